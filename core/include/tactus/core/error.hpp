@@ -1,0 +1,34 @@
+#pragma once
+// Errors shared by every stage. User-facing failures carry where they happened (file, field)
+// and what was expected, so `main` can print one clear line and exit non-zero.
+#include <stdexcept>
+#include <string>
+
+namespace tactus {
+
+// Base of every error tactus reports to a user.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Bad input: a missing or corrupt file, a wrong size, an unknown or out-of-range parameter.
+class InputError : public Error {
+ public:
+  // file: the path (or "command line"); field: the dataset, key or option; expected: what a
+  // valid value looks like; found: what was there instead (optional).
+  InputError(std::string file, std::string field, std::string expected, std::string found = {});
+  const std::string& file() const noexcept { return file_; }
+  const std::string& field() const noexcept { return field_; }
+
+ private:
+  std::string file_, field_;
+};
+
+// A physics or numerical failure during a run: NaN, an inverted element, energy blow-up.
+class NumericalError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace tactus

@@ -1,0 +1,46 @@
+#include "tactus/core/cli.hpp"
+
+#include <iostream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/version.hpp"
+
+namespace tactus::cli {
+
+void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help) {
+  app.set_version_flag("--version", std::string("tactus ") + kVersion);
+  app.add_flag("-v,--verbose", options.verbose, "More detail in the log (repeat for debug)");
+  app.add_flag("-q,--quiet", options.quiet, "Only errors");
+  if (!output_help.empty()) app.add_option("-o,--output", options.output, output_help);
+}
+
+int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std::function<void()>& body) {
+  const std::string program = app.get_name();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  log::set_level(options.quiet ? log::Level::quiet
+                 : options.verbose >= 2 ? log::Level::debug
+                 : options.verbose == 1 ? log::Level::verbose
+                                        : log::Level::info);
+  try {
+    body();
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const NumericalError& e) {
+    std::cerr << program << ": numerical failure: " << e.what() << '\n';
+    return 3;
+  } catch (const Error& e) {
+    std::cerr << program << ": error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << program << ": internal error: " << e.what() << '\n';
+    return 4;
+  }
+}
+
+}  // namespace tactus::cli

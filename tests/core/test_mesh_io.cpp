@@ -1,0 +1,174 @@
+// core/mesh: .msh (gmsh API) and .vtu round trips preserve every value; gmsh-independent readers
+// (meshio) see the same counts and groups; bad files give InputError naming the problem.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+#include "box_mesh.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/core/mesh.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+using tactus::testing::TempDir;
+
+namespace {
+
+// A two-material mesh: the box's upper half becomes group 2 "bone".
+TetMesh two_material_box() {
+  TetMesh m = tactus::testing::make_box_mesh(4, 3, 2, 0.04, 0.03, 0.02, {0.001, -0.002, 0.0003});
+  tactus::testing::perturb_interior_nodes(m, 0.01, 0.2, 11);  // non-round coordinates
+  m.groups.push_back({3, 2, "bone"});
+  for (std::size_t e = 0; e < m.tets.size(); ++e) {
+    double z = 0;
+    for (int v : m.tets[e]) z += m.nodes[v][2] / 4;
+    if (z > 0.0103) m.tet_group[e] = 2;
+  }
+  return m;
+}
+
+// ulp_tolerance 0: bit-exact; gmsh's ASCII writer prints 16 significant digits, which can be
+// 1 ulp off an IEEE double, so the ASCII test allows 2 ulp (relative 4.5e-16).
+void expect_same_mesh(const TetMesh& a, const TetMesh& b, bool with_triangles, double ulp_tolerance = 0) {
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  for (std::size_t i = 0; i < a.nodes.size(); ++i)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_LE(std::abs(a.nodes[i][c] - b.nodes[i][c]),
+                ulp_tolerance * std::numeric_limits<double>::epsilon() * std::abs(a.nodes[i][c]))
+          << "node " << i;
+  // Elements may come back grouped by physical group: compare as multisets of (group, nodes).
+  auto tets = [](const TetMesh& m) {
+    std::multiset<std::pair<int, std::array<int, 4>>> s;
+    for (std::size_t e = 0; e < m.tets.size(); ++e) s.insert({m.tet_group[e], m.tets[e]});
+    return s;
+  };
+  EXPECT_EQ(tets(a), tets(b));
+  if (!with_triangles) return;
+  auto tris = [](const TetMesh& m) {
+    std::multiset<std::pair<int, std::array<int, 3>>> s;
+    for (std::size_t e = 0; e < m.triangles.size(); ++e) s.insert({m.triangle_group[e], m.triangles[e]});
+    return s;
+  };
+  EXPECT_EQ(tris(a), tris(b));
+  ASSERT_EQ(a.groups.size(), b.groups.size());
+  for (const auto& g : a.groups) {
+    const auto* h = b.find_group(g.dim, g.name);
+    ASSERT_NE(h, nullptr) << g.name;
+    EXPECT_EQ(h->tag, g.tag);
+  }
+}
+
+template <class F>
+void expect_input_error(F&& f, std::initializer_list<std::string> fragments) {
+  try {
+    f();
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    for (const auto& frag : fragments) EXPECT_NE(std::string(e.what()).find(frag), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+
+// Oracle: the mesh written. Binary (tactus' default) stores raw doubles: bit-exact.
+TEST(MeshMsh, BinaryRoundTripPreservesEveryValue) {
+  TempDir dir;
+  const TetMesh m = two_material_box();
+  write_msh(dir / "m.msh", m);
+  expect_same_mesh(m, read_msh(dir / "m.msh"), true);
+}
+
+TEST(MeshMsh, AsciiRoundTripWithinTwoUlp) {
+  TempDir dir;
+  const TetMesh m = two_material_box();
+  write_msh(dir / "m.msh", m, false);
+  expect_same_mesh(m, read_msh(dir / "m.msh"), true, 2.0);
+}
+
+TEST(MeshMsh, FileIsMsh41) {
+  TempDir dir;
+  write_msh(dir / "m.msh", two_material_box(), false);
+  std::ifstream in(dir / "m.msh");
+  std::string l1, l2;
+  std::getline(in, l1);
+  std::getline(in, l2);
+  EXPECT_EQ(l1, "$MeshFormat");
+  EXPECT_EQ(l2.substr(0, 6), "4.1 0 ");
+}
+
+// Independent reader: meshio (python3-meshio) must see the same counts and physical names.
+TEST(MeshMsh, ReadByMeshioWithSameCountsAndGroups) {
+  TempDir dir;
+  const TetMesh m = two_material_box();
+  write_msh(dir / "m.msh", m);
+  const std::string script = std::string(std::getenv("TACTUS_SOURCE_DIR")) + "/tests/core/msh_summary.py";
+  const std::string out = (dir / "summary.txt").string();
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + script + " " + (dir / "m.msh").string() + " > " + out).c_str()), 0);
+  std::ifstream in(out);
+  std::map<std::string, long> summary;
+  std::string key;
+  long value;
+  while (in >> key >> value) summary[key] = value;
+  EXPECT_EQ(summary["points"], static_cast<long>(m.nodes.size()));
+  EXPECT_EQ(summary["tetra"], static_cast<long>(m.tets.size()));
+  EXPECT_EQ(summary["triangle"], static_cast<long>(m.triangles.size()));
+  for (const auto& g : m.groups) EXPECT_EQ(summary["group:" + g.name], g.dim) << g.name;
+  long bone = 0;
+  for (int g : m.tet_group) bone += g == 2;
+  EXPECT_EQ(summary["cells_in:bone"], bone);
+}
+
+TEST(MeshVtu, RoundTripPreservesEveryValue) {
+  TempDir dir;
+  const TetMesh m = two_material_box();
+  MeshField disp{"displacement", 3, {}}, vm{"von_mises", 1, {}};
+  for (std::size_t i = 0; i < m.nodes.size(); ++i)
+    for (int c = 0; c < 3; ++c) disp.values.push_back(1e-3 * std::sin(static_cast<double>(3 * i + c)));
+  for (std::size_t e = 0; e < m.tets.size(); ++e) vm.values.push_back(1e5 / (1.0 + static_cast<double>(e)));
+  write_vtu(dir / "m.vtu", m, {disp}, {vm});
+  const VtuContents back = read_vtu(dir / "m.vtu");
+  expect_same_mesh(m, back.mesh, false);
+  ASSERT_NE(back.point_field("displacement"), nullptr);
+  ASSERT_NE(back.cell_field("von_mises"), nullptr);
+  EXPECT_EQ(back.point_field("displacement")->values, disp.values);
+  EXPECT_EQ(back.cell_field("von_mises")->values, vm.values);
+}
+
+TEST(MeshErrors, MissingMsh) {
+  TempDir dir;
+  expect_input_error([&] { read_msh(dir / "none.msh"); }, {"none.msh", "no such file"});
+}
+
+TEST(MeshErrors, GarbageMsh) {
+  TempDir dir;
+  std::ofstream(dir / "g.msh") << "hello\nworld\n";
+  expect_input_error([&] { read_msh(dir / "g.msh"); }, {"g.msh"});
+}
+
+TEST(MeshErrors, TruncatedMsh) {
+  TempDir dir;
+  write_msh(dir / "t.msh", two_material_box());
+  tactus::testing::truncate_file(dir / "t.msh", std::filesystem::file_size(dir / "t.msh") / 2);
+  expect_input_error([&] { read_msh(dir / "t.msh"); }, {"t.msh"});
+}
+
+TEST(MeshErrors, MshWithoutPhysicalVolumes) {
+  TempDir dir;
+  std::ofstream(dir / "np.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                                   "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
+                                   "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n";
+  expect_input_error([&] { read_msh(dir / "np.msh"); }, {"np.msh", "physical volume"});
+}
+
+TEST(MeshErrors, GarbageVtu) {
+  TempDir dir;
+  std::ofstream(dir / "g.vtu") << "<VTKFile broken";
+  expect_input_error([&] { read_vtu(dir / "g.vtu"); }, {"g.vtu"});
+}
+
+TEST(MeshErrors, ValidateNamesBadNodeIndex) {
+  TetMesh m = two_material_box();
+  m.tets[5][2] = static_cast<int>(m.nodes.size()) + 3;
+  expect_input_error([&] { m.validate("in-memory"); }, {"tet 6", "node indices"});
+}

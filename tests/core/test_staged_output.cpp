@@ -1,0 +1,34 @@
+// core/staged_output: an output is visible under its final name only after commit().
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "tactus/core/staged_output.hpp"
+#include "temp_dir.hpp"
+
+using tactus::StagedOutput;
+using tactus::testing::TempDir;
+
+TEST(StagedOutput, NothingLeftWhenNotCommitted) {
+  TempDir dir;
+  {
+    StagedOutput out(dir / "result.txt");
+    std::ofstream(out.path()) << "half";
+    EXPECT_FALSE(std::filesystem::exists(dir / "result.txt"));
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+TEST(StagedOutput, CommitReplacesPreviousDirectory) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "results");
+  std::ofstream(dir / "results" / "old.vtu") << "old";
+  {
+    StagedOutput out(dir / "results");
+    std::filesystem::create_directories(out.path());
+    std::ofstream(out.path() / "new.vtu") << "new";
+    out.commit();
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "results" / "new.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "results" / "old.vtu"));
+}
