@@ -1,0 +1,76 @@
+#pragma once
+// Explicit central-difference integration of M a + A v + f_int = f_ext + R (paper eqs. 33, 35),
+// in the half-step velocity form
+//   v^{n+1/2} = [(1 - alpha dtbar/2) v^{n-1/2} + dtbar M^{-1} (f_ext^n - f_int^n)] / (1 + alpha dtbar/2),
+//   u^{n+1}   = u^n + dt^{n+1/2} v^{n+1/2},   dtbar = (dt^{n-1/2} + dt^{n+1/2}) / 2,
+// which equals eq. 35 for a constant step and allows the step to follow the stable limit as the
+// body deforms. The contract of one step is split in two so that the whole state at t^n
+// (u^n, v^n = (v^{n-1/2} + v^{n+1/2})/2, energies) is visible to outputs between them:
+//   advance_velocity(): needs u^n and the stress pass at u^n; gives v^{n+1/2} and energies at t^n.
+//   advance_position(): gives u^{n+1}, t^{n+1} and the stress pass at u^{n+1}.
+#include <string>
+#include <vector>
+
+#include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/model.hpp"
+#include "tactus/solver/scenario.hpp"
+
+namespace tactus::solver {
+
+struct Energies {
+  double kinetic = 0, internal = 0, damping_work = 0, external_work = 0, initial = 0;
+  double peak = 0;  // largest kinetic + internal seen, for relative errors
+  // kinetic + internal + damping work - external work - initial: zero for an exact integrator.
+  double balance_error() const { return kinetic + internal + damping_work - external_work - initial; }
+  double scale() const;
+};
+
+class ExplicitSolver {
+ public:
+  // Performs the initial stress pass and chooses the step. Throws InputError when the user's
+  // time_step exceeds the stable limit without force_time_step, NumericalError when the
+  // initial configuration is inverted.
+  ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping);
+
+  void advance_velocity();
+  void advance_position();
+
+  double time() const { return time_; }
+  std::size_t step_index() const { return step_; }
+  double time_step() const { return dt_next_; }          // dt^{n+1/2}
+  double critical_step() const { return pass_.critical_step; }
+  std::size_t limiting_element() const { return pass_.limiting_element; }
+  const StressPassResult& stress_pass() const { return pass_; }
+  const Energies& energies() const { return energy_; }
+  const std::vector<double>& displacement() const { return u_; }
+  std::vector<double> velocity_at_step() const;          // v^n (after advance_velocity)
+  const std::vector<double>& half_step_velocity() const { return v_half_; }
+  // u^{n-1} = u^n - dt^{n-1/2} v^{n-1/2}: the last good state when step n fails.
+  std::vector<double> previous_displacement() const;
+  const Model& model() const { return model_; }
+  int threads() const { return forces_.threads(); }
+  // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
+  void check_energy() const;
+  // Describes the stable-step limit: "dt = ... (element ..., L_e = ..., c = ...)".
+  std::string describe_step_limit() const;
+
+ private:
+  void stress_pass();
+  double choose_step() const;
+  double external_force(std::size_t dof) const;
+
+  const Model& model_;
+  RunSpec run_;
+  DampingSpec damping_;
+  InternalForces forces_;
+  StressPassResult pass_;
+  std::vector<double> u_, v_half_, v_prev_half_, f_, inv_mass_;
+  std::vector<double> gravity_force_;  // m g per dof (before the ramp)
+  double time_ = 0, dt_prev_ = 0, dt_next_ = 0, user_dt_ = 0;
+  double pending_external_ = 0, pending_damping_ = 0;  // F^{n-1} . du^{n-1/2} halves (Belytschko's trapezoid)
+  std::size_t step_ = 0;
+  bool velocity_advanced_ = false;
+  Energies energy_;
+};
+
+}  // namespace tactus::solver

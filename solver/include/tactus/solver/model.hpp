@@ -1,0 +1,77 @@
+#pragma once
+// The assembled discrete model: every body's nodes and tets in one numbering, reordered for
+// memory locality, in flat structure-of-arrays form. Built once from a Scenario; the time
+// integrator only reads it.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tactus/core/mesh.hpp"
+#include "tactus/solver/materials.hpp"
+#include "tactus/solver/scenario.hpp"
+
+namespace tactus::solver {
+
+// Tets of one material, contiguous in element order: the force kernel dispatches on the
+// material once per block, never per element.
+struct MaterialBlock {
+  std::string name;  // material name in the scenario
+  Material material;
+  std::size_t begin = 0, end = 0;  // element range
+};
+
+struct BodyRange {
+  std::string name;
+  std::size_t node_begin = 0, node_end = 0;  // in original (input) numbering
+};
+
+struct Model {
+  // Nodes (internal, locality-ordered numbering), 3 doubles per node.
+  std::size_t num_nodes = 0;
+  std::vector<double> X;     // reference positions
+  std::vector<double> mass;  // lumped (row-sum) mass: rho V / 4 from each adjacent tet
+  std::vector<double> initial_velocity;
+
+  // Elements (sorted by block, then along a space-filling curve).
+  std::size_t num_elements = 0;
+  std::vector<std::int32_t> conn;  // 4 per tet
+  std::vector<double> grad;        // 9 per tet: grad N_1, grad N_2, grad N_3 (grad N_0 = -sum)
+  std::vector<double> volume;      // reference volume
+  std::vector<MaterialBlock> blocks;
+
+  // Constraints: per dof (3 per node), 0 free, 1 prescribed velocity; value in constraint_velocity.
+  std::vector<std::uint8_t> constrained;
+  std::vector<double> constraint_velocity;
+
+  // Mapping back to the input numbering, for output and messages.
+  std::vector<std::int32_t> node_of_input;     // internal index of input node i
+  std::vector<std::int32_t> element_of_input;  // internal index of input tet e
+  std::vector<std::int32_t> input_element;     // input index of internal tet
+  TetMesh input_mesh;                          // all bodies, input numbering, placed coordinates
+  std::vector<BodyRange> bodies;
+
+  std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"
+  const MaterialBlock& block_of(std::size_t internal) const;
+};
+
+// Reads every body's mesh, places it, assigns materials and constraints, lumps mass and
+// reorders for locality. Throws InputError on anything inconsistent, naming scenario keys.
+Model build_model(const Scenario& scenario);
+
+// Same, from an in-memory mesh (tests and benchmarks): one body, one material for every group.
+Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name = "material",
+                  const Vec3a& initial_velocity = {0, 0, 0}, bool reorder = true);
+
+// Reorders nodes and elements along a Morton (Z-order) curve so that neighbouring tets share
+// cache lines; exposed for the benchmarks.
+void reorder_for_locality(Model& model);
+
+}  // namespace tactus::solver
+
+#include <functional>
+namespace tactus::solver {
+// Constrains the chosen components of every node whose reference position satisfies `select`
+// to the given velocity (0 = fixed). Returns how many nodes were selected. For tests/benchmarks.
+std::size_t constrain_nodes(Model& model, const std::function<bool(const double* X)>& select,
+                            std::array<bool, 3> components, const Vec3a& velocity = {0, 0, 0});
+}  // namespace tactus::solver

@@ -1,0 +1,34 @@
+#pragma once
+// A whole simulation: scenario -> model -> explicit run -> results folder:
+//   <out>/results/state_NNNN.vtu   one per output time (deformed geometry; point data
+//                                  displacement, velocity; cell data cauchy_stress (xx,yy,zz,xy,yz,xz),
+//                                  von_mises, material, J, fibre_stretch)
+//   <out>/results.pvd              ParaView collection of those files with their times
+//   <out>/history.csv              step, time, dt, energies, balance error, critical step
+//   <out>/run.json                 status, steps, dt, limiting element, wall time, energy balance
+// The folder is staged and renamed when the run ends. A numerical failure still publishes it,
+// with the last good state written and run.json saying "failed" and why.
+#include <filesystem>
+#include <string>
+
+#include "tactus/solver/scenario.hpp"
+
+namespace tactus::solver {
+
+struct RunSummary {
+  std::string status;  // "completed" or "failed"
+  std::size_t steps = 0;
+  double end_time = 0, dt_min = 0, dt_max = 0, wall_seconds = 0;
+  double energy_balance_error = 0;           // final, J
+  double max_relative_balance_error = 0;     // max over steps of |error| / scale
+  std::size_t outputs = 0;
+};
+
+RunSummary run_simulation(const Scenario& scenario, const std::filesystem::path& output_dir);
+
+// tactus-solve material-test: Cauchy stress against stretch as CSV.
+// mode: "uniaxial" (lateral stresses solved to zero), "equibiaxial" (sigma_zz = 0), "shear" (F = I + gamma e_x (x) e_y).
+std::string material_test_csv(const Scenario& scenario, const std::string& material, const std::string& mode,
+                              double max_value, int samples);
+
+}  // namespace tactus::solver

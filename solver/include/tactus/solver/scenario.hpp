@@ -1,0 +1,77 @@
+#pragma once
+// scenario.toml: what to simulate. Every key is declared (parameters.hpp) with unit and range;
+// unknown keys, missing required keys and out-of-range values are errors naming the key.
+// Lengths m, times s, velocities m/s, stresses Pa, densities kg/m^3.
+#include <array>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tactus/solver/parameters.hpp"
+
+namespace tactus::solver {
+
+using Vec3a = std::array<double, 3>;
+
+struct RunSpec {
+  double end_time = 0;
+  double time_step_safety = 0.9;
+  double time_step = 0;          // 0: automatic (safety x critical step)
+  bool force_time_step = false;  // accept a user time_step above the stable limit
+  std::vector<double> output_times;
+  double output_interval = 0;
+  double energy_tolerance = 0.1;  // relative energy-balance error that stops a run as unstable
+  Vec3a gravity{0, 0, 0};
+  double gravity_ramp_time = 0;
+  int threads = 0;  // 0: all cores
+  int history_every = 0;  // 0: automatic (about 2000 rows)
+};
+
+struct DampingSpec {
+  double alpha = 0;  // 1/s, mass-proportional
+  double beta = 0;   // s, stiffness-proportional (evaluated as a viscous stress)
+};
+
+struct MaterialInstance {
+  std::string name, type;
+  std::map<std::string, double> params;
+  std::optional<std::array<Vec3a, 2>> fibres;  // hgo: a_1, a_2 (normalised)
+};
+
+struct BodySpec {
+  std::string name;
+  std::filesystem::path mesh;
+  double scale = 1.0;  // applied to mesh coordinates before translate (e.g. 1e-3 for mm meshes)
+  Vec3a translate{0, 0, 0};
+  Vec3a initial_velocity{0, 0, 0};
+  std::map<std::string, std::string> materials;  // physical volume name (or "*") -> material
+};
+
+struct BoundarySpec {
+  std::string body;
+  std::string group;  // physical surface or volume group name, or empty when a box is given
+  std::optional<std::array<Vec3a, 2>> box;  // [min, max] in placed coordinates
+  std::string type;   // "fixed" or "velocity"
+  Vec3a velocity{0, 0, 0};
+  std::array<bool, 3> components{true, true, true};
+};
+
+struct Scenario {
+  std::filesystem::path file;
+  RunSpec run;
+  DampingSpec damping;
+  std::vector<BodySpec> bodies;
+  std::map<std::string, MaterialInstance> materials;
+  std::vector<BoundarySpec> boundaries;
+};
+
+Scenario read_scenario(const std::filesystem::path& file);
+
+// The declarations, in reference order (sections, then one per material type).
+std::vector<SectionSpec> scenario_reference();
+// Markdown reference of every key (docs/scenario-reference.md).
+std::string scenario_reference_markdown();
+
+}  // namespace tactus::solver

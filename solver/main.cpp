@@ -1,0 +1,54 @@
+// tactus-solve: explicit dynamic simulation of a scenario.toml. Thin driver over tactus::solver.
+#include <fstream>
+#include <iostream>
+
+#include "tactus/core/cli.hpp"
+#include "tactus/core/staged_output.hpp"
+#include "tactus/solver/run.hpp"
+#include "tactus/solver/scenario.hpp"
+
+int main(int argc, char** argv) {
+  using namespace tactus;
+  CLI::App app{"tactus-solve: explicit total-Lagrangian dynamics (HGO soft tissue, elastic bone) of a scenario.toml",
+               "tactus-solve"};
+  cli::CommonOptions common;
+  cli::add_common_options(app, common, "output folder for results (default: results next to the scenario)");
+  std::string scenario_file;
+  app.add_option("scenario", scenario_file, "scenario.toml")->check(CLI::ExistingFile);
+  app.require_subcommand(0, 1);
+
+  auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
+  auto* mtest = app.add_subcommand("material-test", "Cauchy stress vs stretch of one material of a scenario, as CSV");
+  std::string mt_scenario, mt_material, mt_mode = "uniaxial", mt_output;
+  double mt_max = 1.3;
+  int mt_samples = 30;
+  mtest->add_option("scenario", mt_scenario, "scenario.toml")->required()->check(CLI::ExistingFile);
+  mtest->add_option("--material", mt_material, "material name in the scenario")->required();
+  mtest->add_option("--mode", mt_mode, "uniaxial | equibiaxial | shear")->capture_default_str();
+  mtest->add_option("--max", mt_max, "largest stretch (or shear gamma)")->capture_default_str();
+  mtest->add_option("--samples", mt_samples, "number of increments")->capture_default_str();
+  mtest->add_option("-o,--output", mt_output, "CSV file (default: standard output)");
+
+  return cli::run(app, argc, argv, common, [&] {
+    if (keys->parsed()) {
+      std::cout << solver::scenario_reference_markdown();
+      return;
+    }
+    if (mtest->parsed()) {
+      const std::string csv = solver::material_test_csv(solver::read_scenario(mt_scenario), mt_material, mt_mode, mt_max, mt_samples);
+      if (mt_output.empty()) {
+        std::cout << csv;
+      } else {
+        StagedOutput out(mt_output);
+        std::ofstream(out.path()) << csv;
+        out.commit();
+      }
+      return;
+    }
+    if (scenario_file.empty()) throw CLI::RequiredError("scenario");
+    const solver::Scenario sc = solver::read_scenario(scenario_file);
+    const std::filesystem::path out =
+        common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
+    solver::run_simulation(sc, out);
+  });
+}

@@ -1,0 +1,182 @@
+// One-point linear tets, total Lagrangian (paper eqs. 27-32): F = I + sum_a u_a (x) grad N_a,
+// f_a = -V0 P grad N_a. Templated on the material so the inner loop has no virtual call or
+// branch on the material; one switch per block.
+#include "tactus/solver/internal_force.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+namespace tactus::solver {
+
+namespace {
+
+struct ThreadAccumulator {
+  double energy = 0, viscous_power = 0;
+  double dt2 = std::numeric_limits<double>::infinity();  // squared element step (no beta)
+  double dt = std::numeric_limits<double>::infinity();   // element step with beta
+  std::size_t dt_element = 0;
+  double min_J = std::numeric_limits<double>::infinity();
+  std::size_t min_J_element = 0;
+};
+
+template <class Mat, bool kViscous>
+void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_t end, const double* __restrict u,
+                   const double* __restrict v, double* __restrict f, double beta, ThreadAccumulator& acc) {
+  const std::int32_t* __restrict conn = m.conn.data();
+  const double* __restrict grad = m.grad.data();
+  const double* __restrict vol = m.volume.data();
+  const double rho0 = mat.density;
+  const double visc_lambda = mat.small_strain_bulk() - 2.0 * mat.small_strain_shear() / 3.0;
+  const double visc_mu = mat.small_strain_shear();
+  for (std::size_t e = begin; e < end; ++e) {
+    const std::int32_t* c = conn + 4 * e;
+    const double* g = grad + 9 * e;
+    const double* u0 = u + 3 * static_cast<std::size_t>(c[0]);
+    const double* u1 = u + 3 * static_cast<std::size_t>(c[1]);
+    const double* u2 = u + 3 * static_cast<std::size_t>(c[2]);
+    const double* u3 = u + 3 * static_cast<std::size_t>(c[3]);
+    Mat3 F;
+    for (int i = 0; i < 3; ++i) {
+      const double d1 = u1[i] - u0[i], d2 = u2[i] - u0[i], d3 = u3[i] - u0[i];
+      for (int j = 0; j < 3; ++j) F(i, j) = (i == j ? 1.0 : 0.0) + d1 * g[j] + d2 * g[3 + j] + d3 * g[6 + j];
+    }
+    const Mat3 cof = cofactor(F);
+    const double J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
+    if (J < acc.min_J) acc.min_J = J, acc.min_J_element = e;
+    if (!(J > 0)) continue;  // reported by the caller; the step is abandoned
+    StressPoint sp = mat.evaluate(F, cof, J);
+    const double V0 = vol[e];
+    acc.energy += V0 * sp.W;
+
+    // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J.
+    double s = 0, sum[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      double h[3];
+      for (int i = 0; i < 3; ++i) h[i] = (cof(i, 0) * g[3 * a] + cof(i, 1) * g[3 * a + 1] + cof(i, 2) * g[3 * a + 2]) / J;
+      s += h[0] * h[0] + h[1] * h[1] + h[2] * h[2];
+      sum[0] += h[0], sum[1] += h[1], sum[2] += h[2];
+    }
+    s += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
+    // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J).
+    const double dt2 = rho0 / (s * sp.modulus * J);
+
+    if constexpr (kViscous) {
+      // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
+      // D = sym(Fdot F^{-1}); its first Piola stress is J sigma_v F^{-T} = sigma_v cof.
+      const double* v0 = v + 3 * static_cast<std::size_t>(c[0]);
+      const double* v1 = v + 3 * static_cast<std::size_t>(c[1]);
+      const double* v2 = v + 3 * static_cast<std::size_t>(c[2]);
+      const double* v3 = v + 3 * static_cast<std::size_t>(c[3]);
+      Mat3 Fdot;
+      for (int i = 0; i < 3; ++i) {
+        const double d1 = v1[i] - v0[i], d2 = v2[i] - v0[i], d3 = v3[i] - v0[i];
+        for (int j = 0; j < 3; ++j) Fdot(i, j) = d1 * g[j] + d2 * g[3 + j] + d3 * g[6 + j];
+      }
+      const Mat3 L = Fdot * cof.transpose() / J;
+      const Mat3 D = 0.5 * (L + L.transpose());
+      const Mat3 sigma_v = beta * (visc_lambda * D.trace() * Mat3::Identity() + 2.0 * visc_mu * D);
+      const Mat3 Pv = sigma_v * cof;
+      sp.P += Pv;
+      acc.viscous_power += V0 * (Pv.cwiseProduct(Fdot)).sum();
+      const double omega = 2.0 / std::sqrt(dt2);
+      const double xi = 0.5 * beta * omega;
+      const double dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+      if (dt < acc.dt) acc.dt = dt, acc.dt_element = e;
+    } else {
+      if (dt2 < acc.dt2) acc.dt2 = dt2, acc.dt_element = e;
+    }
+
+    double f0[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      double* fa = f + 3 * static_cast<std::size_t>(c[a + 1]);
+      for (int i = 0; i < 3; ++i) {
+        const double h = -V0 * (sp.P(i, 0) * g[3 * a] + sp.P(i, 1) * g[3 * a + 1] + sp.P(i, 2) * g[3 * a + 2]);
+        fa[i] += h;
+        f0[i] -= h;
+      }
+    }
+    double* fz = f + 3 * static_cast<std::size_t>(c[0]);
+    fz[0] += f0[0], fz[1] += f0[1], fz[2] += f0[2];
+  }
+}
+
+template <bool kViscous>
+void block_dispatch(const Model& m, const MaterialBlock& b, std::size_t begin, std::size_t end, const double* u,
+                    const double* v, double* f, double beta, ThreadAccumulator& acc) {
+  std::visit([&](const auto& mat) { element_range<std::decay_t<decltype(mat)>, kViscous>(m, mat, begin, end, u, v, f, beta, acc); },
+             b.material);
+}
+
+// All cores unless OMP_NUM_THREADS says otherwise. (Not omp_get_max_threads(): libgmsh sets
+// the OpenMP thread count to 1 when it initialises, which would silently serialise the solver.)
+int default_threads() {
+  if (const char* env = std::getenv("OMP_NUM_THREADS"))
+    if (const int n = std::atoi(env); n > 0) return n;
+  return omp_get_num_procs();
+}
+
+}  // namespace
+
+InternalForces::InternalForces(const Model& model, double beta, int threads)
+    : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads()) {
+  thread_forces_.resize(static_cast<std::size_t>(threads_ - 1));
+  for (auto& buf : thread_forces_) buf.assign(3 * model.num_nodes, 0.0);
+}
+
+StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out) {
+  const std::size_t ndof = 3 * model_.num_nodes;
+  ThreadAccumulator total;
+  const bool viscous = beta_ > 0;
+#pragma omp parallel num_threads(threads_)
+  {
+    const int tid = omp_get_thread_num();
+    const int nth = omp_get_num_threads();
+    double* f = tid == 0 ? f_out : thread_forces_[static_cast<std::size_t>(tid - 1)].data();
+    std::fill(f, f + ndof, 0.0);
+    ThreadAccumulator acc;
+    for (const auto& b : model_.blocks) {
+      // Static contiguous split: each thread touches a compact set of nodes.
+      const std::size_t n = b.end - b.begin;
+      const std::size_t lo = b.begin + n * static_cast<std::size_t>(tid) / static_cast<std::size_t>(nth);
+      const std::size_t hi = b.begin + n * static_cast<std::size_t>(tid + 1) / static_cast<std::size_t>(nth);
+      if (viscous)
+        block_dispatch<true>(model_, b, lo, hi, u, v, f, beta_, acc);
+      else
+        block_dispatch<false>(model_, b, lo, hi, u, v, f, beta_, acc);
+    }
+#pragma omp barrier
+    if (nth > 1) {
+#pragma omp for schedule(static)
+      for (std::size_t i = 0; i < ndof; ++i) {
+        double sum = f_out[i];
+        for (int t = 1; t < nth; ++t) sum += thread_forces_[static_cast<std::size_t>(t - 1)][i];
+        f_out[i] = sum;
+      }
+    }
+#pragma omp critical
+    {
+      total.energy += acc.energy;
+      total.viscous_power += acc.viscous_power;
+      if (acc.min_J < total.min_J) total.min_J = acc.min_J, total.min_J_element = acc.min_J_element;
+      const double dt = viscous ? acc.dt : std::sqrt(acc.dt2);
+      const double best = viscous ? total.dt : std::sqrt(total.dt2);
+      if (dt < best) {
+        total.dt = acc.dt, total.dt2 = acc.dt2;
+        total.dt_element = acc.dt_element;
+      }
+    }
+  }
+  StressPassResult r;
+  r.strain_energy = total.energy;
+  r.viscous_power = total.viscous_power;
+  r.critical_step = viscous ? total.dt : std::sqrt(total.dt2);
+  r.limiting_element = total.dt_element;
+  r.min_jacobian = total.min_J;
+  r.min_jacobian_element = total.min_J_element;
+  return r;
+}
+
+}  // namespace tactus::solver

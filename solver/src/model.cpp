@@ -1,0 +1,365 @@
+// Assembling the discrete model from a scenario: placement, materials, lumped mass,
+// constraints, and reordering for locality.
+#include "tactus/solver/model.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/stable_step.hpp"
+
+namespace tactus::solver {
+
+namespace {
+
+std::uint64_t spread_bits(std::uint64_t v) {  // 21 bits -> every third bit
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+struct MortonFrame {
+  double lo[3], scale;
+  explicit MortonFrame(const std::vector<double>& X) {
+    double hi[3];
+    for (int c = 0; c < 3; ++c) lo[c] = hi[c] = X.empty() ? 0 : X[c];
+    for (std::size_t i = 0; i < X.size(); i += 3)
+      for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], X[i + c]), hi[c] = std::max(hi[c], X[i + c]);
+    const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+    scale = 2097151.0 / extent;
+  }
+  std::uint64_t code(const double* x) const {
+    std::uint64_t k = 0;
+    for (int c = 0; c < 3; ++c) k |= spread_bits(static_cast<std::uint64_t>((x[c] - lo[c]) * scale)) << c;
+    return k;
+  }
+};
+
+// Fills grad and volume of every element from X; an inverted or flat tet is an input error.
+void compute_element_geometry(Model& m) {
+  m.grad.assign(9 * m.num_elements, 0.0);
+  m.volume.assign(m.num_elements, 0.0);
+  for (std::size_t e = 0; e < m.num_elements; ++e) {
+    Vec3 x[4];
+    for (int a = 0; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) x[a][c] = m.X[3 * static_cast<std::size_t>(m.conn[4 * e + a]) + c];
+    const TetGradients g = tet_shape_gradients(x[0], x[1], x[2], x[3]);
+    if (!(g.volume > 0))
+      throw InputError("mesh", m.describe_element(e), "a tetrahedron with positive volume (nodes ordered as gmsh does)",
+                       "volume " + std::to_string(g.volume) + " m^3 (inverted or flat)");
+    for (int a = 1; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) m.grad[9 * e + 3 * (a - 1) + c] = g.grad[a][c];
+    m.volume[e] = g.volume;
+  }
+}
+
+void lump_mass(Model& m) {
+  m.mass.assign(m.num_nodes, 0.0);
+  for (const auto& b : m.blocks) {
+    const double rho = material_density(b.material);
+    for (std::size_t e = b.begin; e < b.end; ++e)
+      for (int a = 0; a < 4; ++a) m.mass[static_cast<std::size_t>(m.conn[4 * e + a])] += rho * m.volume[e] / 4.0;
+  }
+  for (std::size_t i = 0; i < m.num_nodes; ++i)
+    if (!(m.mass[i] > 0))
+      throw InputError("mesh", "node " + std::to_string(i + 1), "a node attached to at least one tet", "an isolated node");
+}
+
+// Applies node permutation `new_of_old` to every node array and to the connectivity.
+void permute_nodes(Model& m, const std::vector<std::int32_t>& new_of_old) {
+  auto permute3 = [&](std::vector<double>& v) {
+    if (v.empty()) return;
+    std::vector<double> out(v.size());
+    for (std::size_t i = 0; i < m.num_nodes; ++i)
+      for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(new_of_old[i]) + c] = v[3 * i + c];
+    v.swap(out);
+  };
+  permute3(m.X);
+  permute3(m.initial_velocity);
+  permute3(m.constraint_velocity);
+  if (!m.mass.empty()) {
+    std::vector<double> out(m.num_nodes);
+    for (std::size_t i = 0; i < m.num_nodes; ++i) out[static_cast<std::size_t>(new_of_old[i])] = m.mass[i];
+    m.mass.swap(out);
+  }
+  if (!m.constrained.empty()) {
+    std::vector<std::uint8_t> out(m.constrained.size());
+    for (std::size_t i = 0; i < m.num_nodes; ++i)
+      for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(new_of_old[i]) + c] = m.constrained[3 * i + c];
+    m.constrained.swap(out);
+  }
+  for (auto& v : m.conn) v = new_of_old[static_cast<std::size_t>(v)];
+  for (auto& v : m.node_of_input) v = new_of_old[static_cast<std::size_t>(v)];
+}
+
+}  // namespace
+
+void reorder_for_locality(Model& m) {
+  // Nodes along the Morton curve of their reference position.
+  const MortonFrame frame(m.X);
+  std::vector<std::uint64_t> key(m.num_nodes);
+  for (std::size_t i = 0; i < m.num_nodes; ++i) key[i] = frame.code(&m.X[3 * i]);
+  std::vector<std::int32_t> order(m.num_nodes);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
+  std::vector<std::int32_t> new_of_old(m.num_nodes);
+  for (std::size_t k = 0; k < order.size(); ++k) new_of_old[static_cast<std::size_t>(order[k])] = static_cast<std::int32_t>(k);
+  permute_nodes(m, new_of_old);
+
+  // Elements within each block by the smallest (now locality-ordered) node index.
+  std::vector<std::size_t> eorder(m.num_elements);
+  std::iota(eorder.begin(), eorder.end(), 0);
+  std::vector<std::int32_t> first(m.num_elements);
+  for (std::size_t e = 0; e < m.num_elements; ++e)
+    first[e] = *std::min_element(&m.conn[4 * e], &m.conn[4 * e] + 4);
+  for (const auto& b : m.blocks)
+    std::stable_sort(eorder.begin() + static_cast<std::ptrdiff_t>(b.begin), eorder.begin() + static_cast<std::ptrdiff_t>(b.end),
+                     [&](std::size_t a, std::size_t c) { return first[a] < first[c]; });
+  std::vector<std::int32_t> conn(m.conn.size()), input(m.num_elements);
+  std::vector<double> grad(m.grad.size()), vol(m.volume.size());
+  for (std::size_t k = 0; k < m.num_elements; ++k) {
+    const std::size_t e = eorder[k];
+    for (int a = 0; a < 4; ++a) conn[4 * k + a] = m.conn[4 * e + a];
+    input[k] = m.input_element[e];
+    if (!grad.empty()) {
+      for (int j = 0; j < 9; ++j) grad[9 * k + j] = m.grad[9 * e + j];
+      vol[k] = m.volume[e];
+    }
+  }
+  m.conn.swap(conn);
+  m.input_element.swap(input);
+  m.grad.swap(grad);
+  m.volume.swap(vol);
+  for (std::size_t k = 0; k < m.num_elements; ++k) m.element_of_input[static_cast<std::size_t>(m.input_element[k])] = static_cast<std::int32_t>(k);
+}
+
+const MaterialBlock& Model::block_of(std::size_t e) const {
+  for (const auto& b : blocks)
+    if (e >= b.begin && e < b.end) return b;
+  return blocks.front();
+}
+
+std::string Model::describe_element(std::size_t e) const {
+  std::ostringstream o;
+  const std::size_t in = e < input_element.size() ? static_cast<std::size_t>(input_element[e]) : e;
+  std::size_t local = in;
+  std::string body = bodies.empty() ? "" : bodies.front().name;
+  // Body-local tet number (1-based, as in its .msh order of reading).
+  std::size_t offset = 0;
+  for (const auto& b : bodies) {
+    std::size_t count = 0;
+    for (std::size_t t = 0; t < input_mesh.tets.size(); ++t)
+      if (static_cast<std::size_t>(input_mesh.tets[t][0]) >= b.node_begin && static_cast<std::size_t>(input_mesh.tets[t][0]) < b.node_end) ++count;
+    if (in < offset + count) {
+      body = b.name;
+      local = in - offset;
+      break;
+    }
+    offset += count;
+  }
+  o << "tet " << local + 1;
+  if (!body.empty()) o << " of body '" << body << "'";
+  if (in < input_mesh.tet_group.size())
+    if (const auto* g = input_mesh.find_group(3, input_mesh.tet_group[in])) o << " (group '" << g->name << "'";
+  if (!blocks.empty()) o << ", material '" << block_of(e).name << "')";
+  return o.str();
+}
+
+Model build_model(const Scenario& sc) {
+  Model m;
+  std::vector<std::string> tet_material;  // per input tet
+  std::vector<int> tet_body;
+  for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) {
+    const BodySpec& body = sc.bodies[bi];
+    TetMesh mesh = read_msh(body.mesh);
+    const std::size_t node0 = m.input_mesh.nodes.size();
+    m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size()});
+    for (auto& x : mesh.nodes)
+      for (int c = 0; c < 3; ++c) x[c] = x[c] * body.scale + body.translate[c];
+    // Group tags are per file: offset them so bodies keep distinct groups.
+    const int tag_offset = static_cast<int>(1000 * bi);
+    for (auto g : mesh.groups) {
+      g.tag += tag_offset;
+      m.input_mesh.groups.push_back(g);
+    }
+    for (const auto& x : mesh.nodes) m.input_mesh.nodes.push_back(x);
+    for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+      std::array<int, 4> t = mesh.tets[e];
+      for (int& v : t) v += static_cast<int>(node0);
+      m.input_mesh.tets.push_back(t);
+      m.input_mesh.tet_group.push_back(mesh.tet_group[e] + tag_offset);
+      const std::string& gname = mesh.find_group(3, mesh.tet_group[e])->name;
+      auto it = body.materials.find(gname);
+      if (it == body.materials.end()) it = body.materials.find("*");
+      if (it == body.materials.end()) {
+        std::string groups;
+        for (const auto& g : mesh.groups)
+          if (g.dim == 3) groups += (groups.empty() ? "" : ", ") + g.name;
+        throw InputError(sc.file.string(), "bodies[" + std::to_string(bi) + "].materials",
+                         "a material for physical volume '" + gname + "' of " + body.mesh.string() +
+                             " (its volume groups: " + groups + "; or a \"*\" entry)",
+                         "none");
+      }
+      tet_material.push_back(it->second);
+      tet_body.push_back(static_cast<int>(bi));
+    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      std::array<int, 3> tri = mesh.triangles[t];
+      for (int& v : tri) v += static_cast<int>(node0);
+      m.input_mesh.triangles.push_back(tri);
+      m.input_mesh.triangle_group.push_back(mesh.triangle_group[t] + tag_offset);
+    }
+    for (const auto& [gname, mat] : body.materials)
+      if (gname != "*" && !mesh.find_group(3, gname))
+        throw InputError(sc.file.string(), "bodies[" + std::to_string(bi) + "].materials." + gname,
+                         "the name of a physical volume group in " + body.mesh.string(), "no such group");
+  }
+
+  m.num_nodes = m.input_mesh.nodes.size();
+  m.num_elements = m.input_mesh.tets.size();
+  m.X.resize(3 * m.num_nodes);
+  for (std::size_t i = 0; i < m.num_nodes; ++i)
+    for (int c = 0; c < 3; ++c) m.X[3 * i + c] = m.input_mesh.nodes[i][c];
+  m.initial_velocity.assign(3 * m.num_nodes, 0.0);
+  for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi)
+    for (std::size_t i = m.bodies[bi].node_begin; i < m.bodies[bi].node_end; ++i)
+      for (int c = 0; c < 3; ++c) m.initial_velocity[3 * i + c] = sc.bodies[bi].initial_velocity[c];
+
+  // Blocks: elements grouped by material name, in scenario order.
+  std::vector<std::size_t> order;
+  for (const auto& [name, inst] : sc.materials) {
+    MaterialBlock b;
+    b.name = name;
+    b.material = make_material(inst.type, inst.params);
+    if (auto* h = std::get_if<Hgo>(&b.material); h && inst.fibres) {
+      h->a1 = Vec3d((*inst.fibres)[0][0], (*inst.fibres)[0][1], (*inst.fibres)[0][2]);
+      h->a2 = Vec3d((*inst.fibres)[1][0], (*inst.fibres)[1][1], (*inst.fibres)[1][2]);
+    }
+    b.begin = order.size();
+    for (std::size_t e = 0; e < m.num_elements; ++e)
+      if (tet_material[e] == name) order.push_back(e);
+    b.end = order.size();
+    if (b.end > b.begin) m.blocks.push_back(b);
+  }
+  m.conn.resize(4 * m.num_elements);
+  m.input_element.resize(m.num_elements);
+  m.element_of_input.resize(m.num_elements);
+  for (std::size_t k = 0; k < m.num_elements; ++k) {
+    for (int a = 0; a < 4; ++a) m.conn[4 * k + a] = m.input_mesh.tets[order[k]][a];
+    m.input_element[k] = static_cast<std::int32_t>(order[k]);
+    m.element_of_input[order[k]] = static_cast<std::int32_t>(k);
+  }
+  m.node_of_input.resize(m.num_nodes);
+  std::iota(m.node_of_input.begin(), m.node_of_input.end(), 0);
+
+  // Constraints, on input numbering before reordering.
+  m.constrained.assign(3 * m.num_nodes, 0);
+  m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
+  for (std::size_t k = 0; k < sc.boundaries.size(); ++k) {
+    const BoundarySpec& bc = sc.boundaries[k];
+    const std::string key = "boundary[" + std::to_string(k) + "]";
+    std::size_t bi = 0;
+    while (sc.bodies[bi].name != bc.body) ++bi;
+    const BodyRange& range = m.bodies[bi];
+    std::vector<char> selected(m.num_nodes, 0);
+    if (!bc.group.empty()) {
+      const int offset = static_cast<int>(1000 * bi);
+      bool found = false;
+      for (const auto& g : m.input_mesh.groups) {
+        if (g.name != bc.group || g.tag < offset || g.tag >= offset + 1000) continue;
+        found = true;
+        if (g.dim == 2) {
+          for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
+            if (m.input_mesh.triangle_group[t] == g.tag)
+              for (int v : m.input_mesh.triangles[t]) selected[static_cast<std::size_t>(v)] = 1;
+        } else {
+          for (std::size_t t = 0; t < m.input_mesh.tets.size(); ++t)
+            if (m.input_mesh.tet_group[t] == g.tag)
+              for (int v : m.input_mesh.tets[t]) selected[static_cast<std::size_t>(v)] = 1;
+        }
+      }
+      if (!found) {
+        std::string groups;
+        for (const auto& g : m.input_mesh.groups)
+          if (g.tag >= offset && g.tag < offset + 1000) groups += (groups.empty() ? "" : ", ") + g.name;
+        throw InputError(sc.file.string(), key + ".group", "a physical group of body '" + bc.body + "' (" + groups + ")",
+                         "\"" + bc.group + "\"");
+      }
+    } else {
+      const auto& box = *bc.box;
+      for (std::size_t i = range.node_begin; i < range.node_end; ++i) {
+        bool in = true;
+        for (int c = 0; c < 3; ++c) in = in && m.X[3 * i + c] >= box[0][c] && m.X[3 * i + c] <= box[1][c];
+        selected[i] = in;
+      }
+    }
+    std::size_t count = 0;
+    for (std::size_t i = range.node_begin; i < range.node_end; ++i) {
+      if (!selected[i]) continue;
+      ++count;
+      for (int c = 0; c < 3; ++c)
+        if (bc.components[c]) {
+          m.constrained[3 * i + c] = 1;
+          m.constraint_velocity[3 * i + c] = bc.type == "velocity" ? bc.velocity[c] : 0.0;
+        }
+    }
+    if (count == 0) throw InputError(sc.file.string(), key, "a selection containing nodes of body '" + bc.body + "'", "no node");
+    log::verbose() << key << ": " << count << " nodes " << bc.type;
+  }
+
+  compute_element_geometry(m);
+  lump_mass(m);
+  reorder_for_locality(m);
+  return m;
+}
+
+Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name,
+                  const Vec3a& initial_velocity, bool reorder) {
+  Model m;
+  m.input_mesh = mesh;
+  m.bodies.push_back({"body", 0, mesh.nodes.size()});
+  m.num_nodes = mesh.nodes.size();
+  m.num_elements = mesh.tets.size();
+  m.X.resize(3 * m.num_nodes);
+  m.initial_velocity.resize(3 * m.num_nodes);
+  for (std::size_t i = 0; i < m.num_nodes; ++i)
+    for (int c = 0; c < 3; ++c) m.X[3 * i + c] = mesh.nodes[i][c], m.initial_velocity[3 * i + c] = initial_velocity[c];
+  m.conn.resize(4 * m.num_elements);
+  m.input_element.resize(m.num_elements);
+  m.element_of_input.resize(m.num_elements);
+  for (std::size_t e = 0; e < m.num_elements; ++e) {
+    for (int a = 0; a < 4; ++a) m.conn[4 * e + a] = mesh.tets[e][a];
+    m.input_element[e] = m.element_of_input[e] = static_cast<std::int32_t>(e);
+  }
+  m.node_of_input.resize(m.num_nodes);
+  std::iota(m.node_of_input.begin(), m.node_of_input.end(), 0);
+  m.blocks.push_back({material_name, material, 0, m.num_elements});
+  m.constrained.assign(3 * m.num_nodes, 0);
+  m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
+  compute_element_geometry(m);
+  lump_mass(m);
+  if (reorder) reorder_for_locality(m);
+  return m;
+}
+
+}  // namespace tactus::solver
+
+namespace tactus::solver {
+std::size_t constrain_nodes(Model& m, const std::function<bool(const double*)>& select, std::array<bool, 3> components,
+                            const Vec3a& velocity) {
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < m.num_nodes; ++i) {
+    if (!select(&m.X[3 * i])) continue;
+    ++count;
+    for (int c = 0; c < 3; ++c)
+      if (components[c]) m.constrained[3 * i + c] = 1, m.constraint_velocity[3 * i + c] = velocity[c];
+  }
+  return count;
+}
+}  // namespace tactus::solver

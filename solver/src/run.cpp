@@ -1,0 +1,186 @@
+#include "tactus/solver/run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/progress.hpp"
+#include "tactus/core/staged_output.hpp"
+#include "tactus/core/version.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/model.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tactus::solver {
+
+namespace {
+
+// Cell and point fields of one state, in the input numbering.
+void write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v) {
+  const std::size_t N = m.num_nodes, E = m.num_elements;
+  MeshField disp{"displacement", 3, std::vector<double>(3 * N)}, vel{"velocity", 3, std::vector<double>(3 * N)};
+  std::vector<Vec3> current(N);
+  for (std::size_t i = 0; i < N; ++i) {
+    const std::size_t k = static_cast<std::size_t>(m.node_of_input[i]);
+    for (int c = 0; c < 3; ++c) {
+      disp.values[3 * i + c] = u[3 * k + c];
+      vel.values[3 * i + c] = v[3 * k + c];
+      current[i][c] = m.X[3 * k + c] + u[3 * k + c];
+    }
+  }
+  MeshField stress{"cauchy_stress", 6, std::vector<double>(6 * E)}, vm{"von_mises", 1, std::vector<double>(E)},
+      material{"material", 1, std::vector<double>(E)}, jac{"J", 1, std::vector<double>(E)},
+      fibre{"fibre_stretch", 2, std::vector<double>(2 * E)};
+  for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
+    const MaterialBlock& b = m.blocks[bi];
+    for (std::size_t e = b.begin; e < b.end; ++e) {
+      const std::int32_t* c = &m.conn[4 * e];
+      const double* g = &m.grad[9 * e];
+      Mat3 F = Mat3::Identity();
+      for (int a = 1; a < 4; ++a)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            F(i, j) += (u[3 * static_cast<std::size_t>(c[a]) + i] - u[3 * static_cast<std::size_t>(c[0]) + i]) * g[3 * (a - 1) + j];
+      const Mat3 P = std::visit([&](const auto& mat) { return mat.evaluate(F).P; }, b.material);
+      const Mat3 s = cauchy_stress(F, P);
+      const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
+      const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
+      for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
+      vm.values[out] = von_mises(s);
+      material.values[out] = static_cast<double>(bi);
+      jac.values[out] = F.determinant();
+      if (const auto* h = std::get_if<Hgo>(&b.material)) {
+        fibre.values[2 * out] = (F * h->a1).norm();
+        fibre.values[2 * out + 1] = (F * h->a2).norm();
+      }
+    }
+  }
+  write_vtu(file, m.input_mesh, {disp, vel}, {stress, vm, material, jac, fibre}, &current);
+}
+
+void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::string>>& entries) {
+  std::ofstream o(file);
+  o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  o << std::setprecision(12);
+  for (const auto& [t, name] : entries) o << "    <DataSet timestep=\"" << t << "\" part=\"0\" file=\"" << name << "\"/>\n";
+  o << "  </Collection>\n</VTKFile>\n";
+  if (!o) throw InputError(file.string(), "", "a writable file");
+}
+
+}  // namespace
+
+RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const Model model = build_model(sc);
+  log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size()
+              << " materials, " << sc.bodies.size() << " bodies";
+  ExplicitSolver solver(model, sc.run, sc.damping);
+  log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; "
+              << solver.describe_step_limit() << "), " << solver.threads() << " threads";
+
+  StagedOutput staged(output_dir);
+  fs::create_directories(staged.path() / "results");
+  std::vector<std::pair<double, std::string>> pvd;
+  std::ofstream history(staged.path() / "history.csv");
+  history << "step,time,dt,kinetic_energy,internal_energy,damping_work,external_work,energy_balance_error,critical_step\n";
+  history << std::setprecision(10);
+
+  // Output schedule: explicit times, or every interval.
+  std::vector<double> out_times = sc.run.output_times;
+  if (sc.run.output_interval > 0)
+    for (double t = sc.run.output_interval; t <= sc.run.end_time * (1 + 1e-12); t += sc.run.output_interval) out_times.push_back(t);
+  std::sort(out_times.begin(), out_times.end());
+  out_times.erase(std::unique(out_times.begin(), out_times.end()), out_times.end());
+  std::size_t next_out = 0;
+
+  const double est_steps = sc.run.end_time / std::max(solver.time_step(), 1e-300);
+  const std::size_t history_every =
+      sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every) : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000));
+  Progress progress("solve", static_cast<std::size_t>(est_steps) + 1);
+
+  RunSummary summary;
+  summary.dt_min = summary.dt_max = solver.time_step();
+  nlohmann::json failure = nullptr;
+  auto output = [&](const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t) {
+    write_state(model, staged.path() / "results" / name, u, v);
+    pvd.emplace_back(t, "results/" + name);
+    ++summary.outputs;
+  };
+  try {
+    while (true) {
+      solver.advance_velocity();
+      const Energies& en = solver.energies();
+      const double t = solver.time();
+      summary.max_relative_balance_error = std::max(summary.max_relative_balance_error, std::abs(en.balance_error()) / en.scale());
+      if (solver.step_index() % history_every == 0 || t >= sc.run.end_time * (1 - 1e-12))
+        history << solver.step_index() << ',' << t << ',' << solver.time_step() << ',' << en.kinetic << ',' << en.internal << ','
+                << en.damping_work << ',' << en.external_work << ',' << en.balance_error() << ',' << solver.critical_step() << '\n';
+      solver.check_energy();
+      const double half = 0.5 * solver.time_step();
+      while (next_out < out_times.size() && t >= out_times[next_out] - half) {
+        std::ostringstream name;
+        name << "state_" << std::setw(4) << std::setfill('0') << next_out << ".vtu";
+        output(name.str(), solver.displacement(), solver.velocity_at_step(), t);
+        ++next_out;
+      }
+      if (t >= sc.run.end_time * (1 - 1e-12) || solver.time_step() <= 0) break;
+      solver.advance_position();
+      summary.dt_min = std::min(summary.dt_min, solver.time_step() > 0 ? solver.time_step() : summary.dt_min);
+      summary.dt_max = std::max(summary.dt_max, solver.time_step());
+      std::ostringstream note;
+      note << "t=" << solver.time() << " s dt=" << solver.time_step();
+      progress.update(solver.step_index(), note.str());
+    }
+    summary.status = "completed";
+  } catch (const NumericalError& e) {
+    summary.status = "failed";
+    failure = e.what();
+    // The last good state: u^{n-1} (before the failing update), with the half-step velocity.
+    output("last_good_state.vtu", solver.previous_displacement(), solver.half_step_velocity(),
+           solver.time() - 0.5 * solver.time_step());
+  }
+  progress.finish();
+  history.close();
+  summary.steps = solver.step_index();
+  summary.end_time = solver.time();
+  summary.energy_balance_error = solver.energies().balance_error();
+  summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  write_pvd(staged.path() / "results.pvd", pvd);
+
+  const Energies& en = solver.energies();
+  nlohmann::json j;
+  j["tactus_version"] = kVersion;
+  j["scenario"] = sc.file.string();
+  j["status"] = summary.status;
+  j["message"] = failure;
+  j["units"] = "SI (m, kg, s, Pa, J)";
+  j["nodes"] = model.num_nodes;
+  j["tets"] = model.num_elements;
+  j["threads"] = solver.threads();
+  j["steps"] = summary.steps;
+  j["end_time"] = summary.end_time;
+  j["time_step"] = {{"min", summary.dt_min}, {"max", summary.dt_max}, {"safety", sc.run.time_step_safety},
+                    {"critical_at_end", solver.critical_step()}, {"limit", solver.describe_step_limit()}};
+  j["wall_time_s"] = summary.wall_seconds;
+  j["energy"] = {{"initial", en.initial}, {"kinetic", en.kinetic}, {"internal", en.internal}, {"damping_work", en.damping_work},
+                 {"external_work", en.external_work}, {"balance_error", en.balance_error()},
+                 {"balance_error_relative", std::abs(en.balance_error()) / en.scale()},
+                 {"max_balance_error_relative", summary.max_relative_balance_error}};
+  j["outputs"] = summary.outputs;
+  std::ofstream(staged.path() / "run.json") << j.dump(2) << '\n';
+  staged.commit();
+  log::info() << summary.status << ": " << summary.steps << " steps to t = " << summary.end_time << " s in "
+              << summary.wall_seconds << " s; energy balance error " << std::abs(en.balance_error()) / en.scale() * 100
+              << " % of the largest energy; results in " << output_dir.string();
+  if (summary.status == "failed")
+    throw NumericalError(failure.get<std::string>() + " (last good state and history written to " + output_dir.string() + ")");
+  return summary;
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,427 @@
+// scenario.toml reader. All validation is driven by the declarations below, which also produce
+// the key reference (`tactus-solve keys`), so the docs cannot drift from what is accepted.
+#include "tactus/solver/scenario.hpp"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "tactus/core/error.hpp"
+#include "tactus/solver/materials.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tactus::solver {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+ValueSpec opt(ValueSpec s, std::string default_text) {
+  s.required = false;
+  s.default_text = std::move(default_text);
+  return s;
+}
+ValueSpec typed(std::string key, ValueType type, std::string unit, std::string doc, bool required,
+                std::string default_text = {}) {
+  ValueSpec s;
+  s.key = std::move(key);
+  s.type = type;
+  s.unit = std::move(unit);
+  s.doc = std::move(doc);
+  s.required = required;
+  s.default_text = std::move(default_text);
+  return s;
+}
+
+const SectionSpec& run_section() {
+  static const SectionSpec s{
+      "run",
+      "Time integration (explicit central differences, paper eq. 35) and output.",
+      {number("end_time", "s", "simulated end time", 0, true),
+       opt(number("time_step_safety", "", "fraction of the critical step actually used", 0, true, 1, false), "0.9"),
+       opt(number("time_step", "s", "fixed user step; refused above the stable limit unless force_time_step", 0, false),
+           "0 (automatic)"),
+       typed("force_time_step", ValueType::boolean, "", "accept a user time_step above the stable limit", false, "false"),
+       typed("output_times", ValueType::number_list, "s", "times at which results are written", false, "[end_time]"),
+       opt(number("output_interval", "s", "write results every interval (alternative to output_times)", 0, false), "0"),
+       opt(number("energy_tolerance", "", "energy-balance error, relative to the largest energy, that stops the run as unstable", 0, true),
+           "0.1"),
+       typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
+       opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
+       opt(number("threads", "", "worker threads (0: all cores)", 0, false, 1024, false), "0"),
+       opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0")}};
+  return s;
+}
+
+const SectionSpec& damping_section() {
+  static const SectionSpec s{"damping",
+                             "Rayleigh damping A = alpha M + beta K; the beta part is a viscous stress, never an assembled K.",
+                             {opt(number("alpha", "1/s", "mass-proportional coefficient", 0, false), "0"),
+                              opt(number("beta", "s", "stiffness-proportional coefficient", 0, false), "0")}};
+  return s;
+}
+
+const SectionSpec& body_section() {
+  static const SectionSpec s{
+      "bodies",
+      "[[bodies]]: one deformable body per entry.",
+      {typed("name", ValueType::string, "", "unique body name", true),
+       typed("mesh", ValueType::string, "", "gmsh .msh file (relative to the scenario file)", true),
+       opt(number("scale", "", "factor applied to mesh coordinates (1e-3 for a mesh in mm)", 0, true), "1"),
+       typed("translate", ValueType::vec3, "m", "translation applied after scaling", false, "[0, 0, 0]"),
+       typed("initial_velocity", ValueType::vec3, "m/s", "uniform initial velocity", false, "[0, 0, 0]"),
+       typed("materials", ValueType::table, "",
+             "physical volume group name -> material name (key \"*\" for every other group)", true)}};
+  return s;
+}
+
+const SectionSpec& material_common_section() {
+  static const SectionSpec s{
+      "materials.<name>",
+      "A named material; `type` selects the law, whose parameters follow (see below).",
+      {typed("type", ValueType::string, "", "neo_hookean | linear_elastic | hgo", true),
+       typed("fibres", ValueType::vec3_list, "",
+             "hgo only, required: the two fibre directions a_1, a_2 in the reference frame (normalised)", false)}};
+  return s;
+}
+
+const SectionSpec& boundary_section() {
+  static const SectionSpec s{
+      "boundary",
+      "[[boundary]]: fixed or prescribed-velocity nodes of a body, by physical group or by box.",
+      {typed("body", ValueType::string, "", "body name", true),
+       typed("group", ValueType::string, "", "physical surface or volume group whose nodes are constrained", false),
+       typed("box", ValueType::vec3_list, "m", "[[xmin,ymin,zmin],[xmax,ymax,zmax]]: nodes inside (placed coordinates)", false),
+       typed("type", ValueType::string, "", "fixed | velocity", true),
+       typed("velocity", ValueType::vec3, "m/s", "prescribed velocity (type = velocity)", false, "[0, 0, 0]"),
+       typed("components", ValueType::string, "", "constrained components, any of \"xyz\"", false, "\"xyz\"")}};
+  return s;
+}
+
+const char* type_name(ValueType t) {
+  switch (t) {
+    case ValueType::number: return "a number";
+    case ValueType::integer: return "an integer";
+    case ValueType::boolean: return "true or false";
+    case ValueType::string: return "a string";
+    case ValueType::vec3: return "an array of 3 numbers";
+    case ValueType::number_list: return "an array of numbers";
+    case ValueType::vec3_list: return "an array of [x, y, z] arrays";
+    case ValueType::table: return "a table";
+    case ValueType::table_list: return "an array of tables";
+  }
+  return "";
+}
+
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& expected, const std::string& found = {}) const {
+    throw InputError(file_, key, expected, found);
+  }
+
+  // Unknown keys and missing required keys of one table.
+  void check_keys(const toml::table& t, const SectionSpec& spec, const std::string& path,
+                  const std::set<std::string>& extra = {}) const {
+    for (const auto& [k, node] : t) {
+      const std::string key(k.str());
+      if (!spec.find(key) && !extra.count(key)) {
+        std::string allowed;
+        for (const auto& s : spec.keys) allowed += (allowed.empty() ? "" : ", ") + s.key;
+        for (const auto& s : extra) allowed += ", " + s;
+        fail(join(path, key), "one of the keys " + allowed, "unknown key \"" + key + "\"");
+      }
+    }
+    for (const auto& s : spec.keys)
+      if (s.required && !t.contains(s.key)) fail(join(path, s.key), s.doc + " (" + type_name(s.type) + ")", "missing");
+  }
+
+  double number(const toml::table& t, const ValueSpec& s, const std::string& path, double def) const {
+    const toml::node* n = t.get(s.key);
+    if (!n) return def;
+    auto v = n->value<double>();
+    if (!v || n->is_boolean()) fail(join(path, s.key), std::string(type_name(ValueType::number)) + unit_suffix(s), describe(*n));
+    check_range(*v, s, join(path, s.key));
+    return *v;
+  }
+
+  void check_range(double v, const ValueSpec& s, const std::string& key) const {
+    if (!s.in_range(v)) {
+      std::ostringstream f;
+      f << v;
+      fail(key, "a value " + s.range_text() + unit_suffix(s), f.str());
+    }
+  }
+
+  bool boolean(const toml::table& t, const ValueSpec& s, const std::string& path, bool def) const {
+    const toml::node* n = t.get(s.key);
+    if (!n) return def;
+    if (!n->is_boolean()) fail(join(path, s.key), "true or false", describe(*n));
+    return *n->value<bool>();
+  }
+
+  std::string string(const toml::table& t, const ValueSpec& s, const std::string& path, std::string def = {}) const {
+    const toml::node* n = t.get(s.key);
+    if (!n) return def;
+    if (!n->is_string()) fail(join(path, s.key), "a string", describe(*n));
+    return *n->value<std::string>();
+  }
+
+  Vec3a vec3(const toml::node& n, const std::string& key, const std::string& unit) const {
+    const toml::array* a = n.as_array();
+    Vec3a v{};
+    if (!a || a->size() != 3) fail(key, "an array of 3 numbers" + (unit.empty() ? "" : " in " + unit), describe(n));
+    for (std::size_t i = 0; i < 3; ++i) {
+      auto x = (*a)[i].value<double>();
+      if (!x || (*a)[i].is_boolean() || !std::isfinite(*x)) fail(key, "an array of 3 finite numbers", describe(n));
+      v[i] = *x;
+    }
+    return v;
+  }
+
+  Vec3a vec3(const toml::table& t, const ValueSpec& s, const std::string& path, Vec3a def) const {
+    const toml::node* n = t.get(s.key);
+    return n ? vec3(*n, join(path, s.key), s.unit) : def;
+  }
+
+  std::vector<Vec3a> vec3_list(const toml::table& t, const ValueSpec& s, const std::string& path) const {
+    std::vector<Vec3a> out;
+    const toml::node* n = t.get(s.key);
+    if (!n) return out;
+    const toml::array* a = n->as_array();
+    if (!a) fail(join(path, s.key), "an array of [x, y, z] arrays", describe(*n));
+    for (std::size_t i = 0; i < a->size(); ++i) out.push_back(vec3((*a)[i], join(path, s.key) + "[" + std::to_string(i) + "]", s.unit));
+    return out;
+  }
+
+  std::vector<double> number_list(const toml::table& t, const ValueSpec& s, const std::string& path) const {
+    std::vector<double> out;
+    const toml::node* n = t.get(s.key);
+    if (!n) return out;
+    const toml::array* a = n->as_array();
+    if (!a) fail(join(path, s.key), "an array of numbers", describe(*n));
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      auto x = (*a)[i].value<double>();
+      if (!x || !std::isfinite(*x) || *x < 0) fail(join(path, s.key) + "[" + std::to_string(i) + "]", "a time >= 0 in s", describe((*a)[i]));
+      out.push_back(*x);
+    }
+    return out;
+  }
+
+  const toml::table& table(const toml::node& n, const std::string& key) const {
+    const toml::table* t = n.as_table();
+    if (!t) fail(key, "a table", describe(n));
+    return *t;
+  }
+
+  static std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+  static std::string unit_suffix(const ValueSpec& s) { return s.unit.empty() ? "" : " in " + s.unit; }
+  static std::string describe(const toml::node& n) {
+    std::ostringstream o;
+    if (n.is_table()) return "a table";
+    if (n.is_array()) {
+      o << "an array of " << n.as_array()->size();
+      return o.str();
+    }
+    if (n.is_string()) {
+      o << '"' << *n.value<std::string>() << '"';  // (not "\"" + s: GCC 12 -Wrestrict false positive)
+      return o.str();
+    }
+    if (n.is_boolean()) return *n.value<bool>() ? "true" : "false";
+    if (auto d = n.value<double>()) {
+      o << *d;
+      return o.str();
+    }
+    return "a value of another type";
+  }
+
+ private:
+  std::string file_;
+};
+
+}  // namespace
+
+std::vector<SectionSpec> scenario_reference() {
+  std::vector<SectionSpec> out{run_section(), damping_section(), body_section(), material_common_section(),
+                               boundary_section()};
+  for (const auto& m : material_registry()) {
+    SectionSpec s = m.spec();
+    s.name = std::string("materials.<name> with type = \"") + m.name + "\"";
+    out.push_back(s);
+  }
+  return out;
+}
+
+std::string scenario_reference_markdown() {
+  std::ostringstream o;
+  o << "# scenario.toml reference\n\n"
+    << "Generated by `tactus-solve keys` from the declarations the scenario reader validates with "
+       "(solver/src/scenario.cpp, solver/src/materials/materials.cpp). SI units throughout.\n"
+       "Unknown keys, missing required keys and values outside their range are errors naming the key.\n";
+  for (const auto& s : scenario_reference()) {
+    o << "\n## " << s.name << "\n\n" << s.doc << "\n\n| key | type | unit | valid | default | meaning |\n|---|---|---|---|---|---|\n";
+    for (const auto& k : s.keys) {
+      o << "| `" << k.key << "` | " << type_name(k.type) << " | " << (k.unit.empty() ? "-" : k.unit) << " | "
+        << (k.range_text().empty() ? "-" : k.range_text()) << " | "
+        << (k.required ? "**required**" : (k.default_text.empty() ? "-" : k.default_text)) << " | " << k.doc << " |\n";
+    }
+  }
+  return o.str();
+}
+
+Scenario read_scenario(const fs::path& file) {
+  const std::string fname = file.string();
+  if (!fs::exists(file)) throw InputError(fname, "", "an existing scenario file", "no such file");
+  toml::table root;
+  try {
+    root = toml::parse_file(fname);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream where;
+    where << "line " << e.source().begin.line << ", column " << e.source().begin.column;
+    throw InputError(fname, where.str(), "valid TOML", std::string(e.description()));
+  }
+  Reader r(fname);
+  Scenario sc;
+  sc.file = fs::absolute(file);
+  const fs::path base = sc.file.parent_path();
+
+  SectionSpec top{"", "", {typed("run", ValueType::table, "", "", true), typed("damping", ValueType::table, "", "", false),
+                           typed("bodies", ValueType::table_list, "", "", true),
+                           typed("materials", ValueType::table, "", "", true),
+                           typed("boundary", ValueType::table_list, "", "", false)}};
+  r.check_keys(root, top, "");
+
+  {  // [run]
+    const auto& spec = run_section();
+    const toml::table& t = r.table(*root.get("run"), "run");
+    r.check_keys(t, spec, "run");
+    RunSpec& run = sc.run;
+    run.end_time = r.number(t, *spec.find("end_time"), "run", 0);
+    run.time_step_safety = r.number(t, *spec.find("time_step_safety"), "run", 0.9);
+    run.time_step = r.number(t, *spec.find("time_step"), "run", 0);
+    run.force_time_step = r.boolean(t, *spec.find("force_time_step"), "run", false);
+    run.output_times = r.number_list(t, *spec.find("output_times"), "run");
+    run.output_interval = r.number(t, *spec.find("output_interval"), "run", 0);
+    run.energy_tolerance = r.number(t, *spec.find("energy_tolerance"), "run", 0.1);
+    run.gravity = r.vec3(t, *spec.find("gravity"), "run", {0, 0, 0});
+    run.gravity_ramp_time = r.number(t, *spec.find("gravity_ramp_time"), "run", 0);
+    run.threads = static_cast<int>(r.number(t, *spec.find("threads"), "run", 0));
+    run.history_every = static_cast<int>(r.number(t, *spec.find("history_every"), "run", 0));
+    for (double time : run.output_times)
+      if (time > run.end_time) r.fail("run.output_times", "times <= run.end_time", std::to_string(time));
+    if (run.output_times.empty() && run.output_interval <= 0) run.output_times = {run.end_time};
+  }
+  if (const toml::node* n = root.get("damping")) {
+    const auto& spec = damping_section();
+    const toml::table& t = r.table(*n, "damping");
+    r.check_keys(t, spec, "damping");
+    sc.damping.alpha = r.number(t, *spec.find("alpha"), "damping", 0);
+    sc.damping.beta = r.number(t, *spec.find("beta"), "damping", 0);
+  }
+  {  // [materials.<name>]
+    const toml::table& mats = r.table(*root.get("materials"), "materials");
+    if (mats.empty()) r.fail("materials", "at least one [materials.<name>] table", "none");
+    for (const auto& [k, node] : mats) {
+      const std::string name(k.str()), path = "materials." + name;
+      const toml::table& t = r.table(node, path);
+      MaterialInstance m;
+      m.name = name;
+      const auto& common = material_common_section();
+      if (!t.contains("type")) r.fail(path + ".type", "one of neo_hookean, linear_elastic, hgo", "missing");
+      m.type = r.string(t, *common.find("type"), path);
+      const MaterialEntry* entry = nullptr;
+      for (const auto& e : material_registry())
+        if (m.type == e.name) entry = &e;
+      if (!entry) r.fail(path + ".type", "one of neo_hookean, linear_elastic, hgo", "\"" + m.type + "\"");
+      const SectionSpec& pspec = entry->spec();
+      std::set<std::string> extra{"type"};
+      if (entry->kind == MaterialKind::hgo) extra.insert("fibres");
+      r.check_keys(t, pspec, path, extra);
+      for (const auto& ps : pspec.keys) m.params[ps.key] = r.number(t, ps, path, 0);
+      if (entry->kind == MaterialKind::hgo) {
+        const auto f = r.vec3_list(t, *common.find("fibres"), path);
+        if (f.size() != 2)
+          r.fail(path + ".fibres", "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
+                 f.empty() ? "missing" : std::to_string(f.size()) + " directions");
+        std::array<Vec3a, 2> dirs{};
+        for (int i = 0; i < 2; ++i) {
+          const double len = std::sqrt(f[i][0] * f[i][0] + f[i][1] * f[i][1] + f[i][2] * f[i][2]);
+          if (!(len > 1e-12)) r.fail(path + ".fibres[" + std::to_string(i) + "]", "a non-zero direction", "zero vector");
+          for (int c = 0; c < 3; ++c) dirs[i][c] = f[i][c] / len;
+        }
+        m.fibres = dirs;
+      }
+      sc.materials[name] = m;
+    }
+  }
+  {  // [[bodies]]
+    const auto& spec = body_section();
+    const toml::array* arr = root.get("bodies")->as_array();
+    if (!arr || arr->empty()) r.fail("bodies", "one or more [[bodies]] tables", "none");
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string path = "bodies[" + std::to_string(i) + "]";
+      const toml::table& t = r.table((*arr)[i], path);
+      r.check_keys(t, spec, path);
+      BodySpec b;
+      b.name = r.string(t, *spec.find("name"), path);
+      if (!names.insert(b.name).second) r.fail(path + ".name", "a unique body name", "\"" + b.name + "\" twice");
+      b.mesh = base / r.string(t, *spec.find("mesh"), path);
+      b.scale = r.number(t, *spec.find("scale"), path, 1.0);
+      b.translate = r.vec3(t, *spec.find("translate"), path, {0, 0, 0});
+      b.initial_velocity = r.vec3(t, *spec.find("initial_velocity"), path, {0, 0, 0});
+      const toml::table& mt = r.table(*t.get("materials"), path + ".materials");
+      for (const auto& [gk, gv] : mt) {
+        const std::string group(gk.str());
+        if (!gv.is_string()) r.fail(path + ".materials." + group, "a material name (string)", Reader::describe(gv));
+        const std::string mat = *gv.value<std::string>();
+        if (!sc.materials.count(mat)) {
+          std::string known;
+          for (const auto& [n, m] : sc.materials) known += (known.empty() ? "" : ", ") + n;
+          r.fail(path + ".materials." + group, "a material defined under [materials] (" + known + ")", "\"" + mat + "\"");
+        }
+        b.materials[group] = mat;
+      }
+      sc.bodies.push_back(b);
+    }
+  }
+  if (const toml::node* n = root.get("boundary")) {  // [[boundary]]
+    const auto& spec = boundary_section();
+    const toml::array* arr = n->as_array();
+    if (!arr) r.fail("boundary", "[[boundary]] tables");
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string path = "boundary[" + std::to_string(i) + "]";
+      const toml::table& t = r.table((*arr)[i], path);
+      r.check_keys(t, spec, path);
+      BoundarySpec bc;
+      bc.body = r.string(t, *spec.find("body"), path);
+      bool known = false;
+      for (const auto& b : sc.bodies) known = known || b.name == bc.body;
+      if (!known) r.fail(path + ".body", "the name of a [[bodies]] entry", "\"" + bc.body + "\"");
+      bc.group = r.string(t, *spec.find("group"), path);
+      const auto box = r.vec3_list(t, *spec.find("box"), path);
+      if (t.contains("box")) {
+        if (box.size() != 2) r.fail(path + ".box", "[[xmin, ymin, zmin], [xmax, ymax, zmax]]");
+        bc.box = std::array<Vec3a, 2>{box[0], box[1]};
+      }
+      if (bc.group.empty() == !bc.box.has_value()) r.fail(path, "exactly one of `group` or `box`");
+      bc.type = r.string(t, *spec.find("type"), path);
+      if (bc.type != "fixed" && bc.type != "velocity") r.fail(path + ".type", "\"fixed\" or \"velocity\"", "\"" + bc.type + "\"");
+      bc.velocity = r.vec3(t, *spec.find("velocity"), path, {0, 0, 0});
+      const std::string comps = r.string(t, *spec.find("components"), path, "xyz");
+      bc.components = {false, false, false};
+      if (comps.empty()) r.fail(path + ".components", "one or more of x, y, z", "\"\"");
+      for (char c : comps) {
+        if (c < 'x' || c > 'z') r.fail(path + ".components", "letters among x, y, z", "\"" + comps + "\"");
+        bc.components[c - 'x'] = true;
+      }
+      sc.boundaries.push_back(bc);
+    }
+  }
+  return sc;
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,175 @@
+#include "tactus/solver/explicit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+
+namespace tactus::solver {
+
+double Energies::scale() const {
+  return std::max({std::abs(initial), peak, std::abs(external_work), std::abs(damping_work), 1e-300});
+}
+
+ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping)
+    : model_(model), run_(run), damping_(damping), forces_(model, damping.beta, run.threads) {
+  const std::size_t ndof = 3 * model.num_nodes;
+  u_.assign(ndof, 0.0);
+  f_.assign(ndof, 0.0);
+  v_half_ = model.initial_velocity;
+  for (std::size_t i = 0; i < ndof; ++i)
+    if (model.constrained[i]) v_half_[i] = model.constraint_velocity[i];
+  v_prev_half_ = v_half_;
+  inv_mass_.resize(ndof);
+  gravity_force_.resize(ndof);
+  for (std::size_t i = 0; i < ndof; ++i) {
+    inv_mass_[i] = 1.0 / model.mass[i / 3];
+    gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];
+  }
+  stress_pass();
+  double kinetic = 0;
+  for (std::size_t i = 0; i < ndof; ++i) kinetic += 0.5 * model.mass[i / 3] * v_half_[i] * v_half_[i];
+  energy_.kinetic = kinetic;
+  energy_.internal = pass_.strain_energy;
+  energy_.initial = kinetic + pass_.strain_energy;
+  energy_.peak = energy_.initial;
+
+  if (run.time_step > 0) {
+    const double limit = pass_.critical_step;
+    if (run.time_step > limit && !run.force_time_step) {
+      std::ostringstream o;
+      o << "a step <= the stable limit " << limit << " s (" << describe_step_limit()
+        << "); lower it, remove it for the automatic step, or set run.force_time_step = true";
+      std::ostringstream f;
+      f << run.time_step << " s";
+      throw InputError("scenario", "run.time_step", o.str(), f.str());
+    }
+    user_dt_ = run.time_step;
+  }
+  dt_next_ = choose_step();
+}
+
+void ExplicitSolver::stress_pass() {
+  pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data());
+  if (!(pass_.min_jacobian > 0)) {
+    std::ostringstream o;
+    o << "inverted element at step " << step_ << ", t = " << time_ << " s: "
+      << model_.describe_element(pass_.min_jacobian_element) << " has J = " << pass_.min_jacobian
+      << " (the time step may be too large, or the loading too severe for this mesh)";
+    throw NumericalError(o.str());
+  }
+  if (!std::isfinite(pass_.strain_energy)) {
+    std::ostringstream o;
+    o << "non-finite strain energy at step " << step_ << ", t = " << time_ << " s";
+    throw NumericalError(o.str());
+  }
+}
+
+double ExplicitSolver::choose_step() const {
+  double dt = user_dt_ > 0 ? user_dt_ : run_.time_step_safety * pass_.critical_step;
+  // Land exactly on the end time instead of overshooting it.
+  const double remaining = run_.end_time - time_;
+  if (remaining > 0 && dt > remaining) dt = remaining;
+  return dt;
+}
+
+std::string ExplicitSolver::describe_step_limit() const {
+  std::ostringstream o;
+  const std::size_t e = pass_.limiting_element;
+  o << "limited by " << model_.describe_element(e) << ", critical step " << pass_.critical_step << " s";
+  return o.str();
+}
+
+double ExplicitSolver::external_force(std::size_t dof) const {
+  double ramp = 1.0;
+  if (run_.gravity_ramp_time > 0) ramp = std::min(1.0, time_ / run_.gravity_ramp_time);
+  return ramp * gravity_force_[dof];
+}
+
+void ExplicitSolver::advance_velocity() {
+  const std::size_t ndof = 3 * model_.num_nodes;
+  const double dt = dt_next_;
+  const double dtbar = 0.5 * (dt_prev_ + dt);
+  const double alpha = damping_.alpha;
+  const double c_minus = 1.0 - 0.5 * alpha * dtbar, c_plus = 1.0 / (1.0 + 0.5 * alpha * dtbar);
+  const bool first = step_ == 0;
+  double kinetic = 0, ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
+  v_prev_half_ = v_half_;
+  const double* __restrict mass_of = model_.mass.data();
+#pragma omp parallel for num_threads(forces_.threads()) reduction(+ : kinetic, ext_back, ext_fwd, damp_back, damp_fwd) schedule(static)
+  for (std::size_t i = 0; i < ndof; ++i) {
+    const double m = mass_of[i / 3];
+    const double fext = external_force(i);
+    const double v_old = v_half_[i];
+    double v_new = (c_minus * v_old + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus;
+    double reaction = 0;
+    if (model_.constrained[i]) {
+      const double v_set = model_.constraint_velocity[i];
+      reaction = m * (v_set - v_new) / (dtbar > 0 ? dtbar : 1.0);
+      v_new = v_set;
+    }
+    v_half_[i] = v_new;
+    const double v_n = first ? v_old : 0.5 * (v_old + v_new);
+    kinetic += 0.5 * m * v_n * v_n;
+    // Work of F^n over du^{n-1/2} (closes step n-1) and du^{n+1/2} (carried to step n+1).
+    const double F = fext + reaction;
+    const double fdamp = alpha * m * v_n;
+    ext_back += F * dt_prev_ * v_old;
+    ext_fwd += F * dt * v_new;
+    damp_back += fdamp * dt_prev_ * v_old;
+    damp_fwd += fdamp * dt * v_new;
+  }
+  energy_.kinetic = kinetic;
+  energy_.internal = pass_.strain_energy;
+  energy_.external_work += 0.5 * (pending_external_ + ext_back);
+  energy_.damping_work += 0.5 * (pending_damping_ + damp_back) + pass_.viscous_power * dtbar;
+  pending_external_ = ext_fwd;
+  pending_damping_ = damp_fwd;
+  energy_.peak = std::max(energy_.peak, kinetic + pass_.strain_energy);
+  velocity_advanced_ = true;
+}
+
+void ExplicitSolver::check_energy() const {
+  const double err = energy_.balance_error();
+  std::ostringstream o;
+  if (!std::isfinite(err) || !std::isfinite(energy_.kinetic)) {
+    o << "non-finite energy at step " << step_ << ", t = " << time_ << " s (NaN or overflow; " << describe_step_limit() << ")";
+    throw NumericalError(o.str());
+  }
+  if (std::abs(err) > run_.energy_tolerance * energy_.scale()) {
+    o << "energy blow-up at step " << step_ << ", t = " << time_ << " s: energy balance error " << err << " J is "
+      << std::abs(err) / energy_.scale() << " of the largest energy (tolerance run.energy_tolerance = "
+      << run_.energy_tolerance << "); time step " << dt_next_ << " s vs " << describe_step_limit()
+      << " - the step is above the stable limit or the model is unstable";
+    throw NumericalError(o.str());
+  }
+}
+
+void ExplicitSolver::advance_position() {
+  const std::size_t ndof = 3 * model_.num_nodes;
+  const double dt = dt_next_;
+#pragma omp parallel for num_threads(forces_.threads()) schedule(static)
+  for (std::size_t i = 0; i < ndof; ++i) u_[i] += dt * v_half_[i];
+  time_ += dt;
+  ++step_;
+  dt_prev_ = dt;
+  velocity_advanced_ = false;
+  stress_pass();
+  dt_next_ = choose_step();
+}
+
+std::vector<double> ExplicitSolver::velocity_at_step() const {
+  std::vector<double> v(v_half_.size());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = step_ == 0 ? v_prev_half_[i] : 0.5 * (v_prev_half_[i] + v_half_[i]);
+  return v;
+}
+
+std::vector<double> ExplicitSolver::previous_displacement() const {
+  std::vector<double> u(u_.size());
+  const std::vector<double>& v = velocity_advanced_ ? v_prev_half_ : v_half_;
+  for (std::size_t i = 0; i < u.size(); ++i) u[i] = u_[i] - dt_prev_ * v[i];
+  return u;
+}
+
+}  // namespace tactus::solver

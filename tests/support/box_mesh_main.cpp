@@ -1,0 +1,41 @@
+// tactus-box-mesh: structured tet box (6 tets per cell) with an optional second material
+// ("bone") where tet centroids fall inside a box. A development helper for the solver's tests,
+// benchmarks and the sample scenario; the mesher stage (tactus-mesh) produces real meshes.
+#include "box_mesh.hpp"
+#include "tactus/core/cli.hpp"
+#include "tactus/core/error.hpp"
+
+int main(int argc, char** argv) {
+  using namespace tactus;
+  CLI::App app{"tactus-box-mesh: structured tetrahedral box mesh (.msh)", "tactus-box-mesh"};
+  cli::CommonOptions common;
+  cli::add_common_options(app, common, "output .msh file");
+  std::array<double, 3> size{0.1, 0.1, 0.1}, origin{0, 0, 0};
+  std::array<int, 3> cells{10, 10, 10};
+  std::vector<double> inclusion;
+  app.add_option("--size", size, "box edge lengths in m");
+  app.add_option("--origin", origin, "lower corner in m");
+  app.add_option("--cells", cells, "cells along x, y, z");
+  app.add_option("--inclusion", inclusion, "xmin ymin zmin xmax ymax zmax: tets inside become group 'bone'")->expected(6);
+  return cli::run(app, argc, argv, common, [&] {
+    if (common.output.empty()) throw InputError("command line", "-o/--output", "an output .msh path");
+    for (int c = 0; c < 3; ++c) {
+      if (!(size[c] > 0)) throw InputError("command line", "--size", "positive lengths");
+      if (cells[c] < 1) throw InputError("command line", "--cells", "at least one cell per axis");
+    }
+    TetMesh m = testing::make_box_mesh(cells[0], cells[1], cells[2], size[0], size[1], size[2], origin);
+    if (!inclusion.empty()) {
+      m.groups.push_back({3, 2, "bone"});
+      for (std::size_t e = 0; e < m.tets.size(); ++e) {
+        Vec3 c{0, 0, 0};
+        for (int v : m.tets[e])
+          for (int k = 0; k < 3; ++k) c[k] += m.nodes[v][k] / 4;
+        bool in = true;
+        for (int k = 0; k < 3; ++k) in = in && c[k] >= inclusion[k] && c[k] <= inclusion[3 + k];
+        if (in) m.tet_group[e] = 2;
+      }
+      m.groups[0].name = "soft_tissue";
+    }
+    write_msh(common.output, m);
+  });
+}
