@@ -47,7 +47,7 @@ const SectionSpec& run_section() {
        typed("output_times", ValueType::number_list, "s", "times at which results are written", false, "[end_time]"),
        opt(number("output_interval", "s", "write results every interval (alternative to output_times)", 0, false), "0"),
        opt(number("energy_tolerance", "", "energy-balance error, relative to the largest energy, that stops the run as unstable", 0, true),
-           "0.1"),
+           "0.25"),
        typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
        opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
        opt(number("threads", "", "worker threads (0: all cores)", 0, false, 1024, false), "0"),
@@ -305,7 +305,7 @@ Scenario read_scenario(const fs::path& file) {
     run.force_time_step = r.boolean(t, *spec.find("force_time_step"), "run", false);
     run.output_times = r.number_list(t, *spec.find("output_times"), "run");
     run.output_interval = r.number(t, *spec.find("output_interval"), "run", 0);
-    run.energy_tolerance = r.number(t, *spec.find("energy_tolerance"), "run", 0.1);
+    run.energy_tolerance = r.number(t, *spec.find("energy_tolerance"), "run", 0.25);
     run.gravity = r.vec3(t, *spec.find("gravity"), "run", {0, 0, 0});
     run.gravity_ramp_time = r.number(t, *spec.find("gravity_ramp_time"), "run", 0);
     run.threads = static_cast<int>(r.number(t, *spec.find("threads"), "run", 0));

@@ -11,14 +11,14 @@
 #include "temp_dir.hpp"
 
 using namespace tactus;
-using tactus::testing::TempDir;
+using tactus::testkit::TempDir;
 
 namespace {
 
 // A two-material mesh: the box's upper half becomes group 2 "bone".
 TetMesh two_material_box() {
-  TetMesh m = tactus::testing::make_box_mesh(4, 3, 2, 0.04, 0.03, 0.02, {0.001, -0.002, 0.0003});
-  tactus::testing::perturb_interior_nodes(m, 0.01, 0.2, 11);  // non-round coordinates
+  TetMesh m = tactus::testkit::make_box_mesh(4, 3, 2, 0.04, 0.03, 0.02, {0.001, -0.002, 0.0003});
+  tactus::testkit::perturb_interior_nodes(m, 0.01, 0.2, 11);  // non-round coordinates
   m.groups.push_back({3, 2, "bone"});
   for (std::size_t e = 0; e < m.tets.size(); ++e) {
     double z = 0;
@@ -149,7 +149,7 @@ TEST(MeshErrors, GarbageMsh) {
 TEST(MeshErrors, TruncatedMsh) {
   TempDir dir;
   write_msh(dir / "t.msh", two_material_box());
-  tactus::testing::truncate_file(dir / "t.msh", std::filesystem::file_size(dir / "t.msh") / 2);
+  tactus::testkit::truncate_file(dir / "t.msh", std::filesystem::file_size(dir / "t.msh") / 2);
   expect_input_error([&] { read_msh(dir / "t.msh"); }, {"t.msh"});
 }
 

@@ -7,7 +7,7 @@
 #include "temp_dir.hpp"
 
 using tactus::StagedOutput;
-using tactus::testing::TempDir;
+using tactus::testkit::TempDir;
 
 TEST(StagedOutput, NothingLeftWhenNotCommitted) {
   TempDir dir;

@@ -9,7 +9,7 @@
 #include "temp_dir.hpp"
 
 using namespace tactus;
-using tactus::testing::TempDir;
+using tactus::testkit::TempDir;
 
 namespace {
 
@@ -110,7 +110,7 @@ TEST(VolumeErrors, TruncatedFile) {
   Volume<std::uint16_t> v({64, 64, 16}, {1e-3, 1e-3, 1e-3}, {0, 0, 0});
   for (std::size_t i = 0; i < v.size(); ++i) v.data[i] = static_cast<std::uint16_t>(i * 2654435761u);
   write_h5(dir / "t.h5", "/labels", v);
-  tactus::testing::truncate_file(dir / "t.h5", std::filesystem::file_size(dir / "t.h5") / 2);
+  tactus::testkit::truncate_file(dir / "t.h5", std::filesystem::file_size(dir / "t.h5") / 2);
   expect_input_error([&] { read_h5<std::uint16_t>(dir / "t.h5", "/labels"); }, {"t.h5"});
 }
 

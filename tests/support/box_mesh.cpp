@@ -5,7 +5,7 @@
 #include <numeric>
 #include <random>
 
-namespace tactus::testing {
+namespace tactus::testkit {
 
 TetMesh make_box_mesh(int nx, int ny, int nz, double lx, double ly, double lz, Vec3 origin) {
   TetMesh m;
@@ -103,4 +103,4 @@ void shuffle_numbering(TetMesh& mesh, std::uint64_t seed) {
   mesh.tet_group = std::move(groups);
 }
 
-}  // namespace tactus::testing
+}  // namespace tactus::testkit

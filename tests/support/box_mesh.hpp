@@ -6,7 +6,7 @@
 
 #include "tactus/core/mesh.hpp"
 
-namespace tactus::testing {
+namespace tactus::testkit {
 
 TetMesh make_box_mesh(int nx, int ny, int nz, double lx, double ly, double lz, Vec3 origin = {0, 0, 0});
 
@@ -16,4 +16,4 @@ void perturb_interior_nodes(TetMesh& mesh, double cell_size, double fraction, st
 // Randomly renumbers nodes and elements, as a mesher without locality ordering would leave them.
 void shuffle_numbering(TetMesh& mesh, std::uint64_t seed);
 
-}  // namespace tactus::testing
+}  // namespace tactus::testkit

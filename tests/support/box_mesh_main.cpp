@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
       if (!(size[c] > 0)) throw InputError("command line", "--size", "positive lengths");
       if (cells[c] < 1) throw InputError("command line", "--cells", "at least one cell per axis");
     }
-    TetMesh m = testing::make_box_mesh(cells[0], cells[1], cells[2], size[0], size[1], size[2], origin);
+    TetMesh m = testkit::make_box_mesh(cells[0], cells[1], cells[2], size[0], size[1], size[2], origin);
     if (!inclusion.empty()) {
       m.groups.push_back({3, 2, "bone"});
       for (std::size_t e = 0; e < m.tets.size(); ++e) {

@@ -4,7 +4,7 @@
 #include <random>
 #include <string>
 
-namespace tactus::testing {
+namespace tactus::testkit {
 
 class TempDir {
  public:
@@ -29,4 +29,4 @@ class TempDir {
 // Writes `bytes` bytes of `text` (repeated) or truncates an existing file to its first `keep` bytes.
 inline void truncate_file(const std::filesystem::path& p, std::uintmax_t keep) { std::filesystem::resize_file(p, keep); }
 
-}  // namespace tactus::testing
+}  // namespace tactus::testkit

@@ -22,7 +22,7 @@ struct RunSpec {
   bool force_time_step = false;  // accept a user time_step above the stable limit
   std::vector<double> output_times;
   double output_interval = 0;
-  double energy_tolerance = 0.1;  // relative energy-balance error that stops a run as unstable
+  double energy_tolerance = 0.25;  // relative energy-balance error that stops a run as unstable
   Vec3a gravity{0, 0, 0};
   double gravity_ramp_time = 0;
   int threads = 0;  // 0: all cores

@@ -1,0 +1,147 @@
+// solver/scenario: every malformed scenario gives one InputError naming the key and what was
+// expected; the generated key reference matches docs/scenario-reference.md.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "box_mesh.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/solver/model.hpp"
+#include "tactus/solver/scenario.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+
+namespace {
+
+const char* kValid = R"(
+[run]
+end_time = 1e-3
+output_times = [5e-4, 1e-3]
+
+[[bodies]]
+name = "pad"
+mesh = "pad.msh"
+materials = { body = "skin" }
+initial_velocity = [2.0, 0, 0]
+
+[materials.skin]
+type = "hgo"
+c1 = 10206.9
+k1 = 1.7
+k2 = 882.847
+k = 1.0e8
+density = 1050.0
+fibres = [[1, 1, 0], [1, -1, 0]]
+
+[materials.bone]
+type = "linear_elastic"
+E = 10e9
+nu = 0.22
+density = 2150
+
+[[boundary]]
+body = "pad"
+group = "xmin"
+type = "fixed"
+)";
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return s.replace(pos, from.size(), to);
+}
+
+class ScenarioFile : public ::testing::Test {
+ protected:
+  void SetUp() override { write_msh(dir / "pad.msh", testkit::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01)); }
+  std::filesystem::path write(const std::string& text) {
+    std::ofstream(dir / "scenario.toml") << text;
+    return dir / "scenario.toml";
+  }
+  // Expects InputError whose message contains every fragment.
+  void expect_error(const std::string& text, std::initializer_list<std::string> fragments, bool build = false) {
+    try {
+      const Scenario sc = read_scenario(write(text));
+      if (build) build_model(sc);
+      FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+      for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    }
+  }
+  testkit::TempDir dir;
+};
+
+}  // namespace
+
+TEST_F(ScenarioFile, ValidScenarioReads) {
+  const Scenario sc = read_scenario(write(kValid));
+  EXPECT_DOUBLE_EQ(sc.run.end_time, 1e-3);
+  EXPECT_DOUBLE_EQ(sc.run.time_step_safety, 0.9);
+  ASSERT_EQ(sc.bodies.size(), 1u);
+  EXPECT_EQ(sc.bodies[0].initial_velocity[0], 2.0);
+  const auto& fib = *sc.materials.at("skin").fibres;
+  EXPECT_NEAR(fib[0][0], std::sqrt(0.5), 1e-15);  // normalised
+  const Model m = build_model(sc);
+  EXPECT_EQ(m.num_elements, 48u);
+  std::size_t fixed = 0;
+  for (auto c : m.constrained) fixed += c;
+  EXPECT_EQ(fixed, 3u * 9u);  // the 3x3 nodes of the xmin face, all components
+}
+
+TEST_F(ScenarioFile, UnknownKey) { expect_error(replace(kValid, "end_time", "end_tme"), {"run.end_tme", "unknown key"}); }
+TEST_F(ScenarioFile, MissingRequiredKey) {
+  expect_error(replace(kValid, "k2 = 882.847\n", ""), {"materials.skin.k2", "missing"});
+}
+TEST_F(ScenarioFile, NegativeDensity) {
+  expect_error(replace(kValid, "density = 2150", "density = -2150"), {"materials.bone.density", "> 0", "-2150"});
+}
+TEST_F(ScenarioFile, IncompressiblePoissonRatio) {
+  expect_error(replace(kValid, "nu = 0.22", "nu = 0.5"), {"materials.bone.nu", "(-1, 0.5)"});
+}
+TEST_F(ScenarioFile, NonPositiveBulkModulus) {
+  expect_error(replace(kValid, "k = 1.0e8", "k = 0"), {"materials.skin.k", "> 0"});
+}
+TEST_F(ScenarioFile, UnknownMaterialType) {
+  expect_error(replace(kValid, "\"linear_elastic\"", "\"mooney\""), {"materials.bone.type", "hgo", "mooney"});
+}
+TEST_F(ScenarioFile, HgoWithoutFibres) {
+  expect_error(replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", ""), {"materials.skin.fibres", "two fibre directions"});
+}
+TEST_F(ScenarioFile, BodyNamesUndefinedMaterial) {
+  expect_error(replace(kValid, "body = \"skin\"", "body = \"skn\""), {"bodies[0].materials.body", "skn"});
+}
+TEST_F(ScenarioFile, GroupWithoutMaterial) {
+  expect_error(replace(kValid, "body = \"skin\"", "tissue = \"skin\""), {"bodies[0].materials", "'body'", "found none"}, true);
+}
+TEST_F(ScenarioFile, MaterialForMissingGroup) {
+  expect_error(replace(kValid, "body = \"skin\"", "\"*\" = \"skin\", tissue = \"bone\""),
+               {"bodies[0].materials.tissue", "no such group"}, true);
+}
+TEST_F(ScenarioFile, BoundaryGroupNotInMesh) {
+  expect_error(replace(kValid, "group = \"xmin\"", "group = \"palm\""), {"boundary[0].group", "palm", "xmin"}, true);
+}
+TEST_F(ScenarioFile, BoundaryWithGroupAndBox) {
+  expect_error(replace(kValid, "type = \"fixed\"", "type = \"fixed\"\nbox = [[0,0,0],[1,1,1]]"), {"boundary[0]", "exactly one"});
+}
+TEST_F(ScenarioFile, MissingMeshFile) {
+  expect_error(replace(kValid, "pad.msh", "nowhere.msh"), {"nowhere.msh", "no such file"}, true);
+}
+TEST_F(ScenarioFile, TomlSyntaxErrorGivesLine) {
+  expect_error(replace(kValid, "end_time = 1e-3", "end_time = = 1e-3"), {"line 3", "valid TOML"});
+}
+TEST_F(ScenarioFile, OutputTimeAfterEnd) {
+  expect_error(replace(kValid, "[5e-4, 1e-3]", "[5e-4, 2e-3]"), {"run.output_times", "run.end_time"});
+}
+
+// The committed reference must be what the declarations generate (regenerate with
+// `tactus-solve keys > docs/scenario-reference.md`).
+TEST(ScenarioReference, DocsMatchDeclarations) {
+  std::ifstream in(std::string(std::getenv("TACTUS_SOURCE_DIR")) + "/docs/scenario-reference.md");
+  ASSERT_TRUE(in.good());
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), scenario_reference_markdown());
+}
