@@ -139,6 +139,20 @@ void reorder_for_locality(Model& m) {
   for (std::size_t k = 0; k < m.num_elements; ++k) m.element_of_input[static_cast<std::size_t>(m.input_element[k])] = static_cast<std::int32_t>(k);
 }
 
+namespace {
+template <class V>
+std::size_t bytes(const V& v) {
+  return v.capacity() * sizeof(typename V::value_type);
+}
+}  // namespace
+
+std::size_t Model::memory_bytes() const {
+  return bytes(X) + bytes(mass) + bytes(initial_velocity) + bytes(conn) + bytes(grad) + bytes(volume) + bytes(constrained) +
+         bytes(constraint_velocity) + bytes(node_of_input) + bytes(element_of_input) + bytes(input_element) +
+         bytes(input_mesh.nodes) + bytes(input_mesh.tets) + bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) +
+         bytes(input_mesh.triangle_group);
+}
+
 const MaterialBlock& Model::block_of(std::size_t e) const {
   for (const auto& b : blocks)
     if (e >= b.begin && e < b.end) return b;

@@ -51,17 +51,19 @@ void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_
     const double V0 = vol[e];
     acc.energy += V0 * sp.W;
 
-    // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J.
-    double s = 0, sum[3] = {0, 0, 0};
+    // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J;
+    // s = sum_a |grad_x N_a|^2 is accumulated unscaled (J^2 s) to keep divisions out of the loop.
+    double sJ2 = 0, sum[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) {
       double h[3];
-      for (int i = 0; i < 3; ++i) h[i] = (cof(i, 0) * g[3 * a] + cof(i, 1) * g[3 * a + 1] + cof(i, 2) * g[3 * a + 2]) / J;
-      s += h[0] * h[0] + h[1] * h[1] + h[2] * h[2];
+      for (int i = 0; i < 3; ++i) h[i] = cof(i, 0) * g[3 * a] + cof(i, 1) * g[3 * a + 1] + cof(i, 2) * g[3 * a + 2];
+      sJ2 += h[0] * h[0] + h[1] * h[1] + h[2] * h[2];
       sum[0] += h[0], sum[1] += h[1], sum[2] += h[2];
     }
-    s += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
-    // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J).
-    const double dt2 = rho0 / (s * sp.modulus * J);
+    sJ2 += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
+    // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J):
+    // dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M).
+    const double dt2 = rho0 * J / (sJ2 * sp.modulus);
 
     if constexpr (kViscous) {
       // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
@@ -124,6 +126,12 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
     : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads()) {
   thread_forces_.resize(static_cast<std::size_t>(threads_ - 1));
   for (auto& buf : thread_forces_) buf.assign(3 * model.num_nodes, 0.0);
+}
+
+std::size_t InternalForces::memory_bytes() const {
+  std::size_t b = 0;
+  for (const auto& buf : thread_forces_) b += buf.capacity() * sizeof(double);
+  return b;
 }
 
 StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out) {

@@ -159,6 +159,12 @@ void ExplicitSolver::advance_position() {
   dt_next_ = choose_step();
 }
 
+std::size_t ExplicitSolver::memory_bytes() const {
+  std::size_t doubles = u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + inv_mass_.capacity() +
+                        gravity_force_.capacity();
+  return doubles * sizeof(double) + forces_.memory_bytes();
+}
+
 std::vector<double> ExplicitSolver::velocity_at_step() const {
   std::vector<double> v(v_half_.size());
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = step_ == 0 ? v_prev_half_[i] : 0.5 * (v_prev_half_[i] + v_half_[i]);

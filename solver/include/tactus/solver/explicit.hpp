@@ -48,6 +48,7 @@ class ExplicitSolver {
   // u^{n-1} = u^n - dt^{n-1/2} v^{n-1/2}: the last good state when step n fails.
   std::vector<double> previous_displacement() const;
   const Model& model() const { return model_; }
+  std::size_t memory_bytes() const;  // integrator state + per-thread force buffers (not the model)
   int threads() const { return forces_.threads(); }
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
   void check_energy() const;

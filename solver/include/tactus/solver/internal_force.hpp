@@ -26,6 +26,7 @@ class InternalForces {
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
   StressPassResult compute(const double* u, const double* v, double* f_out);
   int threads() const { return threads_; }
+  std::size_t memory_bytes() const;
 
  private:
   const Model& model_;

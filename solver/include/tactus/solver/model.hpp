@@ -50,6 +50,7 @@ struct Model {
   TetMesh input_mesh;                          // all bodies, input numbering, placed coordinates
   std::vector<BodyRange> bodies;
 
+  std::size_t memory_bytes() const;  // everything held, including the input mesh copy
   std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"
   const MaterialBlock& block_of(std::size_t internal) const;
 };

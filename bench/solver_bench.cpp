@@ -1,0 +1,131 @@
+// Solver benchmarks (issue: solver core):
+//  throughput  internal-force (stress pass) tet updates per second for neo_hookean, hgo and
+//              linear_elastic, 1 and 2 threads, at ~10k, 100k and 1M tets, on meshes whose
+//              numbering is shuffled as a mesher without locality ordering could leave it,
+//              with and without tactus' Morton reordering; plus bytes per tet of solver state.
+//  cube        the whole-run case: 0.1 m cube, 20^3 cells x 6 tets = 48,000 tets, neo_hookean
+//              mu = 3 kPa, bulk 50 kPa, rho 1000, bottom fixed, top pushed down 10 % over 2,000
+//              steps of dt = 1e-4 s, mass damping 50 /s, timed end to end (mesh file to results).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "box_mesh.hpp"
+#include "tactus/core/cli.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/model.hpp"
+#include "tactus/solver/run.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+Material bench_material(const std::string& name) {
+  if (name == "neo_hookean") return NeoHookean{3000.0, 50000.0, 1000.0};
+  if (name == "linear_elastic") return LinearElastic::from({{"E", 1e9}, {"nu", 0.3}, {"density", 2000}});
+  return Hgo{10206.9, 1.7, 882.847, 1e8, 1050, Vec3d(0.8660254, 0.5, 0), Vec3d(0.8660254, -0.5, 0)};
+}
+
+// A deformed state: a smooth 3 % stretch/shear field with a little noise, so hgo fibres engage.
+std::vector<double> deformed_state(const Model& m) {
+  std::vector<double> u(3 * m.num_nodes);
+  for (std::size_t i = 0; i < m.num_nodes; ++i) {
+    const double* X = &m.X[3 * i];
+    u[3 * i] = 0.03 * X[0] + 0.01 * X[1] + 1e-4 * std::sin(1e3 * X[2]);
+    u[3 * i + 1] = -0.01 * X[1] + 0.005 * X[2];
+    u[3 * i + 2] = -0.01 * X[2] + 1e-4 * std::cos(1e3 * X[0]);
+  }
+  return u;
+}
+
+double updates_per_second(const Model& m, int threads) {
+  InternalForces forces(m, 0.0, threads);
+  const auto u = deformed_state(m);
+  std::vector<double> v(u.size(), 0.0), f(u.size());
+  forces.compute(u.data(), v.data(), f.data());  // warm-up
+  std::size_t passes = 0;
+  const auto t0 = Clock::now();
+  double elapsed = 0;
+  while (elapsed < 1.5 || passes < 3) {
+    forces.compute(u.data(), v.data(), f.data());
+    ++passes;
+    elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+  }
+  return static_cast<double>(passes * m.num_elements) / elapsed;
+}
+
+void throughput(const std::vector<int>& sizes) {
+  std::printf("%-15s %9s %8s %7s %14s %14s\n", "material", "tets", "order", "threads", "Mupdates/s", "ns/tet-update");
+  for (int n : sizes) {
+    TetMesh mesh = testkit::make_box_mesh(n, n, n, 0.1, 0.1, 0.1);
+    testkit::perturb_interior_nodes(mesh, 0.1 / n, 0.2, 1);
+    testkit::shuffle_numbering(mesh, 2);
+    for (const char* mat : {"neo_hookean", "hgo", "linear_elastic"}) {
+      for (bool reorder : {false, true}) {
+        const Model m = build_model(mesh, bench_material(mat), mat, {0, 0, 0}, reorder);
+        for (int threads : {1, 2}) {
+          const double rate = updates_per_second(m, threads);
+          std::printf("%-15s %9zu %8s %7d %14.2f %14.2f\n", mat, m.num_elements, reorder ? "morton" : "shuffled", threads,
+                      rate / 1e6, 1e9 / rate);
+          std::fflush(stdout);
+        }
+      }
+    }
+    const Model m = build_model(mesh, bench_material("hgo"));
+    RunSpec run;
+    run.end_time = 1;
+    run.threads = 2;
+    const ExplicitSolver solver(m, run, DampingSpec{});
+    std::printf("memory at %zu tets: model %.0f B/tet + integrator %.0f B/tet = %.0f B/tet (%zu nodes)\n", m.num_elements,
+                static_cast<double>(m.memory_bytes()) / static_cast<double>(m.num_elements),
+                static_cast<double>(solver.memory_bytes()) / static_cast<double>(m.num_elements),
+                static_cast<double>(m.memory_bytes() + solver.memory_bytes()) / static_cast<double>(m.num_elements), m.num_nodes);
+  }
+}
+
+void cube(const std::filesystem::path& work) {
+  std::filesystem::create_directories(work);
+  write_msh(work / "cube.msh", testkit::make_box_mesh(20, 20, 20, 0.1, 0.1, 0.1));
+  Scenario sc;
+  sc.file = work / "cube.toml";
+  sc.run.end_time = 0.2;
+  sc.run.time_step = 1e-4;
+  sc.run.output_times = {0.1, 0.2};
+  sc.damping.alpha = 50;
+  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}}, {}};
+  BodySpec body;
+  body.name = "cube";
+  body.mesh = work / "cube.msh";
+  body.materials["*"] = "rubber";
+  sc.bodies.push_back(body);
+  sc.boundaries.push_back(BoundarySpec{"cube", "zmin", {}, "fixed", {0, 0, 0}, {true, true, true}});
+  sc.boundaries.push_back(BoundarySpec{"cube", "zmax", {}, "velocity", {0, 0, -0.01 / 0.2}, {true, true, true}});
+  const auto t0 = Clock::now();
+  const RunSummary s = run_simulation(sc, work / "results");
+  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::printf("cube: 48000 tets, %zu steps, wall %.2f s (%.2f M tet-steps/s end to end), energy balance error %.2e relative\n",
+              s.steps, wall, 48000.0 * static_cast<double>(s.steps) / wall / 1e6, s.max_relative_balance_error);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tactus-bench-solver: solver throughput, memory and whole-run benchmarks", "tactus-bench-solver"};
+  cli::CommonOptions common;
+  cli::add_common_options(app, common, "");
+  std::vector<int> sizes{12, 26, 55};  // 6 n^3 tets: 10,368 / 105,456 / 998,250
+  std::string work = "out/bench";
+  auto* tp = app.add_subcommand("throughput", "stress-pass throughput and memory per tet");
+  tp->add_option("--cells", sizes, "cells per box edge (6 n^3 tets)")->capture_default_str();
+  auto* cb = app.add_subcommand("cube", "whole-run neo_hookean cube (48,000 tets, 2,000 steps)");
+  cb->add_option("--work", work, "folder for the mesh and results")->capture_default_str();
+  app.require_subcommand(1);
+  return cli::run(app, argc, argv, common, [&] {
+    if (tp->parsed()) throughput(sizes);
+    if (cb->parsed()) cube(work);
+  });
+}
