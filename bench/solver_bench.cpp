@@ -11,7 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/cli.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
@@ -61,9 +61,9 @@ double updates_per_second(const Model& m, int threads) {
 void throughput(const std::vector<int>& sizes) {
   std::printf("%-15s %9s %8s %7s %14s %14s\n", "material", "tets", "order", "threads", "Mupdates/s", "ns/tet-update");
   for (int n : sizes) {
-    TetMesh mesh = testkit::make_box_mesh(n, n, n, 0.1, 0.1, 0.1);
-    testkit::perturb_interior_nodes(mesh, 0.1 / n, 0.2, 1);
-    testkit::shuffle_numbering(mesh, 2);
+    TetMesh mesh = samples::make_box_mesh(n, n, n, 0.1, 0.1, 0.1);
+    samples::perturb_interior_nodes(mesh, 0.1 / n, 0.2, 1);
+    samples::shuffle_numbering(mesh, 2);
     for (const char* mat : {"neo_hookean", "hgo", "linear_elastic"}) {
       for (bool reorder : {false, true}) {
         const Model m = build_model(mesh, bench_material(mat), mat, {0, 0, 0}, reorder);
@@ -89,7 +89,7 @@ void throughput(const std::vector<int>& sizes) {
 
 void cube(const std::filesystem::path& work) {
   std::filesystem::create_directories(work);
-  write_msh(work / "cube.msh", testkit::make_box_mesh(20, 20, 20, 0.1, 0.1, 0.1));
+  write_msh(work / "cube.msh", samples::make_box_mesh(20, 20, 20, 0.1, 0.1, 0.1));
   Scenario sc;
   sc.file = work / "cube.toml";
   sc.run.end_time = 0.2;

@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/mesh.hpp"
 #include "temp_dir.hpp"
@@ -17,8 +17,8 @@ namespace {
 
 // A two-material mesh: the box's upper half becomes group 2 "bone".
 TetMesh two_material_box() {
-  TetMesh m = tactus::testkit::make_box_mesh(4, 3, 2, 0.04, 0.03, 0.02, {0.001, -0.002, 0.0003});
-  tactus::testkit::perturb_interior_nodes(m, 0.01, 0.2, 11);  // non-round coordinates
+  TetMesh m = tactus::samples::make_box_mesh(4, 3, 2, 0.04, 0.03, 0.02, {0.001, -0.002, 0.0003});
+  tactus::samples::perturb_interior_nodes(m, 0.01, 0.2, 11);  // non-round coordinates
   m.groups.push_back({3, 2, "bone"});
   for (std::size_t e = 0; e < m.tets.size(); ++e) {
     double z = 0;

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "linear_reference.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
@@ -26,7 +26,7 @@ RunSpec run_until(double end_time) {
 // the smearing of the front by the lumped-mass dispersion over that distance.
 TEST(Dynamics, BarWaveSpeed) {
   const double E = 1e7, rho = 1000, c = std::sqrt(E / rho), v0 = 0.01;
-  const TetMesh mesh = testkit::make_box_mesh(200, 1, 1, 1.0, 0.02, 0.02);
+  const TetMesh mesh = samples::make_box_mesh(200, 1, 1, 1.0, 0.02, 0.02);
   Model model = build_model(mesh, LinearElastic::from({{"E", E}, {"nu", 0.0}, {"density", rho}}));
   constrain_nodes(model, [](const double* X) { return X[0] < 1e-9; }, {true, false, false}, {v0, 0, 0});
   ExplicitSolver solver(model, run_until(0.009), DampingSpec{});
@@ -59,7 +59,7 @@ TEST(Dynamics, BarWaveSpeed) {
 // Oracle: conservation. No damping, no loads: kinetic + strain energy stays at its initial value
 // within 0.5 % over 10,000 steps of a large rotating and deforming motion.
 TEST(Dynamics, FreeBodyConservesEnergy) {
-  const TetMesh mesh = testkit::make_box_mesh(4, 4, 4, 0.1, 0.1, 0.1);
+  const TetMesh mesh = samples::make_box_mesh(4, 4, 4, 0.1, 0.1, 0.1);
   Model model = build_model(mesh, NeoHookean{3000.0, 50000.0, 1000.0});
   for (std::size_t i = 0; i < model.num_nodes; ++i) {
     const double x = model.X[3 * i] - 0.05, y = model.X[3 * i + 1] - 0.05, z = model.X[3 * i + 2] - 0.05;
@@ -87,7 +87,7 @@ TEST(Dynamics, FreeBodyConservesEnergy) {
 // over three periods. 1 % tolerance; the central-difference period error (w dt)^2/24 is ~1e-6.
 TEST(Dynamics, CantileverFirstFrequencyMatchesEigenvalue) {
   const double E = 1e7, nu = 0.3, rho = 1000;
-  const TetMesh mesh = testkit::make_box_mesh(10, 2, 2, 0.1, 0.01, 0.01);
+  const TetMesh mesh = samples::make_box_mesh(10, 2, 2, 0.1, 0.01, 0.01);
   Model model = build_model(mesh, LinearElastic::from({{"E", E}, {"nu", nu}, {"density", rho}}));
   constrain_nodes(model, [](const double* X) { return X[0] < 1e-9; }, {true, true, true});
   const auto modes = testkit::generalized_modes(model, testkit::linear_stiffness(model, E, nu));

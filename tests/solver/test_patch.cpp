@@ -4,7 +4,7 @@
 // (divergence theorem), zero at interior nodes: every node is checked against that.
 #include <gtest/gtest.h>
 
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
 
@@ -14,9 +14,9 @@ using namespace tactus::solver;
 namespace {
 
 void patch_test(const Material& material) {
-  TetMesh mesh = testkit::make_box_mesh(4, 3, 5, 0.04, 0.03, 0.05);
-  testkit::perturb_interior_nodes(mesh, 0.01, 0.3, 2024);  // irregular: up to 30 % of a cell
-  testkit::shuffle_numbering(mesh, 7);                      // and numbered without order
+  TetMesh mesh = samples::make_box_mesh(4, 3, 5, 0.04, 0.03, 0.05);
+  samples::perturb_interior_nodes(mesh, 0.01, 0.3, 2024);  // irregular: up to 30 % of a cell
+  samples::shuffle_numbering(mesh, 7);                      // and numbered without order
   const Model model = build_model(mesh, material);
   Mat3 A;  // a general (non-symmetric) displacement gradient
   A << 0.02, -0.01, 0.015, 0.005, -0.03, 0.01, -0.012, 0.008, 0.025;

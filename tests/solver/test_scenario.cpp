@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -56,7 +56,7 @@ std::string replace(std::string s, const std::string& from, const std::string& t
 
 class ScenarioFile : public ::testing::Test {
  protected:
-  void SetUp() override { write_msh(dir / "pad.msh", testkit::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01)); }
+  void SetUp() override { write_msh(dir / "pad.msh", samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01)); }
   std::filesystem::path write(const std::string& text) {
     std::ofstream(dir / "scenario.toml") << text;
     return dir / "scenario.toml";

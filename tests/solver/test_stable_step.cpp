@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "linear_reference.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/solver/explicit.hpp"
@@ -53,8 +53,8 @@ TEST(StableStep, CriticalStepBelowTrueLimit) {
   EXPECT_LE(s1.critical_step(), truth);
   EXPECT_GE(s1.critical_step(), 0.5 * truth);  // and not needlessly small
 
-  TetMesh mesh = testkit::make_box_mesh(4, 3, 3, 0.04, 0.03, 0.03);
-  testkit::perturb_interior_nodes(mesh, 0.01, 0.25, 3);
+  TetMesh mesh = samples::make_box_mesh(4, 3, 3, 0.04, 0.03, 0.03);
+  samples::perturb_interior_nodes(mesh, 0.01, 0.25, 3);
   const Model box = build_model(mesh, LinearElastic::from({{"E", kE}, {"nu", kNu}, {"density", kRho}}));
   const ExplicitSolver s2(box, run, DampingSpec{});
   EXPECT_LE(s2.critical_step(), true_limit(box));
@@ -105,7 +105,7 @@ TEST(StableStep, RunAboveTrueLimitIsStopped) {
 // Through files: the failure publishes run.json "failed", the message and the last good state.
 TEST(StableStep, FailedRunWritesLastGoodState) {
   testkit::TempDir dir;
-  TetMesh mesh = testkit::make_box_mesh(3, 3, 3, 0.03, 0.03, 0.03);
+  TetMesh mesh = samples::make_box_mesh(3, 3, 3, 0.03, 0.03, 0.03);
   write_msh(dir / "cube.msh", mesh);
   Scenario sc;
   sc.file = dir / "scenario.toml";

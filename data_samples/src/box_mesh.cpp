@@ -1,11 +1,11 @@
-#include "box_mesh.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 
 #include <algorithm>
 #include <map>
 #include <numeric>
 #include <random>
 
-namespace tactus::testkit {
+namespace tactus::samples {
 
 TetMesh make_box_mesh(int nx, int ny, int nz, double lx, double ly, double lz, Vec3 origin) {
   TetMesh m;
@@ -103,4 +103,4 @@ void shuffle_numbering(TetMesh& mesh, std::uint64_t seed) {
   mesh.tet_group = std::move(groups);
 }
 
-}  // namespace tactus::testkit
+}  // namespace tactus::samples

@@ -1,13 +1,13 @@
-// tactus-box-mesh: structured tet box (6 tets per cell) with an optional second material
-// ("bone") where tet centroids fall inside a box. A development helper for the solver's tests,
-// benchmarks and the sample scenario; the mesher stage (tactus-mesh) produces real meshes.
-#include "box_mesh.hpp"
+// tactus-sample-mesh: a structured tet box (6 tets per cell) with an optional second material
+// ("bone") where tet centroids fall inside a box: the sample mesh of the solver's bundled
+// scenario. Meshes of segmented anatomy come from the mesher stage (tactus-mesh).
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
 
 int main(int argc, char** argv) {
   using namespace tactus;
-  CLI::App app{"tactus-box-mesh: structured tetrahedral box mesh (.msh)", "tactus-box-mesh"};
+  CLI::App app{"tactus-sample-mesh: structured tetrahedral box mesh (.msh)", "tactus-sample-mesh"};
   cli::CommonOptions common;
   cli::add_common_options(app, common, "output .msh file");
   std::array<double, 3> size{0.1, 0.1, 0.1}, origin{0, 0, 0};
@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
       if (!(size[c] > 0)) throw InputError("command line", "--size", "positive lengths");
       if (cells[c] < 1) throw InputError("command line", "--cells", "at least one cell per axis");
     }
-    TetMesh m = testkit::make_box_mesh(cells[0], cells[1], cells[2], size[0], size[1], size[2], origin);
+    TetMesh m = samples::make_box_mesh(cells[0], cells[1], cells[2], size[0], size[1], size[2], origin);
     if (!inclusion.empty()) {
       m.groups.push_back({3, 2, "bone"});
       for (std::size_t e = 0; e < m.tets.size(); ++e) {

@@ -1,12 +1,12 @@
 #pragma once
-// Structured tet meshes of a box for tests and benchmarks: each of nx*ny*nz hexahedral cells
+// Structured tet meshes of a box (sample meshes for the solver, its tests and benchmarks): each of nx*ny*nz hexahedral cells
 // is split into 6 tets around its main diagonal (Kuhn split, conforming across cells).
 // Physical groups: volume 1 "body"; surfaces 11..16 "xmin","xmax","ymin","ymax","zmin","zmax".
 #include <cstdint>
 
 #include "tactus/core/mesh.hpp"
 
-namespace tactus::testkit {
+namespace tactus::samples {
 
 TetMesh make_box_mesh(int nx, int ny, int nz, double lx, double ly, double lz, Vec3 origin = {0, 0, 0});
 
@@ -16,4 +16,4 @@ void perturb_interior_nodes(TetMesh& mesh, double cell_size, double fraction, st
 // Randomly renumbers nodes and elements, as a mesher without locality ordering would leave them.
 void shuffle_numbering(TetMesh& mesh, std::uint64_t seed);
 
-}  // namespace tactus::testkit
+}  // namespace tactus::samples
