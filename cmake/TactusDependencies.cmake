@@ -14,7 +14,16 @@ endmacro()
 find_package(Eigen3 3.3 QUIET NO_MODULE)
 tactus_require(Eigen3 libeigen3-dev)
 
-find_package(HDF5 QUIET COMPONENTS C)
+if(TACTUS_DEPENDENCIES_FOR_CONSUMER AND DEFINED TACTUS_HDF5_LIBRARIES)
+  # An installed tactus records the HDF5 it was built with (FindHDF5 would need the consumer
+  # project to enable the C language).
+  set(HDF5_FOUND TRUE)
+  set(HDF5_C_LIBRARIES "${TACTUS_HDF5_LIBRARIES}")
+  set(HDF5_C_INCLUDE_DIRS "${TACTUS_HDF5_INCLUDE_DIRS}")
+  set(HDF5_C_DEFINITIONS "")
+else()
+  find_package(HDF5 QUIET COMPONENTS C)
+endif()
 tactus_require(HDF5 libhdf5-dev)
 if(NOT TARGET tactus_hdf5)
   add_library(tactus_hdf5 INTERFACE IMPORTED)

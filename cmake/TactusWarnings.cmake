@@ -3,6 +3,10 @@ function(tactus_target_defaults target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
                                            -Wold-style-cast -Wcast-align -Woverloaded-virtual
                                            -Wconversion -Wno-sign-conversion)
+  if(TACTUS_NATIVE)
+    # AVX-512 off: GCC 12 warns falsely inside its AVX-512 intrinsics, and AVX2+FMA measured as fast.
+    target_compile_options(${target} PRIVATE -march=native -mno-avx512f)
+  endif()
   if(TACTUS_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
