@@ -3,6 +3,9 @@
 #include "tactus/solver/model.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
 #include <numeric>
 #include <sstream>
 
@@ -122,10 +125,12 @@ void reorder_for_locality(Model& m) {
     std::stable_sort(eorder.begin() + static_cast<std::ptrdiff_t>(b.begin), eorder.begin() + static_cast<std::ptrdiff_t>(b.end),
                      [&](std::size_t a, std::size_t c) { return first[a] < first[c]; });
   std::vector<std::int32_t> conn(m.conn.size()), input(m.num_elements);
-  std::vector<double> grad(m.grad.size()), vol(m.volume.size());
+  std::vector<double> grad(m.grad.size()), vol(m.volume.size()), fib(m.fibres.size());
   for (std::size_t k = 0; k < m.num_elements; ++k) {
     const std::size_t e = eorder[k];
     for (int a = 0; a < 4; ++a) conn[4 * k + a] = m.conn[4 * e + a];
+    if (!fib.empty())
+      for (int j = 0; j < 6; ++j) fib[6 * k + j] = m.fibres[6 * e + j];
     input[k] = m.input_element[e];
     if (!grad.empty()) {
       for (int j = 0; j < 9; ++j) grad[9 * k + j] = m.grad[9 * e + j];
@@ -136,6 +141,7 @@ void reorder_for_locality(Model& m) {
   m.input_element.swap(input);
   m.grad.swap(grad);
   m.volume.swap(vol);
+  m.fibres.swap(fib);
   for (std::size_t k = 0; k < m.num_elements; ++k) m.element_of_input[static_cast<std::size_t>(m.input_element[k])] = static_cast<std::int32_t>(k);
 }
 
@@ -147,7 +153,7 @@ std::size_t bytes(const V& v) {
 }  // namespace
 
 std::size_t Model::memory_bytes() const {
-  return bytes(X) + bytes(mass) + bytes(initial_velocity) + bytes(conn) + bytes(grad) + bytes(volume) + bytes(constrained) +
+  return bytes(X) + bytes(mass) + bytes(initial_velocity) + bytes(conn) + bytes(grad) + bytes(volume) + bytes(constrained) + bytes(fibres) +
          bytes(constraint_velocity) + bytes(node_of_input) + bytes(element_of_input) + bytes(input_element) +
          bytes(input_mesh.nodes) + bytes(input_mesh.tets) + bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) +
          bytes(input_mesh.triangle_group);
@@ -185,15 +191,64 @@ std::string Model::describe_element(std::size_t e) const {
   return o.str();
 }
 
+namespace {
+
+// Per-tet fibre directions of one body from a .vtu of its mesh (cell data fibre_1, fibre_2),
+// matched to the mesh's tets by their node sets, so the file's element order does not matter.
+std::vector<std::array<double, 6>> read_element_fibres(const std::filesystem::path& file, const TetMesh& mesh,
+                                                       const std::string& key) {
+  const VtuContents vtu = read_vtu(file);
+  if (vtu.mesh.nodes.size() != mesh.nodes.size() || vtu.mesh.tets.size() != mesh.tets.size())
+    throw InputError(file.string(), key,
+                     "a .vtu of the body's mesh (" + std::to_string(mesh.nodes.size()) + " nodes, " +
+                         std::to_string(mesh.tets.size()) + " tets)",
+                     std::to_string(vtu.mesh.nodes.size()) + " nodes, " + std::to_string(vtu.mesh.tets.size()) + " tets");
+  const MeshField* f1 = vtu.cell_field("fibre_1");
+  const MeshField* f2 = vtu.cell_field("fibre_2");
+  for (const MeshField* f : {f1, f2})
+    if (!f || f->components != 3)
+      throw InputError(file.string(), f == f1 ? "fibre_1" : "fibre_2", "cell data with 3 components per tet", f ? "other" : "missing");
+  std::map<std::array<int, 4>, std::size_t> index;
+  for (std::size_t e = 0; e < vtu.mesh.tets.size(); ++e) {
+    auto key4 = vtu.mesh.tets[e];
+    std::sort(key4.begin(), key4.end());
+    index[key4] = e;
+  }
+  std::vector<std::array<double, 6>> out(mesh.tets.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    auto key4 = mesh.tets[e];
+    std::sort(key4.begin(), key4.end());
+    auto it = index.find(key4);
+    if (it == index.end())
+      throw InputError(file.string(), "tet " + std::to_string(e + 1), "the same tets (node numbers) as the body's mesh",
+                       "no matching tet");
+    for (int k = 0; k < 2; ++k) {
+      const MeshField& f = k == 0 ? *f1 : *f2;
+      const double* a = &f.values[3 * it->second];
+      const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      if (!(len > 1e-12))
+        throw InputError(file.string(), std::string(k == 0 ? "fibre_1" : "fibre_2") + " of tet " + std::to_string(e + 1),
+                         "a non-zero direction", "zero vector");
+      for (int c = 0; c < 3; ++c) out[e][3 * k + c] = a[c] / len;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 Model build_model(const Scenario& sc) {
   Model m;
   std::vector<std::string> tet_material;  // per input tet
   std::vector<int> tet_body;
+  std::vector<std::optional<std::array<double, 6>>> tet_fibres;
   for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) {
     const BodySpec& body = sc.bodies[bi];
     TetMesh mesh = read_msh(body.mesh);
     const std::size_t node0 = m.input_mesh.nodes.size();
     m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size()});
+    std::vector<std::array<double, 6>> body_fibres;
+    if (!body.fibres.empty()) body_fibres = read_element_fibres(body.fibres, mesh, "bodies[" + std::to_string(bi) + "].fibres");
     for (auto& x : mesh.nodes)
       for (int c = 0; c < 3; ++c) x[c] = x[c] * body.scale + body.translate[c];
     // Group tags are per file: offset them so bodies keep distinct groups.
@@ -222,6 +277,10 @@ Model build_model(const Scenario& sc) {
       }
       tet_material.push_back(it->second);
       tet_body.push_back(static_cast<int>(bi));
+      if (body_fibres.empty())
+        tet_fibres.emplace_back();
+      else
+        tet_fibres.emplace_back(body_fibres[e]);
     }
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       std::array<int, 3> tri = mesh.triangles[t];
@@ -259,7 +318,32 @@ Model build_model(const Scenario& sc) {
     for (std::size_t e = 0; e < m.num_elements; ++e)
       if (tet_material[e] == name) order.push_back(e);
     b.end = order.size();
-    if (b.end > b.begin) m.blocks.push_back(b);
+    if (b.end == b.begin) continue;
+    if (inst.type == "hgo") {
+      for (std::size_t k = b.begin; k < b.end; ++k) {
+        if (tet_fibres[order[k]]) b.element_fibres = true;
+        else if (!inst.fibres)
+          throw InputError(sc.file.string(), "materials." + name + ".fibres",
+                           "fibre directions for hgo: [[ax, ay, az], [bx, by, bz]] here, or a per-element `fibres` file "
+                           "on body '" + sc.bodies[static_cast<std::size_t>(tet_body[order[k]])].name + "'",
+                           "none");
+      }
+    }
+    m.blocks.push_back(b);
+  }
+  if (std::any_of(m.blocks.begin(), m.blocks.end(), [](const MaterialBlock& b) { return b.element_fibres; })) {
+    m.fibres.assign(6 * m.num_elements, 0.0);
+    for (const auto& b : m.blocks) {
+      if (!b.element_fibres) continue;
+      const Hgo& h = std::get<Hgo>(b.material);
+      for (std::size_t k = b.begin; k < b.end; ++k) {
+        const auto& f = tet_fibres[order[k]];
+        for (int c = 0; c < 3; ++c) {
+          m.fibres[6 * k + c] = f ? (*f)[c] : h.a1[c];
+          m.fibres[6 * k + 3 + c] = f ? (*f)[3 + c] : h.a2[c];
+        }
+      }
+    }
   }
   m.conn.resize(4 * m.num_elements);
   m.input_element.resize(m.num_elements);

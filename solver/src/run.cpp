@@ -47,17 +47,28 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
             F(i, j) += (u[3 * static_cast<std::size_t>(c[a]) + i] - u[3 * static_cast<std::size_t>(c[0]) + i]) * g[3 * (a - 1) + j];
-      const Mat3 P = std::visit([&](const auto& mat) { return mat.evaluate(F).P; }, b.material);
+      Vec3d a1 = Vec3d::UnitX(), a2 = Vec3d::UnitY();
+      if (const auto* h = std::get_if<Hgo>(&b.material)) {
+        a1 = b.element_fibres ? Vec3d(&m.fibres[6 * e]) : h->a1;
+        a2 = b.element_fibres ? Vec3d(&m.fibres[6 * e + 3]) : h->a2;
+      }
+      const Mat3 cof = cofactor(F);
+      const double J = F.row(0).dot(cof.row(0));
+      Mat3 P;
+      if (const auto* h = std::get_if<Hgo>(&b.material))
+        P = h->evaluate(F, cof, J, a1, a2).P;
+      else
+        P = std::visit([&](const auto& mat) { return mat.evaluate(F).P; }, b.material);
       const Mat3 s = cauchy_stress(F, P);
       const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
       const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
       for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
       vm.values[out] = von_mises(s);
       material.values[out] = static_cast<double>(bi);
-      jac.values[out] = F.determinant();
-      if (const auto* h = std::get_if<Hgo>(&b.material)) {
-        fibre.values[2 * out] = (F * h->a1).norm();
-        fibre.values[2 * out + 1] = (F * h->a2).norm();
+      jac.values[out] = J;
+      if (std::holds_alternative<Hgo>(b.material)) {
+        fibre.values[2 * out] = (F * a1).norm();
+        fibre.values[2 * out + 1] = (F * a2).norm();
       }
     }
   }

@@ -72,6 +72,10 @@ const SectionSpec& body_section() {
        opt(number("scale", "", "factor applied to mesh coordinates (1e-3 for a mesh in mm)", 0, true), "1"),
        typed("translate", ValueType::vec3, "m", "translation applied after scaling", false, "[0, 0, 0]"),
        typed("initial_velocity", ValueType::vec3, "m/s", "uniform initial velocity", false, "[0, 0, 0]"),
+       typed("fibres", ValueType::string, "",
+             "per-element hgo fibre directions: a .vtu of this mesh's tets with cell data fibre_1, fibre_2 "
+             "(overrides the materials' constant fibres)",
+             false),
        typed("materials", ValueType::table, "",
              "physical volume group name -> material name (key \"*\" for every other group)", true)}};
   return s;
@@ -83,7 +87,9 @@ const SectionSpec& material_common_section() {
       "A named material; `type` selects the law, whose parameters follow (see below).",
       {typed("type", ValueType::string, "", "neo_hookean | linear_elastic | hgo", true),
        typed("fibres", ValueType::vec3_list, "",
-             "hgo only, required: the two fibre directions a_1, a_2 in the reference frame (normalised)", false)}};
+             "hgo only: the two fibre directions a_1, a_2 in the reference frame (normalised); required unless "
+             "every body using the material gives per-element fibres",
+             false)}};
   return s;
 }
 
@@ -343,6 +349,10 @@ Scenario read_scenario(const fs::path& file) {
       for (const auto& ps : pspec.keys) m.params[ps.key] = r.number(t, ps, path, 0);
       if (entry->kind == MaterialKind::hgo) {
         const auto f = r.vec3_list(t, *common.find("fibres"), path);
+        if (f.empty()) {  // per-element fibres from the bodies; checked when the model is built
+          sc.materials[name] = m;
+          continue;
+        }
         if (f.size() != 2)
           r.fail(path + ".fibres", "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
                  f.empty() ? "missing" : std::to_string(f.size()) + " directions");
@@ -373,6 +383,7 @@ Scenario read_scenario(const fs::path& file) {
       b.scale = r.number(t, *spec.find("scale"), path, 1.0);
       b.translate = r.vec3(t, *spec.find("translate"), path, {0, 0, 0});
       b.initial_velocity = r.vec3(t, *spec.find("initial_velocity"), path, {0, 0, 0});
+      if (t.contains("fibres")) b.fibres = base / r.string(t, *spec.find("fibres"), path);
       const toml::table& mt = r.table(*t.get("materials"), path + ".materials");
       for (const auto& [gk, gv] : mt) {
         const std::string group(gk.str());

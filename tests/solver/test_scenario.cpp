@@ -7,6 +7,7 @@
 
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/scenario.hpp"
 #include "temp_dir.hpp"
@@ -91,6 +92,41 @@ TEST_F(ScenarioFile, ValidScenarioReads) {
   EXPECT_EQ(fixed, 3u * 9u);  // the 3x3 nodes of the xmin face, all components
 }
 
+// Per-element fibres from a .vtu (cell data fibre_1, fibre_2) override the material's constant
+// ones. Oracle: a file holding the constant directions gives exactly the forces of the constant
+// fibres, even when the material declares other (here swapped) directions.
+TEST_F(ScenarioFile, PerElementFibresFromFile) {
+  const TetMesh mesh = read_msh(dir / "pad.msh");
+  MeshField f1{"fibre_1", 3, {}}, f2{"fibre_2", 3, {}};
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    f1.values.insert(f1.values.end(), {2.0, 2.0, 0.0});  // normalised on reading
+    f2.values.insert(f2.values.end(), {1.0, -1.0, 0.0});
+  }
+  write_vtu(dir / "fibres.vtu", mesh, {}, {f1, f2});
+  Scenario constant = read_scenario(write(kValid));
+  Scenario per_element = read_scenario(write(replace(
+      replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", "fibres = [[1, -1, 0], [1, 1, 0]]"),
+      "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nfibres = \"fibres.vtu\"")));
+  const Model a = build_model(constant), b = build_model(per_element);
+  ASSERT_FALSE(a.blocks[0].element_fibres);
+  ASSERT_TRUE(b.blocks[0].element_fibres);
+  // Stretch along x so both fibre families are loaded.
+  const std::size_t ndof = 3 * a.num_nodes;
+  std::vector<double> u(ndof, 0.0);
+  const std::vector<double> v(ndof, 0.0);
+  std::vector<double> fa(ndof), fb(ndof);
+  for (std::size_t i = 0; i < a.num_nodes; ++i) u[3 * i] = 0.08 * a.X[3 * i] + 0.02 * a.X[3 * i + 1];
+  InternalForces(a, 0.0, 1).compute(u.data(), v.data(), fa.data());
+  InternalForces(b, 0.0, 1).compute(u.data(), v.data(), fb.data());
+  double diff = 0, norm = 0;
+  for (std::size_t i = 0; i < u.size(); ++i) diff = std::max(diff, std::abs(fa[i] - fb[i])), norm = std::max(norm, std::abs(fa[i]));
+  EXPECT_LE(diff, 1e-12 * norm);
+  // And a file for another mesh is refused with the counts.
+  write_vtu(dir / "other.vtu", samples::make_box_mesh(3, 2, 2, 0.01, 0.01, 0.01), {}, {});
+  expect_error(replace(kValid, "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nfibres = \"other.vtu\""),
+               {"other.vtu", "bodies[0].fibres", "27 nodes, 48 tets"}, true);
+}
+
 TEST_F(ScenarioFile, UnknownKey) { expect_error(replace(kValid, "end_time", "end_tme"), {"run.end_tme", "unknown key"}); }
 TEST_F(ScenarioFile, MissingRequiredKey) {
   expect_error(replace(kValid, "k2 = 882.847\n", ""), {"materials.skin.k2", "missing"});
@@ -108,7 +144,8 @@ TEST_F(ScenarioFile, UnknownMaterialType) {
   expect_error(replace(kValid, "\"linear_elastic\"", "\"mooney\""), {"materials.bone.type", "hgo", "mooney"});
 }
 TEST_F(ScenarioFile, HgoWithoutFibres) {
-  expect_error(replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", ""), {"materials.skin.fibres", "two fibre directions"});
+  expect_error(replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", ""), {"materials.skin.fibres", "fibre directions for hgo"},
+               true);
 }
 TEST_F(ScenarioFile, BodyNamesUndefinedMaterial) {
   expect_error(replace(kValid, "body = \"skin\"", "body = \"skn\""), {"bodies[0].materials.body", "skn"});

@@ -9,6 +9,7 @@
 
 #include "tactus/data_samples/box_mesh.hpp"
 #include "linear_reference.hpp"
+#include "tactus/core/stable_step.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/run.hpp"
@@ -58,6 +59,42 @@ TEST(StableStep, CriticalStepBelowTrueLimit) {
   const Model box = build_model(mesh, LinearElastic::from({{"E", kE}, {"nu", kNu}, {"density", kRho}}));
   const ExplicitSolver s2(box, run, DampingSpec{});
   EXPECT_LE(s2.critical_step(), true_limit(box));
+}
+
+// One definition of the stable step: the solver's first stress pass (undeformed, so current and
+// reference gradients coincide) gives exactly core's critical_time_step with the P-wave speed.
+TEST(StableStep, SolverStepEqualsCoreFunction) {
+  TetMesh mesh = samples::make_box_mesh(5, 4, 3, 0.05, 0.04, 0.03);
+  samples::perturb_interior_nodes(mesh, 0.01, 0.3, 8);
+  const LinearElastic mat = LinearElastic::from({{"E", kE}, {"nu", kNu}, {"density", kRho}});
+  const Model model = build_model(mesh, mat);
+  RunSpec run;
+  run.end_time = 1;
+  const ExplicitSolver s(model, run, DampingSpec{});
+  const CriticalStep core = critical_time_step(mesh, [&](int) { return std::sqrt((mat.lambda + 2 * mat.mu) / kRho); });
+  EXPECT_NEAR(s.critical_step(), core.dt, 1e-12 * core.dt);
+  EXPECT_EQ(static_cast<std::size_t>(model.input_element[s.limiting_element()]), static_cast<std::size_t>(core.element));
+}
+
+// An element driven inside out stops the run naming the element, its material, step and time.
+TEST(StableStep, InvertedElementIsNamed) {
+  Model tet = single_tet();
+  // One node thrown through the opposite face within a few steps.
+  constrain_nodes(tet, [](const double* X) { return X[2] > 0.005; }, {true, true, true}, {0, 0, -2000.0});
+  RunSpec run;
+  run.end_time = 1;
+  ExplicitSolver s(tet, run, DampingSpec{});
+  try {
+    for (int n = 0; n < 100000; ++n) {
+      s.advance_velocity();
+      s.advance_position();
+    }
+    FAIL() << "inversion not detected";
+  } catch (const NumericalError& e) {
+    const std::string msg = e.what();
+    for (const char* frag : {"inverted element", "tet 1", "material 'material'", "step ", "t = "})
+      EXPECT_NE(msg.find(frag), std::string::npos) << msg;
+  }
 }
 
 TEST(StableStep, RunAtComputedStepStaysBounded) {

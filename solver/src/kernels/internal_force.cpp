@@ -24,7 +24,8 @@ struct ThreadAccumulator {
 
 template <class Mat, bool kViscous>
 void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_t end, const double* __restrict u,
-                   const double* __restrict v, double* __restrict f, double beta, ThreadAccumulator& acc) {
+                   const double* __restrict v, double* __restrict f, double beta, const double* __restrict fibres,
+                   ThreadAccumulator& acc) {
   const std::int32_t* __restrict conn = m.conn.data();
   const double* __restrict grad = m.grad.data();
   const double* __restrict vol = m.volume.data();
@@ -47,7 +48,16 @@ void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_
     const double J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
     if (J < acc.min_J) acc.min_J = J, acc.min_J_element = e;
     if (!(J > 0)) continue;  // reported by the caller; the step is abandoned
-    StressPoint sp = mat.evaluate(F, cof, J);
+    StressPoint sp;
+    if constexpr (std::is_same_v<Mat, Hgo>) {
+      if (fibres)  // per-element directions (predictable branch: one value per block)
+        sp = mat.evaluate(F, cof, J, Vec3d(fibres + 6 * e), Vec3d(fibres + 6 * e + 3));
+      else
+        sp = mat.evaluate(F, cof, J);
+    } else {
+      (void)fibres;
+      sp = mat.evaluate(F, cof, J);
+    }
     const double V0 = vol[e];
     acc.energy += V0 * sp.W;
 
@@ -108,8 +118,10 @@ void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_
 template <bool kViscous>
 void block_dispatch(const Model& m, const MaterialBlock& b, std::size_t begin, std::size_t end, const double* u,
                     const double* v, double* f, double beta, ThreadAccumulator& acc) {
-  std::visit([&](const auto& mat) { element_range<std::decay_t<decltype(mat)>, kViscous>(m, mat, begin, end, u, v, f, beta, acc); },
-             b.material);
+  const double* fibres = b.element_fibres ? m.fibres.data() : nullptr;
+  std::visit(
+      [&](const auto& mat) { element_range<std::decay_t<decltype(mat)>, kViscous>(m, mat, begin, end, u, v, f, beta, fibres, acc); },
+      b.material);
 }
 
 // All cores unless OMP_NUM_THREADS says otherwise. (Not omp_get_max_threads(): libgmsh sets

@@ -137,8 +137,11 @@ struct Hgo {
     return evaluate(F, cof, F.row(0).dot(cof.row(0)));
   }
   TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J) const {
-    const Vec3d& f1 = a1;
-    const Vec3d& f2 = a2;
+    return evaluate(F, cof, J, a1, a2);
+  }
+  // With per-element fibre directions f1, f2 (unit vectors, reference configuration).
+  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const Vec3d& f1,
+                                            const Vec3d& f2) const {
     const double I1 = F.squaredNorm();
     const double Jm23 = inv_cbrt(J * J);
     StressPoint s;

@@ -18,6 +18,7 @@ struct MaterialBlock {
   std::string name;  // material name in the scenario
   Material material;
   std::size_t begin = 0, end = 0;  // element range
+  bool element_fibres = false;     // hgo: directions from Model::fibres instead of the material's
 };
 
 struct BodyRange {
@@ -38,6 +39,7 @@ struct Model {
   std::vector<double> grad;        // 9 per tet: grad N_1, grad N_2, grad N_3 (grad N_0 = -sum)
   std::vector<double> volume;      // reference volume
   std::vector<MaterialBlock> blocks;
+  std::vector<double> fibres;      // 6 per tet (a_1, a_2) when some hgo block has element_fibres
 
   // Constraints: per dof (3 per node), 0 free, 1 prescribed velocity; value in constraint_velocity.
   std::vector<std::uint8_t> constrained;

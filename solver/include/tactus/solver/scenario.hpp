@@ -46,6 +46,7 @@ struct BodySpec {
   double scale = 1.0;  // applied to mesh coordinates before translate (e.g. 1e-3 for mm meshes)
   Vec3a translate{0, 0, 0};
   Vec3a initial_velocity{0, 0, 0};
+  std::filesystem::path fibres;  // optional .vtu with per-tet cell data fibre_1, fibre_2
   std::map<std::string, std::string> materials;  // physical volume name (or "*") -> material
 };
 
