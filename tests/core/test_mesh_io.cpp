@@ -102,7 +102,7 @@ TEST(MeshMsh, ReadByMeshioWithSameCountsAndGroups) {
   TempDir dir;
   const TetMesh m = two_material_box();
   write_msh(dir / "m.msh", m);
-  const std::string script = std::string(std::getenv("TACTUS_SOURCE_DIR")) + "/tests/core/msh_summary.py";
+  const std::string script = std::string(TACTUS_SOURCE_DIR) + "/tests/core/msh_summary.py";
   const std::string out = (dir / "summary.txt").string();
   ASSERT_EQ(std::system(("/usr/bin/python3 " + script + " " + (dir / "m.msh").string() + " > " + out).c_str()), 0);
   std::ifstream in(out);

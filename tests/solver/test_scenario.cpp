@@ -176,7 +176,7 @@ TEST_F(ScenarioFile, OutputTimeAfterEnd) {
 // The committed reference must be what the declarations generate (regenerate with
 // `tactus-solve keys > docs/scenario-reference.md`).
 TEST(ScenarioReference, DocsMatchDeclarations) {
-  std::ifstream in(std::string(std::getenv("TACTUS_SOURCE_DIR")) + "/docs/scenario-reference.md");
+  std::ifstream in(std::string(TACTUS_SOURCE_DIR) + "/docs/scenario-reference.md");
   ASSERT_TRUE(in.good());
   std::stringstream text;
   text << in.rdbuf();
