@@ -50,7 +50,7 @@ const SectionSpec& run_section() {
            "0.25"),
        typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
        opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
-       opt(number("threads", "", "worker threads (0: all cores)", 0, false, 1024, false), "0"),
+       opt(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false), "0"),
        opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0")}};
   return s;
 }

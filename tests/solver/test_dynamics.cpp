@@ -16,7 +16,6 @@ namespace {
 RunSpec run_until(double end_time) {
   RunSpec r;
   r.end_time = end_time;
-  r.threads = 2;
   return r;
 }
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -124,18 +125,22 @@ void block_dispatch(const Model& m, const MaterialBlock& b, std::size_t begin, s
       b.material);
 }
 
-// All cores unless OMP_NUM_THREADS says otherwise. (Not omp_get_max_threads(): libgmsh sets
-// the OpenMP thread count to 1 when it initialises, which would silently serialise the solver.)
-int default_threads() {
+// All cores unless OMP_NUM_THREADS says otherwise (not omp_get_max_threads(): libgmsh sets the
+// OpenMP thread count to 1 when it initialises, which would silently serialise the solver), but
+// at least ~4000 tets per thread: below that the two barriers per step cost more than they save,
+// and on a loaded machine a spinning barrier can cost a whole scheduler slice per step.
+int default_threads(std::size_t elements) {
+  int n = omp_get_num_procs();
   if (const char* env = std::getenv("OMP_NUM_THREADS"))
-    if (const int n = std::atoi(env); n > 0) return n;
-  return omp_get_num_procs();
+    if (const int e = std::atoi(env); e > 0) n = e;
+  const int useful = static_cast<int>(std::max<std::size_t>(1, elements / 4000));
+  return std::min(n, useful);
 }
 
 }  // namespace
 
 InternalForces::InternalForces(const Model& model, double beta, int threads)
-    : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads()) {
+    : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads(model.num_elements)) {
   thread_forces_.resize(static_cast<std::size_t>(threads_ - 1));
   for (auto& buf : thread_forces_) buf.assign(3 * model.num_nodes, 0.0);
 }

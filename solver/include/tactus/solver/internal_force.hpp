@@ -21,7 +21,7 @@ struct StressPassResult {
 
 class InternalForces {
  public:
-  // beta: Rayleigh stiffness-proportional damping (s); threads <= 0 uses all cores.
+  // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
   InternalForces(const Model& model, double beta, int threads);
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
   StressPassResult compute(const double* u, const double* v, double* f_out);
