@@ -1,0 +1,43 @@
+#pragma once
+// A synthetic CT of a human hand at the paper's scale (§3.1, §3.2: L1 = 159 mm wide, L2 = 230 mm
+// long along the slice axis, L3 = 78 mm thick), with its ground truth. 27 bones as in the paper
+// (8 carpals, 5 metacarpals, 14 phalanges, thumb with 2), each a cortical shell around a
+// lower-density trabecular core, separated at the joints by soft-tissue gaps, inside a
+// soft-tissue envelope with a skin layer; fingers slightly flexed towards the palm.
+// CT realism: Hounsfield values per tissue, partial-volume blur, Gaussian noise, seeded.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "tactus/core/volume.hpp"
+
+namespace tactus::samples {
+
+struct PhantomParams {
+  double voxel_mm = 0.7;        // in-plane pixel size (x, y)
+  double slice_mm = 0.7;        // slice spacing (z, the hand's long axis)
+  double noise_hu = 25.0;       // standard deviation of the additive noise
+  double blur_voxels = 0.6;     // partial-volume blur, Gaussian sigma in voxels
+  double flexion_deg = 12.0;    // flexion of each finger joint towards the palm
+  double margin_mm = 6.0;       // air around the hand
+  std::uint64_t seed = 1;
+};
+
+// Hounsfield values of the phantom's tissues.
+struct PhantomHu {
+  static constexpr double air = -1000, soft_tissue = 40, skin = 90, trabecular = 350, cortical = 1500;
+};
+
+struct Phantom {
+  Volume<std::int16_t> ct;        // HU
+  Volume<std::uint8_t> truth;     // 0 air, 1 soft tissue (incl. skin), 2..28 bones
+  LabelTable labels;              // id -> bone name
+};
+
+Phantom make_hand_phantom(const PhantomParams& params);
+
+// Writes the DESIGN.md slice stack: slice_NNNN.png (16-bit, stored = HU - rescale_intercept)
+// and stack.json (spacing_mm, origin_mm, rescale_slope 1, rescale_intercept -1024, units).
+void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::path& folder);
+
+}  // namespace tactus::samples

@@ -1,0 +1,287 @@
+// The synthetic hand CT. Geometry is a set of signed distance functions in millimetres:
+// bones are capsules (segment + radius) whose outer shell of thickness t is cortical bone,
+// the soft-tissue envelope is a smooth union of a wrist, a palm and capsules around each finger.
+#include "tactus/data_samples/phantom.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <sstream>
+#include <iomanip>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/staged_output.hpp"
+
+namespace tactus::samples {
+
+namespace {
+
+struct V3 {
+  double x = 0, y = 0, z = 0;
+};
+V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+double norm(V3 a) { return std::sqrt(dot(a, a)); }
+V3 unit(V3 a) { return (1.0 / norm(a)) * a; }
+
+struct Capsule {
+  V3 a, b;
+  double r;
+  double distance(V3 p) const {
+    const V3 ab = b - a, ap = p - a;
+    const double t = std::clamp(dot(ap, ab) / dot(ab, ab), 0.0, 1.0);
+    return norm(ap - t * ab) - r;
+  }
+  double zmin() const { return std::min(a.z, b.z) - r; }
+  double zmax() const { return std::max(a.z, b.z) + r; }
+};
+
+struct Bone {
+  std::string name;
+  Capsule shape;
+  double cortex;  // shell thickness, mm
+};
+
+struct RoundedBox {
+  V3 centre, half;
+  double round;
+  double distance(V3 p) const {
+    const double qx = std::abs(p.x - centre.x) - half.x, qy = std::abs(p.y - centre.y) - half.y,
+                 qz = std::abs(p.z - centre.z) - half.z;
+    const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0), oz = std::max(qz, 0.0);
+    return std::sqrt(ox * ox + oy * oy + oz * oz) + std::min(std::max({qx, qy, qz}), 0.0) - round;
+  }
+};
+
+// Polynomial smooth minimum (blend width k), for a soft-tissue envelope without creases.
+double smin(double a, double b, double k) {
+  const double h = std::max(k - std::abs(a - b), 0.0) / k;
+  return std::min(a, b) - h * h * k * 0.25;
+}
+
+// Rotates direction d towards the palm (-y) by angle (radians) about the axis perpendicular to d
+// in the y-z plane (finger flexion).
+V3 flex(V3 d, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return unit({d.x, c * d.y - s * d.z, s * d.y + c * d.z});
+}
+
+struct Anatomy {
+  std::vector<Bone> bones;
+  std::vector<Capsule> envelope;  // finger and thumb sleeves
+  RoundedBox wrist, palm;
+};
+
+double cortex_for(double r) { return std::clamp(0.32 * r, 1.0, 1.8); }
+
+Anatomy build_anatomy(double flexion) {
+  Anatomy h;
+  constexpr double gap = 2.2;  // joint gap between bone surfaces, mm
+  // Carpals: two rows of four short capsules across the wrist.
+  const char* proximal[4] = {"scaphoid", "lunate", "triquetrum", "pisiform"};
+  const char* distal[4] = {"trapezium", "trapezoid", "capitate", "hamate"};
+  const double carpal_r = 4.6, carpal_half = 1.6, row_dz = 2 * carpal_r + gap + 0.4;
+  for (int i = 0; i < 4; ++i) {
+    const double x = -21.0 + 14.0 * i;
+    const double y = i == 3 ? -3.0 : 0.0;
+    h.bones.push_back({proximal[i], {{x - carpal_half, y, 34}, {x + carpal_half, y, 34}, carpal_r}, cortex_for(carpal_r)});
+    h.bones.push_back({distal[i], {{x - carpal_half, 0, 34 + row_dz}, {x + carpal_half, 0, 34 + row_dz}, carpal_r}, cortex_for(carpal_r)});
+  }
+  const double carpal_top = 34 + row_dz + carpal_r;
+  // Fingers 2-5: metacarpal, proximal, middle, distal phalanx; fanned in x, flexed towards -y.
+  const char* finger[4] = {"index", "middle", "ring", "little"};
+  const double base_x[4] = {-22, -7.5, 7.5, 22}, fan_deg[4] = {-7, -2, 3, 7};
+  const double len[4][4] = {{62, 37, 22, 16}, {60, 40, 25, 17}, {55, 38, 24, 17}, {50, 31, 18, 15}};
+  const double rad[4][4] = {{4.6, 4.1, 3.5, 3.1}, {4.7, 4.3, 3.6, 3.2}, {4.4, 4.0, 3.4, 3.0}, {4.0, 3.6, 3.1, 2.8}};
+  const char* seg_name[4] = {"metacarpal", "proximal_phalanx", "middle_phalanx", "distal_phalanx"};
+  for (int f = 0; f < 4; ++f) {
+    const double fan = fan_deg[f] * M_PI / 180;
+    V3 dir = unit({std::sin(fan), 0, std::cos(fan)});
+    V3 start{base_x[f], 0, carpal_top + gap + rad[f][0]};
+    for (int s = 0; s < 4; ++s) {
+      if (s > 0) {
+        dir = flex(dir, flexion);
+        start = start + (rad[f][s - 1] + gap + rad[f][s]) * dir;
+      }
+      const V3 end = start + len[f][s] * dir;
+      h.bones.push_back({std::string(seg_name[s]) + "_" + finger[f], {start, end, rad[f][s]}, cortex_for(rad[f][s])});
+      if (s > 0) h.envelope.push_back({start - (rad[f][s] + 1.0) * dir, end, rad[f][s] + 5.6});
+      start = end;
+    }
+  }
+  // Thumb: metacarpal from the trapezium outwards and palmwards, then two phalanges.
+  {
+    V3 dir = unit({-0.56, -0.22, 0.76});
+    V3 start{-31, -6, carpal_top + 1.5};
+    const double tl[3] = {40, 32, 24}, tr[3] = {4.6, 4.2, 3.5};
+    const char* tn[3] = {"metacarpal_thumb", "proximal_phalanx_thumb", "distal_phalanx_thumb"};
+    for (int s = 0; s < 3; ++s) {
+      if (s > 0) {
+        dir = flex(dir, 0.8 * flexion);
+        start = start + (tr[s - 1] + gap + tr[s]) * dir;
+      }
+      const V3 end = start + tl[s] * dir;
+      h.bones.push_back({tn[s], {start, end, tr[s]}, cortex_for(tr[s])});
+      h.envelope.push_back({start - (s == 0 ? 0.0 : tr[s] + 1.0) * dir, end, tr[s] + 6.5});
+      start = end;
+    }
+  }
+  h.wrist = {{0, 0, 14}, {22, 10, 20}, 9};
+  h.palm = {{2, 0, 80}, {30, 12, 42}, 9};
+  return h;
+}
+
+// Separable Gaussian blur of a float volume (partial-volume effect), sigma in voxels.
+void gaussian_blur(std::vector<float>& v, const std::array<int, 3>& d, double sigma) {
+  if (sigma <= 0) return;
+  const int radius = static_cast<int>(std::ceil(3 * sigma));
+  std::vector<float> k(2 * radius + 1);
+  double sum = 0;
+  for (int i = -radius; i <= radius; ++i) sum += k[i + radius] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
+  for (auto& w : k) w = static_cast<float>(w / sum);
+  const std::size_t nx = d[0], ny = d[1], nz = d[2];
+  const std::size_t stride[3] = {1, nx, nx * ny};
+  const std::size_t n[3] = {nx, ny, nz};
+  std::vector<float> out(v.size());
+  for (int axis = 0; axis < 3; ++axis) {
+#pragma omp parallel for schedule(static)
+    for (std::size_t idx = 0; idx < v.size(); ++idx) {
+      const std::size_t coord = (idx / stride[axis]) % n[axis];
+      double acc = 0;
+      for (int i = -radius; i <= radius; ++i) {
+        const long c = std::clamp(static_cast<long>(coord) + i, 0L, static_cast<long>(n[axis]) - 1);  // edge clamp
+        acc += k[i + radius] * v[idx + (c - static_cast<long>(coord)) * static_cast<long>(stride[axis])];
+      }
+      out[idx] = static_cast<float>(acc);
+    }
+    v.swap(out);
+  }
+}
+
+}  // namespace
+
+Phantom make_hand_phantom(const PhantomParams& p) {
+  if (!(p.voxel_mm > 0) || !(p.slice_mm > 0))
+    throw InputError("phantom parameters", "voxel_mm/slice_mm", "positive sizes");
+  if (p.noise_hu < 0 || p.blur_voxels < 0) throw InputError("phantom parameters", "noise/blur", "values >= 0");
+  const Anatomy h = build_anatomy(p.flexion_deg * M_PI / 180);
+
+  // Bounding box of the envelope, sampled on a coarse grid, plus the margin.
+  auto envelope = [&](V3 q) {
+    double d = smin(h.wrist.distance(q), h.palm.distance(q), 8.0);
+    for (const auto& c : h.envelope) d = smin(d, c.distance(q), 7.0);
+    return d;
+  };
+  double lo[3] = {1e9, 1e9, 0}, hi[3] = {-1e9, -1e9, -1e9};
+  for (double x = -120; x <= 120; x += 1.5)
+    for (double y = -80; y <= 80; y += 1.5)
+      for (double z = 0; z <= 260; z += 1.5)
+        if (envelope({x, y, z}) <= 0) {
+          lo[0] = std::min(lo[0], x), hi[0] = std::max(hi[0], x);
+          lo[1] = std::min(lo[1], y), hi[1] = std::max(hi[1], y);
+          hi[2] = std::max(hi[2], z);
+        }
+  const double step[3] = {p.voxel_mm, p.voxel_mm, p.slice_mm};
+  std::array<int, 3> dims{};
+  std::array<double, 3> origin_mm{};
+  for (int a = 0; a < 3; ++a) {
+    const double start = a == 2 ? 0.0 : lo[a] - 1.5 - p.margin_mm;  // the wrist is cut at z = 0
+    const double end = hi[a] + 1.5 + p.margin_mm;
+    origin_mm[a] = start;
+    dims[a] = static_cast<int>(std::ceil((end - start) / step[a])) + 1;
+  }
+  Phantom out;
+  const std::array<double, 3> spacing_m{step[0] * 1e-3, step[1] * 1e-3, step[2] * 1e-3};
+  const std::array<double, 3> origin_m{origin_mm[0] * 1e-3, origin_mm[1] * 1e-3, origin_mm[2] * 1e-3};
+  out.truth = Volume<std::uint8_t>(dims, spacing_m, origin_m, 0);
+  out.ct = Volume<std::int16_t>(dims, spacing_m, origin_m, 0);
+  out.labels[0] = "background";
+  out.labels[1] = "soft_tissue";
+  for (std::size_t b = 0; b < h.bones.size(); ++b) out.labels[static_cast<int>(b) + 2] = h.bones[b].name;
+
+  std::vector<float> hu(out.ct.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int k = 0; k < dims[2]; ++k) {
+    const double z = origin_mm[2] + k * step[2];
+    std::vector<std::size_t> bones_here, sleeves_here;  // primitives that reach this slice
+    for (std::size_t b = 0; b < h.bones.size(); ++b)
+      if (z >= h.bones[b].shape.zmin() - 1 && z <= h.bones[b].shape.zmax() + 1) bones_here.push_back(b);
+    for (std::size_t c = 0; c < h.envelope.size(); ++c)
+      if (z >= h.envelope[c].zmin() - 8 && z <= h.envelope[c].zmax() + 8) sleeves_here.push_back(c);
+    for (int j = 0; j < dims[1]; ++j)
+      for (int i = 0; i < dims[0]; ++i) {
+        const V3 q{origin_mm[0] + i * step[0], origin_mm[1] + j * step[1], z};
+        double d = smin(h.wrist.distance(q), h.palm.distance(q), 8.0);
+        for (std::size_t c : sleeves_here) d = smin(d, h.envelope[c].distance(q), 7.0);
+        const std::size_t idx = out.ct.index(i, j, k);
+        if (d > 0 || z < 0) {
+          hu[idx] = PhantomHu::air;
+          continue;
+        }
+        std::uint8_t label = 1;
+        double value = d > -1.5 ? PhantomHu::skin : PhantomHu::soft_tissue;
+        for (std::size_t b : bones_here) {
+          const double db = h.bones[b].shape.distance(q);
+          if (db <= 0) {
+            label = static_cast<std::uint8_t>(b + 2);
+            value = db > -h.bones[b].cortex ? PhantomHu::cortical : PhantomHu::trabecular;
+            break;
+          }
+        }
+        out.truth.data[idx] = label;
+        hu[idx] = static_cast<float>(value);
+      }
+  }
+  gaussian_blur(hu, dims, p.blur_voxels);
+  // Noise: one generator per slice, seeded from (seed, slice), so results do not depend on threads.
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < dims[2]; ++k) {
+    std::mt19937_64 rng(p.seed * 1000003ULL + static_cast<std::uint64_t>(k));
+    std::normal_distribution<float> noise(0.0f, static_cast<float>(p.noise_hu));
+    const std::size_t begin = out.ct.index(0, 0, k), end = begin + static_cast<std::size_t>(dims[0]) * dims[1];
+    for (std::size_t idx = begin; idx < end; ++idx) {
+      const float v = hu[idx] + (p.noise_hu > 0 ? noise(rng) : 0.0f);
+      out.ct.data[idx] = static_cast<std::int16_t>(std::lround(std::clamp(v, -1024.0f, 3071.0f)));
+    }
+  }
+  return out;
+}
+
+void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::path& folder) {
+  constexpr int kIntercept = -1024;  // stored = HU - intercept, in 16-bit
+  StagedOutput staged(folder);
+  std::filesystem::create_directories(staged.path());
+  const int nx = ct.dims[0], ny = ct.dims[1], nz = ct.dims[2];
+  const int width = std::max(4, static_cast<int>(std::to_string(nz - 1).size()));
+  bool ok = true;
+#pragma omp parallel for schedule(dynamic) reduction(&& : ok)
+  for (int k = 0; k < nz; ++k) {
+    cv::Mat slice(ny, nx, CV_16UC1);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) slice.at<std::uint16_t>(j, i) = static_cast<std::uint16_t>(ct.at(i, j, k) - kIntercept);
+    std::ostringstream name;
+    name << "slice_" << std::setw(width) << std::setfill('0') << k << ".png";
+    ok = cv::imwrite((staged.path() / name.str()).string(), slice, {cv::IMWRITE_PNG_COMPRESSION, 1}) && ok;
+  }
+  if (!ok) throw InputError(folder.string(), "", "a writable folder for the slices");
+  nlohmann::json j;
+  j["spacing_mm"] = {ct.spacing[0] * 1e3, ct.spacing[1] * 1e3, ct.spacing[2] * 1e3};
+  j["origin_mm"] = {ct.origin[0] * 1e3, ct.origin[1] * 1e3, ct.origin[2] * 1e3};
+  j["rescale_slope"] = 1.0;
+  j["rescale_intercept"] = kIntercept;
+  j["slices"] = nz;
+  j["layout"] = "slice_k.png: row = y index, column = x index, k = z index; HU = slope * stored + intercept";
+  j["source"] = "tactus-phantom (synthetic hand CT)";
+  std::ofstream(staged.path() / "stack.json") << j.dump(2) << '\n';
+  staged.commit();
+}
+
+}  // namespace tactus::samples
