@@ -17,6 +17,7 @@
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/staged_output.hpp"
+#include "tactus/core/volume_filters.hpp"
 
 namespace tactus::samples {
 
@@ -139,33 +140,6 @@ Anatomy build_anatomy(double flexion) {
   return h;
 }
 
-// Separable Gaussian blur of a float volume (partial-volume effect), sigma in voxels.
-void gaussian_blur(std::vector<float>& v, const std::array<int, 3>& d, double sigma) {
-  if (sigma <= 0) return;
-  const int radius = static_cast<int>(std::ceil(3 * sigma));
-  std::vector<float> k(2 * radius + 1);
-  double sum = 0;
-  for (int i = -radius; i <= radius; ++i) sum += k[i + radius] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
-  for (auto& w : k) w = static_cast<float>(w / sum);
-  const std::size_t nx = d[0], ny = d[1], nz = d[2];
-  const std::size_t stride[3] = {1, nx, nx * ny};
-  const std::size_t n[3] = {nx, ny, nz};
-  std::vector<float> out(v.size());
-  for (int axis = 0; axis < 3; ++axis) {
-#pragma omp parallel for schedule(static)
-    for (std::size_t idx = 0; idx < v.size(); ++idx) {
-      const std::size_t coord = (idx / stride[axis]) % n[axis];
-      double acc = 0;
-      for (int i = -radius; i <= radius; ++i) {
-        const long c = std::clamp(static_cast<long>(coord) + i, 0L, static_cast<long>(n[axis]) - 1);  // edge clamp
-        acc += k[i + radius] * v[idx + (c - static_cast<long>(coord)) * static_cast<long>(stride[axis])];
-      }
-      out[idx] = static_cast<float>(acc);
-    }
-    v.swap(out);
-  }
-}
-
 }  // namespace
 
 Phantom make_hand_phantom(const PhantomParams& p) {
@@ -207,7 +181,8 @@ Phantom make_hand_phantom(const PhantomParams& p) {
   out.labels[1] = "soft_tissue";
   for (std::size_t b = 0; b < h.bones.size(); ++b) out.labels[static_cast<int>(b) + 2] = h.bones[b].name;
 
-  std::vector<float> hu(out.ct.size());
+  Volume<float> hu_volume(dims, spacing_m, origin_m, 0.0f);
+  std::vector<float>& hu = hu_volume.data;
 #pragma omp parallel for schedule(dynamic)
   for (int k = 0; k < dims[2]; ++k) {
     const double z = origin_mm[2] + k * step[2];
@@ -240,7 +215,7 @@ Phantom make_hand_phantom(const PhantomParams& p) {
         hu[idx] = static_cast<float>(value);
       }
   }
-  gaussian_blur(hu, dims, p.blur_voxels);
+  gaussian_blur(hu_volume, p.blur_voxels);
   // Noise: one generator per slice, seeded from (seed, slice), so results do not depend on threads.
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < dims[2]; ++k) {

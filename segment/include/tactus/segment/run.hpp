@@ -1,0 +1,21 @@
+#pragma once
+// The segment stage as a whole: slice stack -> labels.h5, labels.vti, surfaces/, segment.json.
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "tactus/segment/segment.hpp"
+#include "tactus/segment/surfaces.hpp"
+
+namespace tactus::segment {
+
+struct StageOptions {
+  SegmentParams segment;
+  SurfaceParams surfaces;
+  bool write_surfaces = true;
+};
+
+// Returns the report that is also written as <out>/segment.json.
+nlohmann::json run_segment_stage(const std::filesystem::path& stack, const std::filesystem::path& out, const StageOptions& options);
+
+}  // namespace tactus::segment

@@ -1,0 +1,47 @@
+#pragma once
+// Segmentation of a hand CT into air (0), soft tissue (1) and individual bones (2..N):
+// 3-D Gaussian denoising; a body threshold (given, or Otsu over the whole volume) keeping the
+// largest 3-D component with its holes filled; a bone threshold (given, or halfway between the
+// body's median HU (soft tissue) and its 99th percentile (cortical bone))
+// whose marrow holes are filled in 3-D and per slice; specks removed by size; bones split at the joints by
+// labelling the mask eroded by one voxel (6-connected components) and growing the labels back.
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tactus/core/volume.hpp"
+
+namespace tactus::segment {
+
+struct SegmentParams {
+  std::optional<double> body_threshold_hu;  // default: Otsu on the whole volume (air vs tissue)
+  std::optional<double> bone_threshold_hu;  // default: midpoint of the soft-tissue and cortical levels
+  double denoise_sigma_voxels = 0.8;
+  double min_bone_volume_mm3 = 30.0;        // smaller bone components are specks
+  int split_erosion_voxels = 1;             // erosion that separates bones touching at a joint
+};
+
+struct BoneInfo {
+  int label = 0;
+  std::size_t voxels = 0;
+  double volume_m3 = 0;
+  std::array<double, 3> centroid_m{0, 0, 0};
+};
+
+struct Segmentation {
+  Volume<std::uint8_t> labels;
+  LabelTable table;
+  std::vector<BoneInfo> bones;
+  double body_threshold_hu = 0, bone_threshold_hu = 0;
+  double soft_tissue_hu = 0, cortical_hu = 0;  // levels the automatic bone threshold is the midpoint of
+  std::string body_threshold_source, bone_threshold_source;  // "given" or "otsu"
+  std::size_t body_voxels = 0, bone_voxels = 0, specks_removed = 0;
+};
+
+Segmentation segment_hand(const Volume<float>& hu, const SegmentParams& params);
+
+// Otsu's threshold over values in [lo, hi] (256 bins), for `values` where `mask` is set (or all).
+double otsu_threshold(const std::vector<float>& values, const std::vector<std::uint8_t>* mask, double lo, double hi);
+
+}  // namespace tactus::segment

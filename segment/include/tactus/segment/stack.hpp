@@ -1,0 +1,20 @@
+#pragma once
+// Reading a CT slice stack (DESIGN.md): a folder of slice_NNNN.png|tif (8 or 16 bit, one
+// channel) and stack.json {spacing_mm, origin_mm, rescale_slope, rescale_intercept}. Converted
+// once here to Hounsfield units and metres.
+#include <filesystem>
+#include <string>
+
+#include "tactus/core/volume.hpp"
+
+namespace tactus::segment {
+
+struct SliceStack {
+  Volume<float> hu;   // Hounsfield units; spacing/origin in metres
+  int bit_depth = 0;  // 8 or 16
+  std::size_t files = 0;
+};
+
+SliceStack read_slice_stack(const std::filesystem::path& folder);
+
+}  // namespace tactus::segment

@@ -1,0 +1,30 @@
+// tactus-segment: CT slice stack -> labels.h5/.vti (air, soft tissue, one id per bone),
+// surfaces/*.stl|ply (skin and bones) and segment.json. Thin driver over tactus::segment.
+#include "tactus/core/cli.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/segment/run.hpp"
+
+int main(int argc, char** argv) {
+  using namespace tactus;
+  CLI::App app{"tactus-segment: segment a hand CT slice stack into soft tissue and individual bones", "tactus-segment"};
+  cli::CommonOptions common;
+  cli::add_common_options(app, common, "output folder (labels.h5, labels.vti, surfaces/, segment.json)");
+  std::string stack;
+  segment::StageOptions o;
+  double body = 0, bone = 0;
+  bool no_surfaces = false;
+  app.add_option("stack", stack, "slice stack folder (slice_NNNN.png|tif + stack.json)")->required();
+  auto* body_opt = app.add_option("--body-threshold", body, "HU separating air from the body (default: Otsu)");
+  auto* bone_opt = app.add_option("--bone-threshold", bone, "HU separating soft tissue from bone (default: Otsu in the body)");
+  app.add_option("--denoise", o.segment.denoise_sigma_voxels, "Gaussian denoising sigma, voxels")->capture_default_str();
+  app.add_option("--min-bone-mm3", o.segment.min_bone_volume_mm3, "smallest bone kept, mm^3")->capture_default_str();
+  app.add_option("--edge-voxels", o.surfaces.target_edge_voxels, "surface remeshing edge length, voxels")->capture_default_str();
+  app.add_flag("--no-surfaces", no_surfaces, "skip surface extraction");
+  return cli::run(app, argc, argv, common, [&] {
+    if (common.output.empty()) throw InputError("command line", "-o/--output", "an output folder");
+    if (*body_opt) o.segment.body_threshold_hu = body;
+    if (*bone_opt) o.segment.bone_threshold_hu = bone;
+    o.write_surfaces = !no_surfaces;
+    segment::run_segment_stage(stack, common.output, o);
+  });
+}

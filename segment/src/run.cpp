@@ -1,0 +1,75 @@
+#include "tactus/segment/run.hpp"
+
+#include <chrono>
+#include <fstream>
+
+#include "tactus/core/log.hpp"
+#include "tactus/core/staged_output.hpp"
+#include "tactus/core/version.hpp"
+#include "tactus/segment/stack.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tactus::segment {
+
+nlohmann::json run_segment_stage(const fs::path& stack_folder, const fs::path& out, const StageOptions& o) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); };
+  const auto t0 = Clock::now();
+  const SliceStack stack = read_slice_stack(stack_folder);
+  const double t_read = seconds(t0);
+  const auto t1 = Clock::now();
+  const Segmentation s = segment_hand(stack.hu, o.segment);
+  const double t_segment = seconds(t1);
+
+  fs::create_directories(out);
+  write_h5(out / "labels.h5", "/labels", s.labels, &s.table);
+  write_vti(out / "labels.vti", s.labels, "labels");
+
+  nlohmann::json j;
+  j["tactus_version"] = kVersion;
+  j["stack"] = fs::absolute(stack_folder).string();
+  j["units"] = "SI (m, m^3); thresholds in HU";
+  j["dims"] = stack.hu.dims;
+  j["spacing_m"] = stack.hu.spacing;
+  j["bit_depth"] = stack.bit_depth;
+  j["thresholds"] = {{"body_hu", s.body_threshold_hu}, {"body_source", s.body_threshold_source}, {"bone_hu", s.bone_threshold_hu},
+                     {"bone_source", s.bone_threshold_source},
+                     {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
+  j["steps"] = {"3-D Gaussian denoise sigma " + std::to_string(o.segment.denoise_sigma_voxels) + " voxel",
+                "body = largest 3-D component above the body threshold, holes filled",
+                "bone = body voxels above the bone threshold, marrow holes filled (3-D and per slice)",
+                "bones split: 6-connected components of the mask eroded by " + std::to_string(o.segment.split_erosion_voxels) +
+                    " voxel, grown back; components under " + std::to_string(o.segment.min_bone_volume_mm3) + " mm^3 removed"};
+  j["body_volume_m3"] = static_cast<double>(s.body_voxels) * stack.hu.voxel_volume();
+  j["bone_volume_m3"] = static_cast<double>(s.bone_voxels) * stack.hu.voxel_volume();
+  j["specks_removed"] = s.specks_removed;
+  j["bones"] = nlohmann::json::array();
+  for (const auto& b : s.bones)
+    j["bones"].push_back({{"label", b.label}, {"name", s.table.at(b.label)}, {"voxels", b.voxels}, {"volume_m3", b.volume_m3},
+                          {"centroid_m", b.centroid_m}});
+  double t_surfaces = 0;
+  if (o.write_surfaces) {
+    const auto t2 = Clock::now();
+    const auto surfaces = extract_surfaces(s.labels, s.table, out / "surfaces", o.surfaces);
+    t_surfaces = seconds(t2);
+    j["surfaces"] = nlohmann::json::array();
+    for (const auto& r : surfaces)
+      j["surfaces"].push_back({{"name", r.name}, {"stl", r.stl.filename().string()}, {"ply", r.ply.filename().string()},
+                               {"vertices", r.vertices}, {"triangles", r.triangles}, {"volume_m3", r.surface_volume_m3},
+                               {"label_volume_m3", r.label_volume_m3}, {"area_m2", r.area_m2}, {"min_angle_deg", r.min_angle_deg},
+                               {"closed", r.closed}, {"manifold", r.manifold}, {"self_intersecting", r.self_intersecting}});
+  }
+  j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
+  {
+    StagedOutput staged(out / "segment.json");
+    std::ofstream(staged.path()) << j.dump(2) << '\n';
+    staged.commit();
+  }
+  log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU ("
+              << s.body_threshold_source << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
+              << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << out.string();
+  return j;
+}
+
+}  // namespace tactus::segment

@@ -1,0 +1,239 @@
+#include "tactus/segment/segment.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <iomanip>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/volume_filters.hpp"
+
+namespace tactus::segment {
+
+double otsu_threshold(const std::vector<float>& values, const std::vector<std::uint8_t>* mask, double lo, double hi) {
+  constexpr int kBins = 256;
+  std::vector<double> hist(kBins, 0.0);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (mask && !(*mask)[i]) continue;
+    const double t = (values[i] - lo) / (hi - lo);
+    hist[static_cast<std::size_t>(std::clamp(static_cast<int>(t * kBins), 0, kBins - 1))] += 1;
+  }
+  const double total = std::accumulate(hist.begin(), hist.end(), 0.0);
+  double sum_all = 0;
+  for (int b = 0; b < kBins; ++b) sum_all += b * hist[static_cast<std::size_t>(b)];
+  double w0 = 0, sum0 = 0, best = -1;
+  int best_bin = kBins / 2;
+  for (int b = 0; b < kBins - 1; ++b) {
+    w0 += hist[static_cast<std::size_t>(b)];
+    sum0 += b * hist[static_cast<std::size_t>(b)];
+    const double w1 = total - w0;
+    if (w0 <= 0 || w1 <= 0) continue;
+    const double m0 = sum0 / w0, m1 = (sum_all - sum0) / w1;
+    const double between = w0 * w1 * (m0 - m1) * (m0 - m1);
+    if (between > best) best = between, best_bin = b;
+  }
+  return lo + (hi - lo) * (best_bin + 1.0) / kBins;
+}
+
+namespace {
+
+Volume<std::uint8_t> mask_like(const Volume<float>& v) { return Volume<std::uint8_t>(v.dims, v.spacing, v.origin, 0); }
+
+// 6-neighbour erosion repeated `n` times.
+Volume<std::uint8_t> erode(const Volume<std::uint8_t>& m, int n) {
+  Volume<std::uint8_t> cur = m;
+  for (int it = 0; it < n; ++it) {
+    Volume<std::uint8_t> next = cur;
+    const auto& d = cur.dims;
+#pragma omp parallel for schedule(static)
+    for (int z = 0; z < d[2]; ++z)
+      for (int y = 0; y < d[1]; ++y)
+        for (int x = 0; x < d[0]; ++x) {
+          if (!cur.at(x, y, z)) continue;
+          const bool keep = x > 0 && y > 0 && z > 0 && x < d[0] - 1 && y < d[1] - 1 && z < d[2] - 1 && cur.at(x - 1, y, z) &&
+                            cur.at(x + 1, y, z) && cur.at(x, y - 1, z) && cur.at(x, y + 1, z) && cur.at(x, y, z - 1) &&
+                            cur.at(x, y, z + 1);
+          if (!keep) next.at(x, y, z) = 0;
+        }
+    cur = std::move(next);
+  }
+  return cur;
+}
+
+// 2-D hole filling in every z slice (4-connected background reached from the slice's border).
+void fill_slice_holes(Volume<std::uint8_t>& m) {
+  const int nx = m.dims[0], ny = m.dims[1];
+#pragma omp parallel for schedule(dynamic)
+  for (int z = 0; z < m.dims[2]; ++z) {
+    std::vector<std::uint8_t> outside(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
+    std::vector<int> stack;
+    auto push = [&](int x, int y) {
+      const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(y);
+      if (!m.at(x, y, z) && !outside[i]) outside[i] = 1, stack.push_back(static_cast<int>(i));
+    };
+    for (int x = 0; x < nx; ++x) push(x, 0), push(x, ny - 1);
+    for (int y = 0; y < ny; ++y) push(0, y), push(nx - 1, y);
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      const int x = i % nx, y = i / nx;
+      if (x > 0) push(x - 1, y);
+      if (x + 1 < nx) push(x + 1, y);
+      if (y > 0) push(x, y - 1);
+      if (y + 1 < ny) push(x, y + 1);
+    }
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x)
+        if (!outside[static_cast<std::size_t>(x) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(y)]) m.at(x, y, z) = 1;
+  }
+}
+
+}  // namespace
+
+Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
+  Segmentation s;
+  Volume<float> hu = hu_in;
+  gaussian_blur(hu, p.denoise_sigma_voxels);
+
+  // Body: threshold, largest component, holes filled.
+  s.body_threshold_source = p.body_threshold_hu ? "given" : "otsu";
+  s.body_threshold_hu = p.body_threshold_hu ? *p.body_threshold_hu : otsu_threshold(hu.data, nullptr, -1100, 600);
+  Volume<std::uint8_t> body = mask_like(hu);
+  for (std::size_t i = 0; i < hu.size(); ++i) body.data[i] = hu.data[i] > s.body_threshold_hu;
+  {
+    std::vector<std::size_t> sizes;
+    const auto comp = connected_components(body, sizes);
+    if (sizes.size() <= 1) {
+      std::ostringstream o;
+      o << "a body brighter than the body threshold " << s.body_threshold_hu << " HU (" << s.body_threshold_source
+        << "); set it with --body-threshold";
+      throw InputError("slice stack", "body", o.str(), "no voxel above it");
+    }
+    const auto largest = static_cast<std::int32_t>(std::max_element(sizes.begin() + 1, sizes.end()) - sizes.begin());
+    for (std::size_t i = 0; i < body.size(); ++i) body.data[i] = comp[i] == largest;
+  }
+  fill_holes(body);
+
+  // Bone threshold: halfway between the soft-tissue level (the body's median: soft tissue is most
+  // of a hand's volume) and the cortical level (the body's 99th percentile), which puts the bone
+  // surface where the blurred edge crosses its midpoint. An Otsu threshold over the body (~400 HU
+  // here) sits low on that edge and inflates every bone by ~0.7 sigma of the blur (bone Dice 0.90
+  // instead of 0.98 on the phantom). The trabecular marrow below the midpoint is filled as holes.
+  std::vector<std::uint8_t>& in_body = body.data;
+  std::vector<float> body_hu;
+  body_hu.reserve(hu.size() / 4);
+  for (std::size_t i = 0; i < hu.size(); ++i)
+    if (in_body[i]) body_hu.push_back(hu.data[i]);
+  auto percentile = [&](double q) {
+    const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(body_hu.size() - 1));
+    std::nth_element(body_hu.begin(), body_hu.begin() + k, body_hu.end());
+    return static_cast<double>(body_hu[static_cast<std::size_t>(k)]);
+  };
+  s.soft_tissue_hu = percentile(0.5);
+  s.cortical_hu = percentile(0.99);
+  s.bone_threshold_source = p.bone_threshold_hu ? "given" : "midpoint of soft tissue and cortical levels";
+  s.bone_threshold_hu = p.bone_threshold_hu ? *p.bone_threshold_hu : 0.5 * (s.soft_tissue_hu + s.cortical_hu);
+  const bool no_contrast = !p.bone_threshold_hu && s.cortical_hu - s.soft_tissue_hu < 200.0;
+  Volume<std::uint8_t> bone = mask_like(hu);
+  if (!no_contrast)
+    for (std::size_t i = 0; i < hu.size(); ++i) bone.data[i] = in_body[i] && hu.data[i] > s.bone_threshold_hu;
+  // Marrow: holes of the bone mask in 3-D, and in each slice (where a thin cortex may leak in 3-D).
+  fill_holes(bone);
+  fill_slice_holes(bone);
+  for (std::size_t i = 0; i < bone.size(); ++i) bone.data[i] = bone.data[i] && in_body[i];
+
+  // Split at joints: components of the eroded mask, specks dropped, labels grown back.
+  const double voxel_mm3 = hu.voxel_volume() * 1e9;
+  const std::size_t min_voxels = static_cast<std::size_t>(std::ceil(p.min_bone_volume_mm3 / voxel_mm3));
+  const Volume<std::uint8_t> core = erode(bone, p.split_erosion_voxels);
+  std::vector<std::size_t> sizes;
+  std::vector<std::int32_t> comp = connected_components(core, sizes);
+  // Keep cores whose size suggests a bone (the eroded core of the smallest bone is well above
+  // min_voxels / 4); relabel kept cores 1..n.
+  std::vector<std::int32_t> keep(sizes.size(), 0);
+  std::int32_t kept = 0;
+  for (std::size_t c = 1; c < sizes.size(); ++c)
+    if (sizes[c] >= std::max<std::size_t>(1, min_voxels / 4)) keep[c] = ++kept;
+  for (auto& c : comp) c = keep[static_cast<std::size_t>(c)];
+  // Grow back into the bone mask, breadth first (each voxel joins the nearest core).
+  std::vector<std::size_t> frontier, next;
+  for (std::size_t i = 0; i < comp.size(); ++i)
+    if (comp[i]) frontier.push_back(i);
+  const std::size_t nx = static_cast<std::size_t>(hu.dims[0]), nxy = nx * static_cast<std::size_t>(hu.dims[1]);
+  while (!frontier.empty()) {
+    next.clear();
+    for (std::size_t v : frontier) {
+      const std::size_t x = v % nx, y = (v / nx) % static_cast<std::size_t>(hu.dims[1]), z = v / nxy;
+      const std::size_t nb[6] = {x > 0 ? v - 1 : v, x + 1 < nx ? v + 1 : v, y > 0 ? v - nx : v,
+                                 y + 1 < static_cast<std::size_t>(hu.dims[1]) ? v + nx : v, z > 0 ? v - nxy : v,
+                                 z + 1 < static_cast<std::size_t>(hu.dims[2]) ? v + nxy : v};
+      for (std::size_t w : nb)
+        if (bone.data[w] && !comp[w]) comp[w] = comp[v], next.push_back(w);
+    }
+    frontier.swap(next);
+  }
+  // Per-bone statistics; bones below the minimum volume are specks (back to soft tissue).
+  std::vector<BoneInfo> info(static_cast<std::size_t>(kept) + 1);
+  for (std::size_t i = 0; i < comp.size(); ++i) {
+    if (!comp[i]) continue;
+    BoneInfo& b = info[static_cast<std::size_t>(comp[i])];
+    ++b.voxels;
+    const double pos[3] = {static_cast<double>(i % nx), static_cast<double>((i / nx) % static_cast<std::size_t>(hu.dims[1])),
+                           static_cast<double>(i / nxy)};
+    for (int a = 0; a < 3; ++a) b.centroid_m[a] += pos[a];
+  }
+  std::vector<std::int32_t> order;
+  for (std::int32_t c = 1; c <= kept; ++c) {
+    BoneInfo& b = info[static_cast<std::size_t>(c)];
+    if (b.voxels < min_voxels) {
+      ++s.specks_removed;
+      continue;
+    }
+    for (int a = 0; a < 3; ++a) b.centroid_m[a] = hu.origin[a] + hu.spacing[a] * b.centroid_m[a] / static_cast<double>(b.voxels);
+    b.volume_m3 = static_cast<double>(b.voxels) * hu.voxel_volume();
+    order.push_back(c);
+  }
+  if (order.empty()) {
+    std::ostringstream o;
+    o << "bone inside the body: tried body threshold " << s.body_threshold_hu << " HU (" << s.body_threshold_source
+      << ") and bone threshold " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "; soft tissue at "
+      << s.soft_tissue_hu << " HU, brightest 1 % of the body at " << s.cortical_hu << " HU"
+      << (no_contrast ? ", less than 200 HU of contrast" : "") << "), minimum bone volume " << p.min_bone_volume_mm3
+      << " mm^3; set --bone-threshold (cortical bone is ~700-2000 HU) or --body-threshold";
+    throw InputError("slice stack", "bones", o.str(), "no bone");
+  }
+  if (order.size() > 253) throw InputError("slice stack", "bones", "at most 253 bones (uint8 labels)", std::to_string(order.size()));
+  // Deterministic ids: bones ordered along the slice axis, then across.
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+    const auto& A = info[static_cast<std::size_t>(a)].centroid_m;
+    const auto& B = info[static_cast<std::size_t>(b)].centroid_m;
+    return A[2] != B[2] ? A[2] < B[2] : A[0] < B[0];
+  });
+  std::vector<std::uint8_t> new_id(info.size(), 1);  // specks become soft tissue
+  s.table[0] = "background";
+  s.table[1] = "soft_tissue";
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const int label = static_cast<int>(k) + 2;
+    new_id[static_cast<std::size_t>(order[k])] = static_cast<std::uint8_t>(label);
+    BoneInfo b = info[static_cast<std::size_t>(order[k])];
+    b.label = label;
+    s.bones.push_back(b);
+    std::ostringstream name;
+    name << "bone_" << std::setw(2) << std::setfill('0') << label;
+    s.table[label] = name.str();
+  }
+  s.labels = mask_like(hu);
+  for (std::size_t i = 0; i < comp.size(); ++i) {
+    if (!in_body[i]) continue;
+    s.labels.data[i] = comp[i] ? new_id[static_cast<std::size_t>(comp[i])] : 1;
+    ++s.body_voxels;
+    if (s.labels.data[i] > 1) ++s.bone_voxels;
+  }
+  log::verbose() << "segment: body threshold " << s.body_threshold_hu << " HU, bone threshold " << s.bone_threshold_hu
+                 << " HU, " << s.bones.size() << " bones, " << s.specks_removed << " specks removed";
+  return s;
+}
+
+}  // namespace tactus::segment

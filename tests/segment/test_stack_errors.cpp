@@ -1,0 +1,91 @@
+// segment/stack_errors: each malformed slice stack stops with one InputError naming the file or
+// field; a stack without bone says which thresholds were tried and how to set them.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "tactus/core/error.hpp"
+#include "tactus/data_samples/phantom.hpp"
+#include "tactus/segment/run.hpp"
+#include "tactus/segment/stack.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+
+namespace {
+
+class StackErrors : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    samples::PhantomParams p;
+    p.voxel_mm = p.slice_mm = 4.0;  // a tiny stack
+    samples::write_slice_stack(samples::make_hand_phantom(p).ct, dir / "stack");
+  }
+  void expect_error(std::initializer_list<std::string> fragments) {
+    try {
+      segment::read_slice_stack(dir / "stack");
+      FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+      for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    }
+  }
+  testkit::TempDir dir;
+};
+
+}  // namespace
+
+TEST_F(StackErrors, ReadsValidStack) {
+  const auto s = segment::read_slice_stack(dir / "stack");
+  EXPECT_EQ(s.bit_depth, 16);
+  EXPECT_NEAR(s.hu.spacing[0], 4e-3, 1e-15);  // mm in stack.json, metres inside
+}
+TEST_F(StackErrors, MissingSliceInNumbering) {
+  std::filesystem::remove(dir / "stack" / "slice_0005.png");
+  expect_error({"slice 5", "missing", "slice_0006.png"});
+}
+TEST_F(StackErrors, SlicesOfDifferentSizes) {
+  cv::imwrite((dir / "stack" / "slice_0003.png").string(), cv::Mat(7, 9, CV_16UC1, cv::Scalar(1000)));
+  expect_error({"slice_0003.png", "like the first slice", "9 x 7"});
+}
+TEST_F(StackErrors, UnreadableSlice) {
+  std::ofstream(dir / "stack" / "slice_0002.png") << "not a png";
+  expect_error({"slice_0002.png", "unreadable"});
+}
+TEST_F(StackErrors, MissingStackJson) {
+  std::filesystem::remove(dir / "stack" / "stack.json");
+  expect_error({"stack.json", "missing"});
+}
+TEST_F(StackErrors, MalformedStackJson) {
+  std::ofstream(dir / "stack" / "stack.json") << "{ \"spacing_mm\": [0.7, 0.7 ";
+  expect_error({"stack.json", "malformed JSON"});
+}
+TEST_F(StackErrors, NonPositiveSpacing) {
+  std::ofstream(dir / "stack" / "stack.json") << R"({"spacing_mm": [0.7, 0, 0.7]})";
+  expect_error({"stack.json", "spacing_mm", "positive"});
+}
+TEST_F(StackErrors, NoBoneFound) {
+  // A soft-tissue-only body: every slice a grey disc at 40 HU.
+  testkit::TempDir d2;
+  std::filesystem::create_directories(d2 / "s");
+  for (int k = 0; k < 12; ++k) {
+    cv::Mat img(40, 40, CV_16UC1, cv::Scalar(24));  // stored 24 -> -1000 HU
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 40; ++x)
+        if ((x - 20) * (x - 20) + (y - 20) * (y - 20) < 150) img.at<std::uint16_t>(y, x) = 1064;  // 40 HU
+    char name[32];
+    std::snprintf(name, sizeof name, "slice_%04d.png", k);
+    cv::imwrite((d2 / "s" / name).string(), img);
+  }
+  std::ofstream(d2 / "s" / "stack.json") << R"({"spacing_mm": [1, 1, 1], "rescale_slope": 1, "rescale_intercept": -1024})";
+  segment::StageOptions o;
+  o.write_surfaces = false;
+  try {
+    segment::run_segment_stage(d2 / "s", d2 / "out", o);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    for (const char* f : {"body threshold", "bone threshold", "--bone-threshold", "no bone"})
+      EXPECT_NE(msg.find(f), std::string::npos) << msg;
+  }
+}
