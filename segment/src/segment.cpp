@@ -143,6 +143,37 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
   fill_holes(bone);
   fill_slice_holes(bone);
   for (std::size_t i = 0; i < bone.size(); ++i) bone.data[i] = bone.data[i] && in_body[i];
+  if (!p.bone_threshold_hu && !no_contrast) {
+    // Refine on the outer bone edge: the |grad|^2-weighted mean HU over a band two voxels deep
+    // inside the filled mask's surface is the midpoint of the tissue-cortex step as actually
+    // blurred; the band is re-thresholded there and the marrow filled again.
+    const Volume<std::uint8_t> inner = erode(bone, 2);
+    const int nx = hu.dims[0], ny = hu.dims[1], nz = hu.dims[2];
+    double wsum = 0, whu = 0;
+    for (int z = 1; z < nz - 1; ++z)
+      for (int y = 1; y < ny - 1; ++y)
+        for (int x = 1; x < nx - 1; ++x) {
+          const std::size_t i = hu.index(x, y, z);
+          const bool band = bone.data[i] && !inner.data[i];
+          const bool outside_ring = !bone.data[i] && in_body[i] &&
+                                    (bone.at(x - 1, y, z) || bone.at(x + 1, y, z) || bone.at(x, y - 1, z) ||
+                                     bone.at(x, y + 1, z) || bone.at(x, y, z - 1) || bone.at(x, y, z + 1));
+          if (!band && !outside_ring) continue;
+          const double gx = hu.at(x + 1, y, z) - hu.at(x - 1, y, z), gy = hu.at(x, y + 1, z) - hu.at(x, y - 1, z),
+                       gz = hu.at(x, y, z + 1) - hu.at(x, y, z - 1);
+          const double w = gx * gx + gy * gy + gz * gz;
+          wsum += w, whu += w * hu.data[i];
+        }
+    if (wsum > 0) {
+      s.bone_threshold_hu = whu / wsum;
+      s.bone_threshold_source = "gradient-weighted midpoint of the outer bone edge";
+      for (std::size_t i = 0; i < bone.size(); ++i)
+        if (bone.data[i] && !inner.data[i] && hu.data[i] <= s.bone_threshold_hu) bone.data[i] = 0;
+      fill_holes(bone);
+      fill_slice_holes(bone);
+      for (std::size_t i = 0; i < bone.size(); ++i) bone.data[i] = bone.data[i] && in_body[i];
+    }
+  }
 
   // Split at joints: components of the eroded mask, specks dropped, labels grown back.
   const double voxel_mm3 = hu.voxel_volume() * 1e9;
