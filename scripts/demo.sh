@@ -1,18 +1,25 @@
 #!/usr/bin/env bash
-# Sets tactus up (see setup.sh) and runs the main job on the bundled sample. Until the
-# segmentation, meshing and post-processing stages land, the main job is the solver stage on
-# its bundled scenario: a soft-tissue pad (HGO, the paper's parameters) on a bone plate, pressed
-# from above (pipeline/scenarios/pad_press.toml). Outputs go to out/.
+# Sets tactus up (see setup.sh) and runs the main job on the bundled sample, stage by stage,
+# until the one-command pipeline lands:
+#   1. tactus-phantom  synthetic hand CT at the paper's resolution (0.7 mm) -> out/phantom/
+#   2. tactus-segment  labels (soft tissue + 27 bones) and surfaces         -> out/segment/
+#   3. tactus-solve    the solver on its bundled scenario (a soft-tissue pad on a bone plate,
+#                      pressed from above; the hand meshes come with the mesher stage) -> out/pad_press/
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD=${TACTUS_BUILD_DIR:-$ROOT/build}
 bash "$ROOT/scripts/setup.sh"
 cd "$ROOT"
 mkdir -p out/meshes
-echo "== mesh: structured sample pad (soft tissue over a 4 mm bone plate)"
+echo "== 1/3 phantom: synthetic hand CT (0.7 mm slices, noise 25 HU)"
+"$BUILD/data_samples/tactus-phantom" -o out/phantom
+echo "== 2/3 segment: soft tissue, bones, surfaces"
+"$BUILD/segment/tactus-segment" out/phantom -o out/segment
+echo "== 3/3 solve: pipeline/scenarios/pad_press.toml"
 "$BUILD/data_samples/tactus-sample-mesh" --size 0.04 0.04 0.012 --cells 16 16 6 \
   --inclusion -1 -1 -1 1 1 0.004 -o out/meshes/pad.msh
-echo "== solve: pipeline/scenarios/pad_press.toml"
 "$BUILD/solver/tactus-solve" pipeline/scenarios/pad_press.toml -o out/pad_press "$@"
 echo
-echo "Results: out/pad_press/results.pvd (open in ParaView), out/pad_press/history.csv, out/pad_press/run.json"
+echo "CT slices and truth:   out/phantom/ (slice_NNNN.png, stack.json, truth.h5, truth.vti)"
+echo "Segmentation:          out/segment/labels.h5, labels.vti, segment.json, surfaces/*.stl|ply"
+echo "Simulation results:    out/pad_press/results.pvd (open in ParaView), history.csv, run.json"

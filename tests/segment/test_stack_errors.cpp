@@ -40,6 +40,28 @@ TEST_F(StackErrors, ReadsValidStack) {
   EXPECT_EQ(s.bit_depth, 16);
   EXPECT_NEAR(s.hu.spacing[0], 4e-3, 1e-15);  // mm in stack.json, metres inside
 }
+// 8-bit TIFF slices with their own rescale: HU = slope * stored + intercept, exactly.
+TEST(SliceStack, ReadsEightBitTiff) {
+  testkit::TempDir d;
+  std::filesystem::create_directories(d / "s");
+  for (int k = 0; k < 3; ++k) {
+    cv::Mat img(5, 6, CV_8UC1);
+    for (int y = 0; y < 5; ++y)
+      for (int x = 0; x < 6; ++x) img.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(10 * k + 2 * y + x);
+    char name[32];
+    std::snprintf(name, sizeof name, "slice_%03d.tif", k + 7);  // numbering may start anywhere
+    ASSERT_TRUE(cv::imwrite((d / "s" / name).string(), img));
+  }
+  std::ofstream(d / "s" / "stack.json") << R"({"spacing_mm": [0.5, 0.5, 1.25], "origin_mm": [1, 2, 3],
+                                              "rescale_slope": 8, "rescale_intercept": -1000})";
+  const auto s = segment::read_slice_stack(d / "s");
+  EXPECT_EQ(s.bit_depth, 8);
+  ASSERT_EQ(s.hu.dims, (std::array<int, 3>{6, 5, 3}));
+  EXPECT_FLOAT_EQ(s.hu.at(4, 3, 2), 8.0f * (20 + 6 + 4) - 1000.0f);
+  EXPECT_DOUBLE_EQ(s.hu.spacing[2], 1.25e-3);
+  EXPECT_DOUBLE_EQ(s.hu.origin[1], 2e-3);
+}
+
 TEST_F(StackErrors, MissingSliceInNumbering) {
   std::filesystem::remove(dir / "stack" / "slice_0005.png");
   expect_error({"slice 5", "missing", "slice_0006.png"});
