@@ -46,7 +46,7 @@ if(NOT TARGET tactus_gmsh)
     INTERFACE_LINK_LIBRARIES "${GMSH_LIBRARY}")
 endif()
 
-find_package(VTK 9.1 QUIET COMPONENTS CommonCore CommonDataModel IOXML FiltersCore)
+find_package(VTK 9.1 QUIET COMPONENTS CommonCore CommonDataModel IOXML FiltersCore IOGeometry)
 tactus_require(VTK libvtk9-dev)
 
 find_package(nlohmann_json 3.10 QUIET)

@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/gmsh_session.hpp"
 #include "tactus/core/mesh.hpp"
 #include "tactus/core/staged_output.hpp"
 
@@ -17,32 +18,26 @@ namespace {
 constexpr int kGmshTriangle = 2;  // gmsh element type codes
 constexpr int kGmshTet = 4;
 
-// gmsh keeps global state: one session at a time, quiet, finalized on every path.
-class GmshSession {
- public:
-  GmshSession() : lock_(mutex()) {
-    gmsh::initialize(0, nullptr, false);
-    gmsh::option::setNumber("General.Terminal", 0);
-    gmsh::option::setNumber("General.Verbosity", 1);
-  }
-  ~GmshSession() { gmsh::finalize(); }
-  GmshSession(const GmshSession&) = delete;
-  GmshSession& operator=(const GmshSession&) = delete;
-  static std::string last_error() {
-    std::string err;
-    gmsh::logger::getLastError(err);
-    return err.empty() ? "unreadable MSH data" : err;
-  }
-
- private:
-  static std::mutex& mutex() {
-    static std::mutex m;
-    return m;
-  }
-  std::lock_guard<std::mutex> lock_;
-};
+std::mutex& gmsh_mutex() {
+  static std::mutex m;
+  return m;
+}
 
 }  // namespace
+
+GmshSession::GmshSession() : lock_(gmsh_mutex()) {
+  gmsh::initialize(0, nullptr, false);
+  gmsh::option::setNumber("General.Terminal", 0);
+  gmsh::option::setNumber("General.Verbosity", 1);
+}
+
+GmshSession::~GmshSession() { gmsh::finalize(); }
+
+std::string GmshSession::last_error() {
+  std::string err;
+  gmsh::logger::getLastError(err);
+  return err.empty() ? "unreadable MSH data" : err;
+}
 
 void write_msh(const fs::path& file, const TetMesh& mesh, bool binary) {
   mesh.validate(file.string());
@@ -108,6 +103,10 @@ TetMesh read_msh(const fs::path& file) {
   } catch (...) {
     throw InputError(fname, "", "a gmsh MSH file", GmshSession::last_error());
   }
+  return tet_mesh_from_gmsh_model(fname);
+}
+
+TetMesh tet_mesh_from_gmsh_model(const std::string& fname) {
   TetMesh mesh;
   std::vector<std::size_t> node_tags;
   std::vector<double> coords, param;

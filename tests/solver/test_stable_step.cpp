@@ -51,6 +51,7 @@ TEST(StableStep, CriticalStepBelowTrueLimit) {
   run.end_time = 1;
   const ExplicitSolver s1(tet, run, DampingSpec{});
   const double truth = true_limit(tet);
+  std::printf("single tet: computed critical step / true limit 2/w_max = %.4f\n", s1.critical_step() / truth);
   EXPECT_LE(s1.critical_step(), truth);
   EXPECT_GE(s1.critical_step(), 0.5 * truth);  // and not needlessly small
 

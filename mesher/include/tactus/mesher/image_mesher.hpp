@@ -1,0 +1,32 @@
+#pragma once
+// A conforming multi-material tetrahedral mesh of a label volume with CGAL's 3-D mesher
+// (labelled-image domain, paper §3.1: one continuous mesh of bones and soft tissue "without
+// interfaces"): one subdomain per label, nodes shared across every interface.
+#include <string>
+
+#include "tactus/core/mesh.hpp"
+#include "tactus/core/volume.hpp"
+
+namespace tactus::mesher {
+
+struct ImageMeshParams {
+  double facet_angle_deg = 25;      // lower bound on surface triangle angles, (0, 30]
+  double facet_size_mm = 4.0;       // upper bound on surface triangle circumradius
+  double facet_distance_mm = 0.6;   // surface approximation error bound
+  double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
+  double cell_size_mm = 6.0;        // soft tissue cell circumradius bound
+  double bone_cell_size_mm = 3.5;   // the same in bones (finer)
+  bool odt = false, lloyd = false;  // global optimisers (slow); perturb + exude are on by default
+  bool perturb = true, exude = true;
+  double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this
+  double optimiser_time_limit_s = 30;
+  unsigned seed = 0;
+};
+
+// Physical groups written: volumes by label (1 "soft_tissue", 2.. the label table's names, e.g.
+// "bone_02"), surfaces 1001 "skin" (soft tissue / outside) and 1002 "bone_interface".
+constexpr int kSkinTag = 1001, kBoneInterfaceTag = 1002;
+
+TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& params);
+
+}  // namespace tactus::mesher

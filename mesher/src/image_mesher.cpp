@@ -1,0 +1,135 @@
+#include "tactus/mesher/image_mesher.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Image_3.h>
+#include <CGAL/Labeled_mesh_domain_3.h>
+#include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_constant_domain_field_3.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/make_mesh_3.h>
+
+#include <cstring>
+#include <map>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+
+namespace tactus::mesher {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Domain = CGAL::Labeled_mesh_domain_3<K>;
+using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
+using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
+using Criteria = CGAL::Mesh_criteria_3<Tr>;
+using SizeField = CGAL::Mesh_constant_domain_field_3<Domain::R, Domain::Index>;
+
+void check(bool ok, const std::string& field, const std::string& expected, double value) {
+  if (!ok) {
+    std::ostringstream f;
+    f << value;
+    throw InputError("mesh criteria", field, expected, f.str());
+  }
+}
+
+}  // namespace
+
+TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p) {
+  check(p.facet_angle_deg > 0 && p.facet_angle_deg <= 30, "facet_angle", "an angle in (0, 30] degrees", p.facet_angle_deg);
+  check(p.facet_size_mm > 0, "facet_size", "a size > 0 mm", p.facet_size_mm);
+  check(p.facet_distance_mm > 0, "facet_distance", "a distance > 0 mm", p.facet_distance_mm);
+  check(p.cell_radius_edge >= 2, "cell_radius_edge", "a ratio >= 2", p.cell_radius_edge);
+  check(p.cell_size_mm > 0, "cell_size", "a size > 0 mm", p.cell_size_mm);
+  check(p.bone_cell_size_mm > 0, "bone_cell_size", "a size > 0 mm", p.bone_cell_size_mm);
+  for (int a = 0; a < 3; ++a)
+    if (!(labels.spacing[a] > 0)) throw InputError("labels", "spacing", "positive voxel sizes", std::to_string(labels.spacing[a]));
+  std::size_t tissue = 0, nonzero = 0;
+  for (auto v : labels.data) tissue += v == 1, nonzero += v != 0;
+  if (nonzero == 0) throw InputError("labels", "/labels", "a label volume with tissue (labels >= 1)", "only background");
+  if (tissue == 0) throw InputError("labels", "/labels", "soft tissue (label 1) around the bones", "no soft-tissue voxel");
+
+  // The image in millimetres (CGAL's criteria are absolute lengths); nodes go back to metres.
+  _image* im = _createImage(static_cast<std::size_t>(labels.dims[0]), static_cast<std::size_t>(labels.dims[1]),
+                            static_cast<std::size_t>(labels.dims[2]), 1, labels.spacing[0] * 1e3, labels.spacing[1] * 1e3,
+                            labels.spacing[2] * 1e3, 1, WK_FIXED, SGN_UNSIGNED);
+  std::memcpy(im->data, labels.data.data(), labels.size());
+  CGAL::Image_3 image(im);
+  CGAL::get_default_random() = CGAL::Random(p.seed);
+  Domain domain = Domain::create_labeled_image_mesh_domain(image, CGAL::parameters::relative_error_bound = 1e-6,
+                                                           CGAL::parameters::value_outside = 0);
+  SizeField size(p.cell_size_mm);
+  for (const auto& [id, name] : table)
+    if (id >= 2) size.set_size(p.bone_cell_size_mm, 3, domain.index_from_subdomain_index(id));
+  Criteria criteria(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = p.facet_size_mm,
+                    CGAL::parameters::facet_distance = p.facet_distance_mm,
+                    CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge, CGAL::parameters::cell_size = size);
+  const double limit = p.optimiser_time_limit_s;
+  C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(
+      domain, criteria,
+      p.odt ? CGAL::parameters::odt(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_odt(),
+      p.lloyd ? CGAL::parameters::lloyd(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_lloyd(),
+      p.perturb ? CGAL::parameters::perturb(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p.exude_sliver_bound_deg)
+                : CGAL::parameters::no_perturb(),
+      p.exude ? CGAL::parameters::exude(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p.exude_sliver_bound_deg)
+              : CGAL::parameters::no_exude());
+
+  TetMesh mesh;
+  std::map<Tr::Vertex_handle, int> index;
+  const Vec3 origin = labels.origin;
+  auto node = [&](Tr::Vertex_handle v) {
+    auto [it, fresh] = index.emplace(v, static_cast<int>(mesh.nodes.size()));
+    if (fresh) {
+      const auto& q = v->point().point();
+      mesh.nodes.push_back({origin[0] + q.x() * 1e-3, origin[1] + q.y() * 1e-3, origin[2] + q.z() * 1e-3});
+    }
+    return it->second;
+  };
+  std::map<int, std::size_t> per_label;
+  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
+    std::array<int, 4> t = {node(c->vertex(0)), node(c->vertex(1)), node(c->vertex(2)), node(c->vertex(3))};
+    if (tet_volume(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
+                   mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]) < 0)
+      std::swap(t[2], t[3]);
+    mesh.tets.push_back(t);
+    const int label = static_cast<int>(c3t3.subdomain_index(c));
+    mesh.tet_group.push_back(label);
+    ++per_label[label];
+  }
+  for (auto f = c3t3.facets_in_complex_begin(); f != c3t3.facets_in_complex_end(); ++f) {
+    const auto [a, b] = c3t3.surface_patch_index(*f);
+    const int lo = std::min(a, b), hi = std::max(a, b);
+    if (lo == hi) continue;
+    // Orient outward from the inner material: soft tissue for the skin, bone for interfaces.
+    Tr::Cell_handle cell = f->first;
+    int i = f->second;
+    const int inner = lo == 0 ? hi : std::max(lo, hi);
+    if (!c3t3.is_in_complex(cell) || static_cast<int>(c3t3.subdomain_index(cell)) != inner) {
+      const auto mirror = c3t3.triangulation().mirror_facet(*f);
+      cell = mirror.first, i = mirror.second;
+    }
+    std::array<int, 3> tri{};
+    int k = 0;
+    for (int j = 0; j < 4; ++j)
+      if (j != i) tri[static_cast<std::size_t>(k++)] = node(cell->vertex(j));
+    const Vec3 apex = mesh.nodes[static_cast<std::size_t>(node(cell->vertex(i)))];
+    if (tet_volume(mesh.nodes[static_cast<std::size_t>(tri[0])], mesh.nodes[static_cast<std::size_t>(tri[1])],
+                   mesh.nodes[static_cast<std::size_t>(tri[2])], apex) > 0)
+      std::swap(tri[1], tri[2]);
+    mesh.triangles.push_back(tri);
+    mesh.triangle_group.push_back(lo == 0 ? kSkinTag : kBoneInterfaceTag);
+  }
+  for (const auto& [label, count] : per_label) {
+    auto it = table.find(label);
+    mesh.groups.push_back({3, label, it != table.end() ? it->second : "label_" + std::to_string(label)});
+  }
+  mesh.groups.push_back({2, kSkinTag, "skin"});
+  mesh.groups.push_back({2, kBoneInterfaceTag, "bone_interface"});
+  log::verbose() << "mesher: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets, " << mesh.triangles.size()
+                 << " boundary triangles";
+  return mesh;
+}
+
+}  // namespace tactus::mesher

@@ -1,0 +1,122 @@
+#include "tactus/mesher/quality.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "tactus/core/stable_step.hpp"
+
+namespace tactus::mesher {
+
+namespace {
+std::array<double, 3> sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double norm(const std::array<double, 3>& a) { return std::sqrt(dot(a, a)); }
+}  // namespace
+
+TetQuality tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 p[4] = {a, b, c, d};
+  TetQuality q{};
+  q.volume = tet_volume(a, b, c, d);
+  q.length = characteristic_length(a, b, c, d);
+  // Dihedral angle at edge (i,j): between the faces (i,j,k) and (i,j,l).
+  const int edges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+  q.min_dihedral_deg = 180, q.max_dihedral_deg = 0;
+  double emin = 1e300, emax = 0;
+  for (const auto& e : edges) {
+    const auto axis = sub(p[e[1]], p[e[0]]);
+    const auto n1 = cross(axis, sub(p[e[2]], p[e[0]])), n2 = cross(axis, sub(p[e[3]], p[e[0]]));
+    const double c0 = dot(n1, n2) / (norm(n1) * norm(n2));
+    const double angle = std::acos(std::clamp(c0, -1.0, 1.0)) * 180.0 / M_PI;
+    q.min_dihedral_deg = std::min(q.min_dihedral_deg, angle);
+    q.max_dihedral_deg = std::max(q.max_dihedral_deg, angle);
+    emin = std::min(emin, norm(axis)), emax = std::max(emax, norm(axis));
+  }
+  q.edge_ratio = emax / emin;
+  // Radius ratio 3 r_in / R_circ (1 for the regular tet, 0 for a flat one).
+  double area = 0;
+  for (int f = 0; f < 4; ++f) area += 0.5 * norm(cross(sub(p[(f + 2) % 4], p[(f + 1) % 4]), sub(p[(f + 3) % 4], p[(f + 1) % 4])));
+  const double r_in = 3.0 * std::abs(q.volume) / area;
+  const auto u = sub(b, a), v = sub(c, a), w = sub(d, a);
+  const auto num = [&] {
+    const auto vw = cross(v, w), wu = cross(w, u), uv = cross(u, v);
+    const double uu = dot(u, u), vv = dot(v, v), ww = dot(w, w);
+    return std::array<double, 3>{uu * vw[0] + vv * wu[0] + ww * uv[0], uu * vw[1] + vv * wu[1] + ww * uv[1],
+                                 uu * vw[2] + vv * wu[2] + ww * uv[2]};
+  }();
+  const double R = norm(num) / (12.0 * std::abs(q.volume));
+  q.radius_ratio = 3.0 * r_in / R;
+  return q;
+}
+
+nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg) {
+  struct Acc {
+    std::size_t tets = 0, slivers = 0, below10 = 0, inverted = 0;
+    double volume = 0, min_dihedral = 180, max_dihedral = 0, min_radius_ratio = 1, max_edge_ratio = 0;
+    std::vector<double> lengths;
+    std::array<std::size_t, 18> dihedral_hist{};  // 10-degree bins of the minimum dihedral angle
+  };
+  std::map<int, Acc> acc;
+  Acc all;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    const auto& t = mesh.tets[e];
+    const TetQuality q = tet_quality(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
+                                     mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]);
+    for (Acc* a : {&acc[mesh.tet_group[e]], &all}) {
+      ++a->tets;
+      a->volume += q.volume;
+      a->inverted += q.volume <= 0;
+      a->slivers += q.min_dihedral_deg < sliver_deg;
+      a->below10 += q.min_dihedral_deg < 10;
+      a->min_dihedral = std::min(a->min_dihedral, q.min_dihedral_deg);
+      a->max_dihedral = std::max(a->max_dihedral, q.max_dihedral_deg);
+      a->min_radius_ratio = std::min(a->min_radius_ratio, q.radius_ratio);
+      a->max_edge_ratio = std::max(a->max_edge_ratio, q.edge_ratio);
+      a->lengths.push_back(q.length);
+      ++a->dihedral_hist[static_cast<std::size_t>(std::clamp(q.min_dihedral_deg / 10.0, 0.0, 17.0))];
+    }
+  }
+  auto to_json = [](Acc& a) {
+    std::sort(a.lengths.begin(), a.lengths.end());
+    const double median = a.lengths.empty() ? 0 : a.lengths[a.lengths.size() / 2];
+    const double smallest = a.lengths.empty() ? 0 : a.lengths.front();
+    return nlohmann::json{{"tets", a.tets},
+                          {"volume_m3", a.volume},
+                          {"inverted", a.inverted},
+                          {"min_dihedral_deg", a.min_dihedral},
+                          {"max_dihedral_deg", a.max_dihedral},
+                          {"fraction_min_dihedral_below_10deg", a.tets ? static_cast<double>(a.below10) / static_cast<double>(a.tets) : 0},
+                          {"slivers", a.slivers},
+                          {"min_radius_ratio", a.min_radius_ratio},
+                          {"max_edge_ratio", a.max_edge_ratio},
+                          {"min_length_m", smallest},
+                          {"median_length_m", median},
+                          {"min_over_median_length", median > 0 ? smallest / median : 0},
+                          {"min_dihedral_histogram_10deg_bins", a.dihedral_hist}};
+  };
+  nlohmann::json j;
+  j["units"] = "SI (m, m^3, s); angles in degrees; length = L_e = (sum_a |grad N_a|^2)^(-1/2)";
+  j["nodes"] = mesh.nodes.size();
+  j["sliver_bound_deg"] = sliver_deg;
+  j["all"] = to_json(all);
+  j["groups"] = nlohmann::json::object();
+  for (auto& [tag, a] : acc) {
+    const auto* g = mesh.find_group(3, tag);
+    j["groups"][g ? g->name : std::to_string(tag)] = to_json(a);
+  }
+  const CriticalStep step = critical_time_step(mesh, [&](int tag) {
+    auto it = wave_speed.find(tag);
+    return it == wave_speed.end() ? 0.0 : it->second;
+  });
+  if (step.element >= 0) {
+    const auto* g = mesh.find_group(3, step.group);
+    j["critical_time_step"] = {{"dt_s", step.dt}, {"element", step.element + 1}, {"group", g ? g->name : ""},
+                               {"length_m", step.length}, {"wave_speed_m_per_s", wave_speed.at(step.group)}};
+  }
+  return j;
+}
+
+}  // namespace tactus::mesher
