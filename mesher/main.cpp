@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   app.add_option("labels", labels_file, "labels.h5 from tactus-segment");
   app.add_option("--facet-angle", p.facet_angle_deg, "min surface triangle angle, deg")->capture_default_str();
   app.add_option("--facet-size", p.facet_size_mm, "max surface triangle size, mm")->capture_default_str();
+  app.add_option("--bone-facet-size", p.bone_facet_size_mm, "max triangle size on bone surfaces, mm")->capture_default_str();
   app.add_option("--facet-distance", p.facet_distance_mm, "surface approximation error, mm")->capture_default_str();
   app.add_option("--radius-edge", p.cell_radius_edge, "max cell radius-edge ratio")->capture_default_str();
   app.add_option("--cell-size", p.cell_size_mm, "soft-tissue cell size, mm")->capture_default_str();
@@ -61,10 +62,13 @@ int main(int argc, char** argv) {
   app.add_flag("--lloyd", p.lloyd, "Lloyd smoothing before perturb/exude");
   app.add_option("--sliver-bound", p.exude_sliver_bound_deg, "perturb/exude target dihedral angle, deg")->capture_default_str();
   app.add_option("--time-limit", p.optimiser_time_limit_s, "time limit of each optimiser, s")->capture_default_str();
+  bool keep_surfaces = false;
+  app.add_flag("--no-volume-restore", keep_surfaces, "keep CGAL's surfaces (bones then come out 3-4 % small)");
   app.add_option("--seed", p.seed, "random seed")->capture_default_str();
   app.add_option("--soft-wave-speed", soft_speed, "soft-tissue P-wave speed for the step report, m/s")->capture_default_str();
   app.add_option("--bone-wave-speed", bone_speed, "bone P-wave speed for the step report, m/s")->capture_default_str();
 
+  app.fallthrough();  // -o, -v given after a subcommand belong to the main command
   auto* box = app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh");
   std::array<double, 3> size{0.1, 0.1, 0.05}, origin{0, 0, 0};
   double h = 0.01, block_speed = std::sqrt(3e9 * 0.65 / (1.35 * 0.3) / 1200);
@@ -92,6 +96,7 @@ int main(int argc, char** argv) {
       return;
     }
     if (labels_file.empty()) throw CLI::RequiredError("labels");
+    p.restore_volumes = !keep_surfaces;
     LabelTable table;
     const auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
     const auto t0 = std::chrono::steady_clock::now();

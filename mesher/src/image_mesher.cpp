@@ -7,10 +7,13 @@
 #include <CGAL/Mesh_constant_domain_field_3.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/Mesh_3/initialize_triangulation_from_labeled_image.h>
 #include <CGAL/make_mesh_3.h>
+#include <CGAL/refine_mesh_3.h>
 
 #include <cstring>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
@@ -35,6 +38,63 @@ void check(bool ok, const std::string& field, const std::string& expected, doubl
   }
 }
 
+// The mesher's surfaces are chords of the labelled image's (trilinear, corner-cutting) boundary,
+// so convex bones come out 3-4 % below their voxel volume. Restore each closed surface's volume
+// (every bone's interface, and the skin for the whole body) with one offset along the vertex
+// normals, delta = (V_label - V_mesh) / area, a fraction of a millimetre; halve it for a surface
+// whose move would invert a tet.
+void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const std::vector<int>& triangle_inner) {
+  std::map<int, double> target;  // 0: whole body
+  for (auto v : labels.data)
+    if (v) target[v] += labels.voxel_volume(), target[0] += labels.voxel_volume();
+  std::vector<std::vector<std::size_t>> tets_of(mesh.nodes.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (int v : mesh.tets[e]) tets_of[static_cast<std::size_t>(v)].push_back(e);
+  auto tet_vol = [&](std::size_t e) {
+    const auto& t = mesh.tets[e];
+    return tet_volume(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
+                      mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]);
+  };
+  std::map<int, double> current;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    const double v = tet_vol(e);
+    current[mesh.tet_group[e]] += v, current[0] += v;
+  }
+  for (const auto& [surface, goal] : target) {
+    if (surface == 1) continue;  // soft tissue follows from the body and the bones
+    std::map<int, std::array<double, 3>> normal;
+    double area = 0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      if (triangle_inner[t] != surface) continue;
+      const auto& f = mesh.triangles[t];
+      const Vec3 &a = mesh.nodes[static_cast<std::size_t>(f[0])], &b = mesh.nodes[static_cast<std::size_t>(f[1])],
+                 &c = mesh.nodes[static_cast<std::size_t>(f[2])];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double n[3] = {0.5 * (u[1] * w[2] - u[2] * w[1]), 0.5 * (u[2] * w[0] - u[0] * w[2]), 0.5 * (u[0] * w[1] - u[1] * w[0])};
+      area += std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      for (int v : f)
+        for (int k = 0; k < 3; ++k) normal[v][static_cast<std::size_t>(k)] += n[k];
+    }
+    if (area <= 0) continue;
+    double delta = (goal - current[surface]) / area;
+    std::vector<std::pair<int, Vec3>> original;
+    for (auto& [v, n] : normal) {
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      for (double& x : n) x /= len;
+      original.emplace_back(v, mesh.nodes[static_cast<std::size_t>(v)]);
+    }
+    for (int attempt = 0; attempt < 4; ++attempt, delta *= 0.5) {
+      for (const auto& [v, x] : original)
+        for (int k = 0; k < 3; ++k) mesh.nodes[static_cast<std::size_t>(v)][static_cast<std::size_t>(k)] = x[static_cast<std::size_t>(k)] + delta * normal[v][static_cast<std::size_t>(k)];
+      bool valid = true;
+      for (const auto& [v, x] : original)
+        for (std::size_t e : tets_of[static_cast<std::size_t>(v)]) valid = valid && tet_vol(e) > 0;
+      if (valid) break;
+      for (const auto& [v, x] : original) mesh.nodes[static_cast<std::size_t>(v)] = x;
+    }
+  }
+}
+
 }  // namespace
 
 TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p) {
@@ -44,6 +104,7 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   check(p.cell_radius_edge >= 2, "cell_radius_edge", "a ratio >= 2", p.cell_radius_edge);
   check(p.cell_size_mm > 0, "cell_size", "a size > 0 mm", p.cell_size_mm);
   check(p.bone_cell_size_mm > 0, "bone_cell_size", "a size > 0 mm", p.bone_cell_size_mm);
+  check(p.bone_facet_size_mm > 0, "bone_facet_size", "a size > 0 mm", p.bone_facet_size_mm);
   for (int a = 0; a < 3; ++a)
     if (!(labels.spacing[a] > 0)) throw InputError("labels", "spacing", "positive voxel sizes", std::to_string(labels.spacing[a]));
   std::size_t tissue = 0, nonzero = 0;
@@ -60,21 +121,48 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   CGAL::get_default_random() = CGAL::Random(p.seed);
   Domain domain = Domain::create_labeled_image_mesh_domain(image, CGAL::parameters::relative_error_bound = 1e-6,
                                                            CGAL::parameters::value_outside = 0);
-  SizeField size(p.cell_size_mm);
+  // Finer cells in bone, and finer facets on the bone surfaces: facets are chords of the
+  // boundary, so a convex bone meshed with the skin's facet size loses ~13 % of its volume.
+  SizeField size(p.cell_size_mm), facet_size(p.facet_size_mm);
   for (const auto& [id, name] : table)
-    if (id >= 2) size.set_size(p.bone_cell_size_mm, 3, domain.index_from_subdomain_index(id));
-  Criteria criteria(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = p.facet_size_mm,
+    if (id >= 2) {
+      size.set_size(p.bone_cell_size_mm, 3, domain.index_from_subdomain_index(id));
+      facet_size.set_size(p.bone_facet_size_mm, 2, domain.index_from_surface_patch_index(Domain::Surface_patch_index(1, id)));
+    }
+  Criteria criteria(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = facet_size,
                     CGAL::parameters::facet_distance = p.facet_distance_mm,
                     CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge, CGAL::parameters::cell_size = size);
   const double limit = p.optimiser_time_limit_s;
-  C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(
-      domain, criteria,
-      p.odt ? CGAL::parameters::odt(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_odt(),
-      p.lloyd ? CGAL::parameters::lloyd(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_lloyd(),
-      p.perturb ? CGAL::parameters::perturb(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p.exude_sliver_bound_deg)
-                : CGAL::parameters::no_perturb(),
-      p.exude ? CGAL::parameters::exude(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p.exude_sliver_bound_deg)
-              : CGAL::parameters::no_exude());
+  auto optimise = [&](C3t3& c3t3) {
+    CGAL::refine_mesh_3(
+        c3t3, domain, criteria,
+        p.odt ? CGAL::parameters::odt(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_odt(),
+        p.lloyd ? CGAL::parameters::lloyd(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_lloyd(),
+        p.perturb ? CGAL::parameters::perturb(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p.exude_sliver_bound_deg)
+                  : CGAL::parameters::no_perturb(),
+        p.exude ? CGAL::parameters::exude(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p.exude_sliver_bound_deg)
+                : CGAL::parameters::no_exude());
+  };
+  std::set<int> wanted;
+  for (auto v : labels.data)
+    if (v) wanted.insert(v);
+  auto all_present = [&](const C3t3& c) {
+    std::set<int> seen;
+    for (auto cell = c.cells_in_complex_begin(); cell != c.cells_in_complex_end(); ++cell) seen.insert(static_cast<int>(c.subdomain_index(cell)));
+    return seen == wanted;
+  };
+  // Default initialisation (random surface sampling) gives the better elements; when it misses a
+  // small subdomain, restart seeded with points on every connected component of every label.
+  C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
+                                      CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+  if (!all_present(c3t3)) {
+    log::verbose() << "mesher: a subdomain was missed by the initial sampling; seeding every label component";
+    c3t3 = C3t3();
+    ::initialize_triangulation_from_labeled_image(c3t3, domain, image, criteria, static_cast<unsigned char>(0));
+    CGAL::refine_mesh_3(c3t3, domain, criteria, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
+                        CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+  }
+  optimise(c3t3);
 
   TetMesh mesh;
   std::map<Tr::Vertex_handle, int> index;
@@ -88,6 +176,7 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
     return it->second;
   };
   std::map<int, std::size_t> per_label;
+  std::vector<int> triangle_inner;
   for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
     std::array<int, 4> t = {node(c->vertex(0)), node(c->vertex(1)), node(c->vertex(2)), node(c->vertex(3))};
     if (tet_volume(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
@@ -120,6 +209,19 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
       std::swap(tri[1], tri[2]);
     mesh.triangles.push_back(tri);
     mesh.triangle_group.push_back(lo == 0 ? kSkinTag : kBoneInterfaceTag);
+    triangle_inner.push_back(lo == 0 ? 0 : inner);  // 0: the outer skin
+  }
+  if (p.restore_volumes) restore_volumes(mesh, labels, triangle_inner);
+  {
+    std::map<int, std::size_t> voxels;
+    for (auto v : labels.data)
+      if (v) ++voxels[v];
+    for (const auto& [label, n] : voxels)
+      if (!per_label.count(label)) {
+        auto it = table.find(label);
+        throw NumericalError("mesher: label " + std::to_string(label) + " (" + (it != table.end() ? it->second : "?") + ", " +
+                             std::to_string(n) + " voxels) received no tetrahedra; refine --bone-cell-size/--bone-facet-size");
+      }
   }
   for (const auto& [label, count] : per_label) {
     auto it = table.find(label);

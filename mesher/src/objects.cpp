@@ -6,6 +6,7 @@
 #include <vtkPolyData.h>
 #include <vtkSTLReader.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "tactus/core/error.hpp"
@@ -51,9 +52,11 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
     double b[6];
     gmsh::model::getBoundingBox(dim, tag, b[0], b[1], b[2], b[3], b[4], b[5]);
     all.push_back(tag);
+    // OCC pads bounding boxes by its tolerance (~1e-7): compare at 1e-4 of the box size.
+    const double tol = 1e-4 * std::min({size[0], size[1], size[2]});
     for (int axis = 0; axis < 3; ++axis) {
-      if (std::abs(b[axis + 3] - b[axis]) > 1e-9 * size[axis]) continue;  // flat along this axis
-      const int side = std::abs(b[axis] - origin[axis]) < 1e-9 * size[axis] ? 0 : 1;
+      if (std::abs(b[axis + 3] - b[axis]) > tol) continue;  // not flat along this axis
+      const int side = std::abs(0.5 * (b[axis] + b[axis + 3]) - origin[axis]) < tol ? 0 : 1;
       gmsh::model::addPhysicalGroup(2, {tag}, 11 + 2 * axis + side);
       gmsh::model::setPhysicalName(2, 11 + 2 * axis + side, names[2 * axis + side]);
     }

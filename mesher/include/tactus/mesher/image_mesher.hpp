@@ -11,15 +11,17 @@ namespace tactus::mesher {
 
 struct ImageMeshParams {
   double facet_angle_deg = 25;      // lower bound on surface triangle angles, (0, 30]
-  double facet_size_mm = 4.0;       // upper bound on surface triangle circumradius
+  double facet_size_mm = 4.0;       // upper bound on surface triangle circumradius (skin)
+  double bone_facet_size_mm = 3.0;  // the same on the bone / soft-tissue interfaces
   double facet_distance_mm = 0.6;   // surface approximation error bound
   double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
-  double cell_size_mm = 6.0;        // soft tissue cell circumradius bound
+  double cell_size_mm = 7.0;        // soft tissue cell circumradius bound
   double bone_cell_size_mm = 3.5;   // the same in bones (finer)
   bool odt = false, lloyd = false;  // global optimisers (slow); perturb + exude are on by default
   bool perturb = true, exude = true;
   double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this
   double optimiser_time_limit_s = 30;
+  bool restore_volumes = true;      // offset surfaces to the label volumes (see image_mesher.cpp)
   unsigned seed = 0;
 };
 

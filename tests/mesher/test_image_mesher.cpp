@@ -1,0 +1,198 @@
+// mesher/image: the CGAL mesh of the phantom's labels (1 mm voxels) is conforming, valid and
+// faithful: checked face by face and volume by volume against the label volume.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "tactus/core/error.hpp"
+#include "tactus/data_samples/phantom.hpp"
+#include "tactus/mesher/image_mesher.hpp"
+#include "tactus/mesher/quality.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+
+namespace {
+
+struct Meshed {
+  samples::Phantom phantom;
+  TetMesh mesh;
+  Meshed() {
+    samples::PhantomParams p;
+    p.voxel_mm = p.slice_mm = 1.0;
+    phantom = samples::make_hand_phantom(p);
+    mesh = mesher::mesh_label_volume(phantom.truth, phantom.labels, mesher::ImageMeshParams{});
+  }
+};
+const Meshed& meshed() {
+  static const Meshed m;
+  return m;
+}
+
+using Face = std::array<int, 3>;
+Face key(int a, int b, int c) {
+  Face f{a, b, c};
+  std::sort(f.begin(), f.end());
+  return f;
+}
+// Every face of every tet, with the tets (their groups) on each side.
+std::map<Face, std::vector<int>> face_owners(const TetMesh& m) {
+  std::map<Face, std::vector<int>> faces;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) {
+    const auto& t = m.tets[e];
+    for (int i = 0; i < 4; ++i) faces[key(t[(i + 1) % 4], t[(i + 2) % 4], t[(i + 3) % 4])].push_back(static_cast<int>(e));
+  }
+  return faces;
+}
+
+}  // namespace
+
+TEST(ImageMesher, ConformingWithoutDuplicateNodes) {
+  const TetMesh& m = meshed().mesh;
+  std::set<Vec3> unique(m.nodes.begin(), m.nodes.end());
+  EXPECT_EQ(unique.size(), m.nodes.size());
+  std::set<Face> interface_tris, skin_tris;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& f = m.triangles[t];
+    (m.triangle_group[t] == mesher::kSkinTag ? skin_tris : interface_tris).insert(key(f[0], f[1], f[2]));
+  }
+  std::size_t interfaces = 0;
+  for (const auto& [face, owners] : face_owners(m)) {
+    ASSERT_LE(owners.size(), 2u);  // a face shared by three tets would be non-conforming
+    if (owners.size() == 1) {
+      EXPECT_TRUE(skin_tris.count(face)) << "outer face not tagged skin";
+      EXPECT_EQ(m.tet_group[static_cast<std::size_t>(owners[0])], 1) << "bone exposed to air";
+    } else if (m.tet_group[static_cast<std::size_t>(owners[0])] != m.tet_group[static_cast<std::size_t>(owners[1])]) {
+      ++interfaces;
+      EXPECT_TRUE(interface_tris.count(face));  // shared by exactly two tets of different subdomains
+    }
+  }
+  EXPECT_EQ(interfaces, interface_tris.size());
+}
+
+TEST(ImageMesher, ValidTetsAndDihedralBounds) {
+  const TetMesh& m = meshed().mesh;
+  const auto report = mesher::quality_report(m, {});
+  EXPECT_EQ(report["all"]["inverted"].get<std::size_t>(), 0u);
+  EXPECT_GE(report["all"]["min_dihedral_deg"].get<double>(), 5.0);
+  std::printf("tets %zu, min dihedral %.2f deg, fraction below 10 deg %.5f, L_e min/median %.3f\n", m.tets.size(),
+              report["all"]["min_dihedral_deg"].get<double>(), report["all"]["fraction_min_dihedral_below_10deg"].get<double>(),
+              report["all"]["min_over_median_length"].get<double>());
+}
+
+// Oracle: voxel counts x voxel volume of the label volume. 3 % for soft tissue and all bone,
+// 10 % for each single bone (the surface approximation error is ~0.3 mm on 3-5 mm radii).
+TEST(ImageMesher, VolumesMatchLabels) {
+  const Meshed& r = meshed();
+  std::map<int, double> label_volume, mesh_volume;
+  for (auto v : r.phantom.truth.data)
+    if (v) label_volume[v] += r.phantom.truth.voxel_volume();
+  for (std::size_t e = 0; e < r.mesh.tets.size(); ++e) {
+    const auto& t = r.mesh.tets[e];
+    mesh_volume[r.mesh.tet_group[e]] += tet_volume(r.mesh.nodes[static_cast<std::size_t>(t[0])], r.mesh.nodes[static_cast<std::size_t>(t[1])],
+                                                   r.mesh.nodes[static_cast<std::size_t>(t[2])], r.mesh.nodes[static_cast<std::size_t>(t[3])]);
+  }
+  double bone_label = 0, bone_mesh = 0, worst = 0;
+  for (const auto& [id, v] : label_volume) {
+    if (id < 2) continue;
+    bone_label += v, bone_mesh += mesh_volume[id];
+    worst = std::max(worst, std::abs(mesh_volume[id] / v - 1));
+    EXPECT_NEAR(mesh_volume[id] / v, 1.0, 0.10) << r.phantom.labels.at(id);
+  }
+  EXPECT_NEAR(mesh_volume[1] / label_volume[1], 1.0, 0.03);
+  EXPECT_NEAR(bone_mesh / bone_label, 1.0, 0.03);
+  std::printf("volume ratio soft tissue %.4f, all bone %.4f, worst single bone %.3f\n", mesh_volume[1] / label_volume[1],
+              bone_mesh / bone_label, worst);
+}
+
+TEST(ImageMesher, SkinClosedAndManifold) {
+  const TetMesh& m = meshed().mesh;
+  std::map<std::pair<int, int>, int> edges;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    if (m.triangle_group[t] != mesher::kSkinTag) continue;
+    const auto& f = m.triangles[t];
+    for (int i = 0; i < 3; ++i) ++edges[{std::min(f[i], f[(i + 1) % 3]), std::max(f[i], f[(i + 1) % 3])}];
+  }
+  ASSERT_FALSE(edges.empty());
+  for (const auto& [e, count] : edges) EXPECT_EQ(count, 2) << "skin edge " << e.first << "-" << e.second;
+}
+
+// Each bone is one face-connected set of tets, surrounded by soft tissue (never by air).
+TEST(ImageMesher, EachBoneConnectedInsideSoftTissue) {
+  const TetMesh& m = meshed().mesh;
+  const auto faces = face_owners(m);
+  std::map<int, std::vector<int>> by_group;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) by_group[m.tet_group[e]].push_back(static_cast<int>(e));
+  std::vector<std::vector<int>> adj(m.tets.size());
+  for (const auto& [f, owners] : faces)
+    if (owners.size() == 2) adj[static_cast<std::size_t>(owners[0])].push_back(owners[1]), adj[static_cast<std::size_t>(owners[1])].push_back(owners[0]);
+  EXPECT_EQ(by_group.size(), 28u);  // soft tissue + 27 bones
+  for (const auto& [g, tets] : by_group) {
+    if (g < 2) continue;
+    std::set<int> seen{tets[0]};
+    std::vector<int> stack{tets[0]};
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      for (int n : adj[static_cast<std::size_t>(e)])
+        if (m.tet_group[static_cast<std::size_t>(n)] == g && seen.insert(n).second) stack.push_back(n);
+    }
+    EXPECT_EQ(seen.size(), tets.size()) << "bone group " << g << " is not connected";
+  }
+}
+
+TEST(ImageMesher, MshRoundTripKeepsCountsAndGroups) {
+  testkit::TempDir dir;
+  const TetMesh& m = meshed().mesh;
+  write_msh(dir / "hand.msh", m);
+  const TetMesh back = read_msh(dir / "hand.msh");
+  EXPECT_EQ(back.nodes.size(), m.nodes.size());
+  EXPECT_EQ(back.tets.size(), m.tets.size());
+  EXPECT_EQ(back.triangles.size(), m.triangles.size());
+  ASSERT_NE(back.find_group(2, "skin"), nullptr);
+  ASSERT_NE(back.find_group(2, "bone_interface"), nullptr);
+  ASSERT_NE(back.find_group(3, "soft_tissue"), nullptr);
+  ASSERT_NE(back.find_group(3, "scaphoid"), nullptr);
+}
+
+namespace {
+template <class F>
+void expect_input_error(F&& f, std::initializer_list<std::string> fragments) {
+  try {
+    f();
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    for (const auto& s : fragments) EXPECT_NE(std::string(e.what()).find(s), std::string::npos) << e.what();
+  }
+}
+Volume<std::uint8_t> small_labels() {
+  Volume<std::uint8_t> v({12, 12, 12}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 0);
+  for (int z = 2; z < 10; ++z)
+    for (int y = 2; y < 10; ++y)
+      for (int x = 2; x < 10; ++x) v.at(x, y, z) = (x > 4 && x < 7 && y > 4 && y < 7 && z > 4 && z < 7) ? 2 : 1;
+  return v;
+}
+}  // namespace
+
+TEST(ImageMesherErrors, EmptyLabelVolume) {
+  Volume<std::uint8_t> v({8, 8, 8}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 0);
+  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"only background"});
+}
+TEST(ImageMesherErrors, NoSoftTissue) {
+  Volume<std::uint8_t> v({8, 8, 8}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 2);
+  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"soft tissue", "no soft-tissue voxel"});
+}
+TEST(ImageMesherErrors, NonPositiveSpacing) {
+  auto v = small_labels();
+  v.spacing[2] = 0;
+  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"spacing", "positive"});
+}
+TEST(ImageMesherErrors, ImpossibleCriteria) {
+  mesher::ImageMeshParams p;
+  p.cell_size_mm = 0;
+  expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"cell_size", "> 0"});
+  p = {};
+  p.facet_angle_deg = 45;
+  expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"facet_angle", "(0, 30]"});
+}

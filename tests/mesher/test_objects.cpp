@@ -1,0 +1,88 @@
+// mesher/objects: gmsh meshes of the block and of closed STL objects: exact volumes of their
+// planar-faced domains, the physical groups, and refusal of open or unreadable STL files.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/mesher/objects.hpp"
+#include "tactus/mesher/quality.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+
+namespace {
+double volume(const TetMesh& m) {
+  double v = 0;
+  for (const auto& t : m.tets)
+    v += tet_volume(m.nodes[static_cast<std::size_t>(t[0])], m.nodes[static_cast<std::size_t>(t[1])], m.nodes[static_cast<std::size_t>(t[2])],
+                    m.nodes[static_cast<std::size_t>(t[3])]);
+  return v;
+}
+// An ASCII STL of the unit cube scaled by s (12 outward triangles), optionally missing one.
+void write_cube_stl(const std::filesystem::path& file, double s, bool open) {
+  const double c[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const int tris[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                           {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  std::ofstream o(file);
+  o << "solid cube\n";
+  for (int t = 0; t < (open ? 11 : 12); ++t) {
+    o << " facet normal 0 0 0\n  outer loop\n";
+    for (int v : tris[t]) o << "   vertex " << s * c[v][0] << ' ' << s * c[v][1] << ' ' << s * c[v][2] << '\n';
+    o << "  endloop\n endfacet\n";
+  }
+  o << "endsolid cube\n";
+}
+}  // namespace
+
+TEST(Objects, BoxVolumeAndGroups) {
+  const TetMesh m = mesher::mesh_box({0.1, 0.06, 0.04}, {0.01, -0.03, 0}, 0.01);
+  EXPECT_NEAR(volume(m), 0.1 * 0.06 * 0.04, 1e-12);  // planar faces: exact up to round-off
+  for (const char* g : {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax", "surface"}) EXPECT_NE(m.find_group(2, g), nullptr) << g;
+  ASSERT_NE(m.find_group(3, "block"), nullptr);
+  EXPECT_EQ(mesher::quality_report(m, {})["all"]["inverted"].get<std::size_t>(), 0u);
+  // The xmax face's triangles lie on x = 0.11 and cover its area.
+  double area = 0;
+  ASSERT_NE(m.find_group(2, "xmax"), nullptr);
+  const int tag = m.find_group(2, "xmax")->tag;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    if (m.triangle_group[t] != tag) continue;
+    const auto& f = m.triangles[t];
+    for (int v : f) EXPECT_NEAR(m.nodes[static_cast<std::size_t>(v)][0], 0.11, 1e-12);
+    const auto& a = m.nodes[static_cast<std::size_t>(f[0])], &b = m.nodes[static_cast<std::size_t>(f[1])], &c = m.nodes[static_cast<std::size_t>(f[2])];
+    area += 0.5 * std::abs((b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]));
+  }
+  EXPECT_NEAR(area, 0.06 * 0.04, 1e-12);
+}
+
+TEST(Objects, ClosedStlObject) {
+  testkit::TempDir dir;
+  write_cube_stl(dir / "cube.stl", 30.0, false);  // a 30 mm cube, in mm
+  const TetMesh m = mesher::mesh_stl_object(dir / "cube.stl", 0.008, 1e-3);
+  EXPECT_NEAR(volume(m), 0.03 * 0.03 * 0.03, 1e-12);
+  EXPECT_NE(m.find_group(2, "surface"), nullptr);
+}
+
+TEST(Objects, OpenStlRefused) {
+  testkit::TempDir dir;
+  write_cube_stl(dir / "open.stl", 30.0, true);
+  try {
+    mesher::mesh_stl_object(dir / "open.stl", 0.008, 1e-3);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("closed 2-manifold"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("3 open"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Objects, UnreadableStlRefused) {
+  testkit::TempDir dir;
+  std::ofstream(dir / "junk.stl") << "\x01\x02 this is not an STL";
+  EXPECT_THROW(mesher::mesh_stl_object(dir / "junk.stl", 0.008, 1e-3), InputError);
+  EXPECT_THROW(mesher::mesh_stl_object(dir / "missing.stl", 0.008, 1e-3), InputError);
+}
+
+TEST(Objects, BadBoxParameters) {
+  EXPECT_THROW(mesher::mesh_box({0.1, 0, 0.1}, {0, 0, 0}, 0.01), InputError);
+  EXPECT_THROW(mesher::mesh_box({0.1, 0.1, 0.1}, {0, 0, 0}, -1), InputError);
+}
