@@ -12,6 +12,7 @@
 #include <CGAL/refine_mesh_3.h>
 
 #include <cstring>
+#include <iostream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -158,7 +159,13 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   if (!all_present(c3t3)) {
     log::verbose() << "mesher: a subdomain was missed by the initial sampling; seeding every label component";
     c3t3 = C3t3();
-    ::initialize_triangulation_from_labeled_image(c3t3, domain, image, criteria, static_cast<unsigned char>(0));
+    {
+      // CGAL 5.5 prints its progress to std::cout here; keep our stdout for our own output.
+      std::ostringstream sink;
+      std::streambuf* saved = std::cout.rdbuf(sink.rdbuf());
+      ::initialize_triangulation_from_labeled_image(c3t3, domain, image, criteria, static_cast<unsigned char>(0));
+      std::cout.rdbuf(saved);
+    }
     CGAL::refine_mesh_3(c3t3, domain, criteria, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
                         CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
   }
