@@ -8,10 +8,12 @@
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/mesh.hpp"
+#include "expect_error.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
 using tactus::testkit::TempDir;
+using tactus::testkit::expect_input_error;
 
 namespace {
 
@@ -59,15 +61,6 @@ void expect_same_mesh(const TetMesh& a, const TetMesh& b, bool with_triangles, d
   }
 }
 
-template <class F>
-void expect_input_error(F&& f, std::initializer_list<std::string> fragments) {
-  try {
-    f();
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
-    for (const auto& frag : fragments) EXPECT_NE(std::string(e.what()).find(frag), std::string::npos) << e.what();
-  }
-}
 
 }  // namespace
 

@@ -6,10 +6,12 @@
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/volume.hpp"
+#include "expect_error.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
 using tactus::testkit::TempDir;
+using tactus::testkit::expect_input_error;
 
 namespace {
 
@@ -80,19 +82,6 @@ TEST(Volume, Uint8StoredReadsAsUint16) {
   ASSERT_EQ(v.size(), w.size());
   for (std::size_t i = 0; i < v.size(); ++i) EXPECT_EQ(v.data[i], w.data[i]);
 }
-
-namespace {
-// Runs `f`, expects an InputError whose message contains every fragment.
-template <class F>
-void expect_input_error(F&& f, std::initializer_list<std::string> fragments) {
-  try {
-    f();
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
-    for (const auto& frag : fragments) EXPECT_NE(std::string(e.what()).find(frag), std::string::npos) << e.what();
-  }
-}
-}  // namespace
 
 TEST(VolumeErrors, MissingFile) {
   TempDir dir;

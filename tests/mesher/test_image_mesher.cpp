@@ -9,9 +9,11 @@
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/quality.hpp"
+#include "expect_error.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
+using tactus::testkit::expect_input_error;
 
 namespace {
 
@@ -157,15 +159,6 @@ TEST(ImageMesher, MshRoundTripKeepsCountsAndGroups) {
 }
 
 namespace {
-template <class F>
-void expect_input_error(F&& f, std::initializer_list<std::string> fragments) {
-  try {
-    f();
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
-    for (const auto& s : fragments) EXPECT_NE(std::string(e.what()).find(s), std::string::npos) << e.what();
-  }
-}
 Volume<std::uint8_t> small_labels() {
   Volume<std::uint8_t> v({12, 12, 12}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 0);
   for (int z = 2; z < 10; ++z)
