@@ -5,6 +5,7 @@ stress, with a scalar bar. A stop-gap picture maker until tactus-post lands; run
 import sys
 
 import vtk
+from render_png import look_from, write_png
 
 
 def main(vtu_path, png_path, field="von_mises"):
@@ -43,26 +44,8 @@ def main(vtu_path, png_path, field="von_mises"):
     renderer.AddActor2D(bar)
     for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
         prop.SetColor(0, 0, 0)
-    camera = renderer.GetActiveCamera()
-    camera.SetPosition(1, -1.4, 0.9)
-    camera.SetFocalPoint(0, 0, 0)
-    camera.SetViewUp(0, 0, 1)
-    renderer.ResetCamera()
-    camera.Zoom(1.25)
-
-    window = vtk.vtkRenderWindow()
-    window.SetOffScreenRendering(1)
-    window.SetSize(900, 650)
-    window.AddRenderer(renderer)
-    window.Render()
-    grab = vtk.vtkWindowToImageFilter()
-    grab.SetInput(window)
-    grab.Update()
-    writer = vtk.vtkPNGWriter()
-    writer.SetFileName(png_path)
-    writer.SetInputConnection(grab.GetOutputPort())
-    writer.Write()
-
+    look_from(renderer, (1, -1.4, 0.9), (0, 0, 0), 1.25)
+    write_png(renderer, (900, 650), png_path)
 
 if __name__ == "__main__":
     if len(sys.argv) < 3:

@@ -6,6 +6,7 @@ import os
 import sys
 
 import vtk
+from render_png import look_from, write_png
 
 
 def main(folder, png_path):
@@ -24,24 +25,8 @@ def main(folder, png_path):
         else:
             actor.GetProperty().SetColor(0.95, 0.93, 0.85)
         renderer.AddActor(actor)
-    camera = renderer.GetActiveCamera()
-    camera.SetPosition(0.15, -0.5, 0.35)
-    camera.SetFocalPoint(0, 0, 0.12)
-    camera.SetViewUp(0, 0, 1)
-    renderer.ResetCamera()
-    camera.Zoom(1.3)
-    window = vtk.vtkRenderWindow()
-    window.SetOffScreenRendering(1)
-    window.SetSize(700, 900)
-    window.AddRenderer(renderer)
-    window.Render()
-    grab = vtk.vtkWindowToImageFilter()
-    grab.SetInput(window)
-    writer = vtk.vtkPNGWriter()
-    writer.SetFileName(png_path)
-    writer.SetInputConnection(grab.GetOutputPort())
-    writer.Write()
-
+    look_from(renderer, (0.15, -0.5, 0.35), (0, 0, 0.12), 1.3)
+    write_png(renderer, (700, 900), png_path)
 
 if __name__ == "__main__":
     if len(sys.argv) != 3:
