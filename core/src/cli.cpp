@@ -17,10 +17,12 @@ void add_common_options(CLI::App& app, CommonOptions& options, const std::string
 
 int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std::function<void()>& body) {
   const std::string program = app.get_name();
+  // Usage errors exit with 2 (CLI11's own codes are >100); --help and --version with 0.
+  auto usage = [&](const CLI::ParseError& e) { return app.exit(e) == 0 ? 0 : 2; };
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage(e);
   }
   log::set_level(options.quiet ? log::Level::quiet
                  : options.verbose >= 2 ? log::Level::debug
@@ -30,7 +32,7 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
     body();
     return 0;
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return usage(e);
   } catch (const NumericalError& e) {
     std::cerr << program << ": numerical failure: " << e.what() << '\n';
     return 3;

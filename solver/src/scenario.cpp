@@ -294,10 +294,11 @@ Scenario read_scenario(const fs::path& file) {
   sc.file = fs::absolute(file);
   const fs::path base = sc.file.parent_path();
 
-  SectionSpec top{"", "", {typed("run", ValueType::table, "", "", true), typed("damping", ValueType::table, "", "", false),
-                           typed("bodies", ValueType::table_list, "", "", true),
-                           typed("materials", ValueType::table, "", "", true),
-                           typed("boundary", ValueType::table_list, "", "", false)}};
+  SectionSpec top{"", "", {typed("run", ValueType::table, "", "a [run] section", true),
+                           typed("damping", ValueType::table, "", "a [damping] section", false),
+                           typed("bodies", ValueType::table_list, "", "one or more [[bodies]] sections", true),
+                           typed("materials", ValueType::table, "", "[materials.<name>] sections", true),
+                           typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false)}};
   r.check_keys(root, top, "");
 
   {  // [run]
