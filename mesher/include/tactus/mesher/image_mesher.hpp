@@ -21,6 +21,7 @@ struct ImageMeshParams {
   bool perturb = true, exude = true;
   double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this
   double optimiser_time_limit_s = 30;
+  int relocate_passes = 6;          // node relocation of the tets that set the stable step (0: off)
   bool restore_volumes = true;      // offset surfaces to the label volumes (see image_mesher.cpp)
   unsigned seed = 0;
 };
