@@ -13,6 +13,7 @@
 #include "tactus/core/staged_output.hpp"
 #include "tactus/core/version.hpp"
 #include "tactus/solver/explicit.hpp"
+#include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
 
 namespace fs = std::filesystem;
@@ -40,13 +41,7 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
   for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
     const MaterialBlock& b = m.blocks[bi];
     for (std::size_t e = b.begin; e < b.end; ++e) {
-      const std::int32_t* c = &m.conn[4 * e];
-      const double* g = &m.grad[9 * e];
-      Mat3 F = Mat3::Identity();
-      for (int a = 1; a < 4; ++a)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            F(i, j) += (u[3 * static_cast<std::size_t>(c[a]) + i] - u[3 * static_cast<std::size_t>(c[0]) + i]) * g[3 * (a - 1) + j];
+      const Mat3 F = Mat3::Identity() + nodal_gradient(u.data(), &m.conn[4 * e], &m.grad[9 * e]);
       Vec3d a1 = Vec3d::UnitX(), a2 = Vec3d::UnitY();
       if (const auto* h = std::get_if<Hgo>(&b.material)) {
         a1 = b.element_fibres ? Vec3d(&m.fibres[6 * e]) : h->a1;

@@ -36,15 +36,8 @@ void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_
   for (std::size_t e = begin; e < end; ++e) {
     const std::int32_t* c = conn + 4 * e;
     const double* g = grad + 9 * e;
-    const double* u0 = u + 3 * static_cast<std::size_t>(c[0]);
-    const double* u1 = u + 3 * static_cast<std::size_t>(c[1]);
-    const double* u2 = u + 3 * static_cast<std::size_t>(c[2]);
-    const double* u3 = u + 3 * static_cast<std::size_t>(c[3]);
-    Mat3 F;
-    for (int i = 0; i < 3; ++i) {
-      const double d1 = u1[i] - u0[i], d2 = u2[i] - u0[i], d3 = u3[i] - u0[i];
-      for (int j = 0; j < 3; ++j) F(i, j) = (i == j ? 1.0 : 0.0) + d1 * g[j] + d2 * g[3 + j] + d3 * g[6 + j];
-    }
+    Mat3 F = nodal_gradient(u, c, g);
+    F(0, 0) += 1.0, F(1, 1) += 1.0, F(2, 2) += 1.0;
     const Mat3 cof = cofactor(F);
     const double J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
     if (J < acc.min_J) acc.min_J = J, acc.min_J_element = e;
@@ -79,15 +72,7 @@ void element_range(const Model& m, const Mat& mat, std::size_t begin, std::size_
     if constexpr (kViscous) {
       // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
       // D = sym(Fdot F^{-1}); its first Piola stress is J sigma_v F^{-T} = sigma_v cof.
-      const double* v0 = v + 3 * static_cast<std::size_t>(c[0]);
-      const double* v1 = v + 3 * static_cast<std::size_t>(c[1]);
-      const double* v2 = v + 3 * static_cast<std::size_t>(c[2]);
-      const double* v3 = v + 3 * static_cast<std::size_t>(c[3]);
-      Mat3 Fdot;
-      for (int i = 0; i < 3; ++i) {
-        const double d1 = v1[i] - v0[i], d2 = v2[i] - v0[i], d3 = v3[i] - v0[i];
-        for (int j = 0; j < 3; ++j) Fdot(i, j) = d1 * g[j] + d2 * g[3 + j] + d3 * g[6 + j];
-      }
+      const Mat3 Fdot = nodal_gradient(v, c, g);
       const Mat3 L = Fdot * cof.transpose() / J;
       const Mat3 D = 0.5 * (L + L.transpose());
       const Mat3 sigma_v = beta * (visc_lambda * D.trace() * Mat3::Identity() + 2.0 * visc_mu * D);
