@@ -197,7 +197,7 @@ Phantom make_hand_phantom(const PhantomParams& p) {
         double d = smin(h.wrist.distance(q), h.palm.distance(q), 8.0);
         for (std::size_t c : sleeves_here) d = smin(d, h.envelope[c].distance(q), 7.0);
         const std::size_t idx = out.ct.index(i, j, k);
-        if (d > 0 || z < 0) {
+        if (d > 0) {
           hu[idx] = PhantomHu::air;
           continue;
         }

@@ -315,7 +315,7 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
     // Orient outward from the inner material: soft tissue for the skin, bone for interfaces.
     Tr::Cell_handle cell = f->first;
     int i = f->second;
-    const int inner = lo == 0 ? hi : std::max(lo, hi);
+    const int inner = hi;  // soft tissue under the skin (0 | 1), the bone at an interface (1 | b)
     if (!c3t3.is_in_complex(cell) || static_cast<int>(c3t3.subdomain_index(cell)) != inner) {
       const auto mirror = c3t3.triangulation().mirror_facet(*f);
       cell = mirror.first, i = mirror.second;

@@ -168,26 +168,17 @@ const MaterialBlock& Model::block_of(std::size_t e) const {
 std::string Model::describe_element(std::size_t e) const {
   std::ostringstream o;
   const std::size_t in = e < input_element.size() ? static_cast<std::size_t>(input_element[e]) : e;
-  std::size_t local = in;
-  std::string body = bodies.empty() ? "" : bodies.front().name;
-  // Body-local tet number (1-based, as in its .msh order of reading).
-  std::size_t offset = 0;
-  for (const auto& b : bodies) {
-    std::size_t count = 0;
-    for (std::size_t t = 0; t < input_mesh.tets.size(); ++t)
-      if (static_cast<std::size_t>(input_mesh.tets[t][0]) >= b.node_begin && static_cast<std::size_t>(input_mesh.tets[t][0]) < b.node_end) ++count;
-    if (in < offset + count) {
-      body = b.name;
-      local = in - offset;
-      break;
-    }
-    offset += count;
-  }
-  o << "tet " << local + 1;
-  if (!body.empty()) o << " of body '" << body << "'";
+  const BodyRange* body = nullptr;
+  for (const auto& b : bodies)
+    if (in >= b.tet_begin && in < b.tet_end) body = &b;
+  // Body-local tet number, 1-based, in the order its .msh was read.
+  o << "tet " << (body ? in - body->tet_begin : in) + 1;
+  if (body) o << " of body '" << body->name << "'";
+  std::vector<std::string> facts;
   if (in < input_mesh.tet_group.size())
-    if (const auto* g = input_mesh.find_group(3, input_mesh.tet_group[in])) o << " (group '" << g->name << "'";
-  if (!blocks.empty()) o << ", material '" << block_of(e).name << "')";
+    if (const auto* g = input_mesh.find_group(3, input_mesh.tet_group[in])) facts.push_back("group '" + g->name + "'");
+  if (!blocks.empty()) facts.push_back("material '" + block_of(e).name + "'");
+  for (std::size_t k = 0; k < facts.size(); ++k) o << (k == 0 ? " (" : ", ") << facts[k] << (k + 1 == facts.size() ? ")" : "");
   return o.str();
 }
 
@@ -246,7 +237,7 @@ Model build_model(const Scenario& sc) {
     const BodySpec& body = sc.bodies[bi];
     TetMesh mesh = read_msh(body.mesh);
     const std::size_t node0 = m.input_mesh.nodes.size();
-    m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size()});
+    m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size(), m.input_mesh.tets.size(), m.input_mesh.tets.size() + mesh.tets.size()});
     std::vector<std::array<double, 6>> body_fibres;
     if (!body.fibres.empty()) body_fibres = read_element_fibres(body.fibres, mesh, "bodies[" + std::to_string(bi) + "].fibres");
     for (auto& x : mesh.nodes)
@@ -421,7 +412,7 @@ Model build_model(const TetMesh& mesh, const Material& material, const std::stri
                   const Vec3a& initial_velocity, bool reorder) {
   Model m;
   m.input_mesh = mesh;
-  m.bodies.push_back({"body", 0, mesh.nodes.size()});
+  m.bodies.push_back({"body", 0, mesh.nodes.size(), 0, mesh.tets.size()});
   m.num_nodes = mesh.nodes.size();
   m.num_elements = mesh.tets.size();
   m.X.resize(3 * m.num_nodes);

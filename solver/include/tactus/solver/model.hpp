@@ -24,6 +24,7 @@ struct MaterialBlock {
 struct BodyRange {
   std::string name;
   std::size_t node_begin = 0, node_end = 0;  // in original (input) numbering
+  std::size_t tet_begin = 0, tet_end = 0;    // the body's tets in input_mesh
 };
 
 struct Model {
