@@ -49,7 +49,11 @@ int main(int argc, char** argv) {
   std::string labels_file;
   mesher::ImageMeshParams p;
   double soft_speed = dilatational_wave_speed(1.0e8, 2 * 10206.9, 1050);  // paper's hgo tissue
-  double bone_speed = std::sqrt(10e9 * 0.78 / (1.22 * 0.56) / 2150);     // E 10 GPa, nu 0.22
+  // P-wave speed of an isotropic elastic solid from E, nu, rho, through core's definition.
+  auto elastic_speed = [](double E, double nu, double rho) {
+    return dilatational_wave_speed(E / (3 * (1 - 2 * nu)), E / (2 * (1 + nu)), rho);
+  };
+  double bone_speed = elastic_speed(10e9, 0.22, 2150);  // paper §3.2
   app.add_option("labels", labels_file, "labels.h5 from tactus-segment");
   app.add_option("--facet-angle", p.facet_angle_deg, "min surface triangle angle, deg")->capture_default_str();
   app.add_option("--facet-size", p.facet_size_mm, "max surface triangle size, mm")->capture_default_str();
@@ -71,7 +75,7 @@ int main(int argc, char** argv) {
   app.fallthrough();  // -o, -v given after a subcommand belong to the main command
   auto* box = app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh");
   std::array<double, 3> size{0.1, 0.1, 0.05}, origin{0, 0, 0};
-  double h = 0.01, block_speed = std::sqrt(3e9 * 0.65 / (1.35 * 0.3) / 1200);
+  double h = 0.01, block_speed = elastic_speed(3e9, 0.35, 1200);  // polymer block (contact issue)
   box->add_option("--size", size, "edge lengths, m")->capture_default_str();
   box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
   box->add_option("--element-size", h, "element size, m")->capture_default_str();

@@ -42,6 +42,23 @@ void check(bool ok, const std::string& field, const std::string& expected, doubl
   }
 }
 
+// The tets around every node.
+std::vector<std::vector<std::size_t>> tets_around_nodes(const TetMesh& mesh) {
+  std::vector<std::vector<std::size_t>> tets_of(mesh.nodes.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (int v : mesh.tets[e]) tets_of[static_cast<std::size_t>(v)].push_back(e);
+  return tets_of;
+}
+
+// Half the cross product of a triangle's edges: its normal (orientation of the triangle) with
+// length equal to its area.
+std::array<double, 3> area_normal(const TetMesh& mesh, const std::array<int, 3>& f) {
+  const Vec3 &a = mesh.nodes[static_cast<std::size_t>(f[0])], &b = mesh.nodes[static_cast<std::size_t>(f[1])],
+             &c = mesh.nodes[static_cast<std::size_t>(f[2])];
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  return {0.5 * (u[1] * w[2] - u[2] * w[1]), 0.5 * (u[2] * w[0] - u[0] * w[2]), 0.5 * (u[0] * w[1] - u[1] * w[0])};
+}
+
 // The mesher's surfaces are chords of the labelled image's (trilinear, corner-cutting) boundary,
 // so convex bones come out 3-4 % below their voxel volume. Restore each closed surface's volume
 // (every bone's interface, and the skin for the whole body) with one offset along the vertex
@@ -51,9 +68,7 @@ void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const st
   std::map<int, double> target;  // 0: whole body
   for (auto v : labels.data)
     if (v) target[v] += labels.voxel_volume(), target[0] += labels.voxel_volume();
-  std::vector<std::vector<std::size_t>> tets_of(mesh.nodes.size());
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
-    for (int v : mesh.tets[e]) tets_of[static_cast<std::size_t>(v)].push_back(e);
+  const auto tets_of = tets_around_nodes(mesh);
   auto tet_vol = [&](std::size_t e) {
     const auto& t = mesh.tets[e];
     return tet_volume(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
@@ -71,13 +86,10 @@ void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const st
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       if (triangle_inner[t] != surface) continue;
       const auto& f = mesh.triangles[t];
-      const Vec3 &a = mesh.nodes[static_cast<std::size_t>(f[0])], &b = mesh.nodes[static_cast<std::size_t>(f[1])],
-                 &c = mesh.nodes[static_cast<std::size_t>(f[2])];
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double n[3] = {0.5 * (u[1] * w[2] - u[2] * w[1]), 0.5 * (u[2] * w[0] - u[0] * w[2]), 0.5 * (u[0] * w[1] - u[1] * w[0])};
+      const auto n = area_normal(mesh, f);
       area += std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
       for (int v : f)
-        for (int k = 0; k < 3; ++k) normal[v][static_cast<std::size_t>(k)] += n[k];
+        for (std::size_t k = 0; k < 3; ++k) normal[v][k] += n[k];
     }
     if (area <= 0) continue;
     double delta = (goal - current[surface]) / area;
@@ -109,18 +121,13 @@ void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const st
 // (or below its current value, if lower already).
 void relocate_short_tets(TetMesh& mesh, double ratio_goal, double max_surface_move, int passes) {
   const std::size_t nn = mesh.nodes.size();
-  std::vector<std::vector<std::size_t>> tets_of(nn);
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
-    for (int v : mesh.tets[e]) tets_of[static_cast<std::size_t>(v)].push_back(e);
+  const auto tets_of = tets_around_nodes(mesh);
   // Surface normals per node (area weighted) and crease detection.
   std::vector<std::array<double, 3>> normal(nn, {0, 0, 0});
   std::vector<char> on_surface(nn, 0), crease(nn, 0);
   std::vector<std::vector<std::array<double, 3>>> face_normals(nn);
   for (const auto& f : mesh.triangles) {
-    const Vec3 &a = mesh.nodes[static_cast<std::size_t>(f[0])], &b = mesh.nodes[static_cast<std::size_t>(f[1])],
-               &c = mesh.nodes[static_cast<std::size_t>(f[2])];
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    std::array<double, 3> n = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    const auto n = area_normal(mesh, f);
     const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (len == 0) continue;
     for (int v : f) {
