@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
   using namespace tactus;
   CLI::App app{"tactus-phantom: synthetic CT of a hand (27 bones, soft tissue, skin) with ground truth", "tactus-phantom"};
   cli::CommonOptions common;
-  cli::add_common_options(app, common, "output folder (slices, stack.json, truth.h5)");
+  cli::add_common_options(app, common, "output folder (slices, stack.json, truth.h5)", "an output folder");
   samples::PhantomParams p;
   app.add_option("--voxel-mm", p.voxel_mm, "in-plane pixel size in mm (the paper: 0.7)")->capture_default_str();
   app.add_option("--slice-mm", p.slice_mm, "slice spacing in mm")->capture_default_str();
@@ -20,7 +20,6 @@ int main(int argc, char** argv) {
   app.add_option("--flexion", p.flexion_deg, "flexion of each finger joint, degrees")->capture_default_str();
   app.add_option("--seed", p.seed, "noise seed")->capture_default_str();
   return cli::run(app, argc, argv, common, [&] {
-    if (common.output.empty()) throw InputError("command line", "-o/--output", "an output folder");
     const auto t0 = std::chrono::steady_clock::now();
     const samples::Phantom ph = samples::make_hand_phantom(p);
     samples::write_slice_stack(ph.ct, common.output);

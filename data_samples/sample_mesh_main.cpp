@@ -9,7 +9,7 @@ int main(int argc, char** argv) {
   using namespace tactus;
   CLI::App app{"tactus-sample-mesh: structured tetrahedral box mesh (.msh)", "tactus-sample-mesh"};
   cli::CommonOptions common;
-  cli::add_common_options(app, common, "output .msh file");
+  cli::add_common_options(app, common, "output .msh file", "an output .msh path");
   std::array<double, 3> size{0.1, 0.1, 0.1}, origin{0, 0, 0};
   std::array<int, 3> cells{10, 10, 10};
   std::vector<double> inclusion;
@@ -18,7 +18,6 @@ int main(int argc, char** argv) {
   app.add_option("--cells", cells, "cells along x, y, z");
   app.add_option("--inclusion", inclusion, "xmin ymin zmin xmax ymax zmax: tets inside become group 'bone'")->expected(6);
   return cli::run(app, argc, argv, common, [&] {
-    if (common.output.empty()) throw InputError("command line", "-o/--output", "an output .msh path");
     for (int c = 0; c < 3; ++c) {
       if (!(size[c] > 0)) throw InputError("command line", "--size", "positive lengths");
       if (cells[c] < 1) throw InputError("command line", "--cells", "at least one cell per axis");

@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   using namespace tactus;
   CLI::App app{"tactus-mesh: conforming tetrahedral meshes of segmented anatomy (CGAL) and of objects (gmsh)", "tactus-mesh"};
   cli::CommonOptions common;
-  cli::add_common_options(app, common, "output folder, or a .msh path");
+  cli::add_common_options(app, common, "output folder, or a .msh path", "an output folder or .msh path");
   std::string labels_file;
   mesher::ImageMeshParams p;
   double soft_speed = dilatational_wave_speed(1.0e8, 2 * 10206.9, 1050);  // paper's hgo tissue
@@ -89,7 +89,6 @@ int main(int argc, char** argv) {
   stl->add_option("--wave-speed", block_speed, "P-wave speed for the step report, m/s")->capture_default_str();
 
   return cli::run(app, argc, argv, common, [&] {
-    if (common.output.empty()) throw InputError("command line", "-o/--output", "an output folder or .msh path");
     const std::filesystem::path out = common.output;
     if (box->parsed()) {
       write_outputs(mesher::mesh_box(size, origin, h), out, {{1, block_speed}});

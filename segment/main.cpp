@@ -8,7 +8,7 @@ int main(int argc, char** argv) {
   using namespace tactus;
   CLI::App app{"tactus-segment: segment a hand CT slice stack into soft tissue and individual bones", "tactus-segment"};
   cli::CommonOptions common;
-  cli::add_common_options(app, common, "output folder (labels.h5, labels.vti, surfaces/, segment.json)");
+  cli::add_common_options(app, common, "output folder (labels.h5, labels.vti, surfaces/, segment.json)", "an output folder");
   std::string stack;
   segment::StageOptions o;
   double body = 0, bone = 0;
@@ -21,7 +21,6 @@ int main(int argc, char** argv) {
   app.add_option("--edge-voxels", o.surfaces.target_edge_voxels, "surface remeshing edge length, voxels")->capture_default_str();
   app.add_flag("--no-surfaces", no_surfaces, "skip surface extraction");
   return cli::run(app, argc, argv, common, [&] {
-    if (common.output.empty()) throw InputError("command line", "-o/--output", "an output folder");
     if (*body_opt) o.segment.body_threshold_hu = body;
     if (*bone_opt) o.segment.bone_threshold_hu = bone;
     o.write_surfaces = !no_surfaces;

@@ -8,7 +8,9 @@
 
 namespace tactus::cli {
 
-void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help) {
+void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help,
+                        const std::string& required_output) {
+  options.output_required = required_output;
   app.set_version_flag("--version", std::string("tactus ") + kVersion);
   app.add_flag("-v,--verbose", options.verbose, "More detail in the log (repeat for debug)");
   app.add_flag("-q,--quiet", options.quiet, "Only errors");
@@ -29,6 +31,8 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
                  : options.verbose == 1 ? log::Level::verbose
                                         : log::Level::info);
   try {
+    if (!options.output_required.empty() && options.output.empty())
+      throw InputError("command line", "-o/--output", options.output_required);
     body();
     return 0;
   } catch (const CLI::ParseError& e) {
