@@ -405,6 +405,8 @@ Model build_model(const Scenario& sc) {
   compute_element_geometry(m);
   lump_mass(m);
   reorder_for_locality(m);
+  add_scenario_contacts(m, sc);
+  m.contact_settings = sc.contact_solver;
   return m;
 }
 

@@ -23,7 +23,8 @@ namespace tactus::solver {
 namespace {
 
 // Cell and point fields of one state, in the input numbering.
-void write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v) {
+void write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
+                 const ContactSolver* contact) {
   const std::size_t N = m.num_nodes, E = m.num_elements;
   MeshField disp{"displacement", 3, std::vector<double>(3 * N)}, vel{"velocity", 3, std::vector<double>(3 * N)};
   std::vector<Vec3> current(N);
@@ -34,6 +35,23 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
       vel.values[3 * i + c] = v[3 * k + c];
       current[i][c] = m.X[3 * k + c] + u[3 * k + c];
     }
+  }
+  std::vector<MeshField> point_fields{disp, vel};
+  if (contact && !contact->empty()) {
+    // Contact at this time: pressure r_n / A, tangential traction r_t / A, status, gap (DESIGN.md).
+    std::vector<double> pressure, traction, status, gap;
+    contact->node_fields(pressure, traction, status, gap);
+    MeshField p{"contact_pressure", 1, std::vector<double>(N)}, t{"contact_traction", 3, std::vector<double>(3 * N)},
+        st{"contact_status", 1, std::vector<double>(N)}, g{"contact_gap", 1, std::vector<double>(N)};
+    for (std::size_t i = 0; i < N; ++i) {
+      const std::size_t k = static_cast<std::size_t>(m.node_of_input[i]);
+      p.values[i] = pressure[k], st.values[i] = status[k], g.values[i] = gap[k];
+      for (int c = 0; c < 3; ++c) t.values[3 * i + c] = traction[3 * k + c];
+    }
+    point_fields.push_back(std::move(p));
+    point_fields.push_back(std::move(t));
+    point_fields.push_back(std::move(st));
+    point_fields.push_back(std::move(g));
   }
   MeshField stress{"cauchy_stress", 6, std::vector<double>(6 * E)}, vm{"von_mises", 1, std::vector<double>(E)},
       material{"material", 1, std::vector<double>(E)}, jac{"J", 1, std::vector<double>(E)},
@@ -67,7 +85,7 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
       }
     }
   }
-  write_vtu(file, m.input_mesh, {disp, vel}, {stress, vm, material, jac, fibre}, &current);
+  write_vtu(file, m.input_mesh, point_fields, {stress, vm, material, jac, fibre}, &current);
 }
 
 void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::string>>& entries) {
@@ -94,7 +112,10 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
   fs::create_directories(staged.path() / "results");
   std::vector<std::pair<double, std::string>> pvd;
   std::ofstream history(staged.path() / "history.csv");
-  history << "step,time,dt,kinetic_energy,internal_energy,damping_work,external_work,energy_balance_error,critical_step\n";
+  history << "step,time,dt,kinetic_energy,internal_energy,damping_work,external_work,contact_work_normal,contact_work_friction,"
+             "energy_balance_error,critical_step,contact_force,contact_force_x,contact_force_y,contact_force_z,contact_normal_force,"
+             "contact_area,peak_pressure,peak_pressure_x,peak_pressure_y,peak_pressure_z,contact_nodes,stick_nodes,slip_nodes,"
+             "uzawa_iterations\n";
   history << std::setprecision(10);
 
   // Output schedule: explicit times, or every interval.
@@ -113,8 +134,20 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
   RunSummary summary;
   summary.dt_min = summary.dt_max = solver.time_step();
   nlohmann::json failure = nullptr;
+  struct ContactPeaks {
+    double force = 0, force_time = 0, area = 0, area_time = 0, pressure = 0, pressure_time = 0;
+    std::array<double, 3> pressure_at{0, 0, 0};
+    std::size_t pressure_node = 0;
+    int max_iterations = 0;
+    std::size_t unconverged_steps = 0, contact_steps = 0;
+  } peaks;
+  auto current_position = [&](std::int32_t node) {
+    std::array<double, 3> x{};
+    for (int c = 0; c < 3; ++c) x[c] = model.X[3 * node + c] + solver.displacement()[3 * node + c];
+    return x;
+  };
   auto output = [&](const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t) {
-    write_state(model, staged.path() / "results" / name, u, v);
+    write_state(model, staged.path() / "results" / name, u, v, &solver.contact());
     pvd.emplace_back(t, "results/" + name);
     ++summary.outputs;
   };
@@ -124,9 +157,37 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
       const Energies& en = solver.energies();
       const double t = solver.time();
       summary.max_relative_balance_error = std::max(summary.max_relative_balance_error, std::abs(en.balance_error()) / en.scale());
-      if (solver.step_index() % history_every == 0 || t >= sc.run.end_time * (1 - 1e-12))
+      const ContactStepReport& cr = solver.contact_report();
+      std::array<double, 3> peak_at{0, 0, 0};
+      if (cr.peak_node >= 0) peak_at = current_position(cr.peak_node);
+      if (cr.active > 0) {
+        ++peaks.contact_steps;
+        const double force = std::sqrt(cr.force[0] * cr.force[0] + cr.force[1] * cr.force[1] + cr.force[2] * cr.force[2]);
+        if (force > peaks.force) peaks.force = force, peaks.force_time = t;
+        if (cr.area > peaks.area) peaks.area = cr.area, peaks.area_time = t;
+        if (cr.peak_pressure > peaks.pressure)
+          peaks.pressure = cr.peak_pressure, peaks.pressure_time = t, peaks.pressure_at = peak_at,
+          peaks.pressure_node = static_cast<std::size_t>(cr.peak_node);
+      }
+      peaks.max_iterations = std::max(peaks.max_iterations, cr.iterations);
+      if (!cr.converged) {
+        if (peaks.unconverged_steps == 0) {
+          std::ostringstream w;
+          w << "contact: Uzawa iterations stopped at contact_solver.max_iterations = " << sc.contact_solver.max_iterations
+            << " with residual " << cr.residual << " at step " << solver.step_index() << " (reported once; count in run.json)";
+          log::warn(w.str());
+        }
+        ++peaks.unconverged_steps;
+      }
+      if (solver.step_index() % history_every == 0 || t >= sc.run.end_time * (1 - 1e-12)) {
+        const double force = std::sqrt(cr.force[0] * cr.force[0] + cr.force[1] * cr.force[1] + cr.force[2] * cr.force[2]);
         history << solver.step_index() << ',' << t << ',' << solver.time_step() << ',' << en.kinetic << ',' << en.internal << ','
-                << en.damping_work << ',' << en.external_work << ',' << en.balance_error() << ',' << solver.critical_step() << '\n';
+                << en.damping_work << ',' << en.external_work << ',' << en.contact_normal_work << ',' << en.contact_friction_work << ','
+                << en.balance_error() << ',' << solver.critical_step() << ',' << force << ',' << cr.force[0] << ',' << cr.force[1]
+                << ',' << cr.force[2] << ',' << cr.normal_force << ',' << cr.area << ',' << cr.peak_pressure << ',' << peak_at[0]
+                << ',' << peak_at[1] << ',' << peak_at[2] << ',' << cr.active << ',' << cr.sticking << ',' << cr.slipping << ','
+                << cr.iterations << '\n';
+      }
       solver.check_energy();
       const double half = 0.5 * solver.time_step();
       while (next_out < out_times.size() && t >= out_times[next_out] - half) {
@@ -175,10 +236,29 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
                     {"critical_at_end", solver.critical_step()}, {"limit", solver.describe_step_limit()}};
   j["wall_time_s"] = summary.wall_seconds;
   j["energy"] = {{"initial", en.initial}, {"kinetic", en.kinetic}, {"internal", en.internal}, {"damping_work", en.damping_work},
-                 {"external_work", en.external_work}, {"balance_error", en.balance_error()},
+                 {"external_work", en.external_work}, {"contact_work_normal", en.contact_normal_work},
+                 {"contact_work_friction", en.contact_friction_work}, {"balance_error", en.balance_error()},
                  {"balance_error_relative", std::abs(en.balance_error()) / en.scale()},
                  {"max_balance_error_relative", summary.max_relative_balance_error}};
   j["outputs"] = summary.outputs;
+  if (!model.contact_pairs.empty()) {
+    nlohmann::json pairs = nlohmann::json::array();
+    for (const auto& p : model.contact_pairs)
+      pairs.push_back({{"name", p.name}, {"friction", p.friction}, {"slave_nodes", p.slave_nodes.size()},
+                       {"master_triangles", p.master_triangles.size() / 3}, {"rigid_plane", p.rigid_plane}});
+    std::size_t peak_input_node = 0;
+    for (std::size_t i = 0; i < model.node_of_input.size(); ++i)
+      if (static_cast<std::size_t>(model.node_of_input[i]) == peaks.pressure_node) peak_input_node = i;
+    j["contact"] = {{"pairs", pairs},
+                    {"steps_in_contact", peaks.contact_steps},
+                    {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},
+                    {"peak_area", {{"value", peaks.area}, {"time", peaks.area_time}}},
+                    {"peak_pressure",
+                     {{"value", peaks.pressure}, {"time", peaks.pressure_time}, {"position", peaks.pressure_at},
+                      {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
+                    {"uzawa", {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations},
+                               {"unconverged_steps", peaks.unconverged_steps}}}};
+  }
   std::ofstream(staged.path() / "run.json") << j.dump(2) << '\n';
   staged.commit();
   log::info() << summary.status << ": " << summary.steps << " steps to t = " << summary.end_time << " s in "

@@ -106,6 +106,33 @@ const SectionSpec& boundary_section() {
   return s;
 }
 
+const SectionSpec& contact_section() {
+  static const SectionSpec s{
+      "contact",
+      "[[contact]]: bi-potential Coulomb contact (paper §2.1), slave nodes of one body's surface against "
+      "another body's surface (master) or a rigid plane. The finer surface makes the better slave.",
+      {typed("slave_body", ValueType::string, "", "body whose surface nodes are the slaves", true),
+       typed("slave_surface", ValueType::string, "", "physical surface group of slave_body (e.g. skin)", true),
+       typed("master_body", ValueType::string, "", "body owning the master surface (omit with plane)", false),
+       typed("master_surface", ValueType::string, "", "physical surface group of master_body", false),
+       typed("plane", ValueType::vec3_list, "m", "rigid plane master: [[point], [outward normal]] (instead of master_body)",
+             false),
+       opt(number("friction", "", "Coulomb friction coefficient mu", 0, false), "0"),
+       typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false")}};
+  return s;
+}
+
+const SectionSpec& contact_solver_section() {
+  static const SectionSpec s{
+      "contact_solver",
+      "Uzawa iterations of the bi-potential contact solver (Gauss-Seidel over the contact nodes).",
+      {opt(number("tolerance", "", "stop when max |dr| <= tolerance * max |r| over the contact nodes", 0, true, 1, true), "1e-6"),
+       opt(number("max_iterations", "", "iteration limit per step (reached: a warning, the run goes on)", 1, false, 1e6, false), "200"),
+       opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false),
+           "0.5")}};
+  return s;
+}
+
 const char* type_name(ValueType t) {
   switch (t) {
     case ValueType::number: return "a number";
@@ -251,8 +278,8 @@ class Reader {
 }  // namespace
 
 std::vector<SectionSpec> scenario_reference() {
-  std::vector<SectionSpec> out{run_section(), damping_section(), body_section(), material_common_section(),
-                               boundary_section()};
+  std::vector<SectionSpec> out{run_section(),     damping_section(), body_section(), material_common_section(),
+                               boundary_section(), contact_section(), contact_solver_section()};
   for (const auto& m : material_registry()) {
     SectionSpec s = m.spec();
     s.name = std::string("materials.<name> with type = \"") + m.name + "\"";
@@ -298,7 +325,9 @@ Scenario read_scenario(const fs::path& file) {
                            typed("damping", ValueType::table, "", "a [damping] section", false),
                            typed("bodies", ValueType::table_list, "", "one or more [[bodies]] sections", true),
                            typed("materials", ValueType::table, "", "[materials.<name>] sections", true),
-                           typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false)}};
+                           typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false),
+                           typed("contact", ValueType::table_list, "", "[[contact]] sections", false),
+                           typed("contact_solver", ValueType::table, "", "a [contact_solver] section", false)}};
   r.check_keys(root, top, "");
 
   {  // [run]
@@ -432,6 +461,52 @@ Scenario read_scenario(const fs::path& file) {
       }
       sc.boundaries.push_back(bc);
     }
+  }
+  auto body_known = [&](const std::string& name) {
+    for (const auto& b : sc.bodies)
+      if (b.name == name) return true;
+    return false;
+  };
+  if (const toml::node* n = root.get("contact")) {  // [[contact]]
+    const auto& spec = contact_section();
+    const toml::array* arr = n->as_array();
+    if (!arr) r.fail("contact", "[[contact]] tables");
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string path = "contact[" + std::to_string(i) + "]";
+      const toml::table& t = r.table((*arr)[i], path);
+      r.check_keys(t, spec, path);
+      ContactSpec c;
+      c.slave_body = r.string(t, *spec.find("slave_body"), path);
+      if (!body_known(c.slave_body)) r.fail(path + ".slave_body", "the name of a [[bodies]] entry", "\"" + c.slave_body + "\"");
+      c.slave_surface = r.string(t, *spec.find("slave_surface"), path);
+      c.master_body = r.string(t, *spec.find("master_body"), path);
+      c.master_surface = r.string(t, *spec.find("master_surface"), path);
+      const auto plane = r.vec3_list(t, *spec.find("plane"), path);
+      if (t.contains("plane")) {
+        if (plane.size() != 2) r.fail(path + ".plane", "[[x, y, z], [nx, ny, nz]]: a point and the outward normal");
+        if (!(std::sqrt(plane[1][0] * plane[1][0] + plane[1][1] * plane[1][1] + plane[1][2] * plane[1][2]) > 0))
+          r.fail(path + ".plane", "a non-zero normal", "zero vector");
+        c.plane = std::array<Vec3a, 2>{plane[0], plane[1]};
+        if (t.contains("master_body") || t.contains("master_surface"))
+          r.fail(path, "either `plane` or `master_body` + `master_surface`", "both");
+      } else {
+        if (c.master_body.empty() || c.master_surface.empty())
+          r.fail(path, "`master_body` and `master_surface` (or a rigid `plane`)", "missing");
+        if (!body_known(c.master_body)) r.fail(path + ".master_body", "the name of a [[bodies]] entry", "\"" + c.master_body + "\"");
+      }
+      c.friction = r.number(t, *spec.find("friction"), path, 0);
+      c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
+      if (c.two_pass && c.plane) r.fail(path + ".two_pass", "false for a rigid plane", "true");
+      sc.contacts.push_back(c);
+    }
+  }
+  if (const toml::node* n = root.get("contact_solver")) {
+    const auto& spec = contact_solver_section();
+    const toml::table& t = r.table(*n, "contact_solver");
+    r.check_keys(t, spec, "contact_solver");
+    sc.contact_solver.tolerance = r.number(t, *spec.find("tolerance"), "contact_solver", 1e-6);
+    sc.contact_solver.max_iterations = static_cast<int>(r.number(t, *spec.find("max_iterations"), "contact_solver", 200));
+    sc.contact_solver.search_factor = r.number(t, *spec.find("search_factor"), "contact_solver", 0.5);
   }
   return sc;
 }

@@ -13,7 +13,7 @@ double Energies::scale() const {
 }
 
 ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping)
-    : model_(model), run_(run), damping_(damping), forces_(model, damping.beta, run.threads) {
+    : model_(model), run_(run), damping_(damping), forces_(model, damping.beta, run.threads), contact_(model) {
   const std::size_t ndof = 3 * model.num_nodes;
   u_.assign(ndof, 0.0);
   f_.assign(ndof, 0.0);
@@ -27,6 +27,9 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
     inv_mass_[i] = 1.0 / model.mass[i / 3];
     gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];
   }
+  contact_inv_mass_.resize(ndof);
+  for (std::size_t i = 0; i < ndof; ++i) contact_inv_mass_[i] = model.constrained[i] ? 0.0 : inv_mass_[i];
+  if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   stress_pass();
   double kinetic = 0;
   for (std::size_t i = 0; i < ndof; ++i) kinetic += 0.5 * model.mass[i / 3] * v_half_[i] * v_half_[i];
@@ -94,22 +97,31 @@ void ExplicitSolver::advance_velocity() {
   const double alpha = damping_.alpha;
   const double c_minus = 1.0 - 0.5 * alpha * dtbar, c_plus = 1.0 / (1.0 + 0.5 * alpha * dtbar);
   const bool first = step_ == 0;
+  v_prev_half_.swap(v_half_);
+  const double* __restrict v_old_of = v_prev_half_.data();
+  double* __restrict v_new_of = v_half_.data();
+  const int threads = forces_.threads();
+  // Free (contact-less) prediction v^{n+1/2}, prescribed dofs set.
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::size_t i = 0; i < ndof; ++i) {
+    const double v_free = (c_minus * v_old_of[i] + dtbar * (external_force(i) + f_[i]) * inv_mass_[i]) * c_plus;
+    v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : v_free;
+  }
+  // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
+  contact_report_ = contact_.solve(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
+
   double kinetic = 0, ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
-  v_prev_half_ = v_half_;
   const double* __restrict mass_of = model_.mass.data();
-#pragma omp parallel for num_threads(forces_.threads()) reduction(+ : kinetic, ext_back, ext_fwd, damp_back, damp_fwd) schedule(static)
+#pragma omp parallel for num_threads(threads) reduction(+ : kinetic, ext_back, ext_fwd, damp_back, damp_fwd) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) {
     const double m = mass_of[i / 3];
     const double fext = external_force(i);
-    const double v_old = v_half_[i];
-    double v_new = (c_minus * v_old + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus;
+    const double v_old = v_old_of[i], v_new = v_new_of[i];
     double reaction = 0;
-    if (model_.constrained[i]) {
-      const double v_set = model_.constraint_velocity[i];
-      reaction = m * (v_set - v_new) / (dtbar > 0 ? dtbar : 1.0);
-      v_new = v_set;
+    if (model_.constrained[i]) {  // the support force that holds the prescribed velocity
+      const double v_free = (c_minus * v_old + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus;
+      reaction = m * (v_new - v_free) / (dtbar > 0 ? dtbar : 1.0);
     }
-    v_half_[i] = v_new;
     const double v_n = first ? v_old : 0.5 * (v_old + v_new);
     kinetic += 0.5 * m * v_n * v_n;
     // Work of F^n over du^{n-1/2} (closes step n-1) and du^{n+1/2} (carried to step n+1).
@@ -120,12 +132,20 @@ void ExplicitSolver::advance_velocity() {
     damp_back += fdamp * dt_prev_ * v_old;
     damp_fwd += fdamp * dt * v_new;
   }
+  const ContactStepReport& c = contact_report_;
+  ext_back += c.support_work_back;
+  ext_fwd += c.support_work_forward;
   energy_.kinetic = kinetic;
   energy_.internal = pass_.strain_energy;
   energy_.external_work += 0.5 * (pending_external_ + ext_back);
   energy_.damping_work += 0.5 * (pending_damping_ + damp_back) + pass_.viscous_power * dtbar;
+  // The reactions' work on the relative motion, with the sign of energy taken out.
+  energy_.contact_normal_work -= 0.5 * (pending_contact_normal_ + c.normal_work_back);
+  energy_.contact_friction_work -= 0.5 * (pending_contact_friction_ + c.friction_work_back);
   pending_external_ = ext_fwd;
   pending_damping_ = damp_fwd;
+  pending_contact_normal_ = c.normal_work_forward;
+  pending_contact_friction_ = c.friction_work_forward;
   energy_.peak = std::max(energy_.peak, kinetic + pass_.strain_energy);
   velocity_advanced_ = true;
 }

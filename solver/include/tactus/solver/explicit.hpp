@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "tactus/solver/contact.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -19,9 +20,15 @@ namespace tactus::solver {
 
 struct Energies {
   double kinetic = 0, internal = 0, damping_work = 0, external_work = 0, initial = 0;
+  // Energy taken out by the contact reactions (minus their work on the relative motion): normal
+  // (velocity-level impact losses) and frictional (Coulomb sliding) parts.
+  double contact_normal_work = 0, contact_friction_work = 0;
   double peak = 0;  // largest kinetic + internal seen, for relative errors
-  // kinetic + internal + damping work - external work - initial: zero for an exact integrator.
-  double balance_error() const { return kinetic + internal + damping_work - external_work - initial; }
+  double contact_work() const { return contact_normal_work + contact_friction_work; }
+  // kinetic + internal + damping work + contact work - external work - initial: zero for an exact integrator.
+  double balance_error() const {
+    return kinetic + internal + damping_work + contact_work() - external_work - initial;
+  }
   double scale() const;
 };
 
@@ -50,6 +57,9 @@ class ExplicitSolver {
   const Model& model() const { return model_; }
   std::size_t memory_bytes() const;  // integrator state + per-thread force buffers (not the model)
   int threads() const { return forces_.threads(); }
+  // Contact at t^n (after advance_velocity): candidates with their reactions, and the step's report.
+  const ContactSolver& contact() const { return contact_; }
+  const ContactStepReport& contact_report() const { return contact_report_; }
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
   void check_energy() const;
   // Describes the stable-step limit: "dt = ... (element ..., L_e = ..., c = ...)".
@@ -67,6 +77,10 @@ class ExplicitSolver {
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_, inv_mass_;
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
+  ContactSolver contact_;
+  ContactStepReport contact_report_;
+  std::vector<double> contact_inv_mass_;  // 1/m per dof, 0 on prescribed dofs (their supports take the reaction)
+  double pending_contact_normal_ = 0, pending_contact_friction_ = 0;
   double time_ = 0, dt_prev_ = 0, dt_next_ = 0, user_dt_ = 0;
   double pending_external_ = 0, pending_damping_ = 0;  // F^{n-1} . du^{n-1/2} halves (Belytschko's trapezoid)
   std::size_t step_ = 0;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "tactus/core/mesh.hpp"
+#include "tactus/solver/contact.hpp"
 #include "tactus/solver/materials.hpp"
 #include "tactus/solver/scenario.hpp"
 
@@ -52,6 +53,10 @@ struct Model {
   std::vector<std::int32_t> input_element;     // input index of internal tet
   TetMesh input_mesh;                          // all bodies, input numbering, placed coordinates
   std::vector<BodyRange> bodies;
+
+  // Contact (internal numbering): directed slave -> master pairs and the iteration settings.
+  std::vector<ContactPair> contact_pairs;
+  ContactSettings contact_settings;
 
   std::size_t memory_bytes() const;  // everything held, including the input mesh copy
   std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"

@@ -59,6 +59,21 @@ struct BoundarySpec {
   std::array<bool, 3> components{true, true, true};
 };
 
+// [[contact]]: slave nodes of one body's surface against another body's surface or a rigid plane.
+struct ContactSpec {
+  std::string slave_body, slave_surface, master_body, master_surface;
+  std::optional<std::array<Vec3a, 2>> plane;  // point, outward normal (rigid plane master)
+  double friction = 0;                        // Coulomb coefficient mu
+  bool two_pass = false;                      // also the master's nodes against the slave surface
+};
+
+// [contact_solver]: the Uzawa iterations and the search.
+struct ContactSettings {
+  double tolerance = 1e-6;     // stop when max |dr| <= tolerance * max |r| over the contact nodes
+  int max_iterations = 200;
+  double search_factor = 0.5;  // search distance and penetration band, in mean master edges
+};
+
 struct Scenario {
   std::filesystem::path file;
   RunSpec run;
@@ -66,6 +81,8 @@ struct Scenario {
   std::vector<BodySpec> bodies;
   std::map<std::string, MaterialInstance> materials;
   std::vector<BoundarySpec> boundaries;
+  std::vector<ContactSpec> contacts;
+  ContactSettings contact_solver;
 };
 
 Scenario read_scenario(const std::filesystem::path& file);

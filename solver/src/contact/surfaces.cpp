@@ -1,0 +1,156 @@
+// Contact surfaces of the model: slave nodes with tributary areas, master triangles oriented out
+// of their body, built from the meshes' physical surface groups named in [[contact]].
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <unordered_map>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/solver/contact.hpp"
+#include "tactus/solver/model.hpp"
+
+namespace tactus::solver {
+
+namespace {
+
+using V3 = std::array<double, 3>;
+V3 at(const Model& m, int v) { return {m.X[3 * v], m.X[3 * v + 1], m.X[3 * v + 2]}; }
+V3 sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+V3 cross(const V3& a, const V3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
+double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double norm(const V3& a) { return std::sqrt(dot(a, a)); }
+
+std::uint64_t face_key(int a, int b, int c) {
+  int v[3] = {a, b, c};
+  std::sort(v, v + 3);
+  return (static_cast<std::uint64_t>(v[0]) << 42) ^ (static_cast<std::uint64_t>(v[1]) << 21) ^ static_cast<std::uint64_t>(v[2]);
+}
+
+double mean_edge(const Model& m, const std::vector<std::array<int, 3>>& tris) {
+  double sum = 0;
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) sum += norm(sub(at(m, t[k]), at(m, t[(k + 1) % 3])));
+  return tris.empty() ? 0.0 : sum / (3.0 * static_cast<double>(tris.size()));
+}
+
+// Triangles of a body's physical surface group, in internal numbering.
+std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body, const std::string& group,
+                                                const std::string& file, const std::string& key) {
+  const int offset = static_cast<int>(1000 * body);
+  const PhysicalGroup* g = nullptr;
+  for (const auto& pg : m.input_mesh.groups)
+    if (pg.dim == 2 && pg.name == group && pg.tag >= offset && pg.tag < offset + 1000) g = &pg;
+  if (!g) {
+    std::string names;
+    for (const auto& pg : m.input_mesh.groups)
+      if (pg.dim == 2 && pg.tag >= offset && pg.tag < offset + 1000) names += (names.empty() ? "" : ", ") + pg.name;
+    throw InputError(file, key, "a physical surface group of body '" + m.bodies[body].name + "' (" + (names.empty() ? "it has none" : names) + ")",
+                     "\"" + group + "\"");
+  }
+  std::vector<std::array<int, 3>> out;
+  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
+    if (m.input_mesh.triangle_group[t] == g->tag) {
+      std::array<int, 3> tri{};
+      for (int k = 0; k < 3; ++k) tri[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
+      out.push_back(tri);
+    }
+  if (out.empty()) throw InputError(file, key, "a surface group with triangles", "group \"" + group + "\" is empty");
+  return out;
+}
+
+}  // namespace
+
+void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles) {
+  std::unordered_map<int, double> area;
+  std::vector<int> order;
+  for (const auto& t : triangles) {
+    const double a = 0.5 * norm(cross(sub(at(m, t[1]), at(m, t[0])), sub(at(m, t[2]), at(m, t[0]))));
+    for (int v : t) {
+      auto [it, inserted] = area.emplace(v, 0.0);
+      if (inserted) order.push_back(v);
+      it->second += a / 3.0;
+    }
+  }
+  std::sort(order.begin(), order.end());  // node order = memory order
+  pair.slave_nodes.assign(order.begin(), order.end());
+  pair.slave_area.clear();
+  for (int v : order) pair.slave_area.push_back(area[v]);
+  if (pair.rigid_plane && pair.master_edge <= 0) pair.master_edge = mean_edge(m, triangles);
+}
+
+void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles,
+                        const std::string& where) {
+  std::unordered_map<std::uint64_t, std::size_t> index;
+  index.reserve(2 * triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) index.emplace(face_key(triangles[t][0], triangles[t][1], triangles[t][2]), t);
+  std::vector<int> opposite(triangles.size(), -1);
+  static constexpr int faces[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};
+  for (std::size_t e = 0; e < m.num_elements; ++e) {
+    const std::int32_t* c = &m.conn[4 * e];
+    for (const auto& f : faces) {
+      auto it = index.find(face_key(c[f[0]], c[f[1]], c[f[2]]));
+      if (it != index.end() && opposite[it->second] < 0) opposite[it->second] = c[f[3]];
+    }
+  }
+  pair.master_triangles.clear();
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    std::array<int, 3> tri = triangles[t];
+    if (opposite[t] < 0) {
+      std::ostringstream f;
+      f << "triangle " << t + 1 << " of the surface is not a face of any tet";
+      throw InputError("mesh", where, "a surface made of tet faces", f.str());
+    }
+    const V3 n = cross(sub(at(m, tri[1]), at(m, tri[0])), sub(at(m, tri[2]), at(m, tri[0])));
+    if (dot(n, sub(at(m, opposite[t]), at(m, tri[0]))) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
+    for (int v : tri) pair.master_triangles.push_back(v);
+  }
+  pair.master_edge = mean_edge(m, triangles);
+}
+
+void add_scenario_contacts(Model& m, const Scenario& sc) {
+  const std::string file = sc.file.string();
+  auto body_index = [&](const std::string& name) {
+    for (std::size_t b = 0; b < sc.bodies.size(); ++b)
+      if (sc.bodies[b].name == name) return b;
+    return sc.bodies.size();
+  };
+  for (std::size_t k = 0; k < sc.contacts.size(); ++k) {
+    const ContactSpec& cs = sc.contacts[k];
+    const std::string key = "contact[" + std::to_string(k) + "]";
+    const std::size_t sb = body_index(cs.slave_body);
+    const auto slave_tris = group_triangles(m, sb, cs.slave_surface, file, key + ".slave_surface");
+    if (cs.plane) {
+      ContactPair p;
+      p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " -> rigid plane";
+      p.friction = cs.friction;
+      p.rigid_plane = true;
+      p.plane_point = (*cs.plane)[0];
+      const V3 n = (*cs.plane)[1];
+      const double len = norm(n);
+      for (int d = 0; d < 3; ++d) p.plane_normal[d] = n[d] / len;
+      set_slave_surface(p, m, slave_tris);
+      m.contact_pairs.push_back(std::move(p));
+      continue;
+    }
+    const std::size_t mb = body_index(cs.master_body);
+    const auto master_tris = group_triangles(m, mb, cs.master_surface, file, key + ".master_surface");
+    for (int pass = 0; pass < (cs.two_pass ? 2 : 1); ++pass) {
+      ContactPair p;
+      const bool swap = pass == 1;
+      const std::string& s_body = swap ? cs.master_body : cs.slave_body;
+      const std::string& s_surf = swap ? cs.master_surface : cs.slave_surface;
+      const std::string& m_body = swap ? cs.slave_body : cs.master_body;
+      const std::string& m_surf = swap ? cs.slave_surface : cs.master_surface;
+      p.name = key + " " + s_body + "/" + s_surf + " -> " + m_body + "/" + m_surf;
+      p.friction = cs.friction;
+      set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"));
+      set_slave_surface(p, m, swap ? master_tris : slave_tris);
+      log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master_triangles.size() / 3
+                     << " master triangles, mean master edge " << p.master_edge * 1e3 << " mm";
+      m.contact_pairs.push_back(std::move(p));
+    }
+  }
+}
+
+}  // namespace tactus::solver

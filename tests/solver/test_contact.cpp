@@ -1,0 +1,405 @@
+// solver/contact: the bi-potential local solver and Coulomb cone projection against the exact
+// single-node law; two bars impacting (contact time, force, momentum, energy); a block on an
+// incline (stick and slide); Signorini and cone conditions checked on every step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include <gmsh.h>
+
+#include "tactus/core/gmsh_session.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
+#include "tactus/solver/contact.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/model.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+
+namespace {
+
+using V3 = std::array<double, 3>;
+double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double norm(const V3& a) { return std::sqrt(dot(a, a)); }
+V3 axpy(double s, const V3& a, const V3& b) { return {s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2]}; }
+
+V3 random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> g;
+  V3 v{g(rng), g(rng), g(rng)};
+  const double l = norm(v);
+  return {v[0] / l, v[1] / l, v[2] / l};
+}
+V3 tangent_of(const V3& n, std::mt19937_64& rng) {
+  V3 t = random_unit(rng);
+  t = axpy(-dot(t, n), n, t);
+  const double l = norm(t);
+  return {t[0] / l, t[1] / l, t[2] / l};
+}
+
+RunSpec run_until(double end_time) {
+  RunSpec r;
+  r.end_time = end_time;
+  return r;
+}
+
+// Triangles of a surface group, in the model's internal numbering.
+std::vector<std::array<int, 3>> group_faces(const Model& m, int tag) {
+  std::vector<std::array<int, 3>> out;
+  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
+    if (m.input_mesh.triangle_group[t] == tag) {
+      std::array<int, 3> f{};
+      for (int k = 0; k < 3; ++k) f[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
+      out.push_back(f);
+    }
+  return out;
+}
+
+// Two box meshes as one; the second's group tags are shifted by 100.
+TetMesh merge(const TetMesh& a, const TetMesh& b) {
+  TetMesh m = a;
+  const int off = static_cast<int>(a.nodes.size());
+  m.nodes.insert(m.nodes.end(), b.nodes.begin(), b.nodes.end());
+  for (std::size_t e = 0; e < b.tets.size(); ++e) {
+    auto t = b.tets[e];
+    for (int& v : t) v += off;
+    m.tets.push_back(t);
+    m.tet_group.push_back(b.tet_group[e] + 100);
+  }
+  for (std::size_t e = 0; e < b.triangles.size(); ++e) {
+    auto t = b.triangles[e];
+    for (int& v : t) v += off;
+    m.triangles.push_back(t);
+    m.triangle_group.push_back(b.triangle_group[e] + 100);
+  }
+  for (auto g : b.groups) {
+    g.tag += 100;
+    g.name += "_b";
+    m.groups.push_back(g);
+  }
+  return m;
+}
+
+// Signorini and Coulomb conditions of the candidates of the last step, with the velocities after
+// the contact correction: r_n >= 0; a pressed node closes its gap (h + dt u_n = 0); a node left
+// open has no reaction; |r_t| <= mu r_n. Returns the worst violation, relative.
+struct SignoriniCheck {
+  double adhesive = 0, open_with_reaction = 0, cone = 0, penetration = 0;
+};
+void check_signorini(const ExplicitSolver& s, SignoriniCheck& worst, double element) {
+  const ContactState& st = s.contact().state();
+  const auto& v = s.half_step_velocity();
+  const auto& pairs = s.contact().pairs();
+  double rmax = 1e-300;
+  for (std::size_t k = 0; k < st.size(); ++k) rmax = std::max(rmax, norm({st.reaction[3 * k], st.reaction[3 * k + 1], st.reaction[3 * k + 2]}));
+  for (std::size_t k = 0; k < st.size(); ++k) {
+    const V3 n{st.normal[3 * k], st.normal[3 * k + 1], st.normal[3 * k + 2]};
+    const V3 r{st.reaction[3 * k], st.reaction[3 * k + 1], st.reaction[3 * k + 2]};
+    const double rn = dot(r, n);
+    const double rt = norm(axpy(-rn, n, r));
+    const ContactPair& p = pairs[static_cast<std::size_t>(st.pair[k])];
+    V3 u{0, 0, 0};
+    const std::size_t sl = static_cast<std::size_t>(st.slave[k]);
+    for (int d = 0; d < 3; ++d) u[d] = v[3 * sl + d];
+    if (st.triangle[k] >= 0)
+      for (int i = 0; i < 3; ++i) {
+        const std::size_t mi = static_cast<std::size_t>(p.master_triangles[3 * static_cast<std::size_t>(st.triangle[k]) + i]);
+        for (int d = 0; d < 3; ++d) u[d] -= st.weights[3 * k + i] * v[3 * mi + d];
+      }
+    const double next_gap = st.gap[k] + s.time_step() * dot(u, n);
+    worst.adhesive = std::max(worst.adhesive, -rn / rmax);
+    if (next_gap > 1e-6 * element) worst.open_with_reaction = std::max(worst.open_with_reaction, std::abs(rn) / rmax);
+    worst.cone = std::max(worst.cone, (rt - p.friction * rn) / rmax);
+    worst.penetration = std::max(worst.penetration, -next_gap / element);
+  }
+}
+
+}  // namespace
+
+// Oracle: the closed form of the projection on K_mu. Inside the cone it is the identity, in the
+// polar cone zero, otherwise on the cone's surface; in every case r is in K_mu and tau - r is
+// normal to K_mu at r (the variational inequality (tau - r).(q - r) <= 0 for every q in K_mu).
+TEST(Contact, CoulombConeProjectionCases) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> U(-1, 1), M(0.05, 1.5);
+  int cases[3] = {0, 0, 0};
+  for (int trial = 0; trial < 3000; ++trial) {
+    const V3 n = random_unit(rng);
+    const double mu = trial % 10 == 0 ? 0.0 : M(rng);  // frictionless too
+    const V3 tau{U(rng), U(rng), U(rng)};
+    const V3 r = coulomb_cone_projection(tau, n, mu);
+    const double tn = dot(tau, n), tt = norm(axpy(-tn, n, tau));
+    const double rn = dot(r, n), rt = norm(axpy(-rn, n, r));
+    if (tn >= 0 && tt <= mu * tn) {
+      ++cases[0];
+      for (int d = 0; d < 3; ++d) EXPECT_EQ(r[d], tau[d]);
+    } else if (mu * tt <= -tn) {
+      ++cases[1];
+      EXPECT_EQ(norm(r), 0.0);
+    } else {
+      ++cases[2];
+      EXPECT_NEAR(rt, mu * rn, 1e-14);
+      EXPECT_GT(rn, 0.0);
+    }
+    EXPECT_LE(rt, mu * rn + 1e-14);
+    const V3 d = axpy(-1, r, tau);
+    EXPECT_NEAR(dot(d, r), 0.0, 1e-14);
+    for (int q = 0; q < 5; ++q) {  // random points of the cone
+      const V3 t = tangent_of(n, rng);
+      const double qn = std::abs(U(rng)), qt = mu * qn * std::abs(U(rng));
+      const V3 point = axpy(qt, t, V3{qn * n[0], qn * n[1], qn * n[2]});
+      EXPECT_LE(dot(d, axpy(-1, r, point)), 1e-14);
+    }
+  }
+  std::printf("projection cases: inside %d, polar %d, surface %d\n", cases[0], cases[1], cases[2]);
+  for (int c : cases) EXPECT_GT(c, 200);
+}
+
+// Oracle: one node with scalar compliance w obeys r* = -u_free / w; open if r*_n <= 0, stick if
+// |r*_t| <= mu r*_n (r = r*), otherwise slide with r_n = r*_n and r_t = mu r*_n along r*_t.
+// The bi-potential iterations (rho = 1/w) must reach it to 1e-10 in every regime.
+TEST(Contact, LocalSolverMatchesExactLawInAllRegimes) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(0, 1);
+  int worst_iterations = 0;
+  for (int regime = 0; regime < 3; ++regime)
+    for (int trial = 0; trial < 200; ++trial) {
+      const V3 n = random_unit(rng), t = tangent_of(n, rng);
+      const double mu = trial % 10 == 0 && regime != 1 ? 0.0 : 0.05 + 1.2 * U(rng), w = std::pow(10.0, -6 + 6 * U(rng));
+      double rn_star = 0.1 + U(rng), rt_star = 0;
+      if (regime == 0) rn_star = -rn_star, rt_star = 3 * U(rng);   // separating
+      if (regime == 1) rt_star = mu * rn_star * 0.999 * U(rng);  // sticking
+      if (regime == 2) rt_star = mu * rn_star * (1.001 + 3 * U(rng));  // sliding
+      const V3 r_star = axpy(rt_star, t, V3{rn_star * n[0], rn_star * n[1], rn_star * n[2]});
+      const V3 u_free{-w * r_star[0], -w * r_star[1], -w * r_star[2]};
+      const LocalContactResult res = bipotential_local_solve(u_free, n, w, mu);
+      V3 exact{0, 0, 0};
+      if (regime == 1) exact = r_star;
+      if (regime == 2) exact = axpy(mu * rn_star, t, V3{rn_star * n[0], rn_star * n[1], rn_star * n[2]});
+      const double scale = norm(r_star);
+      for (int d = 0; d < 3; ++d) EXPECT_NEAR(res.reaction[d], exact[d], 1e-10 * scale) << "regime " << regime;
+      worst_iterations = std::max(worst_iterations, res.iterations);
+    }
+  std::printf("local solver: at most %d iterations to 1e-14\n", worst_iterations);
+  EXPECT_LT(worst_iterations, 1000);
+}
+
+// Oracle: 1-D impact of identical elastic bars (nu = 0) at +-v: they stay in contact for 2L/c,
+// pressing with rho c A v, and separate at rest having exchanged nothing but momentum, which is
+// conserved exactly by action = reaction. Tolerances: duration 5 %, force 10 % (plateau mean),
+// momentum 1e-10 of rho A L v, energy loss 3 % (velocity-level impact).
+TEST(Contact, TwoBarsImpact) {
+  const double E = 1e7, rho = 1000, L = 0.1, a = 0.01, v0 = 0.1, c = std::sqrt(E / rho);
+  const TetMesh left = samples::make_box_mesh(40, 1, 1, L, a, a);
+  const TetMesh right = samples::make_box_mesh(40, 1, 1, L, a, a, {L + 1e-6, 0, 0});
+  Model model = build_model(merge(left, right), LinearElastic::from({{"E", E}, {"nu", 0.0}, {"density", rho}}));
+  for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i] = model.X[3 * i] < L + 1e-7 ? v0 : -v0;
+  ContactPair pair;
+  pair.name = "bars";
+  set_master_surface(pair, model, group_faces(model, 111), "right xmin");  // right bar's xmin
+  set_slave_surface(pair, model, group_faces(model, 12));                  // left bar's xmax
+  model.contact_pairs.push_back(pair);
+  model.contact_settings.tolerance = 1e-12;
+
+  const double end = 3.0 * L / c;
+  ExplicitSolver solver(model, run_until(end), DampingSpec{});
+  const double E0 = solver.energies().initial, P_scale = rho * a * a * L * v0;
+  double t_first = -1, t_last = -1, worst_momentum = 0, plateau_sum = 0;
+  int plateau_n = 0;
+  SignoriniCheck sig;
+  while (true) {
+    solver.advance_velocity();
+    const auto& v = solver.half_step_velocity();
+    double P = 0;
+    for (std::size_t i = 0; i < model.num_nodes; ++i) P += model.mass[i] * v[3 * i];
+    worst_momentum = std::max(worst_momentum, std::abs(P) / P_scale);
+    const double F = solver.contact_report().normal_force;
+    const double t = solver.time();
+    if (F > 0) {
+      if (t_first < 0) t_first = t;
+      t_last = t;
+    }
+    if (t_first >= 0 && t > t_first + 0.25 * L / c && t < t_first + 1.75 * L / c) plateau_sum += F, ++plateau_n;
+    check_signorini(solver, sig, L / 40);
+    if (t >= end * (1 - 1e-12)) break;
+    solver.advance_position();
+  }
+  const Energies& en = solver.energies();
+  const double duration = t_last - t_first, plateau = plateau_sum / plateau_n, F_ref = rho * c * a * a * v0;
+  const double loss = 1 - (en.kinetic + en.internal) / E0;
+  std::printf("bars: contact %.4e s (2L/c %.4e), force %.5f N (rho c A v %.5f), momentum %.2e, energy loss %.3f %%, "
+              "balance error %.2e, iterations %d\n",
+              duration, 2 * L / c, plateau, F_ref, worst_momentum, 100 * loss, std::abs(en.balance_error()) / E0,
+              solver.contact_report().iterations);
+  EXPECT_NEAR(duration / (2 * L / c), 1.0, 0.05);
+  EXPECT_NEAR(plateau / F_ref, 1.0, 0.10);
+  EXPECT_LE(worst_momentum, 1e-10);
+  EXPECT_GE(loss, -1e-3);
+  EXPECT_LE(loss, 0.03);
+  EXPECT_LE(std::abs(en.balance_error()) / E0, 0.01);
+  EXPECT_LE(sig.adhesive, 1e-12);
+  EXPECT_LE(sig.open_with_reaction, 1e-9);
+  EXPECT_LE(sig.penetration, 1e-3);
+}
+
+namespace {
+// A 2 x 2 x 1 cm elastic block resting on the rigid plane z = 0 under gravity tilted by theta
+// (the plane stands for an incline), ramped in over 0.05 s. Returns the mean x displacement of
+// the bottom nodes at each of the given times and the Signorini check.
+struct InclineRun {
+  std::vector<double> times, slip, velocity;
+  SignoriniCheck sig;
+};
+InclineRun run_incline(double theta, double mu, const std::vector<double>& times) {
+  const TetMesh mesh = samples::make_box_mesh(4, 4, 2, 0.02, 0.02, 0.01);
+  Model model = build_model(mesh, LinearElastic::from({{"E", 1e7}, {"nu", 0.3}, {"density", 1000.0}}));
+  ContactPair plane;
+  plane.name = "incline";
+  plane.friction = mu;
+  plane.rigid_plane = true;
+  set_slave_surface(plane, model, group_faces(model, 15));  // zmin
+  model.contact_pairs.push_back(plane);
+  model.contact_settings.tolerance = 1e-10;
+  RunSpec run = run_until(times.back());
+  run.gravity = {9.81 * std::sin(theta), 0, -9.81 * std::cos(theta)};
+  run.gravity_ramp_time = 0.05;
+  ExplicitSolver solver(model, run, DampingSpec{});
+  InclineRun out;
+  std::size_t next = 0;
+  while (next < times.size()) {
+    solver.advance_velocity();
+    check_signorini(solver, out.sig, 0.005);
+    if (solver.time() >= times[next] - 1e-12) {
+      const auto v = solver.velocity_at_step();
+      double u = 0, vx = 0, count = 0;
+      for (std::size_t i = 0; i < model.num_nodes; ++i)
+        if (model.X[3 * i + 2] < 1e-9) u += solver.displacement()[3 * i], vx += v[3 * i], ++count;
+      out.times.push_back(solver.time());
+      out.slip.push_back(u / count);
+      out.velocity.push_back(vx / count);
+      ++next;
+    }
+    solver.advance_position();
+  }
+  return out;
+}
+}  // namespace
+
+// Oracle: Coulomb's law for a rigid block. tan(theta) = 0.8 mu: it sticks (bottom slip below 1e-3
+// of the block's size, 20 um, over 0.3 s); tan(theta) = 0.5 > mu = 0.3: it slides with
+// a = g (sin theta - mu cos theta) once gravity is fully on (2 %, from the velocity at 0.1 and 0.3 s).
+TEST(Contact, BlockOnInclineSticksAndSlides) {
+  const double mu = 0.3;
+  const InclineRun stick = run_incline(std::atan(0.8 * mu), mu, {0.1, 0.3});
+  std::printf("incline stick: bottom slip %.3e m at 0.3 s\n", stick.slip.back());
+  EXPECT_LE(std::abs(stick.slip.back()), 1e-3 * 0.02);
+
+  const double theta = std::atan(0.5);
+  const InclineRun slide = run_incline(theta, mu, {0.1, 0.3});
+  const double a = (slide.velocity[1] - slide.velocity[0]) / (slide.times[1] - slide.times[0]);
+  const double a_ref = 9.81 * (std::sin(theta) - mu * std::cos(theta));
+  std::printf("incline slide: a = %.5f m/s^2, g(sin - mu cos) = %.5f\n", a, a_ref);
+  EXPECT_NEAR(a / a_ref, 1.0, 0.02);
+  for (const auto* r : {&stick, &slide}) {
+    EXPECT_LE(r->sig.adhesive, 1e-12);
+    EXPECT_LE(r->sig.open_with_reaction, 1e-9);
+    EXPECT_LE(r->sig.cone, 1e-9);
+    EXPECT_LE(r->sig.penetration, 1e-3);
+  }
+}
+
+namespace {
+// A sphere of radius R whose lowest point is at `bottom`, meshed by gmsh with elements of size
+// h_min within fine_radius of the south pole, growing to h_max at 8 fine radii.
+TetMesh graded_sphere(double R, const Vec3& bottom, double h_min, double h_max, double fine_radius) {
+  GmshSession session;
+  gmsh::model::add("sphere");
+  const int vol = gmsh::model::occ::addSphere(bottom[0], bottom[1], bottom[2] + R, R);
+  gmsh::model::occ::synchronize();
+  gmsh::model::addPhysicalGroup(3, {vol}, 1);
+  gmsh::model::setPhysicalName(3, 1, "sphere");
+  gmsh::vectorpair faces, points;
+  gmsh::model::getBoundary({{3, vol}}, faces, false, false, false);
+  std::vector<int> tags;
+  for (const auto& f : faces) tags.push_back(f.second);
+  gmsh::model::addPhysicalGroup(2, tags, 20);
+  gmsh::model::setPhysicalName(2, 20, "surface");
+  gmsh::model::getEntities(points, 0);  // the OCC sphere's two poles
+  int pole = -1;
+  double lowest = 1e300;
+  for (const auto& p : points) {
+    double x0, y0, z0, x1, y1, z1;
+    gmsh::model::getBoundingBox(0, p.second, x0, y0, z0, x1, y1, z1);
+    if (z0 < lowest) lowest = z0, pole = p.second;
+  }
+  const int distance = gmsh::model::mesh::field::add("Distance");
+  gmsh::model::mesh::field::setNumbers(distance, "PointsList", {static_cast<double>(pole)});
+  const int size = gmsh::model::mesh::field::add("Threshold");
+  gmsh::model::mesh::field::setNumber(size, "InField", distance);
+  gmsh::model::mesh::field::setNumber(size, "SizeMin", h_min);
+  gmsh::model::mesh::field::setNumber(size, "SizeMax", h_max);
+  gmsh::model::mesh::field::setNumber(size, "DistMin", fine_radius);
+  gmsh::model::mesh::field::setNumber(size, "DistMax", 8 * fine_radius);
+  gmsh::model::mesh::field::setAsBackgroundMesh(size);
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+  gmsh::option::setNumber("Mesh.Optimize", 1);
+  gmsh::option::setNumber("Mesh.RandomSeed", 1);
+  gmsh::model::mesh::generate(3);
+  return tet_mesh_from_gmsh_model("sphere");
+}
+}  // namespace
+
+// Oracle: Hertz's impact of an elastic sphere on a rigid flat (quasi-static Hertz contact,
+// E* = E / (1 - nu^2), m the sphere's mass): maximum approach d = (15 m v^2 / (16 E* R^1/2))^(2/5),
+// peak force (4/3) E* R^1/2 d^3/2, duration 2.868 (m^2 / (R E*^2 v))^(1/5). v is chosen so the
+// contact radius sqrt(R d) is 0.1 R, and the contact lasts ~13 wave transits (quasi-static).
+// The mesh is graded to 0.2 mm (a fifth of the contact radius) at the pole. 10 % each.
+TEST(Contact, HertzSphereOnRigidPlane) {
+  const double R = 0.01, E = 1e7, nu = 0.3, rho = 1000;
+  const double Es = E / (1 - nu * nu), d_target = 0.01 * R;  // contact radius sqrt(R d) = 0.1 R
+  const TetMesh mesh = graded_sphere(R, {0, 0, 1e-7}, 2e-4, 2.5e-3, 1.5e-3);
+  Model model = build_model(mesh, LinearElastic::from({{"E", E}, {"nu", nu}, {"density", rho}}));
+  double m = 0;
+  for (double mi : model.mass) m += mi;
+  const double v = std::sqrt(std::pow(d_target, 2.5) * 16 * Es * std::sqrt(R) / (15 * m));
+  for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i + 2] = -v;
+  ContactPair plane;
+  plane.name = "floor";
+  plane.rigid_plane = true;
+  set_slave_surface(plane, model, group_faces(model, 20));
+  model.contact_pairs.push_back(plane);
+  model.contact_settings.tolerance = 1e-8;
+
+  const double d_max = std::pow(15 * m * v * v / (16 * Es * std::sqrt(R)), 0.4);
+  const double F_ref = 4.0 / 3.0 * Es * std::sqrt(R) * std::pow(d_max, 1.5);
+  const double T_ref = 2.868 * std::pow(m * m / (R * Es * Es * v), 0.2);
+  ExplicitSolver solver(model, run_until(1.6 * T_ref), DampingSpec{});
+  double t_first = -1, t_last = -1, F_peak = 0;
+  SignoriniCheck sig;
+  while (true) {
+    solver.advance_velocity();
+    const double F = solver.contact_report().normal_force;
+    if (F > 0) {
+      if (t_first < 0) t_first = solver.time();
+      t_last = solver.time();
+    }
+    F_peak = std::max(F_peak, F);
+    check_signorini(solver, sig, 2e-4);
+    if (solver.time() >= 1.6 * T_ref * (1 - 1e-12)) break;
+    solver.advance_position();
+  }
+  std::printf("hertz: %zu tets, %zu steps; duration %.4e s (Hertz %.4e), peak force %.4f N (Hertz %.4f), "
+              "balance error %.2e of E0\n",
+              model.num_elements, solver.step_index(), t_last - t_first, T_ref, F_peak, F_ref,
+              std::abs(solver.energies().balance_error()) / solver.energies().initial);
+  EXPECT_NEAR((t_last - t_first) / T_ref, 1.0, 0.10);
+  EXPECT_NEAR(F_peak / F_ref, 1.0, 0.10);
+  EXPECT_LE(sig.adhesive, 1e-12);
+  EXPECT_LE(sig.penetration, 1e-3);
+}
