@@ -7,6 +7,7 @@
 
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -181,4 +182,67 @@ TEST(ScenarioReference, DocsMatchDeclarations) {
   std::stringstream text;
   text << in.rdbuf();
   EXPECT_EQ(text.str(), scenario_reference_markdown());
+}
+
+namespace {
+// Two boxes 1 cm apart in z: the pad (0..1 cm) and a tool (1.05..2.05 cm) above it.
+std::string contact_scenario(double tool_z, const std::string& contact_keys) {
+  std::ostringstream o;
+  o << kValid << R"(
+[[bodies]]
+name = "tool"
+mesh = "pad.msh"
+materials = { "*" = "bone" }
+translate = [0, 0, )" << tool_z << R"(]
+
+[[contact]]
+slave_body = "pad"
+slave_surface = "zmax"
+master_body = "tool"
+)" << contact_keys << "\n";
+  return o.str();
+}
+}  // namespace
+
+TEST_F(ScenarioFile, ContactPairReads) {
+  const Scenario sc = read_scenario(write(contact_scenario(0.0105, "master_surface = \"zmin\"\nfriction = 0.3\ntwo_pass = true")));
+  ASSERT_EQ(sc.contacts.size(), 1u);
+  EXPECT_DOUBLE_EQ(sc.contacts[0].friction, 0.3);
+  const Model m = build_model(sc);
+  ASSERT_EQ(m.contact_pairs.size(), 2u);  // two passes
+  EXPECT_EQ(m.contact_pairs[0].slave_nodes.size(), 9u);
+  EXPECT_EQ(m.contact_pairs[0].master_triangles.size(), 3u * 8u);
+  double area = 0;
+  for (double a : m.contact_pairs[0].slave_area) area += a;
+  EXPECT_NEAR(area, 1e-4, 1e-15);  // the 1 cm x 1 cm face
+  // Master normals point out of the tool (its zmin face: -z).
+  const auto& t = m.contact_pairs[0].master_triangles;
+  const double* a = &m.X[3 * t[0]], *b = &m.X[3 * t[1]], *c = &m.X[3 * t[2]];
+  const double nz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  EXPECT_LT(nz, 0.0);
+}
+TEST_F(ScenarioFile, ContactMissingSurface) {
+  expect_error(contact_scenario(0.0105, "master_surface = \"top\""),
+               {"contact[0].master_surface", "surface group of body 'tool'", "zmin", "\"top\""}, true);
+}
+TEST_F(ScenarioFile, ContactNegativeFriction) {
+  expect_error(contact_scenario(0.0105, "master_surface = \"zmin\"\nfriction = -0.1"), {"contact[0].friction", ">= 0", "-0.1"});
+}
+TEST_F(ScenarioFile, ContactUnknownBody) {
+  expect_error(replace(contact_scenario(0.0105, "master_surface = \"zmin\""), "master_body = \"tool\"", "master_body = \"block\""),
+               {"contact[0].master_body", "\"block\""});
+}
+// Bodies overlapping by 0.3 mm at t = 0 are refused with the depth, not pushed apart.
+TEST_F(ScenarioFile, ContactOverlapAtStartIsReported) {
+  const Scenario sc = read_scenario(write(contact_scenario(0.0097, "master_surface = \"zmin\"")));
+  const Model m = build_model(sc);
+  try {
+    ExplicitSolver solver(m, sc.run, sc.damping);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("contact[0]"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("0.3 mm inside"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("body 'pad'"), std::string::npos) << msg;
+  }
 }
