@@ -6,6 +6,9 @@
 //  cube        the whole-run case: 0.1 m cube, 20^3 cells x 6 tets = 48,000 tets, neo_hookean
 //              mu = 3 kPa, bulk 50 kPa, rho 1000, bottom fixed, top pushed down 10 % over 2,000
 //              steps of dt = 1e-4 s, mass damping 50 /s, timed end to end (mesh file to results).
+//  contact     contact time per step against surface size: two slabs (n x n x 1 cells each)
+//              pressed face to face, every slave node in contact, mu = 0.3; detection + Uzawa
+//              per step against the stress pass of the same model, 2 threads.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -111,6 +114,72 @@ void cube(const std::filesystem::path& work) {
               s.steps, wall, 48000.0 * static_cast<double>(s.steps) / wall / 1e6, s.max_relative_balance_error);
 }
 
+// Triangles of a box-mesh surface group (tag), in the model's internal numbering.
+std::vector<std::array<int, 3>> faces_of(const Model& m, int tag) {
+  std::vector<std::array<int, 3>> out;
+  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
+    if (m.input_mesh.triangle_group[t] == tag) {
+      std::array<int, 3> f{};
+      for (int k = 0; k < 3; ++k) f[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
+      out.push_back(f);
+    }
+  return out;
+}
+
+void contact_scaling(const std::vector<int>& sizes) {
+  std::printf("%9s %9s %11s %9s %12s %12s %8s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms",
+              "ratio", "iterations");
+  for (int n : sizes) {
+    TetMesh lower = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01);
+    const TetMesh upper = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01, {0, 0, 0.01});
+    const int off = static_cast<int>(lower.nodes.size());
+    lower.nodes.insert(lower.nodes.end(), upper.nodes.begin(), upper.nodes.end());
+    for (std::size_t e = 0; e < upper.tets.size(); ++e) {
+      auto t = upper.tets[e];
+      for (int& v : t) v += off;
+      lower.tets.push_back(t);
+      lower.tet_group.push_back(upper.tet_group[e]);
+    }
+    for (std::size_t e = 0; e < upper.triangles.size(); ++e) {
+      auto t = upper.triangles[e];
+      for (int& v : t) v += off;
+      lower.triangles.push_back(t);
+      lower.triangle_group.push_back(upper.triangle_group[e] + 100);
+    }
+    for (auto g : upper.groups) g.tag += 100, g.name += "_upper", lower.groups.push_back(g);
+    Model m = build_model(lower, bench_material("linear_elastic"));
+    ContactPair pair;
+    pair.name = "slabs";
+    pair.friction = 0.3;
+    set_master_surface(pair, m, faces_of(m, 16), "lower zmax");
+    set_slave_surface(pair, m, faces_of(m, 115));  // upper zmin
+    m.contact_pairs.push_back(pair);
+    if (const char* it = std::getenv("TACTUS_BENCH_UZAWA_ITERATIONS")) m.contact_settings.max_iterations = std::atoi(it);
+    for (std::size_t i = 0; i < m.num_nodes; ++i)
+      if (m.X[3 * i + 2] > 0.01 - 1e-9) m.initial_velocity[3 * i + 2] = -0.5, m.initial_velocity[3 * i] = 0.2;
+    RunSpec run;
+    run.end_time = 1;
+    run.threads = 2;
+    ExplicitSolver solver(m, run, DampingSpec{});
+    std::size_t active = 0;
+    int iterations = 0;
+    const int steps = 20;
+    double contact0 = 0, stress0 = 0;
+    for (int k = 0; k < steps + 2; ++k) {
+      if (k == 2) contact0 = solver.contact_seconds(), stress0 = solver.stress_seconds();  // after warm-up
+      solver.advance_velocity();  // free update + contact (detection + Uzawa)
+      solver.advance_position();  // position update + stress pass
+      active = std::max(active, solver.contact_report().active);
+      iterations = std::max(iterations, solver.contact_report().iterations);
+    }
+    const double contact_s = solver.contact_seconds() - contact0, stress_s = solver.stress_seconds() - stress0;
+    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master_triangles.size() / 3, pair.slave_nodes.size(),
+                m.num_elements, active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations);
+    std::fflush(stdout);
+  }
+  std::printf("per step: contact_ms = detection + Uzawa (Gauss-Seidel, sequential); stress_ms = stress pass (2 threads)\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -123,9 +192,13 @@ int main(int argc, char** argv) {
   tp->add_option("--cells", sizes, "cells per box edge (6 n^3 tets)")->capture_default_str();
   auto* cb = app.add_subcommand("cube", "whole-run neo_hookean cube (48,000 tets, 2,000 steps)");
   cb->add_option("--work", work, "folder for the mesh and results")->capture_default_str();
+  std::vector<int> contact_sizes{16, 32, 64, 128, 224};  // 2 n^2 master triangles: 512 ... 100,352
+  auto* ct = app.add_subcommand("contact", "contact time per step against contact surface size");
+  ct->add_option("--cells", contact_sizes, "cells per slab edge (2 n^2 triangles per contact face)")->capture_default_str();
   app.require_subcommand(1);
   return cli::run(app, argc, argv, common, [&] {
     if (tp->parsed()) throughput(sizes);
     if (cb->parsed()) cube(work);
+    if (ct->parsed()) contact_scaling(contact_sizes);
   });
 }

@@ -15,6 +15,9 @@ int main(int argc, char** argv) {
   cli::add_common_options(app, common, "output folder for results (default: results next to the scenario)");
   std::string scenario_file;
   app.add_option("scenario", scenario_file, "scenario.toml")->check(CLI::ExistingFile);
+  std::string mesh_dir;
+  app.add_option("--meshes", mesh_dir, "folder that relative mesh and fibre paths of the scenario start from "
+                                       "(default: the scenario's folder)")->check(CLI::ExistingDirectory);
   app.require_subcommand(0, 1);
 
   auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
@@ -46,7 +49,7 @@ int main(int argc, char** argv) {
       return;
     }
     if (scenario_file.empty()) throw CLI::RequiredError("scenario");
-    const solver::Scenario sc = solver::read_scenario(scenario_file);
+    const solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
     solver::run_simulation(sc, out);

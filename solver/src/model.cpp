@@ -242,8 +242,21 @@ Model build_model(const Scenario& sc) {
     if (!body.fibres.empty()) body_fibres = read_element_fibres(body.fibres, mesh, "bodies[" + std::to_string(bi) + "].fibres");
     for (auto& x : mesh.nodes)
       for (int c = 0; c < 3; ++c) x[c] = x[c] * body.scale + body.translate[c];
+    if (!body.against.empty()) {
+      const int a = body.against_axis;
+      std::size_t other = 0;
+      while (sc.bodies[other].name != body.against) ++other;
+      double other_lo = 1e300, other_hi = -1e300, lo = 1e300, hi = -1e300;
+      for (std::size_t i = m.bodies[other].node_begin; i < m.bodies[other].node_end; ++i)
+        other_lo = std::min(other_lo, m.input_mesh.nodes[i][a]), other_hi = std::max(other_hi, m.input_mesh.nodes[i][a]);
+      for (const auto& x : mesh.nodes) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
+      const double shift = body.against_side > 0 ? other_hi + body.against_gap - lo : other_lo - body.against_gap - hi;
+      for (auto& x : mesh.nodes) x[a] += shift;
+      log::verbose() << "bodies[" << bi << "] '" << body.name << "' moved by " << shift << " m along " << "xyz"[a]
+                     << " to lie " << body.against_gap << " m from '" << body.against << "'";
+    }
     // Group tags are per file: offset them so bodies keep distinct groups.
-    const int tag_offset = static_cast<int>(1000 * bi);
+    const int tag_offset = static_cast<int>(kBodyTagStride * bi);
     for (auto g : mesh.groups) {
       g.tag += tag_offset;
       m.input_mesh.groups.push_back(g);
@@ -358,10 +371,10 @@ Model build_model(const Scenario& sc) {
     const BodyRange& range = m.bodies[bi];
     std::vector<char> selected(m.num_nodes, 0);
     if (!bc.group.empty()) {
-      const int offset = static_cast<int>(1000 * bi);
+      const int offset = static_cast<int>(kBodyTagStride * bi);
       bool found = false;
       for (const auto& g : m.input_mesh.groups) {
-        if (g.name != bc.group || g.tag < offset || g.tag >= offset + 1000) continue;
+        if (g.name != bc.group || g.tag < offset || g.tag >= offset + kBodyTagStride) continue;
         found = true;
         if (g.dim == 2) {
           for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
@@ -376,7 +389,7 @@ Model build_model(const Scenario& sc) {
       if (!found) {
         std::string groups;
         for (const auto& g : m.input_mesh.groups)
-          if (g.tag >= offset && g.tag < offset + 1000) groups += (groups.empty() ? "" : ", ") + g.name;
+          if (g.tag >= offset && g.tag < offset + kBodyTagStride) groups += (groups.empty() ? "" : ", ") + g.name;
         throw InputError(sc.file.string(), key + ".group", "a physical group of body '" + bc.body + "' (" + groups + ")",
                          "\"" + bc.group + "\"");
       }

@@ -235,6 +235,8 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
   j["time_step"] = {{"min", summary.dt_min}, {"max", summary.dt_max}, {"safety", sc.run.time_step_safety},
                     {"critical_at_end", solver.critical_step()}, {"limit", solver.describe_step_limit()}};
   j["wall_time_s"] = summary.wall_seconds;
+  j["timing_s"] = {{"stress_passes", solver.stress_seconds()}, {"contact", solver.contact_seconds()},
+                   {"rest", summary.wall_seconds - solver.stress_seconds() - solver.contact_seconds()}};
   j["energy"] = {{"initial", en.initial}, {"kinetic", en.kinetic}, {"internal", en.internal}, {"damping_work", en.damping_work},
                  {"external_work", en.external_work}, {"contact_work_normal", en.contact_normal_work},
                  {"contact_work_friction", en.contact_friction_work}, {"balance_error", en.balance_error()},

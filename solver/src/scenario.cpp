@@ -72,6 +72,13 @@ const SectionSpec& body_section() {
        opt(number("scale", "", "factor applied to mesh coordinates (1e-3 for a mesh in mm)", 0, true), "1"),
        typed("translate", ValueType::vec3, "m", "translation applied after scaling", false, "[0, 0, 0]"),
        typed("initial_velocity", ValueType::vec3, "m/s", "uniform initial velocity", false, "[0, 0, 0]"),
+       typed("against", ValueType::string, "",
+             "place this body next to an earlier body: after translate, it is moved along against_axis only, "
+             "so that against_gap separates the two bounding boxes along that axis",
+             false),
+       typed("against_axis", ValueType::string, "", "side of the other body this one lies on: +x, -x, +y, -y, +z or -z", false,
+             "\"+x\""),
+       opt(number("against_gap", "m", "gap between the two bodies along against_axis", 0, false), "0"),
        typed("fibres", ValueType::string, "",
              "per-element hgo fibre directions: a .vtu of this mesh's tets with cell data fibre_1, fibre_2 "
              "(overrides the materials' constant fibres)",
@@ -305,7 +312,7 @@ std::string scenario_reference_markdown() {
   return o.str();
 }
 
-Scenario read_scenario(const fs::path& file) {
+Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
   const std::string fname = file.string();
   if (!fs::exists(file)) throw InputError(fname, "", "an existing scenario file", "no such file");
   toml::table root;
@@ -319,7 +326,7 @@ Scenario read_scenario(const fs::path& file) {
   Reader r(fname);
   Scenario sc;
   sc.file = fs::absolute(file);
-  const fs::path base = sc.file.parent_path();
+  const fs::path base = mesh_dir.empty() ? sc.file.parent_path() : fs::absolute(mesh_dir);
 
   SectionSpec top{"", "", {typed("run", ValueType::table, "", "a [run] section", true),
                            typed("damping", ValueType::table, "", "a [damping] section", false),
@@ -414,6 +421,19 @@ Scenario read_scenario(const fs::path& file) {
       b.translate = r.vec3(t, *spec.find("translate"), path, {0, 0, 0});
       b.initial_velocity = r.vec3(t, *spec.find("initial_velocity"), path, {0, 0, 0});
       if (t.contains("fibres")) b.fibres = base / r.string(t, *spec.find("fibres"), path);
+      if (t.contains("against")) {
+        b.against = r.string(t, *spec.find("against"), path);
+        if (!names.count(b.against) || b.against == b.name)
+          r.fail(path + ".against", "the name of a [[bodies]] entry listed before this one", "\"" + b.against + "\"");
+        const std::string axis = r.string(t, *spec.find("against_axis"), path, "+x");
+        if (axis.size() != 2 || (axis[0] != '+' && axis[0] != '-') || axis[1] < 'x' || axis[1] > 'z')
+          r.fail(path + ".against_axis", "one of +x, -x, +y, -y, +z, -z", "\"" + axis + "\"");
+        b.against_axis = axis[1] - 'x';
+        b.against_side = axis[0] == '+' ? 1 : -1;
+        b.against_gap = r.number(t, *spec.find("against_gap"), path, 0);
+      } else if (t.contains("against_axis") || t.contains("against_gap")) {
+        r.fail(path + ".against", "the body to place against (against_axis and against_gap need it)", "missing");
+      }
       const toml::table& mt = r.table(*t.get("materials"), path + ".materials");
       for (const auto& [gk, gv] : mt) {
         const std::string group(gk.str());

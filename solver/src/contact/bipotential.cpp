@@ -61,13 +61,14 @@ LocalContactResult bipotential_local_solve(const V3& u_free, const V3& n, double
 }
 
 void ContactState::clear() {
-  pair.clear(), slave.clear(), triangle.clear(), weights.clear(), normal.clear(), gap.clear();
+  pair.clear(), slave.clear(), triangle.clear(), slave_index.clear(), weights.clear(), normal.clear(), gap.clear();
   reaction.clear(), compliance.clear(), area.clear(), status.clear();
 }
 
 ContactSolver::ContactSolver(const Model& model)
     : model_(model), pairs_(model.contact_pairs), settings_(model.contact_settings) {
   x_.resize(3 * model.num_nodes);
+  for (const auto& p : pairs_) last_reaction_.emplace_back(3 * p.slave_nodes.size(), 0.0);
 }
 
 void ContactSolver::build_grid(const ContactPair& p, const double* x, double margin) {
@@ -88,6 +89,7 @@ void ContactSolver::build_grid(const ContactPair& p, const double* x, double mar
   const std::size_t cells = static_cast<std::size_t>(g.n[0]) * g.n[1] * g.n[2];
   g.count.assign(cells + 1, 0);
   g.box.resize(T);
+  g.normal.resize(4 * T);
   auto cell_of = [&](double v, int c) { return std::clamp(static_cast<int>((v - g.lo[c]) / g.cell), 0, g.n[c] - 1); };
   for (std::size_t t = 0; t < T; ++t) {
     double a[3], b[3];
@@ -98,6 +100,13 @@ void ContactSolver::build_grid(const ContactPair& p, const double* x, double mar
     }
     auto& bx = g.box[t];
     for (int c = 0; c < 3; ++c) bx[c] = cell_of(a[c] - margin, c), bx[3 + c] = cell_of(b[c] + margin, c);
+    const std::int32_t* tri = &p.master_triangles[3 * t];
+    const double* x0 = x + 3 * tri[0];
+    const V3 nn = cross(sub(x + 3 * tri[1], x0), sub(x + 3 * tri[2], x0));
+    const double twice_area = norm(nn);
+    const double inv = twice_area > 0 ? 1.0 / twice_area : 0.0;
+    for (int c = 0; c < 3; ++c) g.normal[4 * t + c] = nn[c] * inv;
+    g.normal[4 * t + 3] = inv;
     for (int k = bx[2]; k <= bx[5]; ++k)
       for (int j = bx[1]; j <= bx[4]; ++j)
         for (int i = bx[0]; i <= bx[3]; ++i) ++g.count[(static_cast<std::size_t>(k) * g.n[1] + j) * g.n[0] + i + 1];
@@ -118,31 +127,40 @@ void ContactSolver::build_grid(const ContactPair& p, const double* x, double mar
 void ContactSolver::detect(const double* u) {
   state_.clear();
   const std::size_t ndof = 3 * model_.num_nodes;
+#pragma omp parallel for num_threads(threads_) schedule(static) if (ndof > 30000)
   for (std::size_t i = 0; i < ndof; ++i) x_[i] = model_.X[i] + u[i];
   const double* x = x_.data();
   for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
     const ContactPair& p = pairs_[pi];
     const double band = settings_.search_factor * p.master_edge;
-    auto add = [&](std::int32_t s, std::int32_t tri, const double* N, const V3& n, double h, double area) {
+    auto add = [&](std::size_t k, std::int32_t tri, const double* N, const V3& n, double h) {
       state_.pair.push_back(static_cast<std::int32_t>(pi));
-      state_.slave.push_back(s);
+      state_.slave.push_back(p.slave_nodes[k]);
+      state_.slave_index.push_back(static_cast<std::int32_t>(k));
       state_.triangle.push_back(tri);
-      for (int k = 0; k < 3; ++k) state_.weights.push_back(N[k]), state_.normal.push_back(n[k]);
+      for (int d = 0; d < 3; ++d) state_.weights.push_back(N[d]), state_.normal.push_back(n[d]);
       state_.gap.push_back(h);
-      state_.area.push_back(area);
+      state_.area.push_back(p.slave_area[k]);
     };
     if (p.rigid_plane) {
       const double N0[3] = {0, 0, 0};
       for (std::size_t k = 0; k < p.slave_nodes.size(); ++k) {
         const std::int32_t s = p.slave_nodes[k];
         const double h = dot(sub(x + 3 * s, p.plane_point.data()), p.plane_normal);
-        if (h <= band) add(s, -1, N0, p.plane_normal, h, p.slave_area[k]);
+        if (h <= band) add(k, -1, N0, p.plane_normal, h);
       }
       continue;
     }
     build_grid(p, x, band);
     const Grid& g = grid_;
-    for (std::size_t k = 0; k < p.slave_nodes.size(); ++k) {
+    const std::size_t S = p.slave_nodes.size();
+    slot_triangle_.assign(S, -1);
+    slot_data_.resize(7 * S);
+    std::int32_t* slot_t = slot_triangle_.data();
+    double* slot = slot_data_.data();
+    // Narrow phase per slave node (independent: parallel); candidates are gathered in slave order.
+#pragma omp parallel for num_threads(threads_) schedule(static) if (S > 2000)
+    for (std::size_t k = 0; k < S; ++k) {
       const std::int32_t s = p.slave_nodes[k];
       const double* xs = x + 3 * s;
       int cidx[3];
@@ -154,33 +172,37 @@ void ContactSolver::detect(const double* u) {
       }
       if (!inside) continue;
       const std::size_t cell = (static_cast<std::size_t>(cidx[2]) * g.n[1] + cidx[1]) * g.n[0] + cidx[0];
-      double best_abs = std::numeric_limits<double>::infinity(), best_h = 0, bestN[3] = {0, 0, 0};
-      V3 best_n{0, 0, 0};
-      std::int32_t best_t = -1;
+      double best_abs = std::numeric_limits<double>::infinity();
+      double* out = slot + 7 * k;
       for (std::int32_t it = g.count[cell]; it < g.start[cell]; ++it) {
         const std::int32_t t = g.items[static_cast<std::size_t>(it)];
         const std::int32_t* tri = &p.master_triangles[3 * static_cast<std::size_t>(t)];
         if (tri[0] == s || tri[1] == s || tri[2] == s) continue;
+        const double* tn = &g.normal[4 * static_cast<std::size_t>(t)];
+        if (tn[3] == 0) continue;  // degenerate triangle
+        const V3 n{tn[0], tn[1], tn[2]};
         const double *a = x + 3 * tri[0], *b = x + 3 * tri[1], *c = x + 3 * tri[2];
-        const V3 nn = cross(sub(b, a), sub(c, a));
-        const double twice_area = norm(nn);
-        if (!(twice_area > 0)) continue;
-        const V3 n{nn[0] / twice_area, nn[1] / twice_area, nn[2] / twice_area};
         const double h = dot(sub(xs, a), n);
         if (h > band || h < -band || std::abs(h) >= best_abs) continue;
         // Barycentric coordinates of the projection x_s - h n (signed sub-areas over the area).
         const V3 pb = sub(xs, b), pc = sub(xs, c);
-        const double la = dot(cross(sub(c, b), pb), n) / twice_area;
-        const double lb = dot(cross(sub(a, c), pc), n) / twice_area;
+        const double la = dot(cross(sub(c, b), pb), n) * tn[3];
+        const double lb = dot(cross(sub(a, c), pc), n) * tn[3];
         const double lc = 1.0 - la - lb;
         constexpr double eps = 1e-3;  // closes the seams between neighbouring triangles
         if (la < -eps || lb < -eps || lc < -eps) continue;
-        best_abs = std::abs(h), best_h = h, best_t = t, best_n = n;
+        best_abs = std::abs(h);
+        slot_t[k] = t;
         const double ca = std::max(la, 0.0), cb = std::max(lb, 0.0), cc = std::max(lc, 0.0), sum = ca + cb + cc;
-        bestN[0] = ca / sum, bestN[1] = cb / sum, bestN[2] = cc / sum;
+        out[0] = ca / sum, out[1] = cb / sum, out[2] = cc / sum;
+        out[3] = n[0], out[4] = n[1], out[5] = n[2], out[6] = h;
       }
-      if (best_t >= 0) add(s, best_t, bestN, best_n, best_h, p.slave_area[k]);
     }
+    for (std::size_t k = 0; k < S; ++k)
+      if (slot_t[k] >= 0) {
+        const double* d = slot + 7 * k;
+        add(k, slot_t[k], d, {d[3], d[4], d[5]}, d[6]);
+      }
   }
   const std::size_t K = state_.size();
   state_.reaction.assign(3 * K, 0.0);
@@ -252,6 +274,22 @@ ContactStepReport ContactSolver::solve(const double* u, double* v, const double*
     state_.compliance[k] = c * w;
   }
 
+  // Warm start: the previous step's reaction of the same slave node, projected on the new cone.
+  for (std::size_t k = 0; k < K; ++k) {
+    const std::size_t pi = static_cast<std::size_t>(state_.pair[k]);
+    const double* last = &last_reaction_[pi][3 * static_cast<std::size_t>(state_.slave_index[k])];
+    if (last[0] == 0 && last[1] == 0 && last[2] == 0) continue;
+    const V3 n{state_.normal[3 * k], state_.normal[3 * k + 1], state_.normal[3 * k + 2]};
+    const V3 r0 = coulomb_cone_projection({last[0], last[1], last[2]}, n, pairs_[pi].friction);
+    std::int32_t node[4];
+    double wt[4];
+    const int m = nodes_of(k, node, wt);
+    for (int d = 0; d < 3; ++d) state_.reaction[3 * k + d] = r0[d];
+    for (int a = 0; a < m; ++a)
+      for (int d = 0; d < 3; ++d) v[3 * node[a] + d] += c * wt[a] * r0[d] * inv_mass[3 * node[a] + d];
+  }
+  for (auto& last : last_reaction_) std::fill(last.begin(), last.end(), 0.0);  // (sized by the surfaces, not per step)
+
   // Uzawa iterations, Gauss-Seidel over the candidates (eqs. 11-12 with rho = 1/w: one
   // iteration is exact for an isolated frictionless node).
   const double inv_dt = dt > 0 ? 1.0 / dt : 0.0;
@@ -287,6 +325,10 @@ ContactStepReport ContactSolver::solve(const double* u, double* v, const double*
     if (residual <= settings_.tolerance) break;
   }
   rep.iterations = std::min(it, settings_.max_iterations);
+  for (std::size_t k = 0; k < K; ++k) {
+    double* last = &last_reaction_[static_cast<std::size_t>(state_.pair[k])][3 * static_cast<std::size_t>(state_.slave_index[k])];
+    for (int d = 0; d < 3; ++d) last[d] = state_.reaction[3 * k + d];
+  }
   rep.residual = residual;
   rep.converged = residual <= settings_.tolerance;
 

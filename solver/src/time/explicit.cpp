@@ -1,6 +1,7 @@
 #include "tactus/solver/explicit.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -29,6 +30,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   }
   contact_inv_mass_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) contact_inv_mass_[i] = model.constrained[i] ? 0.0 : inv_mass_[i];
+  contact_.set_threads(forces_.threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   stress_pass();
   double kinetic = 0;
@@ -54,7 +56,9 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
 }
 
 void ExplicitSolver::stress_pass() {
+  const auto t0 = std::chrono::steady_clock::now();
   pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data());
+  stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!(pass_.min_jacobian > 0)) {
     std::ostringstream o;
     o << "inverted element at step " << step_ << ", t = " << time_ << " s: "
@@ -108,7 +112,11 @@ void ExplicitSolver::advance_velocity() {
     v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : v_free;
   }
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
-  contact_report_ = contact_.solve(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
+  if (!contact_.empty()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    contact_report_ = contact_.solve(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
+    contact_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
 
   double kinetic = 0, ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
   const double* __restrict mass_of = model_.mass.data();

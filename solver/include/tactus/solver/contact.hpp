@@ -67,6 +67,7 @@ enum class ContactStatus : std::uint8_t { open = 0, stick = 1, slip = 2 };
 // The candidates of the last solve (one per slave node near a master surface), structure of arrays.
 struct ContactState {
   std::vector<std::int32_t> pair, slave, triangle;  // triangle -1 for a rigid plane
+  std::vector<std::int32_t> slave_index;             // position of the slave in its pair's slave_nodes
   std::vector<double> weights;                       // 3 per candidate: N_i
   std::vector<double> normal;                        // 3 per candidate
   std::vector<double> gap;                           // h at t^n
@@ -99,6 +100,7 @@ class ContactSolver {
  public:
   explicit ContactSolver(const Model& model);  // pairs and settings from the model
   bool empty() const { return pairs_.empty(); }
+  void set_threads(int threads) { threads_ = threads; }  // detection runs in parallel over slave nodes
 
   // Detects candidates at the current positions x = X + u; throws InputError when a slave node
   // lies deeper than `overlap_tolerance` inside a master surface (used at t = 0).
@@ -127,6 +129,13 @@ class ContactSolver {
   ContactSettings settings_;
   ContactState state_;
   std::vector<double> x_;  // current positions of all nodes (filled per step)
+  // Reactions of the previous step per pair and slave (3 each): the Uzawa iterations start from
+  // them (projected on the new cone), so a lasting contact converges in one or two sweeps.
+  std::vector<std::vector<double>> last_reaction_;
+  int threads_ = 1;
+  // Per slave node of the pair being detected: closest triangle (-1 none), weights, normal, gap.
+  std::vector<std::int32_t> slot_triangle_;
+  std::vector<double> slot_data_;  // 7 per slave: N (3), n (3), h
   // Uniform grid over one pair's master triangles (rebuilt per pair and step; storage reused).
   struct Grid {
     double lo[3]{}, cell = 1;
@@ -134,6 +143,7 @@ class ContactSolver {
     std::vector<std::int32_t> start, items;
     std::vector<std::int32_t> count;
     std::vector<std::array<int, 6>> box;  // cell range of each triangle
+    std::vector<double> normal;            // 4 per triangle: unit outward normal, 1 / (2 area); 0 if degenerate
   } grid_;
 };
 

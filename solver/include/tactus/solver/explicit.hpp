@@ -60,6 +60,9 @@ class ExplicitSolver {
   // Contact at t^n (after advance_velocity): candidates with their reactions, and the step's report.
   const ContactSolver& contact() const { return contact_; }
   const ContactStepReport& contact_report() const { return contact_report_; }
+  // Wall time spent so far in the stress passes and in contact (detection + Uzawa), s.
+  double stress_seconds() const { return stress_seconds_; }
+  double contact_seconds() const { return contact_seconds_; }
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
   void check_energy() const;
   // Describes the stable-step limit: "dt = ... (element ..., L_e = ..., c = ...)".
@@ -81,6 +84,7 @@ class ExplicitSolver {
   ContactStepReport contact_report_;
   std::vector<double> contact_inv_mass_;  // 1/m per dof, 0 on prescribed dofs (their supports take the reaction)
   double pending_contact_normal_ = 0, pending_contact_friction_ = 0;
+  double stress_seconds_ = 0, contact_seconds_ = 0;
   double time_ = 0, dt_prev_ = 0, dt_next_ = 0, user_dt_ = 0;
   double pending_external_ = 0, pending_damping_ = 0;  // F^{n-1} . du^{n-1/2} halves (Belytschko's trapezoid)
   std::size_t step_ = 0;

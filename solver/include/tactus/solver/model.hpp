@@ -28,6 +28,10 @@ struct BodyRange {
   std::size_t tet_begin = 0, tet_end = 0;    // the body's tets in input_mesh
 };
 
+// Physical group tags are per mesh file: body b's groups are stored with tag + b * kBodyTagStride
+// (meshes use tags up to ~1000 + labels, e.g. the mesher's skin 1001).
+inline constexpr int kBodyTagStride = 1000000;
+
 struct Model {
   // Nodes (internal, locality-ordered numbering), 3 doubles per node.
   std::size_t num_nodes = 0;

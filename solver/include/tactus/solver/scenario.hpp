@@ -47,6 +47,11 @@ struct BodySpec {
   Vec3a translate{0, 0, 0};
   Vec3a initial_velocity{0, 0, 0};
   std::filesystem::path fibres;  // optional .vtu with per-tet cell data fibre_1, fibre_2
+  // Placement against an earlier body: moved along one axis to leave against_gap between the
+  // bounding boxes (e.g. the block 0.5 mm from the hand, whatever the hand mesh).
+  std::string against;
+  int against_axis = 0, against_side = 1;
+  double against_gap = 0;
   std::map<std::string, std::string> materials;  // physical volume name (or "*") -> material
 };
 
@@ -85,7 +90,9 @@ struct Scenario {
   ContactSettings contact_solver;
 };
 
-Scenario read_scenario(const std::filesystem::path& file);
+// Relative mesh and fibre paths are resolved against `mesh_dir` when given (tactus-solve --meshes,
+// used by the pipeline), else against the scenario file's folder.
+Scenario read_scenario(const std::filesystem::path& file, const std::filesystem::path& mesh_dir = {});
 
 // The declarations, in reference order (sections, then one per material type).
 std::vector<SectionSpec> scenario_reference();
