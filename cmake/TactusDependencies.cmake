@@ -46,7 +46,9 @@ if(NOT TARGET tactus_gmsh)
     INTERFACE_LINK_LIBRARIES "${GMSH_LIBRARY}")
 endif()
 
-find_package(VTK 9.1 QUIET COMPONENTS CommonCore CommonDataModel IOXML FiltersCore IOGeometry)
+find_package(VTK 9.1 QUIET COMPONENTS CommonCore CommonDataModel IOXML FiltersCore FiltersGeneral FiltersGeometry
+  FiltersSources IOGeometry IOImage RenderingCore RenderingOpenGL2 RenderingFreeType RenderingAnnotation
+  ChartsCore ViewsContext2D RenderingContext2D RenderingContextOpenGL2 InteractionStyle)
 tactus_require(VTK libvtk9-dev)
 
 find_package(nlohmann_json 3.10 QUIET)

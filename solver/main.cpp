@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   std::string mesh_dir;
   app.add_option("--meshes", mesh_dir, "folder that relative mesh and fibre paths of the scenario start from "
                                        "(default: the scenario's folder)")->check(CLI::ExistingDirectory);
+  double end_time = 0;
+  app.add_option("--end-time", end_time, "stop at this time (s) instead of the scenario's run.end_time; later output "
+                                         "times are dropped")->check(CLI::PositiveNumber);
   app.require_subcommand(0, 1);
 
   auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
@@ -49,7 +52,12 @@ int main(int argc, char** argv) {
       return;
     }
     if (scenario_file.empty()) throw CLI::RequiredError("scenario");
-    const solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
+    solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
+    if (end_time > 0) {
+      sc.run.end_time = end_time;
+      std::erase_if(sc.run.output_times, [&](double t) { return t > end_time * (1 + 1e-12); });
+      if (sc.run.output_times.empty() && sc.run.output_interval <= 0) sc.run.output_times = {end_time};
+    }
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
     solver::run_simulation(sc, out);

@@ -55,7 +55,9 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
   }
   MeshField stress{"cauchy_stress", 6, std::vector<double>(6 * E)}, vm{"von_mises", 1, std::vector<double>(E)},
       material{"material", 1, std::vector<double>(E)}, jac{"J", 1, std::vector<double>(E)},
-      fibre{"fibre_stretch", 2, std::vector<double>(2 * E)};
+      fibre{"fibre_stretch", 2, std::vector<double>(2 * E)}, body{"body", 1, std::vector<double>(E)};
+  for (std::size_t b = 0; b < m.bodies.size(); ++b)
+    for (std::size_t e = m.bodies[b].tet_begin; e < m.bodies[b].tet_end; ++e) body.values[e] = static_cast<double>(b);
   for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
     const MaterialBlock& b = m.blocks[bi];
     for (std::size_t e = b.begin; e < b.end; ++e) {
@@ -85,7 +87,7 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
       }
     }
   }
-  write_vtu(file, m.input_mesh, point_fields, {stress, vm, material, jac, fibre}, &current);
+  write_vtu(file, m.input_mesh, point_fields, {stress, vm, material, body, jac, fibre}, &current);
 }
 
 void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::string>>& entries) {
@@ -227,6 +229,11 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
   j["status"] = summary.status;
   j["message"] = failure;
   j["units"] = "SI (m, kg, s, Pa, J)";
+  // Names behind the "material" and "body" cell fields of the results (their values index these).
+  j["materials"] = nlohmann::json::array();
+  for (const auto& b : model.blocks) j["materials"].push_back(b.name);
+  j["bodies"] = nlohmann::json::array();
+  for (const auto& b : model.bodies) j["bodies"].push_back(b.name);
   j["nodes"] = model.num_nodes;
   j["tets"] = model.num_elements;
   j["threads"] = solver.threads();

@@ -2,10 +2,13 @@
 // A whole simulation: scenario -> model -> explicit run -> results folder:
 //   <out>/results/state_NNNN.vtu   one per output time (deformed geometry; point data
 //                                  displacement, velocity; cell data cauchy_stress (xx,yy,zz,xy,yz,xz),
-//                                  von_mises, material, J, fibre_stretch)
+//                                  von_mises, material, body, J, fibre_stretch; with contact, point
+//                                  data contact_pressure, contact_traction, contact_status, contact_gap)
 //   <out>/results.pvd              ParaView collection of those files with their times
-//   <out>/history.csv              step, time, dt, energies, balance error, critical step
-//   <out>/run.json                 status, steps, dt, limiting element, wall time, energy balance
+//   <out>/history.csv              step, time, dt, energies (incl. contact work), balance error,
+//                                  critical step, contact force/area/peak pressure and where
+//   <out>/run.json                 status, steps, dt, limiting element, wall time and its split,
+//                                  energy balance, material and body names, contact peaks
 // The folder is staged and renamed when the run ends. A numerical failure still publishes it,
 // with the last good state written and run.json saying "failed" and why.
 #include <filesystem>

@@ -1,0 +1,52 @@
+#pragma once
+// The report's numbers (summary.json / summary.md): peak von Mises per material over the output
+// states, peak contact pressure (every step, from the history, and at the output states), largest
+// contact area, peak contact force, energy balance, and the run's steps, time step and wall time.
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tactus/postproc/results.hpp"
+
+namespace tactus::postproc {
+
+struct PeakAt {
+  double value = 0, time = 0;
+  std::array<double, 3> position{0, 0, 0};  // current (deformed) position, m
+  long index = -1;                          // 1-based node or element of the state files, -1 if none
+};
+
+struct MaterialPeak {
+  std::string material;
+  PeakAt von_mises;  // Pa, at an element centroid
+};
+
+struct FrameSummary {
+  double time = 0;
+  std::string file;
+  std::vector<double> von_mises_max;  // per material index
+  double contact_pressure_max = 0;    // Pa
+  std::size_t contact_nodes = 0;      // nodes with pressure > 0
+  double contact_force = 0;           // N, from the history row nearest in time (0 without contact)
+};
+
+struct Summary {
+  std::string status, message;
+  std::size_t steps = 0, nodes = 0, tets = 0;
+  double end_time = 0, dt_min = 0, dt_max = 0, wall_time = 0, stress_seconds = 0, contact_seconds = 0;
+  double initial_energy = 0, initial_kinetic = 0, balance_error = 0, contact_work_normal = 0, contact_work_friction = 0;
+  std::vector<MaterialPeak> von_mises;  // over the output states
+  bool contact_occurred = false;
+  PeakAt peak_pressure_steps;    // every step (history): includes first-touch impulses
+  PeakAt peak_pressure_outputs;  // at the output states (what the pictures show)
+  PeakAt largest_area, peak_force;
+  std::vector<FrameSummary> frames;
+  std::vector<std::string> pictures;  // file names in the report folder
+};
+
+Summary summarize(const Results& results);
+std::string summary_json(const Summary& s);
+std::string summary_markdown(const Summary& s);
+
+}  // namespace tactus::postproc

@@ -1,0 +1,193 @@
+// The report's numbers from the states, the history and run.json.
+#include "tactus/postproc/summary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/mesh.hpp"
+
+namespace tactus::postproc {
+
+namespace {
+
+std::array<double, 3> centroid(const TetMesh& m, std::size_t e) {
+  std::array<double, 3> c{0, 0, 0};
+  for (int v : m.tets[e])
+    for (int d = 0; d < 3; ++d) c[d] += 0.25 * m.nodes[static_cast<std::size_t>(v)][d];
+  return c;
+}
+
+const MeshField& need_cell(const VtuContents& v, const std::string& name, const std::string& file) {
+  const MeshField* f = v.cell_field(name);
+  if (!f) throw InputError(file, name, "cell data " + name + " (a tactus-solve state)", "missing");
+  return *f;
+}
+
+nlohmann::json peak_json(const PeakAt& p, const char* unit) {
+  return {{"value", p.value}, {"unit", unit}, {"time_s", p.time}, {"position_m", p.position}, {"index", p.index}};
+}
+
+}  // namespace
+
+Summary summarize(const Results& r) {
+  Summary s;
+  const auto j = nlohmann::json::parse(r.run_json);
+  auto num = [&](const nlohmann::json& node, const char* key) { return node.contains(key) && node[key].is_number() ? node[key].get<double>() : 0.0; };
+  s.status = j.value("status", "");
+  if (j.contains("message") && j["message"].is_string()) s.message = j["message"].get<std::string>();
+  s.steps = j.value("steps", std::size_t{0});
+  s.nodes = j.value("nodes", std::size_t{0});
+  s.tets = j.value("tets", std::size_t{0});
+  s.end_time = num(j, "end_time");
+  s.wall_time = num(j, "wall_time_s");
+  if (j.contains("time_step")) s.dt_min = num(j["time_step"], "min"), s.dt_max = num(j["time_step"], "max");
+  if (j.contains("timing_s")) s.stress_seconds = num(j["timing_s"], "stress_passes"), s.contact_seconds = num(j["timing_s"], "contact");
+  if (j.contains("energy")) {
+    const auto& e = j["energy"];
+    s.initial_energy = num(e, "initial"), s.balance_error = num(e, "balance_error");
+    s.contact_work_normal = num(e, "contact_work_normal"), s.contact_work_friction = num(e, "contact_work_friction");
+  }
+  const History& h = r.history;
+  if (h.has("kinetic_energy") && h.rows() > 0) s.initial_kinetic = h.column("kinetic_energy").front();
+
+  // Every step (history rows are every few steps; run.json holds the per-step peaks).
+  if (j.contains("contact")) {
+    const auto& c = j["contact"];
+    if (c.contains("peak_pressure")) {
+      const auto& p = c["peak_pressure"];
+      s.peak_pressure_steps.value = num(p, "value"), s.peak_pressure_steps.time = num(p, "time");
+      if (p.contains("position")) s.peak_pressure_steps.position = p["position"].get<std::array<double, 3>>();
+      if (p.contains("node") && p["node"].is_number()) s.peak_pressure_steps.index = p["node"].get<long>();
+    }
+    if (c.contains("peak_area")) s.largest_area.value = num(c["peak_area"], "value"), s.largest_area.time = num(c["peak_area"], "time");
+    if (c.contains("peak_force")) s.peak_force.value = num(c["peak_force"], "value"), s.peak_force.time = num(c["peak_force"], "time");
+    s.contact_occurred = c.value("steps_in_contact", std::size_t{0}) > 0;
+  }
+
+  const std::size_t M = std::max<std::size_t>(r.materials.size(), 1);
+  s.von_mises.resize(M);
+  for (std::size_t m = 0; m < M; ++m) s.von_mises[m].material = m < r.materials.size() ? r.materials[m] : "material " + std::to_string(m);
+  for (const Frame& f : r.frames) {
+    const VtuContents v = read_vtu(f.file);
+    const std::string file = f.file.string();
+    const MeshField& vm = need_cell(v, "von_mises", file);
+    const MeshField& mat = need_cell(v, "material", file);
+    FrameSummary fs;
+    fs.time = f.time;
+    fs.file = f.file.filename().string();
+    fs.von_mises_max.assign(M, 0.0);
+    for (std::size_t e = 0; e < vm.values.size(); ++e) {
+      const std::size_t m = static_cast<std::size_t>(mat.values[e]);
+      if (m >= M) throw InputError(file, "material", "indices below " + std::to_string(M) + " (run.json materials)", std::to_string(m));
+      if (vm.values[e] > fs.von_mises_max[m]) fs.von_mises_max[m] = vm.values[e];
+      if (vm.values[e] > s.von_mises[m].von_mises.value) {
+        s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1};
+      }
+    }
+    if (const MeshField* p = v.point_field("contact_pressure")) {
+      for (std::size_t i = 0; i < p->values.size(); ++i) {
+        const double pi = p->values[i];
+        if (pi > 0) ++fs.contact_nodes;
+        if (pi > fs.contact_pressure_max) fs.contact_pressure_max = pi;
+        if (pi > s.peak_pressure_outputs.value)
+          s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1};
+      }
+    }
+    if (h.has("contact_force") && h.rows() > 0) {  // nearest history row
+      const auto& t = h.column("time");
+      const std::size_t k = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), f.time - 1e-15) - t.begin());
+      fs.contact_force = h.column("contact_force")[std::min(k, t.size() - 1)];
+    }
+    s.frames.push_back(fs);
+  }
+  return s;
+}
+
+std::string summary_json(const Summary& s) {
+  nlohmann::json j;
+  j["run"] = {{"status", s.status},       {"message", s.message},     {"steps", s.steps},         {"nodes", s.nodes},
+              {"tets", s.tets},           {"end_time_s", s.end_time}, {"dt_min_s", s.dt_min},     {"dt_max_s", s.dt_max},
+              {"wall_time_s", s.wall_time}, {"stress_pass_s", s.stress_seconds}, {"contact_s", s.contact_seconds}};
+  j["energy"] = {{"initial_J", s.initial_energy},
+                 {"initial_kinetic_J", s.initial_kinetic},
+                 {"balance_error_J", s.balance_error},
+                 {"balance_error_of_initial_kinetic", s.initial_kinetic > 0 ? std::abs(s.balance_error) / s.initial_kinetic : 0.0},
+                 {"contact_work_normal_J", s.contact_work_normal},
+                 {"frictional_dissipation_J", s.contact_work_friction}};
+  nlohmann::json vm = nlohmann::json::object();
+  for (const auto& m : s.von_mises) vm[m.material] = peak_json(m.von_mises, "Pa");
+  j["peak_von_mises"] = vm;
+  j["contact"] = {{"occurred", s.contact_occurred}};
+  if (s.contact_occurred) {
+    j["contact"]["peak_pressure_any_step"] = peak_json(s.peak_pressure_steps, "Pa");
+    j["contact"]["peak_pressure_at_outputs"] = peak_json(s.peak_pressure_outputs, "Pa");
+    j["contact"]["largest_area"] = {{"value", s.largest_area.value}, {"unit", "m^2"}, {"time_s", s.largest_area.time}};
+    j["contact"]["peak_force"] = {{"value", s.peak_force.value}, {"unit", "N"}, {"time_s", s.peak_force.time}};
+  }
+  nlohmann::json frames = nlohmann::json::array();
+  for (const auto& f : s.frames) {
+    nlohmann::json fv = nlohmann::json::object();
+    for (std::size_t m = 0; m < f.von_mises_max.size(); ++m) fv[s.von_mises[m].material] = f.von_mises_max[m];
+    frames.push_back({{"time_s", f.time}, {"file", f.file}, {"von_mises_max_Pa", fv}, {"contact_pressure_max_Pa", f.contact_pressure_max},
+                      {"contact_nodes", f.contact_nodes}, {"contact_force_N", f.contact_force}});
+  }
+  j["outputs"] = frames;
+  j["pictures"] = s.pictures;
+  return j.dump(2) + "\n";
+}
+
+std::string summary_markdown(const Summary& s) {
+  std::ostringstream o;
+  auto mm = [](const std::array<double, 3>& p) {
+    std::ostringstream q;
+    q << std::fixed << std::setprecision(1) << "(" << p[0] * 1e3 << ", " << p[1] * 1e3 << ", " << p[2] * 1e3 << ") mm";
+    return q.str();
+  };
+  o << std::setprecision(4);
+  o << "# tactus report\n\n";
+  o << "Run " << s.status << (s.message.empty() ? "" : ": " + s.message) << ". " << s.steps << " steps to t = " << s.end_time * 1e3
+    << " ms, dt " << s.dt_min << " .. " << s.dt_max << " s, " << s.nodes << " nodes, " << s.tets << " tets; wall time "
+    << s.wall_time << " s (stress passes " << s.stress_seconds << " s, contact " << s.contact_seconds << " s).\n\n";
+  o << "Energy balance error " << s.balance_error << " J";
+  if (s.initial_kinetic > 0) o << " (" << 100 * std::abs(s.balance_error) / s.initial_kinetic << " % of the initial kinetic energy " << s.initial_kinetic << " J)";
+  o << "; contact work: normal " << s.contact_work_normal << " J, frictional dissipation " << s.contact_work_friction << " J.\n\n";
+  o << "## Peak von Mises stress (over the output states)\n\n| material | peak (MPa) | time (ms) | where (element centroid) |\n|---|---|---|---|\n";
+  for (const auto& m : s.von_mises)
+    o << "| " << m.material << " | " << m.von_mises.value / 1e6 << " | " << m.von_mises.time * 1e3 << " | element " << m.von_mises.index << ", "
+      << mm(m.von_mises.position) << " |\n";
+  o << "\n## Contact\n\n";
+  if (!s.contact_occurred) {
+    o << "No contact occurred during the run: no pressure map, zero contact force.\n";
+  } else {
+    o << "| quantity | value | time (ms) | where |\n|---|---|---|---|\n";
+    o << "| peak pressure, output states | " << s.peak_pressure_outputs.value / 1e6 << " MPa | " << s.peak_pressure_outputs.time * 1e3
+      << " | node " << s.peak_pressure_outputs.index << ", " << mm(s.peak_pressure_outputs.position) << " |\n";
+    o << "| peak pressure, any step | " << s.peak_pressure_steps.value / 1e6 << " MPa | " << s.peak_pressure_steps.time * 1e3 << " | node "
+      << s.peak_pressure_steps.index << ", " << mm(s.peak_pressure_steps.position) << " |\n";
+    o << "| largest contact area | " << s.largest_area.value * 1e6 << " mm^2 | " << s.largest_area.time * 1e3 << " | |\n";
+    o << "| peak contact force | " << s.peak_force.value << " N | " << s.peak_force.time * 1e3 << " | |\n";
+    o << "\nThe any-step peak includes the first-touch impulse of each node (velocity-level impact over one step); "
+         "the output-state peak is what the pressure picture shows.\n";
+  }
+  o << "\n## Output states\n\n| t (ms) | file |";
+  for (const auto& m : s.von_mises) o << " max von Mises " << m.material << " (MPa) |";
+  o << " max pressure (MPa) | contact nodes | contact force (N) |\n|---|---|";
+  for (std::size_t m = 0; m < s.von_mises.size(); ++m) o << "---|";
+  o << "---|---|---|\n";
+  for (const auto& f : s.frames) {
+    o << "| " << f.time * 1e3 << " | " << f.file << " |";
+    for (double v : f.von_mises_max) o << " " << v / 1e6 << " |";
+    o << " " << f.contact_pressure_max / 1e6 << " | " << f.contact_nodes << " | " << f.contact_force << " |\n";
+  }
+  if (!s.pictures.empty()) {
+    o << "\n## Pictures\n\n";
+    for (const auto& p : s.pictures) o << "![" << p << "](" << p << ")\n";
+  }
+  return o.str();
+}
+
+}  // namespace tactus::postproc
