@@ -18,7 +18,7 @@ check() {  # check EXPECTED_RC FRAGMENT -- command...
     fail=1
   fi
 }
-for exe in data_samples/tactus-phantom data_samples/tactus-sample-mesh segment/tactus-segment mesher/tactus-mesh solver/tactus-solve; do
+for exe in data_samples/tactus-phantom data_samples/tactus-sample-mesh segment/tactus-segment mesher/tactus-mesh solver/tactus-solve postproc/tactus-post; do
   check 0 "" -- "$B/$exe" --version
   check 2 "" -- "$B/$exe" --no-such-option
 done
@@ -42,8 +42,12 @@ density = 1000
 TOML
 check 1 "run.end_time: expected a value > 0 in s, found -1" -- "$B/solver/tactus-solve" "$T/bad.toml" -o "$T/results"
 check 1 "closed 2-manifold" -- "$B/mesher/tactus-mesh" stl "$(dirname "$0")/open_triangle.stl" -o "$T/obj.msh"
+check 1 "expected a results folder written by tactus-solve, found no such folder" -- "$B/postproc/tactus-post" "$T/none" -o "$T/report" --no-pictures
+mkdir -p "$T/empty_results"
+check 1 "results.pvd: expected the results listing results.pvd" -- "$B/postproc/tactus-post" "$T/empty_results" -o "$T/report" --no-pictures
+check 1 "expected a slice stack folder" -- /usr/bin/python3 "$(dirname "$0")/../../pipeline/tactus-pipeline" "$T/none" "$T/bad.toml" -o "$T/work"
 # Nothing half-written was left.
-leftovers=$(find "$T" -name '*.partial-*' -o -name 'results' -o -name 'out' -o -name 'mesh' -o -name 'obj.msh')
+leftovers=$(find "$T" -name '*.partial-*' -o -name 'results' -o -name 'out' -o -name 'mesh' -o -name 'obj.msh' -o -name 'report' -o -name 'work')
 [ -z "$leftovers" ] || { echo "FAIL: outputs left behind: $leftovers"; fail=1; }
 [ $fail = 0 ] && echo "all exit-code checks passed"
 exit $fail

@@ -9,6 +9,8 @@ trap 'rm -rf "$WORK"' EXIT
 cmake --install "$BUILD" --prefix "$WORK/prefix" > "$WORK/install.log"
 test -x "$WORK/prefix/bin/tactus-solve"
 test -x "$WORK/prefix/bin/tactus-sample-mesh"
+test -x "$WORK/prefix/bin/tactus-post"
+test -x "$WORK/prefix/bin/tactus-pipeline"
 cmake -S "$HERE" -B "$WORK/consumer" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$WORK/prefix" > "$WORK/configure.log"
 cmake --build "$WORK/consumer" > "$WORK/build.log"
 "$WORK/consumer/consumer"

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# pipeline/end_to_end: a coarse phantom (1.2 mm voxels) through tactus-pipeline: segment, mesh the
+# hand (CGAL) and the block (gmsh), solve the hand-block impact to 1 ms, report. Checks:
+#   1. the report's numbers against values read independently from the .vtu / history / run.json
+#      (check_report.py), energy balance within 2 % of the initial kinetic energy, no inversion;
+#   2. a re-run skips all five stages;
+#   3. a run that ends before the bodies meet: the report says no contact occurred;
+#   4. a stage failing mid-way (bad scenario): the pipeline names it, earlier outputs stay;
+#   5. a results folder with a missing state file: tactus-post refuses it, naming the file.
+# Usage: e2e.sh <build dir>
+set -euo pipefail
+BUILD=$(cd "$1" && pwd)
+SRC=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+PY=/usr/bin/python3
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+export TACTUS_BUILD_DIR=$BUILD
+fail() { echo "e2e: FAIL: $*"; exit 1; }
+
+"$BUILD/data_samples/tactus-phantom" --voxel-mm 1.2 --slice-mm 1.2 -q -o "$T/phantom"
+MESH_ARGS="--cell-size 9 --facet-size 5 --bone-facet-size 4 --bone-cell-size 5 --facet-distance 0.8"
+OBJECT="box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size 0.012"
+run() {  # run <scenario> <end time> [more options]
+  "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$1" -o "$T/work" --end-time "$2" --mesh-args "$MESH_ARGS" \
+    --object "$OBJECT" -q "${@:3}"
+}
+
+echo "--- 1. hand-block to 1 ms"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-3 | tee "$T/first.log"
+"$PY" "$SRC/tests/pipeline/check_report.py" "$T/work/solve" "$T/work/report" --expect-contact
+
+echo "--- 2. re-run: nothing changed"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-3 | tee "$T/second.log"
+[ "$(grep -c 'unchanged, skipped' "$T/second.log")" -eq 5 ] || fail "expected all 5 stages skipped"
+
+echo "--- 3. ends at 0.1 ms, before the 0.5 mm gap closes (0.25 ms at 2 m/s)"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 | tee "$T/third.log"
+grep -q "segment: unchanged, skipped" "$T/third.log" || fail "segment re-ran although its input did not change"
+grep -q "== solve: done" "$T/third.log" || fail "solve did not re-run with a new end time"
+"$PY" "$SRC/tests/pipeline/check_report.py" "$T/work/solve" "$T/work/report" --expect-no-contact
+
+echo "--- 4. a stage failing mid-way"
+sed 's/^friction = 0.3/friction = -0.3/' "$SRC/pipeline/scenarios/hand_block.toml" > "$T/bad.toml"
+if run "$T/bad.toml" 1e-3 > "$T/fourth.log" 2> "$T/fourth.err"; then fail "pipeline succeeded on a bad scenario"; fi
+cat "$T/fourth.err"
+grep -q "stage 'solve' failed" "$T/fourth.err" || fail "the failing stage is not named"
+grep -q "contact\[0\].friction" "$T/fourth.err" || fail "the solver's message is not shown"
+[ -f "$T/work/mesh/mesh.msh" ] && [ -f "$T/work/segment/labels.h5" ] || fail "earlier stages' outputs were removed"
+
+echo "--- 5. a results folder missing a state file"
+cp -r "$T/work/solve" "$T/broken"
+rm "$T/broken/results/state_0000.vtu"
+set +e
+"$BUILD/postproc/tactus-post" "$T/broken" -o "$T/broken_report" --no-pictures 2> "$T/fifth.err"
+rc=$?
+set -e
+cat "$T/fifth.err"
+[ "$rc" -eq 1 ] || fail "tactus-post exit code $rc (expected 1)"
+grep -q "state_0000.vtu is missing" "$T/fifth.err" || fail "the missing file is not named"
+[ ! -e "$T/broken_report" ] || fail "a report was left behind"
+echo "e2e: all good"
