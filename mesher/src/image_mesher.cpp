@@ -11,6 +11,7 @@
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -217,6 +218,182 @@ void relocate_short_tets(TetMesh& mesh, double ratio_goal, double max_surface_mo
   }
 }
 
+
+std::array<int, 3> sorted_face(int a, int b, int c) {
+  std::array<int, 3> f{a, b, c};
+  std::sort(f.begin(), f.end());
+  return f;
+}
+constexpr int kFaces[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};  // face nodes, then the opposite
+
+// Boundary triangles from the tets' labels: the faces between different labels (0 = outside),
+// skin where one side is outside, bone interface otherwise; oriented out of the higher label
+// (soft tissue under the skin, the bone at an interface), as CGAL's facets are above.
+void rebuild_boundary_triangles(TetMesh& mesh) {
+  std::map<std::array<int, 3>, std::vector<std::size_t>> owners;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (const auto& f : kFaces) owners[sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]])].push_back(e);
+  mesh.triangles.clear();
+  mesh.triangle_group.clear();
+  for (const auto& [key, tets] : owners) {
+    const int la = mesh.tet_group[tets[0]], lb = tets.size() > 1 ? mesh.tet_group[tets[1]] : 0;
+    if (la == lb) continue;
+    const std::size_t inner = tets.size() > 1 && lb > la ? tets[1] : tets[0];
+    const auto& t = mesh.tets[inner];
+    int apex = 0;
+    for (int v : t)
+      if (v != key[0] && v != key[1] && v != key[2]) apex = v;
+    std::array<int, 3> tri = key;
+    if (tet_volume(mesh.nodes[static_cast<std::size_t>(tri[0])], mesh.nodes[static_cast<std::size_t>(tri[1])],
+                   mesh.nodes[static_cast<std::size_t>(tri[2])], mesh.nodes[static_cast<std::size_t>(apex)]) > 0)
+      std::swap(tri[1], tri[2]);  // the apex behind the triangle: its normal points out of `inner`
+    mesh.triangles.push_back(tri);
+    mesh.triangle_group.push_back(std::min(la, lb) == 0 ? kSkinTag : kBoneInterfaceTag);
+  }
+}
+
+// Peels soft-tissue tets that lie flat on the skin (two or three faces on it) and whose
+// characteristic length is below ratio_goal of the soft-tissue median: such a tet is a sliver of
+// the surface approximation (its four nodes on the skin, e.g. at the wrist cut's rim or over a
+// thin finger), no node can be moved to fix it without leaving the surface, and it sets the
+// explicit time step. Removing it exposes its inner faces; the skin stays closed and 2-manifold
+// (checked around every edge and node of the tet), every node stays in the mesh, and the volume
+// lost is the sliver's (a fraction of a per mille). Returns the number of tets removed.
+std::size_t peel_skin_slivers(TetMesh& mesh, double ratio_goal) {
+  constexpr int kSoft = 1;
+  auto length = [&](std::size_t e) {
+    const auto& t = mesh.tets[e];
+    const TetGradients g = tet_shape_gradients(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
+                                               mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]);
+    return g.volume > 0 ? characteristic_length(g) : 0.0;
+  };
+  std::vector<double> soft;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    if (mesh.tet_group[e] == kSoft) soft.push_back(length(e));
+  if (soft.empty()) return 0;
+  std::nth_element(soft.begin(), soft.begin() + static_cast<std::ptrdiff_t>(soft.size() / 2), soft.end());
+  const double median = soft[soft.size() / 2];
+
+  std::map<std::array<int, 3>, std::vector<std::size_t>> owners;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (const auto& f : kFaces) owners[sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]])].push_back(e);
+  std::vector<char> alive(mesh.tets.size(), 1);
+  const auto tets_of = tets_around_nodes(mesh);
+  auto live_owners = [&](const std::array<int, 3>& key) {
+    std::size_t n = 0;
+    for (std::size_t e : owners[key]) n += alive[e];
+    return n;
+  };
+  // Skin faces (one live soft-tissue owner, nothing behind) around a node, among its live tets.
+  auto skin_faces_at = [&](int node) {
+    std::set<std::array<int, 3>> out;
+    for (std::size_t e : tets_of[static_cast<std::size_t>(node)]) {
+      if (!alive[e]) continue;
+      for (const auto& f : kFaces) {
+        const auto key = sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]]);
+        if ((key[0] == node || key[1] == node || key[2] == node) && live_owners(key) == 1 && mesh.tet_group[e] != 0) out.insert(key);
+      }
+    }
+    return out;
+  };
+  // One closed fan of faces around the node, each edge of it shared by exactly two faces.
+  auto manifold_at = [&](int node) {
+    const auto faces = skin_faces_at(node);
+    if (faces.empty()) return true;
+    std::map<int, std::vector<std::array<int, 3>>> by_edge;  // other end of the edge at `node`
+    for (const auto& f : faces)
+      for (int v : f)
+        if (v != node) by_edge[v].push_back(f);
+    for (const auto& [v, fs] : by_edge)
+      if (fs.size() != 2) return false;
+    std::set<std::array<int, 3>> seen{*faces.begin()};
+    std::vector<std::array<int, 3>> stack{*faces.begin()};
+    while (!stack.empty()) {
+      const auto f = stack.back();
+      stack.pop_back();
+      for (int v : f)
+        if (v != node)
+          for (const auto& g : by_edge[v])
+            if (seen.insert(g).second) stack.push_back(g);
+    }
+    return seen.size() == faces.size();
+  };
+
+  std::vector<std::pair<double, std::size_t>> candidates;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    if (mesh.tet_group[e] == kSoft && length(e) < ratio_goal * median) candidates.push_back({length(e), e});
+  std::sort(candidates.begin(), candidates.end());
+  std::size_t removed = 0;
+  for (const auto& [len, e] : candidates) {
+    const auto& t = mesh.tets[e];
+    int on_skin = 0;
+    bool ok = true;
+    for (const auto& f : kFaces) {
+      const auto key = sorted_face(t[f[0]], t[f[1]], t[f[2]]);
+      const std::size_t n = live_owners(key);
+      if (n == 1) {
+        ++on_skin;
+      } else {
+        for (std::size_t other : owners[key])  // the face becomes skin: only over soft tissue
+          if (other != e && alive[other] && mesh.tet_group[other] != kSoft) ok = false;
+      }
+    }
+    log::debug() << "peel: tet " << e << " L/median " << len / median << ", " << on_skin << " faces on the skin, faces over soft tissue " << ok;
+    if (!ok || on_skin < 1) continue;  // one face on the skin: only with a neighbour (below)
+    for (int v : t) {  // every node keeps a tet
+      std::size_t n = 0;
+      for (std::size_t o : tets_of[static_cast<std::size_t>(v)]) n += alive[o] && o != e;
+      ok = ok && n > 0;
+    }
+    if (!ok) continue;
+    alive[e] = 0;
+    for (int v : t) ok = ok && manifold_at(v);
+    log::debug() << "peel: tet " << e << " nodes kept; manifold after removal " << ok;
+    if (ok) {
+      ++removed;
+      continue;
+    }
+    // Alone it would pinch the skin (e.g. across the sharp rim of the wrist cut): try it together
+    // with one soft-tissue neighbour that is short too.
+    bool paired = false;
+    for (const auto& f : kFaces) {
+      if (paired) break;
+      for (std::size_t other : owners[sorted_face(t[f[0]], t[f[1]], t[f[2]])]) {
+        if (other == e || !alive[other] || mesh.tet_group[other] != kSoft || length(other) >= 1.5 * ratio_goal * median) continue;
+        bool behind_soft = true;  // the pair's faces that become skin lie over soft tissue
+        for (const auto& g : kFaces)
+          for (std::size_t o : owners[sorted_face(mesh.tets[other][g[0]], mesh.tets[other][g[1]], mesh.tets[other][g[2]])])
+            behind_soft = behind_soft && (o == e || o == other || !alive[o] || mesh.tet_group[o] == kSoft);
+        if (!behind_soft) continue;
+        alive[other] = 0;
+        bool good = true;
+        for (const std::array<int, 4>* tet : {&t, static_cast<const std::array<int, 4>*>(&mesh.tets[other])})
+          for (int v : *tet) {
+            std::size_t n = 0;
+            for (std::size_t o : tets_of[static_cast<std::size_t>(v)]) n += alive[o];
+            good = good && n > 0 && manifold_at(v);
+          }
+        if (good) {
+          paired = true;
+          removed += 2;
+          break;
+        }
+        alive[other] = 1;
+      }
+    }
+    if (!paired) alive[e] = 1;
+  }
+  if (removed == 0) return 0;
+  std::vector<std::array<int, 4>> tets;
+  std::vector<int> groups;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    if (alive[e]) tets.push_back(mesh.tets[e]), groups.push_back(mesh.tet_group[e]);
+  mesh.tets = std::move(tets);
+  mesh.tet_group = std::move(groups);
+  rebuild_boundary_triangles(mesh);
+  return removed;
+}
+
 }  // namespace
 
 TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p) {
@@ -268,27 +445,100 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   std::set<int> wanted;
   for (auto v : labels.data)
     if (v) wanted.insert(v);
-  auto all_present = [&](const C3t3& c) {
-    std::set<int> seen;
+  auto missing_labels = [&](const C3t3& c) {
+    std::set<int> seen, missing;
     for (auto cell = c.cells_in_complex_begin(); cell != c.cells_in_complex_end(); ++cell) seen.insert(static_cast<int>(c.subdomain_index(cell)));
-    return seen == wanted;
+    for (int l : wanted)
+      if (!seen.count(l)) missing.insert(l);
+    return missing;
   };
-  // Default initialisation (random surface sampling) gives the better elements; when it misses a
-  // small subdomain, restart seeded with points on every connected component of every label.
+  // Default initialisation (random surface sampling) gives the better elements.
   C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
                                       CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
-  if (!all_present(c3t3)) {
-    log::verbose() << "mesher: a subdomain was missed by the initial sampling; seeding every label component";
+  std::set<int> missing = missing_labels(c3t3);
+  for (int attempt = 0; attempt < 4 && !missing_labels(c3t3).empty(); ++attempt) {
+    for (int l : missing_labels(c3t3)) missing.insert(l);
+    // A small subdomain was missed: the same random sampling plus a few surface points on each
+    // missed label only (seeding every component of every label, as CGAL's
+    // initialize_triangulation_from_labeled_image does, clusters tiny tets along all surfaces).
+    std::string names;
+    for (int l : missing) names += (names.empty() ? "" : ", ") + (table.count(l) ? table.at(l) : std::to_string(l));
+    log::verbose() << "mesher: the initial sampling missed " << names << "; adding surface points on them";
     c3t3 = C3t3();
-    {
-      // CGAL 5.5 prints its progress to std::cout here; keep our stdout for our own output.
-      std::ostringstream sink;
-      std::streambuf* saved = std::cout.rdbuf(sink.rdbuf());
-      ::initialize_triangulation_from_labeled_image(c3t3, domain, image, criteria, static_cast<unsigned char>(0));
-      std::cout.rdbuf(saved);
+    CGAL::get_default_random() = CGAL::Random(p.seed);
+    std::vector<std::pair<Domain::Point_3, Domain::Index>> points;
+    domain.construct_initial_points_object()(std::back_inserter(points));
+    const double sp[3] = {labels.spacing[0] * 1e3, labels.spacing[1] * 1e3, labels.spacing[2] * 1e3};
+    auto label_at = [&](const double q[3]) {
+      long idx[3];
+      for (int a = 0; a < 3; ++a) {
+        idx[a] = std::lround(q[a] / sp[a]);
+        if (idx[a] < 0 || idx[a] >= labels.dims[a]) return -1;
+      }
+      return static_cast<int>(labels.at(static_cast<int>(idx[0]), static_cast<int>(idx[1]), static_cast<int>(idx[2])));
+    };
+    for (int l : missing) {
+      double sum[3] = {0, 0, 0};
+      std::size_t n = 0;
+      for (int k = 0; k < labels.dims[2]; ++k)
+        for (int j = 0; j < labels.dims[1]; ++j)
+          for (int i = 0; i < labels.dims[0]; ++i)
+            if (labels.at(i, j, k) == l) sum[0] += static_cast<double>(i), sum[1] += static_cast<double>(j), sum[2] += static_cast<double>(k), ++n;
+      double c[3] = {0, 0, 0}, best = 1e300;  // the label's voxel nearest to its centroid
+      for (int k = 0; k < labels.dims[2]; ++k)
+        for (int j = 0; j < labels.dims[1]; ++j)
+          for (int i = 0; i < labels.dims[0]; ++i)
+            if (labels.at(i, j, k) == l) {
+              const double d = std::pow(static_cast<double>(i) - sum[0] / static_cast<double>(n), 2) +
+                               std::pow(static_cast<double>(j) - sum[1] / static_cast<double>(n), 2) +
+                               std::pow(static_cast<double>(k) - sum[2] / static_cast<double>(n), 2);
+              if (d < best) best = d, c[0] = static_cast<double>(i) * sp[0], c[1] = static_cast<double>(j) * sp[1], c[2] = static_cast<double>(k) * sp[2];
+            }
+      // Rays along the axes and the diagonals, each cut at its first voxel outside the label.
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            if (dx == 0 && dy == 0 && dz == 0) continue;
+            const double len = std::sqrt(static_cast<double>(dx * dx + dy * dy + dz * dz));
+            const double d[3] = {dx / len, dy / len, dz / len};
+            const double step = 0.5 * std::min({sp[0], sp[1], sp[2]});
+            double q[3] = {c[0], c[1], c[2]};
+            int steps = 0;
+            while (label_at(q) == l && steps < 10000) {
+              for (int a = 0; a < 3; ++a) q[a] += step * d[a];
+              ++steps;
+            }
+            for (int a = 0; a < 3; ++a) q[a] += 2 * step * d[a];
+            const auto hit = domain.construct_intersection_object()(Domain::Segment_3(Domain::Point_3(c[0], c[1], c[2]), Domain::Point_3(q[0], q[1], q[2])));
+            if (std::get<2>(hit) == 2) points.emplace_back(std::get<0>(hit), std::get<1>(hit));
+            log::debug() << "mesher: label " << l << " ray from (" << c[0] << ", " << c[1] << ", " << c[2] << ") mm, " << steps
+                         << " steps inside, hit dimension " << std::get<2>(hit);
+          }
+    }
+    auto cwp = c3t3.triangulation().geom_traits().construct_weighted_point_3_object();
+    for (const auto& [point, idx] : points) {
+      const auto v = c3t3.triangulation().insert(cwp(point));
+      if (v != Tr::Vertex_handle()) c3t3.set_dimension(v, 2), c3t3.set_index(v, idx);
     }
     CGAL::refine_mesh_3(c3t3, domain, criteria, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
                         CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+  }
+  {
+    if (const std::set<int> still = missing_labels(c3t3); !still.empty()) {
+      std::string names_left;
+      for (int l : still) names_left += (names_left.empty() ? "" : ", ") + (table.count(l) ? table.at(l) : std::to_string(l));
+      log::verbose() << "mesher: still missing " << names_left << "; seeding every component of every label";
+      c3t3 = C3t3();
+      {
+        // CGAL 5.5 prints its progress to std::cout here; keep our stdout for our own output.
+        std::ostringstream sink;
+        std::streambuf* saved = std::cout.rdbuf(sink.rdbuf());
+        ::initialize_triangulation_from_labeled_image(c3t3, domain, image, criteria, static_cast<unsigned char>(0));
+        std::cout.rdbuf(saved);
+      }
+      CGAL::refine_mesh_3(c3t3, domain, criteria, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
+                          CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+    }
   }
   optimise(c3t3);
 
@@ -341,6 +591,17 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   }
   if (p.restore_volumes) restore_volumes(mesh, labels, triangle_inner);
   if (p.relocate_passes > 0) relocate_short_tets(mesh, 0.35, p.facet_distance_mm * 1e-3, p.relocate_passes);
+  if (p.peel_skin_slivers) {
+    // Sweeps until nothing changes: peeling one sliver can put its neighbour flat on the skin.
+    std::size_t peeled = 0;
+    for (int sweep = 0; sweep < 8; ++sweep) {
+      const std::size_t n = peel_skin_slivers(mesh, 0.3);
+      peeled += n;
+      if (n == 0) break;
+    }
+    log::verbose() << "mesher: peeled " << peeled << " soft-tissue slivers lying on the skin";
+    if (peeled > 0 && p.relocate_passes > 0) relocate_short_tets(mesh, 0.35, p.facet_distance_mm * 1e-3, p.relocate_passes);
+  }
   {
     std::map<int, std::size_t> voxels;
     for (auto v : labels.data)

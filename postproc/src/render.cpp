@@ -7,8 +7,8 @@
 #include <vtkCamera.h>
 #include <vtkCellData.h>
 #include <vtkChartXY.h>
+#include <vtkContextActor.h>
 #include <vtkContextScene.h>
-#include <vtkContextView.h>
 #include <vtkCutter.h>
 #include <vtkDataSetSurfaceFilter.h>
 #include <vtkDoubleArray.h>
@@ -211,12 +211,15 @@ void plot(const History& h, const fs::path& file, const std::string& title, cons
     for (const auto& [name, scale] : series)
       if (h.has(name)) table->SetValue(static_cast<vtkIdType>(i), col++, h.column(name)[i] * scale);
   }
-  vtkNew<vtkContextView> view;
-  view->GetRenderWindow()->SetOffScreenRendering(1);
-  view->GetRenderWindow()->SetSize(w, hgt);
-  view->GetRenderer()->SetBackground(1, 1, 1);
+  // The chart drawn by a context actor in a plain off-screen window: a vtkContextView would bring
+  // an X interactor, which crashes when the X server is busy (seen with concurrent runs).
+  auto window = offscreen(w, hgt);
+  auto ren = white_renderer();
+  window->AddRenderer(ren);
+  vtkNew<vtkContextActor> actor;
+  ren->AddActor(actor);
   vtkNew<vtkChartXY> chart;
-  view->GetScene()->AddItem(chart);
+  actor->GetScene()->AddItem(chart);
   chart->SetTitle(title);
   chart->GetAxis(vtkAxis::BOTTOM)->SetTitle("time (ms)");
   chart->GetAxis(vtkAxis::LEFT)->SetTitle(ylabel);
@@ -228,7 +231,7 @@ void plot(const History& h, const fs::path& file, const std::string& title, cons
     line->SetColor(colors[k % 5][0], colors[k % 5][1], colors[k % 5][2], 255);
     line->SetWidth(2.0);
   }
-  write_png(view->GetRenderWindow(), file);
+  write_png(window, file);
 }
 
 }  // namespace

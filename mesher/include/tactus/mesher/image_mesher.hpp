@@ -23,6 +23,7 @@ struct ImageMeshParams {
   double optimiser_time_limit_s = 30;
   int relocate_passes = 6;          // node relocation of the tets that set the stable step (0: off)
   bool restore_volumes = true;      // offset surfaces to the label volumes (see image_mesher.cpp)
+  bool peel_skin_slivers = true;    // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
   unsigned seed = 0;
 };
 

@@ -1,6 +1,6 @@
 #pragma once
 // The report's pictures, rendered off screen with VTK (an X display is needed: tactus-post
-// re-runs itself under xvfb-run when none is set).
+// starts a private Xvfb when none is set).
 #include <filesystem>
 #include <string>
 #include <vector>
