@@ -114,45 +114,19 @@ void cube(const std::filesystem::path& work) {
               s.steps, wall, 48000.0 * static_cast<double>(s.steps) / wall / 1e6, s.max_relative_balance_error);
 }
 
-// Triangles of a box-mesh surface group (tag), in the model's internal numbering.
-std::vector<std::array<int, 3>> faces_of(const Model& m, int tag) {
-  std::vector<std::array<int, 3>> out;
-  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
-    if (m.input_mesh.triangle_group[t] == tag) {
-      std::array<int, 3> f{};
-      for (int k = 0; k < 3; ++k) f[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
-      out.push_back(f);
-    }
-  return out;
-}
-
 void contact_scaling(const std::vector<int>& sizes) {
   std::printf("%9s %9s %11s %9s %12s %12s %8s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms",
               "ratio", "iterations");
   for (int n : sizes) {
     TetMesh lower = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01);
     const TetMesh upper = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01, {0, 0, 0.01});
-    const int off = static_cast<int>(lower.nodes.size());
-    lower.nodes.insert(lower.nodes.end(), upper.nodes.begin(), upper.nodes.end());
-    for (std::size_t e = 0; e < upper.tets.size(); ++e) {
-      auto t = upper.tets[e];
-      for (int& v : t) v += off;
-      lower.tets.push_back(t);
-      lower.tet_group.push_back(upper.tet_group[e]);
-    }
-    for (std::size_t e = 0; e < upper.triangles.size(); ++e) {
-      auto t = upper.triangles[e];
-      for (int& v : t) v += off;
-      lower.triangles.push_back(t);
-      lower.triangle_group.push_back(upper.triangle_group[e] + 100);
-    }
-    for (auto g : upper.groups) g.tag += 100, g.name += "_upper", lower.groups.push_back(g);
+    samples::append_mesh(lower, upper, 100, "_upper");
     Model m = build_model(lower, bench_material("linear_elastic"));
     ContactPair pair;
     pair.name = "slabs";
     pair.friction = 0.3;
-    set_master_surface(pair, m, faces_of(m, 16), "lower zmax");
-    set_slave_surface(pair, m, faces_of(m, 115));  // upper zmin
+    set_master_surface(pair, m, surface_triangles(m, 16), "lower zmax");
+    set_slave_surface(pair, m, surface_triangles(m, 115));  // upper zmin
     m.contact_pairs.push_back(pair);
     if (const char* it = std::getenv("TACTUS_BENCH_UZAWA_ITERATIONS")) m.contact_settings.max_iterations = std::atoi(it);
     for (std::size_t i = 0; i < m.num_nodes; ++i)

@@ -103,4 +103,26 @@ void shuffle_numbering(TetMesh& mesh, std::uint64_t seed) {
   mesh.tet_group = std::move(groups);
 }
 
+void append_mesh(TetMesh& mesh, const TetMesh& other, int tag_offset, const std::string& name_suffix) {
+  const int off = static_cast<int>(mesh.nodes.size());
+  mesh.nodes.insert(mesh.nodes.end(), other.nodes.begin(), other.nodes.end());
+  for (std::size_t e = 0; e < other.tets.size(); ++e) {
+    auto t = other.tets[e];
+    for (int& v : t) v += off;
+    mesh.tets.push_back(t);
+    mesh.tet_group.push_back(other.tet_group[e] + tag_offset);
+  }
+  for (std::size_t e = 0; e < other.triangles.size(); ++e) {
+    auto t = other.triangles[e];
+    for (int& v : t) v += off;
+    mesh.triangles.push_back(t);
+    mesh.triangle_group.push_back(other.triangle_group[e] + tag_offset);
+  }
+  for (auto g : other.groups) {
+    g.tag += tag_offset;
+    g.name += name_suffix;
+    mesh.groups.push_back(g);
+  }
+}
+
 }  // namespace tactus::samples

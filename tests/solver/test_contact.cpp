@@ -46,40 +46,12 @@ RunSpec run_until(double end_time) {
   return r;
 }
 
-// Triangles of a surface group, in the model's internal numbering.
-std::vector<std::array<int, 3>> group_faces(const Model& m, int tag) {
-  std::vector<std::array<int, 3>> out;
-  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
-    if (m.input_mesh.triangle_group[t] == tag) {
-      std::array<int, 3> f{};
-      for (int k = 0; k < 3; ++k) f[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
-      out.push_back(f);
-    }
-  return out;
-}
+std::vector<std::array<int, 3>> group_faces(const Model& m, int tag) { return surface_triangles(m, tag); }
 
 // Two box meshes as one; the second's group tags are shifted by 100.
 TetMesh merge(const TetMesh& a, const TetMesh& b) {
   TetMesh m = a;
-  const int off = static_cast<int>(a.nodes.size());
-  m.nodes.insert(m.nodes.end(), b.nodes.begin(), b.nodes.end());
-  for (std::size_t e = 0; e < b.tets.size(); ++e) {
-    auto t = b.tets[e];
-    for (int& v : t) v += off;
-    m.tets.push_back(t);
-    m.tet_group.push_back(b.tet_group[e] + 100);
-  }
-  for (std::size_t e = 0; e < b.triangles.size(); ++e) {
-    auto t = b.triangles[e];
-    for (int& v : t) v += off;
-    m.triangles.push_back(t);
-    m.triangle_group.push_back(b.triangle_group[e] + 100);
-  }
-  for (auto g : b.groups) {
-    g.tag += 100;
-    g.name += "_b";
-    m.groups.push_back(g);
-  }
+  samples::append_mesh(m, b, 100, "_b");
   return m;
 }
 

@@ -48,18 +48,23 @@ std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body
     throw InputError(file, key, "a physical surface group of body '" + m.bodies[body].name + "' (" + (names.empty() ? "it has none" : names) + ")",
                      "\"" + group + "\"");
   }
-  std::vector<std::array<int, 3>> out;
-  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
-    if (m.input_mesh.triangle_group[t] == g->tag) {
-      std::array<int, 3> tri{};
-      for (int k = 0; k < 3; ++k) tri[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
-      out.push_back(tri);
-    }
+  std::vector<std::array<int, 3>> out = surface_triangles(m, g->tag);
   if (out.empty()) throw InputError(file, key, "a surface group with triangles", "group \"" + group + "\" is empty");
   return out;
 }
 
 }  // namespace
+
+std::vector<std::array<int, 3>> surface_triangles(const Model& m, int tag) {
+  std::vector<std::array<int, 3>> out;
+  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
+    if (m.input_mesh.triangle_group[t] == tag) {
+      std::array<int, 3> tri{};
+      for (int k = 0; k < 3; ++k) tri[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
+      out.push_back(tri);
+    }
+  return out;
+}
 
 void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles) {
   std::unordered_map<int, double> area;

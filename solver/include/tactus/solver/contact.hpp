@@ -44,6 +44,8 @@ void set_slave_surface(ContactPair& pair, const Model& model, const std::vector<
 // Throws InputError naming `where` when a triangle is not a face of any tet.
 void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles,
                         const std::string& where);
+// The triangles of physical surface `tag` of the model's input mesh, in internal numbering.
+std::vector<std::array<int, 3>> surface_triangles(const Model& model, int tag);
 // The scenario's [[contact]] entries as directed pairs (two per two_pass entry) on model.contact_pairs.
 void add_scenario_contacts(Model& model, const Scenario& scenario);
 
