@@ -228,6 +228,20 @@ std::vector<std::array<double, 6>> read_element_fibres(const std::filesystem::pa
 
 }  // namespace
 
+std::size_t Model::input_node(std::size_t internal) const {
+  for (std::size_t i = 0; i < node_of_input.size(); ++i)
+    if (static_cast<std::size_t>(node_of_input[i]) == internal) return i;
+  return internal;
+}
+
+std::vector<const PhysicalGroup*> Model::body_groups(std::size_t body) const {
+  const int offset = static_cast<int>(kBodyTagStride * body);
+  std::vector<const PhysicalGroup*> out;
+  for (const auto& g : input_mesh.groups)
+    if (g.tag >= offset && g.tag < offset + kBodyTagStride) out.push_back(&g);
+  return out;
+}
+
 Model build_model(const Scenario& sc) {
   Model m;
   std::vector<std::string> tet_material;  // per input tet
@@ -371,25 +385,23 @@ Model build_model(const Scenario& sc) {
     const BodyRange& range = m.bodies[bi];
     std::vector<char> selected(m.num_nodes, 0);
     if (!bc.group.empty()) {
-      const int offset = static_cast<int>(kBodyTagStride * bi);
       bool found = false;
-      for (const auto& g : m.input_mesh.groups) {
-        if (g.name != bc.group || g.tag < offset || g.tag >= offset + kBodyTagStride) continue;
+      for (const PhysicalGroup* g : m.body_groups(bi)) {
+        if (g->name != bc.group) continue;
         found = true;
-        if (g.dim == 2) {
+        if (g->dim == 2) {
           for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
-            if (m.input_mesh.triangle_group[t] == g.tag)
+            if (m.input_mesh.triangle_group[t] == g->tag)
               for (int v : m.input_mesh.triangles[t]) selected[static_cast<std::size_t>(v)] = 1;
         } else {
           for (std::size_t t = 0; t < m.input_mesh.tets.size(); ++t)
-            if (m.input_mesh.tet_group[t] == g.tag)
+            if (m.input_mesh.tet_group[t] == g->tag)
               for (int v : m.input_mesh.tets[t]) selected[static_cast<std::size_t>(v)] = 1;
         }
       }
       if (!found) {
         std::string groups;
-        for (const auto& g : m.input_mesh.groups)
-          if (g.tag >= offset && g.tag < offset + kBodyTagStride) groups += (groups.empty() ? "" : ", ") + g.name;
+        for (const PhysicalGroup* g : m.body_groups(bi)) groups += (groups.empty() ? "" : ", ") + g->name;
         throw InputError(sc.file.string(), key + ".group", "a physical group of body '" + bc.body + "' (" + groups + ")",
                          "\"" + bc.group + "\"");
       }

@@ -255,9 +255,7 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
     for (const auto& p : model.contact_pairs)
       pairs.push_back({{"name", p.name}, {"friction", p.friction}, {"slave_nodes", p.slave_nodes.size()},
                        {"master_triangles", p.master_triangles.size() / 3}, {"rigid_plane", p.rigid_plane}});
-    std::size_t peak_input_node = 0;
-    for (std::size_t i = 0; i < model.node_of_input.size(); ++i)
-      if (static_cast<std::size_t>(model.node_of_input[i]) == peaks.pressure_node) peak_input_node = i;
+    const std::size_t peak_input_node = model.input_node(peaks.pressure_node);
     j["contact"] = {{"pairs", pairs},
                     {"steps_in_contact", peaks.contact_steps},
                     {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},

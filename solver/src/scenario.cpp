@@ -449,6 +449,11 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       sc.bodies.push_back(b);
     }
   }
+  auto require_body = [&](const std::string& name, const std::string& key) {
+    for (const auto& b : sc.bodies)
+      if (b.name == name) return;
+    r.fail(key, "the name of a [[bodies]] entry", "\"" + name + "\"");
+  };
   if (const toml::node* n = root.get("boundary")) {  // [[boundary]]
     const auto& spec = boundary_section();
     const toml::array* arr = n->as_array();
@@ -459,9 +464,7 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       r.check_keys(t, spec, path);
       BoundarySpec bc;
       bc.body = r.string(t, *spec.find("body"), path);
-      bool known = false;
-      for (const auto& b : sc.bodies) known = known || b.name == bc.body;
-      if (!known) r.fail(path + ".body", "the name of a [[bodies]] entry", "\"" + bc.body + "\"");
+      require_body(bc.body, path + ".body");
       bc.group = r.string(t, *spec.find("group"), path);
       const auto box = r.vec3_list(t, *spec.find("box"), path);
       if (t.contains("box")) {
@@ -482,11 +485,6 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       sc.boundaries.push_back(bc);
     }
   }
-  auto body_known = [&](const std::string& name) {
-    for (const auto& b : sc.bodies)
-      if (b.name == name) return true;
-    return false;
-  };
   if (const toml::node* n = root.get("contact")) {  // [[contact]]
     const auto& spec = contact_section();
     const toml::array* arr = n->as_array();
@@ -497,7 +495,7 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       r.check_keys(t, spec, path);
       ContactSpec c;
       c.slave_body = r.string(t, *spec.find("slave_body"), path);
-      if (!body_known(c.slave_body)) r.fail(path + ".slave_body", "the name of a [[bodies]] entry", "\"" + c.slave_body + "\"");
+      require_body(c.slave_body, path + ".slave_body");
       c.slave_surface = r.string(t, *spec.find("slave_surface"), path);
       c.master_body = r.string(t, *spec.find("master_body"), path);
       c.master_surface = r.string(t, *spec.find("master_surface"), path);
@@ -512,7 +510,7 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       } else {
         if (c.master_body.empty() || c.master_surface.empty())
           r.fail(path, "`master_body` and `master_surface` (or a rigid `plane`)", "missing");
-        if (!body_known(c.master_body)) r.fail(path + ".master_body", "the name of a [[bodies]] entry", "\"" + c.master_body + "\"");
+        require_body(c.master_body, path + ".master_body");
       }
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);

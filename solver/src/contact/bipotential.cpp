@@ -223,9 +223,7 @@ void ContactSolver::check_initial_overlap(const double* u) const {
   }
   if (worst == st.size()) return;
   const ContactPair& p = pairs_[static_cast<std::size_t>(st.pair[worst])];
-  std::size_t input_node = 0;
-  for (std::size_t i = 0; i < model_.node_of_input.size(); ++i)
-    if (model_.node_of_input[i] == st.slave[worst]) input_node = i;
+  std::size_t input_node = model_.input_node(static_cast<std::size_t>(st.slave[worst]));
   std::string body;
   for (const auto& b : model_.bodies)
     if (input_node >= b.node_begin && input_node < b.node_end) body = b.name, input_node -= b.node_begin;

@@ -37,14 +37,13 @@ double mean_edge(const Model& m, const std::vector<std::array<int, 3>>& tris) {
 // Triangles of a body's physical surface group, in internal numbering.
 std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body, const std::string& group,
                                                 const std::string& file, const std::string& key) {
-  const int offset = static_cast<int>(kBodyTagStride * body);
   const PhysicalGroup* g = nullptr;
-  for (const auto& pg : m.input_mesh.groups)
-    if (pg.dim == 2 && pg.name == group && pg.tag >= offset && pg.tag < offset + kBodyTagStride) g = &pg;
+  for (const PhysicalGroup* pg : m.body_groups(body))
+    if (pg->dim == 2 && pg->name == group) g = pg;
   if (!g) {
     std::string names;
-    for (const auto& pg : m.input_mesh.groups)
-      if (pg.dim == 2 && pg.tag >= offset && pg.tag < offset + kBodyTagStride) names += (names.empty() ? "" : ", ") + pg.name;
+    for (const PhysicalGroup* pg : m.body_groups(body))
+      if (pg->dim == 2) names += (names.empty() ? "" : ", ") + pg->name;
     throw InputError(file, key, "a physical surface group of body '" + m.bodies[body].name + "' (" + (names.empty() ? "it has none" : names) + ")",
                      "\"" + group + "\"");
   }

@@ -105,12 +105,13 @@ void ExplicitSolver::advance_velocity() {
   const double* __restrict v_old_of = v_prev_half_.data();
   double* __restrict v_new_of = v_half_.data();
   const int threads = forces_.threads();
-  // Free (contact-less) prediction v^{n+1/2}, prescribed dofs set.
+  // Free (contact-less) prediction v^{n+1/2} of one dof, from v^{n-1/2} and the forces at t^n.
+  auto free_velocity = [&](std::size_t i, double fext) {
+    return (c_minus * v_old_of[i] + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus;
+  };
 #pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::size_t i = 0; i < ndof; ++i) {
-    const double v_free = (c_minus * v_old_of[i] + dtbar * (external_force(i) + f_[i]) * inv_mass_[i]) * c_plus;
-    v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : v_free;
-  }
+  for (std::size_t i = 0; i < ndof; ++i)
+    v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : free_velocity(i, external_force(i));
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -127,8 +128,7 @@ void ExplicitSolver::advance_velocity() {
     const double v_old = v_old_of[i], v_new = v_new_of[i];
     double reaction = 0;
     if (model_.constrained[i]) {  // the support force that holds the prescribed velocity
-      const double v_free = (c_minus * v_old + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus;
-      reaction = m * (v_new - v_free) / (dtbar > 0 ? dtbar : 1.0);
+      reaction = m * (v_new - free_velocity(i, fext)) / (dtbar > 0 ? dtbar : 1.0);
     }
     const double v_n = first ? v_old : 0.5 * (v_old + v_new);
     kinetic += 0.5 * m * v_n * v_n;

@@ -65,6 +65,10 @@ struct Model {
   std::size_t memory_bytes() const;  // everything held, including the input mesh copy
   std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"
   const MaterialBlock& block_of(std::size_t internal) const;
+  // Input-numbering index of an internal node (a search: for messages and reports, not loops).
+  std::size_t input_node(std::size_t internal) const;
+  // The physical groups of body b (tags within its stride), in file order.
+  std::vector<const PhysicalGroup*> body_groups(std::size_t body) const;
 };
 
 // Reads every body's mesh, places it, assigns materials and constraints, lumps mass and
