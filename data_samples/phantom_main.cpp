@@ -5,6 +5,7 @@
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
+#include "tactus/core/output.hpp"
 #include "tactus/data_samples/phantom.hpp"
 
 int main(int argc, char** argv) {
@@ -21,10 +22,12 @@ int main(int argc, char** argv) {
   app.add_option("--seed", p.seed, "noise seed")->capture_default_str();
   return cli::run(app, argc, argv, common, [&] {
     const auto t0 = std::chrono::steady_clock::now();
+    OutputFolder out(common.output, common.output_rules({}));
     const samples::Phantom ph = samples::make_hand_phantom(p);
-    samples::write_slice_stack(ph.ct, common.output);
-    write_h5(std::filesystem::path(common.output) / "truth.h5", "/labels", ph.truth, &ph.labels);
-    write_vti(std::filesystem::path(common.output) / "truth.vti", ph.truth, "labels");
+    samples::write_slice_stack(ph.ct, out.path());
+    write_h5(out.path() / "truth.h5", "/labels", ph.truth, &ph.labels);
+    write_vti(out.path() / "truth.vti", ph.truth, "labels");
+    out.commit();
     log::info() << "phantom: " << ph.ct.dims[0] << " x " << ph.ct.dims[1] << " x " << ph.ct.dims[2] << " voxels ("
                 << p.voxel_mm << " x " << p.voxel_mm << " x " << p.slice_mm << " mm), " << ph.labels.size() - 2
                 << " bones, written to " << common.output << " in "

@@ -4,6 +4,7 @@
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/output.hpp"
 
 int main(int argc, char** argv) {
   using namespace tactus;
@@ -35,6 +36,8 @@ int main(int argc, char** argv) {
       }
       m.groups[0].name = "soft_tissue";
     }
-    write_msh(common.output, m);
+    OutputFiles out({common.output}, common.output_rules({}));
+    write_msh(out.staged(0), m);
+    out.commit();
   });
 }

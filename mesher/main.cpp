@@ -1,13 +1,15 @@
 // tactus-mesh: labels.h5 -> conforming multi-material tet mesh (CGAL Mesh_3), and object meshes
 // with gmsh (`box`, `stl`). Writes mesh.msh (gmsh 4.1), mesh.vtu and quality.json.
 #include <chrono>
+#include <memory>
+#include <type_traits>
 #include <fstream>
 #include <sstream>
 
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
-#include "tactus/core/staged_output.hpp"
+#include "tactus/core/output.hpp"
 #include "tactus/core/stable_step.hpp"
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/objects.hpp"
@@ -15,18 +17,26 @@
 
 namespace {
 
-// Writes <out>.msh, <out>.vtu and <out>_quality.json (or quality.json in a folder output).
-void write_outputs(const tactus::TetMesh& mesh, const std::filesystem::path& out, const std::map<int, double>& speeds) {
-  namespace fs = std::filesystem;
-  const fs::path msh = out.extension() == ".msh" ? out : out / "mesh.msh";
-  const fs::path base = msh.parent_path() / msh.stem();
-  tactus::write_msh(msh, mesh);
-  tactus::write_vtu(fs::path(base.string() + ".vtu"), mesh);
+// The output files of a mesh: <out>/mesh.msh, mesh.vtu, quality.json for a folder output, or
+// <out>.msh, <out>.vtu, <out>_quality.json when -o names a .msh file.
+std::vector<std::filesystem::path> output_files(const std::filesystem::path& out) {
+  if (out.extension() != ".msh") return {out / "mesh.msh", out / "mesh.vtu", out / "quality.json"};
+  const std::filesystem::path base = out.parent_path() / out.stem();
+  return {out, base.string() + ".vtu", base.string() + "_quality.json"};
+}
+
+// Writes the mesh, its .vtu and the quality report into the staged output and commits it.
+template <class Output>
+void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, const std::map<int, double>& speeds) {
+  const auto path = [&](std::size_t i) {
+    if constexpr (std::is_same_v<Output, tactus::OutputFiles>) return out.staged(first + i);
+    else return out.path() / std::vector<std::string>{"mesh.msh", "mesh.vtu", "quality.json"}[i];
+  };
+  tactus::write_msh(path(0), mesh);
+  tactus::write_vtu(path(1), mesh);
   const auto report = tactus::mesher::quality_report(mesh, speeds);
-  const fs::path q = out.extension() == ".msh" ? fs::path(base.string() + "_quality.json") : out / "quality.json";
-  tactus::StagedOutput staged(q);
-  std::ofstream(staged.path()) << report.dump(2) << '\n';
-  staged.commit();
+  std::ofstream(path(2)) << report.dump(2) << '\n';
+  out.commit();
   const auto& all = report["all"];
   std::ostringstream step;
   if (report.contains("critical_time_step"))
@@ -35,9 +45,26 @@ void write_outputs(const tactus::TetMesh& mesh, const std::filesystem::path& out
          << ", L_e min/median " << all["min_over_median_length"].get<double>() << ")";
   tactus::log::info() << "mesh: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets; min dihedral "
                       << all["min_dihedral_deg"].get<double>() << " deg, "
-                      << 100 * all["fraction_min_dihedral_below_10deg"].get<double>() << " % of tets below 10 deg" << step.str()
-                      << "; wrote " << msh.string();
+                      << 100 * all["fraction_min_dihedral_below_10deg"].get<double>() << " % of tets below 10 deg" << step.str();
 }
+
+// A folder output, or the three files next to a .msh path.
+struct MeshOutput {
+  std::unique_ptr<tactus::OutputFolder> folder;
+  std::unique_ptr<tactus::OutputFiles> files;
+  MeshOutput(const std::filesystem::path& out, const tactus::OutputRules& rules) {
+    if (out.extension() == ".msh")
+      files = std::make_unique<tactus::OutputFiles>(output_files(out), rules);
+    else
+      folder = std::make_unique<tactus::OutputFolder>(out, rules);
+  }
+  void write(const tactus::TetMesh& mesh, const std::map<int, double>& speeds) {
+    if (files)
+      write_outputs(mesh, *files, 0, speeds);
+    else
+      write_outputs(mesh, *folder, 0, speeds);
+  }
+};
 
 }  // namespace
 
@@ -91,14 +118,17 @@ int main(int argc, char** argv) {
   return cli::run(app, argc, argv, common, [&] {
     const std::filesystem::path out = common.output;
     if (box->parsed()) {
-      write_outputs(mesher::mesh_box(size, origin, h), out, {{1, block_speed}});
+      MeshOutput output(out, common.output_rules({}));
+      output.write(mesher::mesh_box(size, origin, h), {{1, block_speed}});
       return;
     }
     if (stl->parsed()) {
-      write_outputs(mesher::mesh_stl_object(stl_file, h, stl_scale), out, {{1, block_speed}});
+      MeshOutput output(out, common.output_rules({stl_file}));
+      output.write(mesher::mesh_stl_object(stl_file, h, stl_scale), {{1, block_speed}});
       return;
     }
     if (labels_file.empty()) throw CLI::RequiredError("labels");
+    MeshOutput output(out, common.output_rules({labels_file}));
     p.restore_volumes = !keep_surfaces;
     LabelTable table;
     const auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
@@ -108,6 +138,6 @@ int main(int argc, char** argv) {
     std::map<int, double> speeds;
     for (const auto& g : mesh.groups)
       if (g.dim == 3) speeds[g.tag] = g.tag == 1 ? soft_speed : bone_speed;
-    write_outputs(mesh, out, speeds);
+    output.write(mesh, speeds);
   });
 }

@@ -14,8 +14,9 @@
 
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
-#include "tactus/core/staged_output.hpp"
+#include "tactus/core/output.hpp"
 #include "tactus/postproc/render.hpp"
 #include "tactus/postproc/results.hpp"
 #include "tactus/postproc/summary.hpp"
@@ -49,6 +50,7 @@ class VirtualDisplay {
     pid_ = fork();
     if (pid_ == 0) {
       prctl(PR_SET_PDEATHSIG, SIGTERM);  // no server left behind if tactus-post dies
+      tactus::unblock_stop_signals();     // (tactus-post blocks them for its interrupt watcher)
       close(fds[0]);
       const std::string fd = std::to_string(fds[1]), display = ":" + std::to_string(number);
       const int null = open("/dev/null", O_WRONLY);
@@ -93,13 +95,12 @@ int main(int argc, char** argv) {
   app.add_option("--times", times, "times (s) of the von Mises pictures, nearest output state (default: all)");
   app.add_flag("--no-pictures", no_pictures, "numbers only (no rendering, no display needed)");
   return cli::run(app, argc, argv, common, [&] {
-    const postproc::Results results = postproc::read_results(results_dir);
-    postproc::Summary summary = postproc::summarize(results);
     const std::filesystem::path out = common.output.empty()
                                           ? std::filesystem::path(results_dir).parent_path() / "report"
                                           : std::filesystem::path(common.output);
-    StagedOutput staged(out);
-    std::filesystem::create_directories(staged.path());
+    OutputFolder staged(out, common.output_rules({results_dir}));
+    const postproc::Results results = postproc::read_results(results_dir);
+    postproc::Summary summary = postproc::summarize(results);
     if (!no_pictures) {
       std::unique_ptr<VirtualDisplay> display;
       if (!std::getenv("DISPLAY") || !*std::getenv("DISPLAY")) display = std::make_unique<VirtualDisplay>();

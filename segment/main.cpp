@@ -2,6 +2,7 @@
 // surfaces/*.stl|ply (skin and bones) and segment.json. Thin driver over tactus::segment.
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/output.hpp"
 #include "tactus/segment/run.hpp"
 
 int main(int argc, char** argv) {
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
     if (*body_opt) o.segment.body_threshold_hu = body;
     if (*bone_opt) o.segment.bone_threshold_hu = bone;
     o.write_surfaces = !no_surfaces;
-    segment::run_segment_stage(stack, common.output, o);
+    OutputFolder out(common.output, common.output_rules({stack}));
+    segment::run_segment_stage(stack, out, o);
   });
 }

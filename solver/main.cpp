@@ -1,9 +1,12 @@
 // tactus-solve: explicit dynamic simulation of a scenario.toml. Thin driver over tactus::solver.
+#include <cmath>
 #include <fstream>
 #include <iostream>
 
+#include "tactus/core/error.hpp"
+#include "tactus/core/output.hpp"
+
 #include "tactus/core/cli.hpp"
-#include "tactus/core/staged_output.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
 
@@ -19,8 +22,8 @@ int main(int argc, char** argv) {
   app.add_option("--meshes", mesh_dir, "folder that relative mesh and fibre paths of the scenario start from "
                                        "(default: the scenario's folder)")->check(CLI::ExistingDirectory);
   double end_time = 0;
-  app.add_option("--end-time", end_time, "stop at this time (s) instead of the scenario's run.end_time; later output "
-                                         "times are dropped")->check(CLI::PositiveNumber);
+  auto* end_time_opt = app.add_option("--end-time", end_time, "stop at this time (s) instead of the scenario's run.end_time; later "
+                                                              "output times are dropped");
   app.require_subcommand(0, 1);
 
   auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
@@ -45,21 +48,24 @@ int main(int argc, char** argv) {
       if (mt_output.empty()) {
         std::cout << csv;
       } else {
-        StagedOutput out(mt_output);
-        std::ofstream(out.path()) << csv;
+        OutputFiles out({mt_output}, common.output_rules({mt_scenario}));
+        std::ofstream(out.staged(0)) << csv;
         out.commit();
       }
       return;
     }
     if (scenario_file.empty()) throw CLI::RequiredError("scenario");
     solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
-    if (end_time > 0) {
+    if (*end_time_opt) {
+      if (!(end_time > 0) || !std::isfinite(end_time))
+        throw InputError("command line", "--end-time", "a time > 0 in s", end_time_opt->as<std::string>());
       sc.run.end_time = end_time;
       std::erase_if(sc.run.output_times, [&](double t) { return t > end_time * (1 + 1e-12); });
       if (sc.run.output_times.empty() && sc.run.output_interval <= 0) sc.run.output_times = {end_time};
     }
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
-    solver::run_simulation(sc, out);
+    OutputFolder output(out, common.output_rules(solver::scenario_inputs(sc)));
+    solver::run_simulation(sc, output);
   });
 }

@@ -1,12 +1,18 @@
 #include "tactus/core/cli.hpp"
 
 #include <iostream>
+#include <new>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/version.hpp"
 
 namespace tactus::cli {
+
+OutputRules CommonOptions::output_rules(std::vector<std::filesystem::path> inputs) const {
+  return {program, std::move(inputs), force};
+}
 
 void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help,
                         const std::string& required_output) {
@@ -14,11 +20,18 @@ void add_common_options(CLI::App& app, CommonOptions& options, const std::string
   app.set_version_flag("--version", std::string("tactus ") + kVersion);
   app.add_flag("-v,--verbose", options.verbose, "More detail in the log (repeat for debug)");
   app.add_flag("-q,--quiet", options.quiet, "Only errors");
-  if (!output_help.empty()) app.add_option("-o,--output", options.output, output_help);
+  if (!output_help.empty()) {
+    app.add_option("-o,--output", options.output, output_help);
+    app.add_flag("--force", options.force,
+                 "also replace a previous output of another tactus tool (a folder or file tactus did not write is "
+                 "never replaced)");
+  }
 }
 
 int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std::function<void()>& body) {
   const std::string program = app.get_name();
+  options.program = program;
+  install_interrupt_handling(program);
   // Usage errors exit with 2 (CLI11's own codes are >100); --help and --version with 0.
   auto usage = [&](const CLI::ParseError& e) { return app.exit(e) == 0 ? 0 : 2; };
   try {
@@ -37,11 +50,21 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
     return 0;
   } catch (const CLI::ParseError& e) {
     return usage(e);
+  } catch (const Interrupted& e) {
+    mark_interrupt_handled();
+    std::cerr << program << ": " << e.what() << '\n';
+    return e.exit_code();
   } catch (const NumericalError& e) {
     std::cerr << program << ": numerical failure: " << e.what() << '\n';
     return 3;
   } catch (const Error& e) {
     std::cerr << program << ": error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::cerr << program << ": error: " << e.path1().string() << ": " << e.code().message() << '\n';
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << program << ": error: out of memory (the input asks for more than this machine has)\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << program << ": internal error: " << e.what() << '\n';

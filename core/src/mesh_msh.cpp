@@ -1,4 +1,5 @@
-// gmsh MSH 4.1 read/write through the gmsh API (libgmsh 4.8).
+// gmsh MSH 4.1 writing through the gmsh API (libgmsh 4.8), and the gmsh model -> TetMesh
+// conversion for meshes gmsh generates in memory. Reading .msh files is msh_reader.cpp's.
 #include <gmsh.h>
 
 #include <map>
@@ -86,24 +87,11 @@ void write_msh(const fs::path& file, const TetMesh& mesh, bool binary) {
     try {
       gmsh::write(staged_msh.string());
     } catch (...) {
-      throw InputError(file.string(), "", "a writable .msh file", GmshSession::last_error());
+      throw WriteError(file.string(), "gmsh failed writing it: " + GmshSession::last_error());
     }
     fs::rename(staged_msh, out.path());
   }
   out.commit();
-}
-
-TetMesh read_msh(const fs::path& file) {
-  const std::string fname = file.string();
-  if (!fs::exists(file)) throw InputError(fname, "", "an existing .msh file", "no such file");
-  if (fs::is_directory(file)) throw InputError(fname, "", "a .msh file", "a directory");
-  GmshSession session;
-  try {
-    gmsh::open(fname);
-  } catch (...) {
-    throw InputError(fname, "", "a gmsh MSH file", GmshSession::last_error());
-  }
-  return tet_mesh_from_gmsh_model(fname);
 }
 
 TetMesh tet_mesh_from_gmsh_model(const std::string& fname) {

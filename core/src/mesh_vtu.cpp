@@ -4,13 +4,17 @@
 #include <vtkDoubleArray.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
+#include <vtkObject.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
+#include <cmath>
+
 #include "tactus/core/error.hpp"
+#include "tactus/core/isolated.hpp"
 #include "tactus/core/mesh.hpp"
 #include "tactus/core/staged_output.hpp"
 
@@ -77,7 +81,7 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   writer->SetInputData(grid);
   writer->SetDataModeToAppended();
   writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1) throw InputError(fname, "", "a writable .vtu file");
+  if (writer->Write() != 1) throw WriteError(fname, "VTK failed writing the grid");
   out.commit();
 }
 
@@ -92,9 +96,12 @@ const MeshField* VtuContents::cell_field(std::string_view name) const {
   return nullptr;
 }
 
-VtuContents read_vtu(const fs::path& file) {
+namespace {
+
+// The direct read with VTK, run in an isolated child process (see read_vtu).
+VtuContents read_vtu_direct(const fs::path& file) {
   const std::string fname = file.string();
-  if (!fs::exists(file)) throw InputError(fname, "", "an existing .vtu file", "no such file");
+  vtkObject::GlobalWarningDisplayOff();  // (in the child: our message replaces VTK's)
   vtkNew<vtkXMLUnstructuredGridReader> reader;
   reader->SetFileName(fname.c_str());
   reader->Update();
@@ -102,26 +109,84 @@ VtuContents read_vtu(const fs::path& file) {
   if (reader->GetErrorCode() != 0 || !grid || grid->GetNumberOfPoints() == 0)
     throw InputError(fname, "", "a VTK XML unstructured grid (.vtu)", "unreadable or empty");
   VtuContents out;
-  out.mesh.nodes.resize(static_cast<std::size_t>(grid->GetNumberOfPoints()));
-  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) grid->GetPoint(i, out.mesh.nodes[static_cast<std::size_t>(i)].data());
+  const vtkIdType np = grid->GetNumberOfPoints();
+  out.mesh.nodes.resize(static_cast<std::size_t>(np));
+  for (vtkIdType i = 0; i < np; ++i) {
+    auto& x = out.mesh.nodes[static_cast<std::size_t>(i)];
+    grid->GetPoint(i, x.data());
+    for (double c : x)
+      if (!std::isfinite(c)) throw InputError(fname, "point " + std::to_string(i), "finite coordinates", "a NaN or infinity");
+  }
   vtkDataArray* group = grid->GetCellData()->GetArray("group");
+  if (group && (group->GetNumberOfComponents() != 1 || group->GetNumberOfTuples() != grid->GetNumberOfCells()))
+    throw InputError(fname, "group", "one value per cell");
   for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
-    if (grid->GetCellType(c) != VTK_TETRA)
-      throw InputError(fname, "cell " + std::to_string(c), "4-node tetrahedra only");
+    if (grid->GetCellType(c) != VTK_TETRA) throw InputError(fname, "cell " + std::to_string(c), "4-node tetrahedra only");
     vtkIdType npts;
     const vtkIdType* ids;
     grid->GetCellPoints(c, npts, ids);
-    out.mesh.tets.push_back({static_cast<int>(ids[0]), static_cast<int>(ids[1]), static_cast<int>(ids[2]),
-                             static_cast<int>(ids[3])});
-    out.mesh.tet_group.push_back(group ? static_cast<int>(group->GetComponent(c, 0)) : 1);
+    if (npts != 4) throw InputError(fname, "cell " + std::to_string(c), "4 points", std::to_string(npts));
+    for (int k = 0; k < 4; ++k)
+      if (ids[k] < 0 || ids[k] >= np)
+        throw InputError(fname, "cell " + std::to_string(c), "point ids below " + std::to_string(np), std::to_string(ids[k]));
+    out.mesh.tets.push_back({static_cast<int>(ids[0]), static_cast<int>(ids[1]), static_cast<int>(ids[2]), static_cast<int>(ids[3])});
+    const double g = group ? group->GetComponent(c, 0) : 1.0;
+    if (!(g >= 1 && g <= 2e9) || g != std::floor(g)) throw InputError(fname, "group of cell " + std::to_string(c), "a positive integer tag", std::to_string(g));
+    out.mesh.tet_group.push_back(static_cast<int>(g));
   }
   for (int tag : out.mesh.tet_group)
     if (!out.mesh.find_group(3, tag)) out.mesh.groups.push_back({3, tag, "group_" + std::to_string(tag)});
-  for (int i = 0; i < grid->GetPointData()->GetNumberOfArrays(); ++i)
-    out.point_fields.push_back(from_vtk(grid->GetPointData()->GetArray(i)));
-  for (int i = 0; i < grid->GetCellData()->GetNumberOfArrays(); ++i) {
-    vtkDataArray* a = grid->GetCellData()->GetArray(i);
-    if (a != group) out.cell_fields.push_back(from_vtk(a));
+  auto fields = [&](vtkFieldData* data, std::size_t tuples, std::vector<MeshField>& into, vtkDataArray* skip) {
+    for (int i = 0; i < data->GetNumberOfArrays(); ++i) {
+      vtkDataArray* a = data->GetArray(i);
+      if (!a || a == skip) continue;  // (string arrays are not data arrays)
+      if (static_cast<std::size_t>(a->GetNumberOfTuples()) != tuples || a->GetNumberOfComponents() < 1)
+        throw InputError(fname, a->GetName() ? a->GetName() : "unnamed array", std::to_string(tuples) + " tuples",
+                         std::to_string(a->GetNumberOfTuples()));
+      into.push_back(from_vtk(a));
+    }
+  };
+  fields(grid->GetPointData(), out.mesh.nodes.size(), out.point_fields, nullptr);
+  fields(grid->GetCellData(), out.mesh.tets.size(), out.cell_fields, group);
+  return out;
+}
+
+void put_fields(ByteWriter& w, const std::vector<MeshField>& fields) {
+  w.put<std::uint64_t>(fields.size());
+  for (const auto& f : fields) w.put_string(f.name), w.put(f.components), w.put_vector(f.values);
+}
+
+}  // namespace
+
+VtuContents read_vtu(const fs::path& file) {
+  const std::string fname = file.string();
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an existing .vtu file", "no such file");
+  // VTK's XML reader is not hardened against hostile bytes: it reads in an isolated child process.
+  const std::string bytes = run_isolated(fname, "VTK unstructured grid (.vtu)", [&](ByteWriter& w) {
+    const VtuContents v = read_vtu_direct(file);
+    w.put_vector(v.mesh.nodes);
+    w.put_vector(v.mesh.tets);
+    w.put_vector(v.mesh.tet_group);
+    put_fields(w, v.point_fields);
+    put_fields(w, v.cell_fields);
+  });
+  ByteReader r(bytes);
+  VtuContents out;
+  out.mesh.nodes = r.get_vector<Vec3>();
+  out.mesh.tets = r.get_vector<std::array<int, 4>>();
+  out.mesh.tet_group = r.get_vector<int>();
+  for (int tag : out.mesh.tet_group)
+    if (!out.mesh.find_group(3, tag)) out.mesh.groups.push_back({3, tag, "group_" + std::to_string(tag)});
+  for (auto* fields : {&out.point_fields, &out.cell_fields}) {
+    const auto n = r.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+      MeshField f;
+      f.name = r.get_string();
+      f.components = r.get<int>();
+      f.values = r.get_vector<double>();
+      fields->push_back(std::move(f));
+    }
   }
   return out;
 }

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <optional>
 
+#include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
 
 namespace tactus {
@@ -46,6 +47,7 @@ double Progress::elapsed_seconds() const {
 }
 
 void Progress::update(std::size_t done, const std::string& note) {
+  check_interrupt();  // long loops report progress: the natural place to stop on Ctrl-C
   if (!tty_) return;
   const auto now = std::chrono::steady_clock::now();
   if (drawn_ && now - last_draw_ < std::chrono::milliseconds(100)) return;

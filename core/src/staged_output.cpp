@@ -12,8 +12,9 @@ void ensure_parent_directory(const fs::path& path) {
   const fs::path parent = path.parent_path();
   if (parent.empty()) return;
   std::error_code ec;
+  if (fs::is_directory(parent, ec)) return;
   fs::create_directories(parent, ec);
-  if (ec) throw InputError(parent.string(), "", "a directory that can be created", ec.message());
+  if (ec) throw WriteError(parent.string(), "cannot create the folder (" + ec.message() + ")");
 }
 
 StagedOutput::StagedOutput(fs::path final_path) : final_(std::move(final_path)) {
@@ -21,22 +22,21 @@ StagedOutput::StagedOutput(fs::path final_path) : final_(std::move(final_path)) 
   staging_ = final_;
   staging_ += ".partial-" + std::to_string(getpid());
   std::error_code ec;
-  fs::remove_all(staging_, ec);
+  fs::remove(staging_, ec);
 }
 
 StagedOutput::~StagedOutput() {
   if (committed_) return;
   std::error_code ec;
-  fs::remove_all(staging_, ec);
+  fs::remove(staging_, ec);
 }
 
 void StagedOutput::commit() {
   std::error_code ec;
-  if (!fs::exists(staging_, ec))
-    throw InputError(staging_.string(), "", "a staged output to commit", "nothing written");
-  if (fs::is_directory(final_, ec)) fs::remove_all(final_, ec);
+  if (!fs::is_regular_file(staging_, ec)) throw WriteError(final_.string(), "nothing was written (the file system refused it?)");
+  if (fs::is_directory(final_, ec)) throw WriteError(final_.string(), "a folder is there; a file cannot replace it");
   fs::rename(staging_, final_, ec);
-  if (ec) throw InputError(final_.string(), "", "a writable output location", ec.message());
+  if (ec) throw WriteError(final_.string(), ec.message());
   committed_ = true;
 }
 

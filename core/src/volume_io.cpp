@@ -3,14 +3,23 @@
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
 #include <vtkNew.h>
+#include <vtkObject.h>
 #include <vtkPointData.h>
 #include <vtkSmartPointer.h>
 #include <vtkXMLImageDataReader.h>
 #include <vtkXMLImageDataWriter.h>
 
+#include <unistd.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/isolated.hpp"
 #include "tactus/core/staged_output.hpp"
 #include "tactus/core/volume.hpp"
 #include "vtk_array_type.hpp"
@@ -18,6 +27,52 @@
 namespace fs = std::filesystem;
 
 namespace tactus {
+
+void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing,
+                              const std::array<double, 3>& origin, std::size_t bytes_per_voxel, const std::string& file,
+                              const std::string& field) {
+  const char* axis = "xyz";
+  double voxels = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (dims[a] < 1 || dims[a] > kMaxVolumeDim)
+      throw InputError(file, field, "1 to " + std::to_string(kMaxVolumeDim) + " voxels along each axis",
+                       std::to_string(dims[a]) + " along " + axis[a]);
+    voxels *= dims[a];
+    std::ostringstream v;
+    v << spacing[a] << " m along " << axis[a];
+    if (!std::isfinite(spacing[a]) || spacing[a] < kMinSpacing || spacing[a] > kMaxSpacing)
+      throw InputError(file, field + " spacing", "a voxel size from 0.1 um to 1 m (stored in metres)", v.str());
+    if (!std::isfinite(origin[a]) || std::abs(origin[a]) > kMaxOrigin) {
+      std::ostringstream o;
+      o << origin[a] << " m along " << axis[a];
+      throw InputError(file, field + " origin", "a finite origin within 1 km (stored in metres)", o.str());
+    }
+  }
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  const double memory = pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 1e12;
+  if (voxels * static_cast<double>(bytes_per_voxel) > 0.5 * memory) {
+    std::ostringstream f;
+    f << dims[0] << " x " << dims[1] << " x " << dims[2] << " voxels (" << voxels * static_cast<double>(bytes_per_voxel) / 1e9
+      << " GB; this machine has " << memory / 1e9 << " GB)";
+    throw InputError(file, field, "a volume that fits in half of this machine's memory", f.str());
+  }
+}
+
+LabelTable parse_label_table(const std::string& text, const std::string& file, const std::string& field) {
+  const auto table = nlohmann::json::parse(text, nullptr, false);
+  if (table.is_discarded() || !table.is_object()) throw InputError(file, field, "a JSON object {\"id\": \"name\"}");
+  LabelTable out;
+  for (const auto& [key, value] : table.items()) {
+    int id = -1;
+    const auto [end, ec] = std::from_chars(key.data(), key.data() + key.size(), id);
+    if (ec != std::errc() || end != key.data() + key.size() || id < 0 || id > 65535)
+      throw InputError(file, field, "label ids from 0 to 65535", "\"" + key + "\"");
+    if (!value.is_string() || value.get<std::string>().empty() || value.get<std::string>().size() > 200)
+      throw InputError(file, field, "a name (a string of 1 to 200 characters) for label " + key, value.dump());
+    out[id] = value.get<std::string>();
+  }
+  return out;
+}
 
 namespace {
 
@@ -89,18 +144,73 @@ std::array<double, 3> read_double3_attribute(hid_t obj, const char* name, const 
   return v;
 }
 
-std::string read_string_attribute(hid_t obj, const char* name) {
+// A string attribute of any kind HDF5 stores (fixed-length with NUL-terminated, NUL-padded or
+// space-padded bytes, or variable-length, as h5py writes by default), read without conversion.
+// "" when absent; InputError when it is not a single string.
+std::string read_string_attribute(hid_t obj, const char* name, const std::string& file, const std::string& where) {
   if (H5Aexists(obj, name) <= 0) return {};
   H5Handle attr(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
   H5Handle ftype(H5Aget_type(attr.get()), H5Tclose);
-  if (H5Tget_class(ftype.get()) != H5T_STRING || H5Tis_variable_str(ftype.get()) > 0) return {};
+  H5Handle space(H5Aget_space(attr.get()), H5Sclose);
+  const std::string key = where + "@" + name;
+  if (H5Tget_class(ftype.get()) != H5T_STRING) throw InputError(file, key, "a string attribute", "another type");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) throw InputError(file, key, "a single string", "an array of strings");
+  if (H5Tis_variable_str(ftype.get()) > 0) {
+    H5Handle mtype(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(mtype.get(), H5T_VARIABLE);
+    H5Tset_cset(mtype.get(), H5Tget_cset(ftype.get()));
+    char* text = nullptr;
+    if (H5Aread(attr.get(), mtype.get(), &text) < 0) throw InputError(file, key, "a readable string");
+    std::string s = text ? text : "";
+    H5free_memory(text);
+    return s;
+  }
   const std::size_t n = H5Tget_size(ftype.get());
+  if (n == 0 || n > (std::size_t{1} << 24)) throw InputError(file, key, "a string of at most 16 MB", std::to_string(n) + " bytes");
   std::string s(n, '\0');
-  H5Handle mtype(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(mtype.get(), n);
-  H5Aread(attr.get(), mtype.get(), s.data());
-  while (!s.empty() && s.back() == '\0') s.pop_back();
+  H5Handle mtype(H5Tcopy(ftype.get()), H5Tclose);  // the file's own layout: no conversion, nothing cut
+  if (H5Aread(attr.get(), mtype.get(), s.data()) < 0) throw InputError(file, key, "a readable string");
+  if (H5Tget_strpad(ftype.get()) == H5T_STR_SPACEPAD) {
+    while (!s.empty() && s.back() == ' ') s.pop_back();
+  } else {
+    s.resize(std::strlen(s.c_str()));  // NUL-terminated or NUL-padded
+  }
   return s;
+}
+
+// The voxels of a 3-D dataset as T, slice by slice through a wide integer or a double, so a value
+// T cannot hold (a label -1 in an int8 file, 300 in an int64 one) is an error instead of being
+// clamped silently by HDF5's conversion.
+template <class T>
+void read_voxels(hid_t ds, hid_t ftype, const hsize_t shape[3], Volume<T>& v, const std::string& file, const std::string& dataset) {
+  const bool integer_file = H5Tget_class(ftype) == H5T_INTEGER;
+  const hsize_t slice = shape[1] * shape[2];
+  H5Handle fspace(H5Dget_space(ds), H5Sclose);
+  const hsize_t count[3] = {1, shape[1], shape[2]};
+  H5Handle mspace(H5Screate_simple(3, count, nullptr), H5Sclose);
+  std::vector<std::int64_t> ibuf(integer_file ? slice : 0);
+  std::vector<double> dbuf(integer_file ? 0 : slice);
+  const double lo = static_cast<double>(std::numeric_limits<T>::lowest()), hi = static_cast<double>(std::numeric_limits<T>::max());
+  for (hsize_t z = 0; z < shape[0]; ++z) {
+    const hsize_t offset[3] = {z, 0, 0};
+    H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, offset, nullptr, count, nullptr);
+    const herr_t ok = integer_file ? H5Dread(ds, H5T_NATIVE_INT64, mspace.get(), fspace.get(), H5P_DEFAULT, ibuf.data())
+                                   : H5Dread(ds, H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, dbuf.data());
+    if (ok < 0) throw InputError(file, dataset, "readable voxel data", "slice z = " + std::to_string(z) + " cannot be read (truncated or corrupt)");
+    T* out = v.data.data() + z * slice;
+    for (hsize_t i = 0; i < slice; ++i) {
+      const double value = integer_file ? static_cast<double>(ibuf[i]) : dbuf[i];
+      if (!(value >= lo && value <= hi)) {
+        std::ostringstream f;
+        f << value << " at voxel (x " << i % shape[2] << ", y " << i / shape[2] << ", z " << z << ")";
+        throw InputError(file, dataset, std::string("values a ") + (std::is_integral_v<T> ? "label" : "voxel") +
+                                            " of this volume can hold, in [" + std::to_string(static_cast<long long>(lo)) + ", " +
+                                            std::to_string(static_cast<long long>(hi)) + "]",
+                         f.str());
+      }
+      out[i] = static_cast<T>(value);
+    }
+  }
 }
 
 }  // namespace
@@ -114,7 +224,7 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
   StagedOutput out(file);
   {
     H5Handle f(H5Fcreate(out.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    if (!f.valid()) throw InputError(file.string(), "", "a writable HDF5 file");
+    if (!f.valid()) throw WriteError(file.string(), "HDF5 cannot create the file");
     const hsize_t shape[3] = {static_cast<hsize_t>(volume.dims[2]), static_cast<hsize_t>(volume.dims[1]),
                               static_cast<hsize_t>(volume.dims[0])};
     H5Handle space(H5Screate_simple(3, shape, nullptr), H5Sclose);
@@ -131,7 +241,7 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
     if (!ds.valid()) throw InputError(file.string(), dataset, "a dataset that can be created");
     if (volume.size() > 0 &&
         H5Dwrite(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, volume.data.data()) < 0)
-      throw InputError(file.string(), dataset, "a successful write");
+      throw WriteError(file.string(), "HDF5 failed writing " + dataset);
     write_double3_attribute(ds.get(), "spacing", volume.spacing);
     write_double3_attribute(ds.get(), "origin", volume.origin);
     write_string_attribute(ds.get(), "units", "m");
@@ -145,10 +255,12 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
   out.commit();
 }
 
+namespace {
+
+// The direct read, run in an isolated child process (see read_h5).
 template <class T>
-Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* labels) {
+Volume<T> read_h5_direct(const fs::path& file, const std::string& dataset, LabelTable* labels) {
   const std::string fname = file.string();
-  if (!fs::exists(file)) throw InputError(fname, "", "an existing HDF5 file", "no such file");
   QuietHdf5 quiet;
   if (H5Fis_hdf5(file.c_str()) <= 0) throw InputError(fname, "", "an HDF5 file", "not HDF5 or corrupt");
   H5Handle f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
@@ -170,36 +282,68 @@ Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* 
     throw InputError(fname, dataset, "integer voxels", "floating-point voxels");
 
   Volume<T> v;
+  for (int a = 0; a < 3; ++a)
+    if (shape[a] == 0 || shape[a] > static_cast<hsize_t>(kMaxVolumeDim))
+      throw InputError(fname, dataset, "1 to " + std::to_string(kMaxVolumeDim) + " voxels along each axis",
+                       std::to_string(shape[2]) + " x " + std::to_string(shape[1]) + " x " + std::to_string(shape[0]));
   v.dims = {static_cast<int>(shape[2]), static_cast<int>(shape[1]), static_cast<int>(shape[0])};
   v.spacing = read_double3_attribute(ds.get(), "spacing", fname, dataset);
   v.origin = read_double3_attribute(ds.get(), "origin", fname, dataset);
-  for (int a = 0; a < 3; ++a)
-    if (!(v.spacing[a] > 0))
-      throw InputError(fname, dataset + "@spacing", "positive spacing in x, y, z",
-                       std::to_string(v.spacing[a]) + " along axis " + std::to_string(a));
-  const std::string units = read_string_attribute(ds.get(), "units");
+  validate_volume_geometry(v.dims, v.spacing, v.origin, sizeof(T), fname, dataset);
+  // The declared shape must be backed by the file: stored bytes cannot be more than ~1000x
+  // smaller than the raw data (deflate's limit), so a 6 kB file cannot declare 10^15 voxels.
+  const double raw = static_cast<double>(shape[0]) * static_cast<double>(shape[1]) * static_cast<double>(shape[2]) *
+                     static_cast<double>(H5Tget_size(ftype.get()));
+  const double stored = static_cast<double>(H5Dget_storage_size(ds.get()));
+  std::error_code ec;
+  const double file_size = static_cast<double>(fs::file_size(file, ec));
+  if (raw > 2000.0 * std::max(stored, 1.0) + 1e6 || stored > file_size + 1e6)
+    throw InputError(fname, dataset, "voxel data the file holds",
+                     "a declared " + std::to_string(shape[2]) + " x " + std::to_string(shape[1]) + " x " + std::to_string(shape[0]) +
+                         " volume with " + std::to_string(static_cast<long long>(stored)) + " bytes stored in a " +
+                         std::to_string(static_cast<long long>(file_size)) + "-byte file (truncated or corrupt)");
+  const std::string units = read_string_attribute(ds.get(), "units", fname, dataset);
   if (!units.empty() && units != "m")
     throw InputError(fname, dataset + "@units", "\"m\" (tactus stores SI lengths)", "\"" + units + "\"");
   v.data.resize(static_cast<std::size_t>(shape[0] * shape[1] * shape[2]));
-  if (!v.data.empty() &&
-      H5Dread(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data.data()) < 0)
-    throw InputError(fname, dataset, "readable voxel data", "read failed (truncated or out of range)");
+  read_voxels(ds.get(), ftype.get(), shape, v, fname, dataset);
   if (labels) {
     labels->clear();
-    const std::string text = read_string_attribute(ds.get(), "label_table");
-    if (!text.empty()) {
-      const auto table = nlohmann::json::parse(text, nullptr, false);
-      if (table.is_discarded() || !table.is_object())
-        throw InputError(fname, dataset + "@label_table", "a JSON object {\"id\": \"name\"}");
-      for (const auto& [key, value] : table.items()) {
-        if (!value.is_string()) throw InputError(fname, dataset + "@label_table", "string names");
-        try {
-          (*labels)[std::stoi(key)] = value.template get<std::string>();
-        } catch (const std::exception&) {
-          throw InputError(fname, dataset + "@label_table", "integer label ids", "\"" + key + "\"");
-        }
-      }
-    }
+    const std::string text = read_string_attribute(ds.get(), "label_table", fname, dataset);
+    if (!text.empty()) *labels = parse_label_table(text, fname, dataset + "@label_table");
+  }
+  return v;
+}
+
+}  // namespace
+
+template <class T>
+Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* labels) {
+  const std::string fname = file.string();
+  std::error_code ec;
+  if (!fs::exists(file, ec)) throw InputError(fname, "", "an existing HDF5 file", "no such file");
+  if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an HDF5 file", "not a regular file");
+  // libhdf5 is not hardened against hostile bytes: it reads in an isolated child process.
+  const std::string bytes = run_isolated(fname, "HDF5 file", [&](ByteWriter& w) {
+    LabelTable table;
+    const Volume<T> v = read_h5_direct<T>(file, dataset, labels ? &table : nullptr);
+    w.put(v.dims), w.put(v.spacing), w.put(v.origin);
+    w.put_vector(v.data);
+    w.put<std::uint64_t>(table.size());
+    for (const auto& [id, name] : table) w.put(id), w.put_string(name);
+  });
+  ByteReader r(bytes);
+  Volume<T> v;
+  v.dims = r.get<std::array<int, 3>>();
+  v.spacing = r.get<std::array<double, 3>>();
+  v.origin = r.get<std::array<double, 3>>();
+  v.data = r.get_vector<T>();
+  const auto n = r.get<std::uint64_t>();
+  if (labels) labels->clear();
+  for (std::uint64_t i = 0; i < n; ++i) {
+    const int id = r.get<int>();
+    std::string name = r.get_string();
+    if (labels) (*labels)[id] = std::move(name);
   }
   return v;
 }
@@ -222,30 +366,50 @@ void write_vti(const fs::path& file, const Volume<T>& volume, const std::string&
   writer->SetInputData(image);
   writer->SetDataModeToAppended();
   writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1) throw InputError(file.string(), "", "a writable .vti file");
+  if (writer->Write() != 1) throw WriteError(file.string(), "VTK failed writing the image");
   out.commit();
 }
 
 template <class T>
 Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
-  if (!fs::exists(file)) throw InputError(file.string(), "", "an existing .vti file", "no such file");
-  vtkNew<vtkXMLImageDataReader> reader;
-  reader->SetFileName(file.c_str());
-  reader->Update();
-  vtkImageData* image = reader->GetOutput();
-  if (reader->GetErrorCode() != 0 || !image || image->GetNumberOfPoints() == 0)
-    throw InputError(file.string(), "", "a VTK XML image (.vti)", "unreadable or empty");
-  vtkDataArray* array = image->GetPointData()->GetArray(array_name.c_str());
-  if (!array) throw InputError(file.string(), array_name, "a point-data array named " + array_name);
+  const std::string fname = file.string();
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an existing .vti file", "no such file");
+  // VTK's XML reader is not hardened against hostile bytes: it reads in an isolated child process.
+  const std::string bytes = run_isolated(fname, "VTK image (.vti)", [&](ByteWriter& w) {
+    vtkObject::GlobalWarningDisplayOff();  // (in the child: our message replaces VTK's)
+    vtkNew<vtkXMLImageDataReader> reader;
+    reader->SetFileName(file.c_str());
+    reader->Update();
+    vtkImageData* image = reader->GetOutput();
+    if (reader->GetErrorCode() != 0 || !image || image->GetNumberOfPoints() == 0)
+      throw InputError(fname, "", "a VTK XML image (.vti)", "unreadable or empty");
+    vtkDataArray* array = image->GetPointData()->GetArray(array_name.c_str());
+    if (!array) throw InputError(fname, array_name, "a point-data array named " + array_name);
+    std::array<int, 3> d{};
+    std::array<double, 3> spacing{}, origin{};
+    image->GetDimensions(d.data());
+    image->GetSpacing(spacing.data());
+    image->GetOrigin(origin.data());
+    validate_volume_geometry(d, spacing, origin, sizeof(T), fname, array_name);
+    if (array->GetNumberOfTuples() != image->GetNumberOfPoints() || array->GetNumberOfComponents() != 1)
+      throw InputError(fname, array_name, "one value per voxel");
+    std::vector<T> data(static_cast<std::size_t>(array->GetNumberOfTuples()));
+    const double lo = static_cast<double>(std::numeric_limits<T>::lowest()), hi = static_cast<double>(std::numeric_limits<T>::max());
+    for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i) {
+      const double value = array->GetComponent(i, 0);
+      if (!(value >= lo && value <= hi)) throw InputError(fname, array_name, "values this volume type can hold", std::to_string(value));
+      data[static_cast<std::size_t>(i)] = static_cast<T>(value);
+    }
+    w.put(d), w.put(spacing), w.put(origin);
+    w.put_vector(data);
+  });
+  ByteReader r(bytes);
   Volume<T> v;
-  int d[3];
-  image->GetDimensions(d);
-  v.dims = {d[0], d[1], d[2]};
-  image->GetSpacing(v.spacing.data());
-  image->GetOrigin(v.origin.data());
-  v.data.resize(static_cast<std::size_t>(array->GetNumberOfTuples()));
-  for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i)
-    v.data[static_cast<std::size_t>(i)] = static_cast<T>(array->GetComponent(i, 0));
+  v.dims = r.get<std::array<int, 3>>();
+  v.spacing = r.get<std::array<double, 3>>();
+  v.origin = r.get<std::array<double, 3>>();
+  v.data = r.get_vector<T>();
   return v;
 }
 

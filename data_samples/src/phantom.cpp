@@ -232,8 +232,9 @@ Phantom make_hand_phantom(const PhantomParams& p) {
 
 void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::path& folder) {
   constexpr int kIntercept = -1024;  // stored = HU - intercept, in 16-bit
-  StagedOutput staged(folder);
-  std::filesystem::create_directories(staged.path());
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) throw WriteError(folder.string(), "cannot create the folder (" + ec.message() + ")");
   const int nx = ct.dims[0], ny = ct.dims[1], nz = ct.dims[2];
   const int width = std::max(4, static_cast<int>(std::to_string(nz - 1).size()));
   bool ok = true;
@@ -244,9 +245,9 @@ void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::pa
       for (int i = 0; i < nx; ++i) slice.at<std::uint16_t>(j, i) = static_cast<std::uint16_t>(ct.at(i, j, k) - kIntercept);
     std::ostringstream name;
     name << "slice_" << std::setw(width) << std::setfill('0') << k << ".png";
-    ok = cv::imwrite((staged.path() / name.str()).string(), slice, {cv::IMWRITE_PNG_COMPRESSION, 1}) && ok;
+    ok = cv::imwrite((folder / name.str()).string(), slice, {cv::IMWRITE_PNG_COMPRESSION, 1}) && ok;
   }
-  if (!ok) throw InputError(folder.string(), "", "a writable folder for the slices");
+  if (!ok) throw WriteError(folder.string(), "a slice could not be written");
   nlohmann::json j;
   j["spacing_mm"] = {ct.spacing[0] * 1e3, ct.spacing[1] * 1e3, ct.spacing[2] * 1e3};
   j["origin_mm"] = {ct.origin[0] * 1e3, ct.origin[1] * 1e3, ct.origin[2] * 1e3};
@@ -255,8 +256,7 @@ void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::pa
   j["slices"] = nz;
   j["layout"] = "slice_k.png: row = y index, column = x index, k = z index; HU = slope * stored + intercept";
   j["source"] = "tactus-phantom (synthetic hand CT)";
-  std::ofstream(staged.path() / "stack.json") << j.dump(2) << '\n';
-  staged.commit();
+  std::ofstream(folder / "stack.json") << j.dump(2) << '\n';
 }
 
 }  // namespace tactus::samples

@@ -47,6 +47,51 @@ History read_history_csv(const fs::path& file) {
   return h;
 }
 
+void validate_run_json(const nlohmann::json& j, const std::string& file) {
+  // Every key the report uses, with its type: a wrong type is named, never an internal error.
+  auto require = [&](const nlohmann::json& node, const std::string& path, const char* key, const char* what, auto is) {
+    if (!node.contains(key) || !is(node[key])) throw InputError(file, path + key, what, node.contains(key) ? node[key].dump().substr(0, 60) : "missing");
+  };
+  const auto number = [](const nlohmann::json& v) { return v.is_number(); };
+  const auto count = [](const nlohmann::json& v) { return v.is_number_unsigned() || (v.is_number_integer() && v.get<long long>() >= 0); };
+  const auto string = [](const nlohmann::json& v) { return v.is_string(); };
+  const auto names = [](const nlohmann::json& v) {
+    return v.is_array() && std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) { return x.is_string(); });
+  };
+  const auto object = [](const nlohmann::json& v) { return v.is_object(); };
+  require(j, "", "status", "a string", string);
+  require(j, "", "materials", "an array of material names", names);
+  require(j, "", "bodies", "an array of body names", names);
+  for (const char* k : {"steps", "nodes", "tets"}) require(j, "", k, "a count (integer >= 0)", count);
+  for (const char* k : {"end_time", "wall_time_s"}) require(j, "", k, "a number", number);
+  require(j, "", "time_step", "an object", object);
+  for (const char* k : {"min", "max"}) require(j["time_step"], "time_step.", k, "a number", number);
+  require(j, "", "energy", "an object", object);
+  for (const char* k : {"initial", "balance_error", "contact_work_normal", "contact_work_friction"})
+    require(j["energy"], "energy.", k, "a number", number);
+  if (j.contains("timing_s")) {
+    require(j, "", "timing_s", "an object", object);
+    for (const char* k : {"stress_passes", "contact"}) require(j["timing_s"], "timing_s.", k, "a number", number);
+  }
+  if (j.contains("message") && !j["message"].is_null() && !j["message"].is_string())
+    throw InputError(file, "message", "a string or null", j["message"].dump().substr(0, 60));
+  if (j.contains("contact")) {
+    const auto& c = j["contact"];
+    require(j, "", "contact", "an object", object);
+    require(c, "contact.", "steps_in_contact", "a count", count);
+    for (const char* k : {"peak_force", "peak_area", "peak_pressure"}) {
+      require(c, "contact.", k, "an object", object);
+      for (const char* v : {"value", "time"}) require(c[k], std::string("contact.") + k + ".", v, "a number", number);
+    }
+    const auto& p = c["peak_pressure"];
+    if (p.contains("position"))
+      require(p, "contact.peak_pressure.", "position", "[x, y, z]",
+              [](const nlohmann::json& v) { return v.is_array() && v.size() == 3 && std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) { return x.is_number(); }); });
+    if (p.contains("node") && !p["node"].is_null() && !p["node"].is_number_integer())
+      throw InputError(file, "contact.peak_pressure.node", "a node number or null", p["node"].dump().substr(0, 60));
+  }
+}
+
 Results read_results(const fs::path& folder) {
   Results r;
   r.folder = fs::absolute(folder);
@@ -71,6 +116,9 @@ Results read_results(const fs::path& folder) {
     r.frames.push_back(f);
   }
   if (s.find("<Collection") == std::string::npos) throw InputError(pvd.string(), "", "a VTK Collection file", "other content");
+  if (r.frames.empty())
+    throw InputError(pvd.string(), "DataSet", "at least one output state to report on",
+                     "none (the run wrote no state: see run.json)");
   std::stable_sort(r.frames.begin(), r.frames.end(), [](const Frame& a, const Frame& b) { return a.time < b.time; });
   r.history = read_history_csv(folder / "history.csv");
   std::ifstream rj(folder / "run.json");
@@ -78,12 +126,13 @@ Results read_results(const fs::path& folder) {
   std::stringstream rjs;
   rjs << rj.rdbuf();
   r.run_json = rjs.str();
-  try {
-    const auto j = nlohmann::json::parse(r.run_json);
-    if (j.contains("materials")) r.materials = j["materials"].get<std::vector<std::string>>();
-    if (j.contains("bodies")) r.bodies = j["bodies"].get<std::vector<std::string>>();
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError((folder / "run.json").string(), "", "valid JSON", e.what());
+  const std::string rj_file = (folder / "run.json").string();
+  const auto j = nlohmann::json::parse(r.run_json, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) throw InputError(rj_file, "", "a JSON object (run.json written by tactus-solve)", "malformed JSON");
+  validate_run_json(j, rj_file);
+  for (const char* key : {"materials", "bodies"}) {
+    auto& names = std::string(key) == "materials" ? r.materials : r.bodies;
+    for (const auto& n : j[key]) names.push_back(n.get<std::string>());
   }
   return r;
 }

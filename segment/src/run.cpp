@@ -4,7 +4,6 @@
 #include <fstream>
 
 #include "tactus/core/log.hpp"
-#include "tactus/core/staged_output.hpp"
 #include "tactus/core/version.hpp"
 #include "tactus/segment/stack.hpp"
 
@@ -13,6 +12,12 @@ namespace fs = std::filesystem;
 namespace tactus::segment {
 
 nlohmann::json run_segment_stage(const fs::path& stack_folder, const fs::path& out, const StageOptions& o) {
+  OutputFolder staged(out, {"tactus-segment", {stack_folder}, false});
+  return run_segment_stage(stack_folder, staged, o);
+}
+
+nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& staged, const StageOptions& o) {
+  const fs::path out = staged.path();
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); };
   const auto t0 = Clock::now();
@@ -22,7 +27,6 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, const fs::path& o
   const Segmentation s = segment_hand(stack.hu, o.segment);
   const double t_segment = seconds(t1);
 
-  fs::create_directories(out);
   write_h5(out / "labels.h5", "/labels", s.labels, &s.table);
   write_vti(out / "labels.vti", s.labels, "labels");
 
@@ -61,11 +65,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, const fs::path& o
                                {"closed", r.closed}, {"manifold", r.manifold}, {"self_intersecting", r.self_intersecting}});
   }
   j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
-  {
-    StagedOutput staged(out / "segment.json");
-    std::ofstream(staged.path()) << j.dump(2) << '\n';
-    staged.commit();
-  }
+  std::ofstream(out / "segment.json") << j.dump(2) << '\n';
+  staged.commit();
   log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU ("
               << s.body_threshold_source << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
               << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << out.string();

@@ -190,8 +190,10 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
 
 std::vector<SurfaceReport> extract_surfaces(const Volume<std::uint8_t>& labels, const LabelTable& table, const fs::path& folder,
                                             const SurfaceParams& p) {
-  StagedOutput staged(folder);
-  fs::create_directories(staged.path());
+  // `folder` lies inside the stage's staged output folder: written directly.
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) throw WriteError(folder.string(), "cannot create the folder (" + ec.message() + ")");
   std::vector<SurfaceReport> out;
   std::vector<int> bone_ids;
   for (const auto& [id, name] : table)
@@ -200,7 +202,7 @@ std::vector<SurfaceReport> extract_surfaces(const Volume<std::uint8_t>& labels, 
   {
     std::vector<char> select(256, 0);
     for (int v = 1; v < 256; ++v) select[static_cast<std::size_t>(v)] = 1;
-    out.push_back(make_surface(labels, select, "skin", staged.path(), p));
+    out.push_back(make_surface(labels, select, "skin", folder, p));
     for (const auto& [id, name] : table)
       if (id >= 1) out.back().labels.push_back(id);
   }
@@ -209,16 +211,11 @@ std::vector<SurfaceReport> extract_surfaces(const Volume<std::uint8_t>& labels, 
     select[static_cast<std::size_t>(id)] = 1;
     std::ostringstream name;
     name << "bone_" << std::setw(2) << std::setfill('0') << id;
-    out.push_back(make_surface(labels, select, name.str(), staged.path(), p));
+    out.push_back(make_surface(labels, select, name.str(), folder, p));
     out.back().labels = {id};
     progress.update(out.size());
   }
   progress.finish();
-  staged.commit();
-  for (auto& r : out) {  // paths after the rename
-    r.stl = folder / r.stl.filename();
-    r.ply = folder / r.ply.filename();
-  }
   return out;
 }
 

@@ -101,7 +101,22 @@ void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::st
 
 }  // namespace
 
+std::vector<fs::path> scenario_inputs(const Scenario& sc) {
+  std::vector<fs::path> in{sc.file};
+  for (const auto& b : sc.bodies) {
+    in.push_back(b.mesh);
+    if (!b.fibres.empty()) in.push_back(b.fibres);
+  }
+  return in;
+}
+
 RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
+  OutputFolder out(output_dir, {"tactus-solve", scenario_inputs(sc), false});
+  return run_simulation(sc, out);
+}
+
+RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
+  const fs::path output_dir = staged.final_path();
   const auto wall_start = std::chrono::steady_clock::now();
   const Model model = build_model(sc);
   log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size()
@@ -110,7 +125,6 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
   log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; "
               << solver.describe_step_limit() << "), " << solver.threads() << " threads";
 
-  StagedOutput staged(output_dir);
   fs::create_directories(staged.path() / "results");
   std::vector<std::pair<double, std::string>> pvd;
   std::ofstream history(staged.path() / "history.csv");

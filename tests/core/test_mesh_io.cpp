@@ -165,3 +165,140 @@ TEST(MeshErrors, ValidateNamesBadNodeIndex) {
   m.tets[5][2] = static_cast<int>(m.nodes.size()) + 3;
   expect_input_error([&] { m.validate("in-memory"); }, {"tet 6", "node indices"});
 }
+
+// ---------------------------------------------------------------------------------------------
+// tactus's own MSH reader against libgmsh's (an independent implementation), on the four
+// encodings: 4.1 binary and ASCII (tactus writes these), 2.2 ASCII and binary (older tools).
+#include <gmsh.h>
+
+#include "tactus/core/gmsh_session.hpp"
+
+namespace {
+
+TetMesh read_with_gmsh(const std::filesystem::path& file) {
+  GmshSession session;
+  gmsh::open(file.string());
+  return tet_mesh_from_gmsh_model(file.string());
+}
+
+void resave_with_gmsh(const std::filesystem::path& in, const std::filesystem::path& out, double version, bool binary) {
+  GmshSession session;
+  gmsh::open(in.string());
+  gmsh::option::setNumber("Mesh.MshFileVersion", version);
+  gmsh::option::setNumber("Mesh.Binary", binary ? 1 : 0);
+  gmsh::option::setNumber("Mesh.SaveAll", 0);
+  gmsh::write(out.string());
+}
+
+std::string file_text(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void write_text(const std::filesystem::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
+
+}  // namespace
+
+TEST(MeshMsh, OwnReaderAgreesWithGmshOnEveryEncoding) {
+  TempDir dir;
+  TetMesh m = two_material_box();
+  m.groups.push_back({2, 7, "top"});
+  for (std::size_t t = 0; t < 4; ++t) m.triangles.push_back({m.tets[t][0], m.tets[t][1], m.tets[t][2]}), m.triangle_group.push_back(7);
+  write_msh(dir / "b41.msh", m, true);
+  write_msh(dir / "a41.msh", m, false);
+  resave_with_gmsh(dir / "b41.msh", dir / "a22.msh", 2.2, false);
+  resave_with_gmsh(dir / "b41.msh", dir / "b22.msh", 2.2, true);
+  // Elements as coordinates, so node numbering (libgmsh renumbers 2.2 files) does not matter.
+  auto by_coordinates = [](const TetMesh& mesh) {
+    std::multiset<std::pair<int, std::vector<double>>> tets, tris;
+    for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+      std::vector<double> x;
+      for (int v : mesh.tets[e]) x.insert(x.end(), mesh.nodes[v].begin(), mesh.nodes[v].end());
+      tets.insert({mesh.tet_group[e], x});
+    }
+    for (std::size_t e = 0; e < mesh.triangles.size(); ++e) {
+      std::vector<double> x;
+      for (int v : mesh.triangles[e]) x.insert(x.end(), mesh.nodes[v].begin(), mesh.nodes[v].end());
+      tris.insert({mesh.triangle_group[e], x});
+    }
+    return std::pair{tets, tris};
+  };
+  for (const char* name : {"b41.msh", "a41.msh", "a22.msh", "b22.msh"}) {
+    SCOPED_TRACE(name);
+    const TetMesh ours = read_msh(dir / name), theirs = read_with_gmsh(dir / name);
+    EXPECT_TRUE(by_coordinates(ours) == by_coordinates(theirs));
+    ASSERT_EQ(ours.groups.size(), theirs.groups.size());
+    for (const auto& g : theirs.groups) EXPECT_NE(ours.find_group(g.dim, g.name), nullptr) << g.name;
+    if (std::string(name).find("41") != std::string::npos) EXPECT_EQ(ours.tets, theirs.tets);  // same numbering and order
+    std::printf("%s: %zu nodes, %zu tets, %zu triangles: identical to libgmsh's reading\n", name, ours.nodes.size(), ours.tets.size(),
+                ours.triangles.size());
+  }
+}
+
+// The corruptions that crashed libgmsh's reader (a bad-input probe): each is now one InputError
+// naming the file and the place.
+TEST(MeshErrors, CorruptMshIsRefusedWhereLibgmshCrashed) {
+  TempDir dir;
+  write_msh(dir / "b.msh", two_material_box(), true);
+  write_msh(dir / "a.msh", two_material_box(), false);
+  const std::string bin = file_text(dir / "b.msh"), ascii = file_text(dir / "a.msh");
+  auto expect_refused = [&](const std::string& bytes, std::initializer_list<std::string> fragments) {
+    write_text(dir / "c.msh", bytes);
+    expect_input_error([&] { read_msh(dir / "c.msh"); }, fragments);
+  };
+  // Bytes inserted into binary $Elements.
+  std::string s = bin;
+  s.insert(s.find("$Elements") + 40, "\x07\x07\x07\x07\x07");
+  expect_refused(s, {"c.msh", "$Elements"});
+  // A run deleted from $Nodes.
+  s = bin;
+  s.erase(s.find("$Nodes") + 100, 57);
+  expect_refused(s, {"c.msh"});
+  // An element block of 99999999999 elements (ASCII).
+  s = ascii;
+  {
+    const auto at = s.find("$Elements\n") + 10;
+    const auto line2 = s.find('\n', s.find('\n', at) + 1);  // the first block header line
+    const auto start = s.find('\n', at) + 1;
+    std::string header = s.substr(start, line2 - start);
+    header = header.substr(0, header.rfind(' ')) + " 99999999999";
+    s.replace(start, line2 - start, header);
+  }
+  expect_refused(s, {"c.msh", "$Elements"});
+  // A physical dimension of -2147483649.
+  s = ascii;
+  s.replace(s.find("$PhysicalNames\n") + 15 + 2, 1, "-2147483649");
+  expect_refused(s, {"c.msh", "$PhysicalNames"});
+  // A duplicated count line.
+  s = ascii;
+  {
+    const auto at = s.find("$Nodes\n") + 7;
+    const auto end = s.find('\n', at) + 1;
+    s.insert(end, s.substr(at, end - at));
+  }
+  expect_refused(s, {"c.msh", "$Nodes"});
+  // A negative entity tag.
+  s = ascii;
+  {
+    const auto at = s.find("$Entities\n") + 10;
+    const auto line = s.find('\n', at) + 1;  // first entity line
+    s.insert(line, "-");
+  }
+  expect_refused(s, {"c.msh", "$Entities"});
+}
+
+// A tet referring to a node that does not exist, and a coordinate of 1e30 (a step of 3e-38 s).
+TEST(MeshErrors, MshReferencesAndCoordinatesAreChecked) {
+  TempDir dir;
+  const std::string head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"v\"\n$EndPhysicalNames\n"
+                           "$Entities\n0 0 0 1\n1 0 0 0 1 1 1 1 1 0\n$EndEntities\n";
+  std::ofstream(dir / "r.msh") << head << "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
+                               << "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 9\n$EndElements\n";
+  expect_input_error([&] { read_msh(dir / "r.msh"); }, {"r.msh", "node tags defined in $Nodes", "tag 9"});
+  std::ofstream(dir / "x.msh") << head << "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1e30 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
+                               << "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n";
+  expect_input_error([&] { read_msh(dir / "x.msh"); }, {"x.msh", "coordinates within 1e9"});
+  std::ofstream(dir / "ok.msh") << head << "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
+                                << "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n";
+  EXPECT_EQ(read_msh(dir / "ok.msh").tets.size(), 1u);
+}

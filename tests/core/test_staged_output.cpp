@@ -1,8 +1,9 @@
-// core/staged_output: an output is visible under its final name only after commit().
+// core/staged_output: a file is visible under its final name only after commit().
 #include <gtest/gtest.h>
 
 #include <fstream>
 
+#include "tactus/core/error.hpp"
 #include "tactus/core/staged_output.hpp"
 #include "temp_dir.hpp"
 
@@ -19,16 +20,12 @@ TEST(StagedOutput, NothingLeftWhenNotCommitted) {
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
 }
 
-TEST(StagedOutput, CommitReplacesPreviousDirectory) {
+TEST(StagedOutput, NeverReplacesAFolder) {
   TempDir dir;
   std::filesystem::create_directories(dir / "results");
   std::ofstream(dir / "results" / "old.vtu") << "old";
-  {
-    StagedOutput out(dir / "results");
-    std::filesystem::create_directories(out.path());
-    std::ofstream(out.path() / "new.vtu") << "new";
-    out.commit();
-  }
-  EXPECT_TRUE(std::filesystem::exists(dir / "results" / "new.vtu"));
-  EXPECT_FALSE(std::filesystem::exists(dir / "results" / "old.vtu"));
+  StagedOutput out(dir / "results");
+  std::ofstream(out.path()) << "new";
+  EXPECT_THROW(out.commit(), tactus::WriteError);
+  EXPECT_TRUE(std::filesystem::exists(dir / "results" / "old.vtu"));
 }

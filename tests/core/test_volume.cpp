@@ -120,7 +120,7 @@ TEST(VolumeErrors, NonPositiveSpacing) {
   auto v = random_volume<std::uint8_t>(1);
   v.spacing[1] = 0;
   write_h5(dir / "v.h5", "/labels", v);
-  expect_input_error([&] { read_h5<std::uint8_t>(dir / "v.h5", "/labels"); }, {"spacing", "positive"});
+  expect_input_error([&] { read_h5<std::uint8_t>(dir / "v.h5", "/labels"); }, {"spacing", "voxel size", "0 m along y"});
 }
 
 #include <hdf5.h>
@@ -138,4 +138,125 @@ TEST(VolumeErrors, MissingSpacingAttribute) {
   H5Sclose(space);
   H5Fclose(f);
   expect_input_error([&] { read_h5<std::uint8_t>(file, "/labels"); }, {"raw.h5", "/labels@spacing"});
+}
+
+namespace {
+
+// A label dataset written with the HDF5 C API as another tool would: `type` voxels from `values`,
+// tactus' spacing/origin attributes, and optionally a string attribute of the given kind.
+enum class StringKind { none, fixed_nullterm, fixed_nullpad, fixed_spacepad, variable };
+
+std::string write_foreign_labels(const std::filesystem::path& file, hid_t type, const std::vector<long long>& values,
+                                 const hsize_t shape[3], StringKind kind = StringKind::none, const std::string& text = {}) {
+  hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  hid_t space = H5Screate_simple(3, shape, nullptr);
+  hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+  const hsize_t total = shape[0] * shape[1] * shape[2];
+  if (total > 1000000) {  // a huge declared shape: chunked, nothing written
+    const hsize_t chunk[3] = {1, 64, 64};
+    H5Pset_chunk(plist, 3, chunk);
+    H5Pset_deflate(plist, 4);
+  }
+  hid_t ds = H5Dcreate2(f, "/labels", type, space, H5P_DEFAULT, plist, H5P_DEFAULT);
+  if (total <= 1000000) H5Dwrite(ds, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+  const hsize_t three = 3;
+  const double spacing[3] = {1e-3, 1e-3, 1e-3}, origin[3] = {0, 0, 0};
+  for (auto [name, v] : {std::pair{"spacing", spacing}, std::pair{"origin", origin}}) {
+    hid_t as = H5Screate_simple(1, &three, nullptr);
+    hid_t a = H5Acreate2(ds, name, H5T_IEEE_F64LE, as, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(a, H5T_NATIVE_DOUBLE, v);
+    H5Aclose(a), H5Sclose(as);
+  }
+  if (kind != StringKind::none) {
+    hid_t st = H5Tcopy(H5T_C_S1);
+    hid_t scalar = H5Screate(H5S_SCALAR);
+    if (kind == StringKind::variable) {
+      H5Tset_size(st, H5T_VARIABLE);
+      H5Tset_cset(st, H5T_CSET_UTF8);
+      hid_t a = H5Acreate2(ds, "label_table", st, scalar, H5P_DEFAULT, H5P_DEFAULT);
+      const char* p = text.c_str();
+      H5Awrite(a, st, &p);
+      H5Aclose(a);
+    } else {
+      std::string stored = text;
+      if (kind == StringKind::fixed_nullterm) stored.push_back('\0');
+      if (kind == StringKind::fixed_spacepad) stored += "   ";
+      if (kind == StringKind::fixed_nullpad) stored += std::string(3, '\0');
+      H5Tset_size(st, stored.size());
+      H5Tset_strpad(st, kind == StringKind::fixed_spacepad ? H5T_STR_SPACEPAD
+                        : kind == StringKind::fixed_nullpad ? H5T_STR_NULLPAD
+                                                            : H5T_STR_NULLTERM);
+      hid_t a = H5Acreate2(ds, "label_table", st, scalar, H5P_DEFAULT, H5P_DEFAULT);
+      H5Awrite(a, st, stored.data());
+      H5Aclose(a);
+    }
+    H5Sclose(scalar), H5Tclose(st);
+  }
+  H5Dclose(ds), H5Pclose(plist), H5Sclose(space), H5Fclose(f);
+  return file.string();
+}
+
+}  // namespace
+
+// Every kind of string attribute HDF5 writers produce (h5py writes variable-length UTF-8 by
+// default, other tools fixed-length with any padding) reads back whole: the last character of a
+// NUL-padded string used to be cut, and variable-length ones were ignored.
+TEST(VolumeStrings, EveryStringAttributeKindReadsWhole) {
+  TempDir dir;
+  const hsize_t shape[3] = {1, 1, 2};
+  const std::string table = R"({"0": "air", "1": "soft_tissue", "2": "bone_02"})";
+  for (auto kind : {StringKind::fixed_nullterm, StringKind::fixed_nullpad, StringKind::fixed_spacepad, StringKind::variable}) {
+    const auto file = write_foreign_labels(dir / "l.h5", H5T_STD_U8LE, {1, 2}, shape, kind, table);
+    LabelTable labels;
+    const auto v = read_h5<std::uint8_t>(file, "/labels", &labels);
+    ASSERT_EQ(labels.size(), 3u) << static_cast<int>(kind);
+    EXPECT_EQ(labels.at(2), "bone_02") << static_cast<int>(kind);
+    EXPECT_EQ(v.data, (std::vector<std::uint8_t>{1, 2}));
+  }
+}
+
+// Stored values a uint8 label volume cannot hold are refused, naming value and voxel (HDF5's
+// conversion used to clamp -1 to 0 and 300 to 255 silently).
+TEST(VolumeErrors, LabelsOutsideTheVolumeTypeAreRefused) {
+  TempDir dir;
+  const hsize_t shape[3] = {1, 1, 3};
+  expect_input_error([&] { read_h5<std::uint8_t>(write_foreign_labels(dir / "a.h5", H5T_STD_I8LE, {1, -1, 2}, shape), "/labels"); },
+                     {"a.h5", "-1 at voxel (x 1, y 0, z 0)", "[0, 255]"});
+  expect_input_error([&] { read_h5<std::uint8_t>(write_foreign_labels(dir / "b.h5", H5T_STD_I64LE, {1, 2, 300}, shape), "/labels"); },
+                     {"b.h5", "300 at voxel (x 2"});
+  // Values that fit are read whatever the stored type.
+  const auto v = read_h5<std::uint8_t>(write_foreign_labels(dir / "c.h5", H5T_STD_I64LE, {0, 7, 255}, shape), "/labels");
+  EXPECT_EQ(v.data, (std::vector<std::uint8_t>{0, 7, 255}));
+}
+
+// A 6 kB file that declares 50000^3 voxels is refused before anything is allocated.
+TEST(VolumeErrors, DeclaredShapeMustBeBackedByTheFile) {
+  TempDir dir;
+  const hsize_t shape[3] = {50000, 50000, 50000};
+  const auto file = write_foreign_labels(dir / "huge.h5", H5T_STD_U8LE, {}, shape);
+  EXPECT_LT(std::filesystem::file_size(file), 100000u);
+  expect_input_error([&] { read_h5<std::uint8_t>(file, "/labels"); }, {"huge.h5", "50000 x 50000 x 50000"});
+}
+
+// A corrupt HDF5 file (bytes overwritten inside the object headers) is an InputError naming the
+// file, whatever libhdf5 does with it: it reads in an isolated child process.
+TEST(VolumeErrors, CorruptHdf5IsAnInputErrorNeverACrash) {
+  TempDir dir;
+  write_h5(dir / "v.h5", "/labels", random_volume<std::uint8_t>(3));
+  const auto size = std::filesystem::file_size(dir / "v.h5");
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::filesystem::copy_file(dir / "v.h5", dir / "c.h5", std::filesystem::copy_options::overwrite_existing);
+    std::fstream f(dir / "c.h5", std::ios::in | std::ios::out | std::ios::binary);
+    for (int k = 0; k < 16; ++k) {
+      f.seekp(static_cast<std::streamoff>(std::uniform_int_distribution<std::uintmax_t>(0, size - 1)(rng)));
+      f.put(static_cast<char>(rng()));
+    }
+    f.close();
+    try {
+      (void)read_h5<std::uint8_t>(dir / "c.h5", "/labels");
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("c.h5"), std::string::npos) << e.what();
+    }
+  }
 }

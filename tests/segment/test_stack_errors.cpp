@@ -2,7 +2,9 @@
 // field; a stack without bone says which thresholds were tried and how to set them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "tactus/core/error.hpp"
@@ -53,7 +55,7 @@ TEST(SliceStack, ReadsEightBitTiff) {
     ASSERT_TRUE(cv::imwrite((d / "s" / name).string(), img));
   }
   std::ofstream(d / "s" / "stack.json") << R"({"spacing_mm": [0.5, 0.5, 1.25], "origin_mm": [1, 2, 3],
-                                              "rescale_slope": 8, "rescale_intercept": -1000})";
+                                              "rescale_slope": 8, "rescale_intercept": -1000, "slices": 3})";
   const auto s = segment::read_slice_stack(d / "s");
   EXPECT_EQ(s.bit_depth, 8);
   ASSERT_EQ(s.hu.dims, (std::array<int, 3>{6, 5, 3}));
@@ -86,6 +88,65 @@ TEST_F(StackErrors, NonPositiveSpacing) {
   std::ofstream(dir / "stack" / "stack.json") << R"({"spacing_mm": [0.7, 0, 0.7]})";
   expect_error({"stack.json", "spacing_mm", "positive"});
 }
+// stack.json as written by the phantom, with one key replaced (or removed when value is empty).
+namespace {
+void edit_stack_json(const std::filesystem::path& file, const std::string& key, const std::string& value) {
+  std::ifstream in(file);
+  auto j = nlohmann::json::parse(in);
+  if (value.empty()) j.erase(key);
+  else j[key] = nlohmann::json::parse(value);
+  std::ofstream(file) << j.dump();
+}
+}  // namespace
+
+// Silently wrong before: without the intercept the stored values were taken as HU.
+TEST_F(StackErrors, MissingRescaleIntercept) {
+  edit_stack_json(dir / "stack" / "stack.json", "rescale_intercept", "");
+  expect_error({"stack.json", "rescale_intercept", "missing"});
+}
+// Silently wrong before: a missing first or last slice keeps the numbering contiguous.
+TEST_F(StackErrors, MissingLastSliceCaughtByTheCount) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "stack"))
+    if (e.path().extension() == ".png") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::filesystem::remove(files.back());
+  expect_error({"slices", "as stack.json says", "a first or last slice missing"});
+}
+TEST_F(StackErrors, SliceCountMustBeGiven) {
+  edit_stack_json(dir / "stack" / "stack.json", "slices", "");
+  expect_error({"stack.json", "slices", "missing"});
+}
+// These crashed or hung: spacing 1e308 (segfault), 1e-308 (endless remeshing), a slice number
+// too large for stol ("internal error: stol").
+TEST_F(StackErrors, AbsurdNumbersAreRefused) {
+  edit_stack_json(dir / "stack" / "stack.json", "spacing_mm", "[0.7, 1e308, 0.7]");
+  expect_error({"spacing_mm", "1e+308"});
+  edit_stack_json(dir / "stack" / "stack.json", "spacing_mm", "[0.7, 1e-308, 0.7]");
+  expect_error({"spacing_mm", "1e-308"});
+  edit_stack_json(dir / "stack" / "stack.json", "spacing_mm", "[4, 4, 4]");
+  std::ofstream(dir / "stack" / "slice_99999999999999999999.png") << "x";
+  expect_error({"slice_99999999999999999999.png", "slice number"});
+}
+TEST_F(StackErrors, WrongJsonTypes) {
+  edit_stack_json(dir / "stack" / "stack.json", "rescale_slope", "\"1\"");
+  expect_error({"stack.json", "rescale_slope"});
+  edit_stack_json(dir / "stack" / "stack.json", "rescale_slope", "1");
+  edit_stack_json(dir / "stack" / "stack.json", "origin_mm", "{\"x\": 1}");
+  expect_error({"stack.json", "origin_mm"});
+}
+// The PNG container is validated before any decoder sees it.
+TEST_F(StackErrors, CorruptPngChunksAreRefused) {
+  const auto slice = dir / "stack" / "slice_0002.png";
+  std::fstream f(slice, std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(40);  // inside the image data: its chunk's CRC no longer matches
+  f.put('\x55');
+  f.close();
+  expect_error({"slice_0002.png", "CRC"});
+  cv::imwrite(slice.string(), cv::Mat(5, 5, CV_8UC3, cv::Scalar(1, 2, 3)));
+  expect_error({"slice_0002.png", "grey"});
+}
+
 TEST_F(StackErrors, NoBoneFound) {
   // A soft-tissue-only body: every slice a grey disc at 40 HU.
   testkit::TempDir d2;
@@ -99,7 +160,7 @@ TEST_F(StackErrors, NoBoneFound) {
     std::snprintf(name, sizeof name, "slice_%04d.png", k);
     cv::imwrite((d2 / "s" / name).string(), img);
   }
-  std::ofstream(d2 / "s" / "stack.json") << R"({"spacing_mm": [1, 1, 1], "rescale_slope": 1, "rescale_intercept": -1024})";
+  std::ofstream(d2 / "s" / "stack.json") << R"({"spacing_mm": [1, 1, 1], "rescale_slope": 1, "rescale_intercept": -1024, "slices": 12})";
   segment::StageOptions o;
   o.write_surfaces = false;
   try {

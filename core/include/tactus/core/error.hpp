@@ -18,11 +18,25 @@ class InputError : public Error {
   // file: the path (or "command line"); field: the dataset, key or option; expected: what a
   // valid value looks like; found: what was there instead (optional).
   InputError(std::string file, std::string field, std::string expected, std::string found = {});
+  // An already composed message (one that crossed a process boundary).
+  struct Formatted {};
+  InputError(Formatted, std::string file, std::string field, const std::string& message);
   const std::string& file() const noexcept { return file_; }
   const std::string& field() const noexcept { return field_; }
 
  private:
   std::string file_, field_;
+};
+
+// An output that cannot be written: no permission, no space, a path under a file, a refusal to
+// replace something tactus did not write. `path` names where.
+class WriteError : public Error {
+ public:
+  WriteError(std::string path, std::string reason);
+  const std::string& path() const noexcept { return path_; }
+
+ private:
+  std::string path_;
 };
 
 // A physics or numerical failure during a run: NaN, an inverted element, energy blow-up.

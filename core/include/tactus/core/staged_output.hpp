@@ -1,22 +1,23 @@
 #pragma once
-// Outputs are written under a temporary name next to their final place and renamed only when
-// complete, so a crash or an error never leaves a half-written file that looks finished.
+// One file written under a temporary name next to its final place and renamed only when
+// complete, so a crash or an error never leaves a half-written file that looks finished. The
+// file writers (write_msh, write_vtu, write_h5, ...) use it; a tool's whole output goes through
+// OutputFolder / OutputFiles (output.hpp), which decide whether the final place may be used.
 #include <filesystem>
 
 namespace tactus {
 
 class StagedOutput {
  public:
-  // `final_path` may be a file or a directory; the staging path is a sibling with a
-  // ".partial" suffix (same filesystem, so the rename is atomic for files).
+  // The staging path is a sibling "<name>.partial-<pid>" (same file system: the rename is atomic).
   explicit StagedOutput(std::filesystem::path final_path);
-  ~StagedOutput();  // removes the staging path unless committed
+  ~StagedOutput();  // removes the staging file unless committed
   StagedOutput(const StagedOutput&) = delete;
   StagedOutput& operator=(const StagedOutput&) = delete;
 
   const std::filesystem::path& path() const noexcept { return staging_; }
   const std::filesystem::path& final_path() const noexcept { return final_; }
-  // Replaces any previous output at the final path with the staged one.
+  // Renames the staged file to the final path (replacing a file there; never a folder).
   void commit();
 
  private:
@@ -24,7 +25,7 @@ class StagedOutput {
   bool committed_ = false;
 };
 
-// Creates the parent directory of `path` if needed; throws InputError when it cannot.
+// Creates the parent directory of `path` if needed; throws WriteError when it cannot.
 void ensure_parent_directory(const std::filesystem::path& path);
 
 }  // namespace tactus

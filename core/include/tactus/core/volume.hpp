@@ -39,9 +39,26 @@ struct Volume {
 // Names of the labels in a label volume: 0 background, 1 soft tissue, 2.. bones.
 using LabelTable = std::map<int, std::string>;
 
+// Limits of what tactus accepts as a volume: voxels per axis, and the plausible physical range of
+// a voxel (0.1 um to 1 m) and of an origin (within 1 km).
+inline constexpr int kMaxVolumeDim = 65536;
+inline constexpr double kMinSpacing = 1e-7, kMaxSpacing = 1.0, kMaxOrigin = 1e3;
+
+// Throws InputError (naming `file` and `field`) unless the dims are 1..kMaxVolumeDim, the
+// spacings finite within [kMinSpacing, kMaxSpacing], the origin finite within kMaxOrigin, and the
+// voxels (of `bytes_per_voxel`) fit in half this machine's memory.
+void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing,
+                              const std::array<double, 3>& origin, std::size_t bytes_per_voxel, const std::string& file,
+                              const std::string& field);
+
+// The label table stored with label volumes: a JSON object {"id": "name"} with ids 0..65535.
+LabelTable parse_label_table(const std::string& json_text, const std::string& file, const std::string& field);
+
 // HDF5 I/O. The dataset is z-y-x; attributes: spacing and origin (x,y,z, metres), units "m",
 // and for label volumes `label_table` (JSON object id -> name). Supported voxel types:
-// uint8, uint16, int16, float. Reading converts integer types when the stored values fit.
+// uint8, uint16, int16, float. Reading converts integer types when every stored value fits (a
+// value that does not is an error, never clamped). The HDF5 and VTK readers run in an isolated
+// child process (isolated.hpp): a corrupt file is an InputError, never a crash.
 template <class T>
 void write_h5(const std::filesystem::path& file, const std::string& dataset, const Volume<T>& volume,
               const LabelTable* labels = nullptr);

@@ -4,6 +4,7 @@
 // InputError naming the file.
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -36,5 +37,8 @@ struct Results {
 Results read_results(const std::filesystem::path& folder);
 
 History read_history_csv(const std::filesystem::path& file);
+
+// Checks every run.json key the report uses, with its type (InputError naming the key).
+void validate_run_json(const nlohmann::json& run_json, const std::string& file);
 
 }  // namespace tactus::postproc

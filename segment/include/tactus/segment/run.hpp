@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tactus/core/output.hpp"
 #include "tactus/segment/segment.hpp"
 #include "tactus/segment/surfaces.hpp"
 
@@ -15,7 +16,10 @@ struct StageOptions {
   bool write_surfaces = true;
 };
 
-// Returns the report that is also written as <out>/segment.json.
+// Writes labels.h5, labels.vti, surfaces/ and segment.json into `out` and commits it; returns the
+// report that is also written as segment.json.
+nlohmann::json run_segment_stage(const std::filesystem::path& stack, OutputFolder& out, const StageOptions& options);
+// The same into a new folder `out` (tests, benchmarks).
 nlohmann::json run_segment_stage(const std::filesystem::path& stack, const std::filesystem::path& out, const StageOptions& options);
 
 }  // namespace tactus::segment

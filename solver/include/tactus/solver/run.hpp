@@ -9,11 +9,14 @@
 //                                  critical step, contact force/area/peak pressure and where
 //   <out>/run.json                 status, steps, dt, limiting element, wall time and its split,
 //                                  energy balance, material and body names, contact peaks
-// The folder is staged and renamed when the run ends. A numerical failure still publishes it,
-// with the last good state written and run.json saying "failed" and why.
+// The folder is staged (OutputFolder) and moved into place when the run ends. A numerical failure
+// still publishes it, with the last good state written and run.json saying "failed" and why; an
+// interrupt publishes nothing.
 #include <filesystem>
 #include <string>
+#include <vector>
 
+#include "tactus/core/output.hpp"
 #include "tactus/solver/scenario.hpp"
 
 namespace tactus::solver {
@@ -27,7 +30,12 @@ struct RunSummary {
   std::size_t outputs = 0;
 };
 
+// Writes into `out` (checks its free space against the estimated size first) and commits it.
+RunSummary run_simulation(const Scenario& scenario, OutputFolder& out);
+// The same into a new folder (tests, benchmarks).
 RunSummary run_simulation(const Scenario& scenario, const std::filesystem::path& output_dir);
+// Every file a scenario reads (the scenario, meshes, fibre files): inputs an output may not replace.
+std::vector<std::filesystem::path> scenario_inputs(const Scenario& scenario);
 
 // tactus-solve material-test: Cauchy stress against stretch as CSV.
 // mode: "uniaxial" (lateral stresses solved to zero), "equibiaxial" (sigma_zz = 0), "shear" (F = I + gamma e_x (x) e_y).
