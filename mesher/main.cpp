@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
   bool keep_surfaces = false;
   app.add_flag("--no-volume-restore", keep_surfaces, "keep CGAL's surfaces (bones then come out 3-4 % small)");
   app.add_option("--seed", p.seed, "random seed")->capture_default_str();
+  app.add_option("--max-elements", p.max_elements, "refuse meshes expected to have more tets than this")->capture_default_str();
   app.add_option("--soft-wave-speed", soft_speed, "soft-tissue P-wave speed for the step report, m/s")->capture_default_str();
   app.add_option("--bone-wave-speed", bone_speed, "bone P-wave speed for the step report, m/s")->capture_default_str();
 
@@ -119,12 +120,12 @@ int main(int argc, char** argv) {
     const std::filesystem::path out = common.output;
     if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
-      output.write(mesher::mesh_box(size, origin, h), {{1, block_speed}});
+      output.write(mesher::mesh_box(size, origin, h, "block", p.max_elements), {{1, block_speed}});
       return;
     }
     if (stl->parsed()) {
       MeshOutput output(out, common.output_rules({stl_file}));
-      output.write(mesher::mesh_stl_object(stl_file, h, stl_scale), {{1, block_speed}});
+      output.write(mesher::mesh_stl_object(stl_file, h, stl_scale, "object", p.max_elements), {{1, block_speed}});
       return;
     }
     if (labels_file.empty()) throw CLI::RequiredError("labels");

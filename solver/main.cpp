@@ -7,8 +7,26 @@
 #include "tactus/core/output.hpp"
 
 #include "tactus/core/cli.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/staged_output.hpp"
+#include "tactus/solver/reference.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
+
+namespace {
+// --write-reference replaces a file only when it is a tactus reference already.
+void guard_reference_path(const std::filesystem::path& p) {
+  std::error_code ec;
+  if (!std::filesystem::exists(p, ec)) {
+    tactus::ensure_parent_directory(p);
+    return;
+  }
+  std::ifstream in(p);
+  const auto j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object() || !j.contains("tactus_reference"))
+    throw tactus::WriteError(p.string(), "the file exists and is not a tactus reference; choose another name");
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace tactus;
@@ -24,6 +42,11 @@ int main(int argc, char** argv) {
   double end_time = 0;
   auto* end_time_opt = app.add_option("--end-time", end_time, "stop at this time (s) instead of the scenario's run.end_time; later "
                                                               "output times are dropped");
+  std::string check_file, write_reference;
+  app.add_option("--check", check_file, "compare the run's figures with a stored reference (JSON) and print each difference; "
+                                        "exit 5 when one is beyond its tolerance")->check(CLI::ExistingFile);
+  app.add_option("--write-reference", write_reference, "write the run's figures as a reference with default tolerances "
+                                                       "(replaces only an existing tactus reference)");
   app.require_subcommand(0, 1);
 
   auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
@@ -61,11 +84,34 @@ int main(int argc, char** argv) {
         throw InputError("command line", "--end-time", "a time > 0 in s", end_time_opt->as<std::string>());
       sc.run.end_time = end_time;
       std::erase_if(sc.run.output_times, [&](double t) { return t > end_time * (1 + 1e-12); });
-      if (sc.run.output_times.empty() && sc.run.output_interval <= 0) sc.run.output_times = {end_time};
     }
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
+    // The reference is read before the run: a malformed one is refused up front.
+    nlohmann::json reference;
+    if (!check_file.empty()) {
+      std::ifstream in(check_file);
+      reference = nlohmann::json::parse(in, nullptr, false);
+      solver::check_reference(nlohmann::json::object(), reference, check_file);
+    }
+    if (!write_reference.empty()) guard_reference_path(write_reference);
     OutputFolder output(out, common.output_rules(solver::scenario_inputs(sc)));
-    solver::run_simulation(sc, output);
+    const solver::RunSummary summary = solver::run_simulation(sc, output);
+    if (!write_reference.empty()) {
+      StagedOutput staged(write_reference);
+      std::ofstream(staged.path()) << solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2)
+                                   << '\n';
+      staged.commit();
+      log::info() << "reference written: " << write_reference;
+    }
+    if (!check_file.empty()) {
+      const auto checks = solver::check_reference(summary.run_json, reference, check_file);
+      std::cout << "reference " << check_file << ":\n" << solver::format_checks(checks);
+      std::string failed;
+      for (const auto& c : checks)
+        if (!c.ok) failed += (failed.empty() ? "" : ", ") + c.name;
+      if (!failed.empty()) throw CheckFailed(check_file + ": beyond tolerance: " + failed);
+      log::info() << "all " << checks.size() << " figures within their tolerances of " << check_file;
+    }
   });
 }

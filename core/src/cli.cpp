@@ -54,6 +54,9 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
     mark_interrupt_handled();
     std::cerr << program << ": " << e.what() << '\n';
     return e.exit_code();
+  } catch (const CheckFailed& e) {
+    std::cerr << program << ": check failed: " << e.what() << '\n';
+    return 5;
   } catch (const NumericalError& e) {
     std::cerr << program << ": numerical failure: " << e.what() << '\n';
     return 3;

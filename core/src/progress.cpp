@@ -46,6 +46,10 @@ double Progress::elapsed_seconds() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+bool Progress::due() const {
+  return tty_ && (!drawn_ || std::chrono::steady_clock::now() - last_draw_ >= std::chrono::milliseconds(100));
+}
+
 void Progress::update(std::size_t done, const std::string& note) {
   check_interrupt();  // long loops report progress: the natural place to stop on Ctrl-C
   if (!tty_) return;

@@ -396,6 +396,14 @@ std::size_t peel_skin_slivers(TetMesh& mesh, double ratio_goal) {
 
 }  // namespace
 
+double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
+  std::size_t soft = 0, bone = 0;
+  for (auto v : labels.data) soft += v == 1, bone += v >= 2;
+  const double voxel_mm3 = labels.voxel_volume() * 1e9;
+  auto tets = [](double volume_mm3, double size_mm) { return volume_mm3 / (0.1 * size_mm * size_mm * size_mm); };
+  return tets(static_cast<double>(soft) * voxel_mm3, p.cell_size_mm) + tets(static_cast<double>(bone) * voxel_mm3, p.bone_cell_size_mm);
+}
+
 TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p) {
   check(p.facet_angle_deg > 0 && p.facet_angle_deg <= 30, "facet_angle", "an angle in (0, 30] degrees", p.facet_angle_deg);
   check(p.facet_size_mm > 0, "facet_size", "a size > 0 mm", p.facet_size_mm);
@@ -404,12 +412,33 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   check(p.cell_size_mm > 0, "cell_size", "a size > 0 mm", p.cell_size_mm);
   check(p.bone_cell_size_mm > 0, "bone_cell_size", "a size > 0 mm", p.bone_cell_size_mm);
   check(p.bone_facet_size_mm > 0, "bone_facet_size", "a size > 0 mm", p.bone_facet_size_mm);
-  for (int a = 0; a < 3; ++a)
-    if (!(labels.spacing[a] > 0)) throw InputError("labels", "spacing", "positive voxel sizes", std::to_string(labels.spacing[a]));
+  validate_volume_geometry(labels.dims, labels.spacing, labels.origin, 1, "labels", "/labels");
   std::size_t tissue = 0, nonzero = 0;
   for (auto v : labels.data) tissue += v == 1, nonzero += v != 0;
   if (nonzero == 0) throw InputError("labels", "/labels", "a label volume with tissue (labels >= 1)", "only background");
   if (tissue == 0) throw InputError("labels", "/labels", "soft tissue (label 1) around the bones", "no soft-tissue voxel");
+  {  // CGAL's initial sampling never ends on a body one voxel thick: at least 3 voxels along every axis.
+    std::array<int, 3> lo{labels.dims}, hi{-1, -1, -1};
+    for (int k = 0; k < labels.dims[2]; ++k)
+      for (int j = 0; j < labels.dims[1]; ++j)
+        for (int i = 0; i < labels.dims[0]; ++i)
+          if (labels.at(i, j, k)) {
+            const int x[3] = {i, j, k};
+            for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], x[a]), hi[a] = std::max(hi[a], x[a]);
+          }
+    for (int a = 0; a < 3; ++a)
+      if (hi[a] - lo[a] + 1 < 3)
+        throw InputError("labels", "/labels", "a labelled body at least 3 voxels thick along every axis (a volume to mesh)",
+                         std::to_string(hi[a] - lo[a] + 1) + " voxel(s) along " + std::string(1, "xyz"[a]));
+  }
+  check(p.max_elements > 0, "max_elements", "a count > 0", p.max_elements);
+  if (const double n = expected_tets(labels, p); n > p.max_elements) {
+    std::ostringstream f;
+    f << "about " << n << " tets at cell size " << p.cell_size_mm << " mm (bone " << p.bone_cell_size_mm << " mm)";
+    throw InputError("labels", "cell size", "a mesh of at most " + std::to_string(static_cast<long long>(p.max_elements)) +
+                                                " tets (coarser --cell-size / --bone-cell-size, or raise --max-elements)",
+                     f.str());
+  }
 
   // The image in millimetres (CGAL's criteria are absolute lengths); nodes go back to metres.
   _image* im = _createImage(static_cast<std::size_t>(labels.dims[0]), static_cast<std::size_t>(labels.dims[1]),

@@ -1,13 +1,13 @@
 #include "tactus/mesher/objects.hpp"
 
 #include <gmsh.h>
-#include <vtkFeatureEdges.h>
-#include <vtkNew.h>
-#include <vtkPolyData.h>
-#include <vtkSTLReader.h>
-
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/gmsh_session.hpp"
@@ -33,11 +33,30 @@ void mesh_volume(double element_size, const std::string& source) {
 
 }  // namespace
 
-TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::string& name) {
-  for (int a = 0; a < 3; ++a)
-    if (!(size[a] > 0)) throw InputError("box", "size", "positive edge lengths in m", std::to_string(size[a]));
+namespace {
+
+void check_expected_tets(double volume, double h, double max_elements, const std::string& source) {
+  const double expected = 6.0 * volume / (h * h * h);
+  if (expected > max_elements) {
+    std::ostringstream f;
+    f << "about " << expected << " tets for " << volume << " m^3 at element size " << h << " m";
+    throw InputError(source, "element size", "a mesh of at most " + std::to_string(static_cast<long long>(max_elements)) +
+                                                 " tets (raise --max-elements to allow more)",
+                     f.str());
+  }
+}
+
+}  // namespace
+
+TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::string& name, double max_elements) {
+  for (int a = 0; a < 3; ++a) {
+    if (!(size[a] > 0) || !std::isfinite(size[a]) || size[a] > 1e3)
+      throw InputError("box", "size", "edge lengths from 0 to 1000 m", std::to_string(size[a]));
+    if (!std::isfinite(origin[a]) || std::abs(origin[a]) > 1e3) throw InputError("box", "origin", "a finite corner within 1 km", std::to_string(origin[a]));
+  }
   if (!(h > 0) || h > 2 * std::max({size[0], size[1], size[2]}))
     throw InputError("box", "element size", "a size > 0 m and not larger than the box", std::to_string(h));
+  check_expected_tets(size[0] * size[1] * size[2], h, max_elements, "box");
   GmshSession session;
   gmsh::model::add(name);
   const int vol = gmsh::model::occ::addBox(origin[0], origin[1], origin[2], size[0], size[1], size[2]);
@@ -67,34 +86,110 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
   return tet_mesh_from_gmsh_model("box");
 }
 
-TetMesh mesh_stl_object(const std::filesystem::path& stl, double h, double scale, const std::string& name) {
+StlSurface read_stl(const std::filesystem::path& stl) {
   const std::string file = stl.string();
-  if (!std::filesystem::exists(stl)) throw InputError(file, "", "an existing STL file", "no such file");
-  {  // Closed and readable? (VTK reads ASCII and binary STL.)
-    vtkNew<vtkSTLReader> reader;
-    reader->SetFileName(file.c_str());
-    reader->Update();
-    if (reader->GetErrorCode() != 0 || reader->GetOutput()->GetNumberOfCells() == 0)
-      throw InputError(file, "", "a readable STL surface", "unreadable or empty");
-    vtkNew<vtkFeatureEdges> edges;
-    edges->SetInputConnection(reader->GetOutputPort());
-    edges->BoundaryEdgesOn();
-    edges->NonManifoldEdgesOn();
-    edges->FeatureEdgesOff();
-    edges->ManifoldEdgesOff();
-    edges->Update();
-    if (const auto n = edges->GetOutput()->GetNumberOfCells(); n > 0)
-      throw InputError(file, "", "a closed 2-manifold surface", std::to_string(n) + " open or non-manifold edges");
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(stl, ec)) throw InputError(file, "", "an existing STL file", "no such file");
+  std::ifstream in(stl, std::ios::binary);
+  const std::string b((std::istreambuf_iterator<char>(in)), {});
+  std::vector<Vec3> corners;  // 3 per triangle
+  auto add_corner = [&](const Vec3& x, std::size_t triangle) {
+    for (double c : x)
+      if (!std::isfinite(c) || std::abs(c) > 1e9)
+        throw InputError(file, "triangle " + std::to_string(triangle + 1), "finite coordinates within 1e9", std::to_string(c));
+    corners.push_back(x);
+  };
+  // Binary: 80-byte header, uint32 count, 50 bytes per triangle; the size must match exactly.
+  std::uint32_t count = 0;
+  if (b.size() >= 84) std::memcpy(&count, b.data() + 80, 4);
+  const bool binary = b.size() >= 84 && b.size() == 84 + 50 * static_cast<std::uint64_t>(count);
+  if (binary) {
+    for (std::uint32_t t = 0; t < count; ++t) {
+      const char* p = b.data() + 84 + 50 * static_cast<std::size_t>(t) + 12;  // after the normal
+      for (int k = 0; k < 3; ++k) {
+        float v[3];
+        std::memcpy(v, p + 12 * k, 12);
+        add_corner({v[0], v[1], v[2]}, t);
+      }
+    }
+  } else {
+    std::istringstream text(b);
+    std::string word;
+    if (!(text >> word) || word != "solid")
+      throw InputError(file, "", "an STL file (ASCII starting with 'solid', or binary with 84 + 50 n bytes)",
+                       b.size() >= 84 ? "a binary header declaring " + std::to_string(count) + " triangles in " + std::to_string(b.size()) + " bytes"
+                                      : "neither");
+    std::size_t t = 0;
+    while (text >> word) {
+      if (word != "vertex") continue;
+      Vec3 x{};
+      std::string token;
+      for (double& c : x) {
+        if (!(text >> token)) throw InputError(file, "vertex " + std::to_string(corners.size() + 1), "three coordinates", "the end of the file");
+        const auto [end, err] = std::from_chars(token.data(), token.data() + token.size(), c);
+        if (err != std::errc() || end != token.data() + token.size())
+          throw InputError(file, "vertex " + std::to_string(corners.size() + 1), "a number", "\"" + token.substr(0, 30) + "\"");
+      }
+      add_corner(x, t);
+      if (corners.size() % 3 == 0) ++t;
+    }
+    if (corners.size() % 3 != 0) throw InputError(file, "", "three vertices per facet", std::to_string(corners.size()) + " vertices");
   }
-  if (!(h > 0)) throw InputError(file, "element size", "a size > 0 m", std::to_string(h));
-  if (!(scale > 0)) throw InputError(file, "scale", "a factor > 0", std::to_string(scale));
+  if (corners.empty()) throw InputError(file, "", "a readable STL surface", "no triangles");
+  if (corners.size() / 3 > 50'000'000) throw InputError(file, "", "at most 50 million triangles", std::to_string(corners.size() / 3));
+  StlSurface s;
+  std::map<Vec3, int> index;
+  for (std::size_t t = 0; t < corners.size() / 3; ++t) {
+    std::array<int, 3> tri{};
+    for (int k = 0; k < 3; ++k) {
+      auto [it, added] = index.emplace(corners[3 * t + k], static_cast<int>(s.vertices.size()));
+      if (added) s.vertices.push_back(corners[3 * t + k]);
+      tri[k] = it->second;
+    }
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;  // degenerate facet
+    s.triangles.push_back(tri);
+  }
+  std::map<std::pair<int, int>, int> edges;
+  for (const auto& t : s.triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}];
+  for (const auto& [e, n] : edges) s.boundary_edges += n == 1, s.non_manifold_edges += n > 2;
+  return s;
+}
+
+TetMesh mesh_stl_object(const std::filesystem::path& stl, double h, double scale, const std::string& name, double max_elements) {
+  const std::string file = stl.string();
+  if (!(h > 0) || !std::isfinite(h)) throw InputError(file, "element size", "a size > 0 m", std::to_string(h));
+  if (!(scale > 0) || !std::isfinite(scale)) throw InputError(file, "scale", "a factor > 0", std::to_string(scale));
+  // Read and checked by tactus: gmsh only ever sees the validated triangles.
+  const StlSurface surface = read_stl(stl);
+  if (const std::size_t n = surface.boundary_edges + surface.non_manifold_edges; n > 0)
+    throw InputError(file, "", "a closed 2-manifold surface", std::to_string(n) + " open or non-manifold edges");
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (const auto& x : surface.vertices)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], x[c] * scale), hi[c] = std::max(hi[c], x[c] * scale);
+  double volume = 0;  // enclosed volume (divergence theorem), for the size guard
+  for (const auto& t : surface.triangles) {
+    const Vec3 &a = surface.vertices[t[0]], &b = surface.vertices[t[1]], &c = surface.vertices[t[2]];
+    volume += tet_volume({0, 0, 0}, a, b, c);
+  }
+  volume = std::abs(volume) * scale * scale * scale;
+  if (!(volume > 0)) throw InputError(file, "", "a surface enclosing a volume", "zero volume");
+  check_expected_tets(volume, h, max_elements, file);
   GmshSession session;
   gmsh::model::add(name);
-  try {
-    gmsh::merge(file);
-  } catch (...) {
-    throw InputError(file, "", "an STL gmsh can read", GmshSession::last_error());
+  gmsh::model::addDiscreteEntity(2, 1);
+  std::vector<std::size_t> node_tags(surface.vertices.size()), element_tags(surface.triangles.size()), element_nodes;
+  std::vector<double> coords;
+  for (std::size_t i = 0; i < surface.vertices.size(); ++i) {
+    node_tags[i] = i + 1;
+    coords.insert(coords.end(), surface.vertices[i].begin(), surface.vertices[i].end());
   }
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    element_tags[t] = t + 1;
+    for (int v : surface.triangles[t]) element_nodes.push_back(static_cast<std::size_t>(v) + 1);
+  }
+  gmsh::model::mesh::addNodes(2, 1, node_tags, coords);
+  gmsh::model::mesh::addElementsByType(1, 2, element_tags, element_nodes);
   gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, false, M_PI);
   gmsh::model::mesh::createGeometry();
   gmsh::vectorpair surfaces;

@@ -226,6 +226,34 @@ std::vector<std::array<double, 6>> read_element_fibres(const std::filesystem::pa
   return out;
 }
 
+// Two nodes of one mesh at the same place, both used by tets: the mesh is cracked there (the
+// interface was meshed twice instead of sharing its nodes), and the two sides would separate
+// under load without any error. Found by sorting along x and comparing neighbours within 1e-9 of
+// the mesh size.
+void check_no_duplicate_nodes(const TetMesh& mesh, const std::string& file) {
+  std::vector<char> used(mesh.nodes.size(), 0);
+  for (const auto& t : mesh.tets)
+    for (int v : t) used[static_cast<std::size_t>(v)] = 1;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
+    if (used[i]) {
+      order.push_back(i);
+      for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], mesh.nodes[i][c]), hi[c] = std::max(hi[c], mesh.nodes[i][c]);
+    }
+  const double tol = 1e-9 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mesh.nodes[a][0] < mesh.nodes[b][0]; });
+  for (std::size_t k = 0; k < order.size(); ++k)
+    for (std::size_t l = k + 1; l < order.size() && mesh.nodes[order[l]][0] - mesh.nodes[order[k]][0] <= tol; ++l) {
+      const Vec3 &a = mesh.nodes[order[k]], &b = mesh.nodes[order[l]];
+      if (std::abs(a[1] - b[1]) > tol || std::abs(a[2] - b[2]) > tol) continue;
+      std::ostringstream f;
+      f << "nodes " << std::min(order[k], order[l]) + 1 << " and " << std::max(order[k], order[l]) + 1 << " at (" << a[0] << ", " << a[1]
+        << ", " << a[2] << ") both belong to tets: a crack";
+      throw InputError(file, "$Nodes", "a conforming mesh, each point one node (merge the duplicates, e.g. gmsh's Coherence)", f.str());
+    }
+}
+
 }  // namespace
 
 std::size_t Model::input_node(std::size_t internal) const {
@@ -250,6 +278,7 @@ Model build_model(const Scenario& sc) {
   for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) {
     const BodySpec& body = sc.bodies[bi];
     TetMesh mesh = read_msh(body.mesh);
+    check_no_duplicate_nodes(mesh, body.mesh.string());
     const std::size_t node0 = m.input_mesh.nodes.size();
     m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size(), m.input_mesh.tets.size(), m.input_mesh.tets.size() + mesh.tets.size()});
     std::vector<std::array<double, 6>> body_fibres;

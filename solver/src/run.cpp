@@ -4,13 +4,14 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/progress.hpp"
-#include "tactus/core/staged_output.hpp"
 #include "tactus/core/version.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
@@ -23,8 +24,10 @@ namespace tactus::solver {
 namespace {
 
 // Cell and point fields of one state, in the input numbering.
-void write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                 const ContactSolver* contact) {
+// Returns the largest von Mises stress of each material block in this state.
+std::vector<double> write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
+                                const ContactSolver* contact) {
+  std::vector<double> block_peak(m.blocks.size(), 0.0);
   const std::size_t N = m.num_nodes, E = m.num_elements;
   MeshField disp{"displacement", 3, std::vector<double>(3 * N)}, vel{"velocity", 3, std::vector<double>(3 * N)};
   std::vector<Vec3> current(N);
@@ -79,6 +82,7 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
       const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
       for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
       vm.values[out] = von_mises(s);
+      block_peak[bi] = std::max(block_peak[bi], vm.values[out]);
       material.values[out] = static_cast<double>(bi);
       jac.values[out] = J;
       if (std::holds_alternative<Hgo>(b.material)) {
@@ -88,6 +92,7 @@ void write_state(const Model& m, const fs::path& file, const std::vector<double>
     }
   }
   write_vtu(file, m.input_mesh, point_fields, {stress, vm, material, body, jac, fibre}, &current);
+  return block_peak;
 }
 
 void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::string>>& entries) {
@@ -124,6 +129,23 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   ExplicitSolver solver(model, sc.run, sc.damping);
   log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; "
               << solver.describe_step_limit() << "), " << solver.threads() << " threads";
+  const std::vector<double>& schedule = solver.schedule();
+
+  // Runaway guards, before any step: the number of steps this run would take, and the space its
+  // states need (about 15 doubles per node and 16 per tet, uncompressed).
+  const double est_steps = sc.run.end_time / std::max(solver.time_step(), 1e-300);
+  if (est_steps > sc.run.max_steps) {
+    std::ostringstream f;
+    f << "about " << est_steps << " steps (end time " << sc.run.end_time << " s at " << solver.time_step() << " s per step, "
+      << solver.describe_step_limit() << ")";
+    throw InputError(sc.file.string(), "run.end_time",
+                     "a run of at most run.max_steps = " + std::to_string(static_cast<long long>(sc.run.max_steps)) +
+                         " steps (raise run.max_steps to allow it)",
+                     f.str());
+  }
+  const double state_bytes = 8.0 * (15.0 * static_cast<double>(model.num_nodes) + 16.0 * static_cast<double>(model.num_elements));
+  staged.require_space(static_cast<std::uintmax_t>(state_bytes * static_cast<double>(schedule.size()) + 2e5 * 200),
+                       std::to_string(schedule.size()) + " result states");
 
   fs::create_directories(staged.path() / "results");
   std::vector<std::pair<double, std::string>> pvd;
@@ -132,23 +154,17 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
              "energy_balance_error,critical_step,contact_force,contact_force_x,contact_force_y,contact_force_z,contact_normal_force,"
              "contact_area,peak_pressure,peak_pressure_x,peak_pressure_y,peak_pressure_z,contact_nodes,stick_nodes,slip_nodes,"
              "uzawa_iterations\n";
-  history << std::setprecision(10);
-
-  // Output schedule: explicit times, or every interval.
-  std::vector<double> out_times = sc.run.output_times;
-  if (sc.run.output_interval > 0)
-    for (double t = sc.run.output_interval; t <= sc.run.end_time * (1 + 1e-12); t += sc.run.output_interval) out_times.push_back(t);
-  std::sort(out_times.begin(), out_times.end());
-  out_times.erase(std::unique(out_times.begin(), out_times.end()), out_times.end());
+  history << std::setprecision(17);
   std::size_t next_out = 0;
 
-  const double est_steps = sc.run.end_time / std::max(solver.time_step(), 1e-300);
   const std::size_t history_every =
       sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every) : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000));
   Progress progress("solve", static_cast<std::size_t>(est_steps) + 1);
 
   RunSummary summary;
-  summary.dt_min = summary.dt_max = solver.time_step();
+  summary.dt_min = std::numeric_limits<double>::infinity();
+  summary.dt_max = 0;
+  summary.von_mises_peak.assign(model.blocks.size(), 0.0);
   nlohmann::json failure = nullptr;
   struct ContactPeaks {
     double force = 0, force_time = 0, area = 0, area_time = 0, pressure = 0, pressure_time = 0;
@@ -163,12 +179,14 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
     return x;
   };
   auto output = [&](const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t) {
-    write_state(model, staged.path() / "results" / name, u, v, &solver.contact());
+    const std::vector<double> vm = write_state(model, staged.path() / "results" / name, u, v, &solver.contact());
+    for (std::size_t b = 0; b < vm.size(); ++b) summary.von_mises_peak[b] = std::max(summary.von_mises_peak[b], vm[b]);
     pvd.emplace_back(t, "results/" + name);
     ++summary.outputs;
   };
   try {
     while (true) {
+      check_interrupt();
       solver.advance_velocity();
       const Energies& en = solver.energies();
       const double t = solver.time();
@@ -195,9 +213,10 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
         }
         ++peaks.unconverged_steps;
       }
-      if (solver.step_index() % history_every == 0 || t >= sc.run.end_time * (1 - 1e-12)) {
+      const bool scheduled = next_out < schedule.size() && t == schedule[next_out];
+      if (solver.step_index() % history_every == 0 || scheduled || solver.finished()) {
         const double force = std::sqrt(cr.force[0] * cr.force[0] + cr.force[1] * cr.force[1] + cr.force[2] * cr.force[2]);
-        history << solver.step_index() << ',' << t << ',' << solver.time_step() << ',' << en.kinetic << ',' << en.internal << ','
+        history << solver.step_index() << ',' << t << ',' << solver.last_step() << ',' << en.kinetic << ',' << en.internal << ','
                 << en.damping_work << ',' << en.external_work << ',' << en.contact_normal_work << ',' << en.contact_friction_work << ','
                 << en.balance_error() << ',' << solver.critical_step() << ',' << force << ',' << cr.force[0] << ',' << cr.force[1]
                 << ',' << cr.force[2] << ',' << cr.normal_force << ',' << cr.area << ',' << cr.peak_pressure << ',' << peak_at[0]
@@ -205,20 +224,21 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
                 << cr.iterations << '\n';
       }
       solver.check_energy();
-      const double half = 0.5 * solver.time_step();
-      while (next_out < out_times.size() && t >= out_times[next_out] - half) {
+      if (scheduled) {  // the solver lands on every scheduled time exactly
         std::ostringstream name;
         name << "state_" << std::setw(4) << std::setfill('0') << next_out << ".vtu";
         output(name.str(), solver.displacement(), solver.velocity_at_step(), t);
         ++next_out;
       }
-      if (t >= sc.run.end_time * (1 - 1e-12) || solver.time_step() <= 0) break;
+      if (solver.finished()) break;
       solver.advance_position();
-      summary.dt_min = std::min(summary.dt_min, solver.time_step() > 0 ? solver.time_step() : summary.dt_min);
-      summary.dt_max = std::max(summary.dt_max, solver.time_step());
-      std::ostringstream note;
-      note << "t=" << solver.time() << " s dt=" << solver.time_step();
-      progress.update(solver.step_index(), note.str());
+      summary.dt_min = std::min(summary.dt_min, solver.last_step());
+      summary.dt_max = std::max(summary.dt_max, solver.last_step());
+      if (progress.due()) {
+        std::ostringstream note;
+        note << "t=" << solver.time() << " s dt=" << solver.time_step();
+        progress.update(solver.step_index(), note.str());
+      }
     }
     summary.status = "completed";
   } catch (const NumericalError& e) {
@@ -234,6 +254,12 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   summary.end_time = solver.time();
   summary.energy_balance_error = solver.energies().balance_error();
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  if (summary.steps == 0) summary.dt_min = summary.dt_max = 0;
+  const std::size_t states_written = summary.status == "completed" ? summary.outputs : next_out;
+  if (summary.status == "completed" && states_written != schedule.size()) {
+    summary.status = "failed";
+    failure = "wrote " + std::to_string(states_written) + " of the " + std::to_string(schedule.size()) + " scheduled states";
+  }
   write_pvd(staged.path() / "results.pvd", pvd);
 
   const Energies& en = solver.energies();
@@ -253,7 +279,9 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   j["threads"] = solver.threads();
   j["steps"] = summary.steps;
   j["end_time"] = summary.end_time;
+  j["output_times"] = schedule;
   j["time_step"] = {{"min", summary.dt_min}, {"max", summary.dt_max}, {"safety", sc.run.time_step_safety},
+                    {"min_ratio_to_nominal", solver.min_step_ratio()}, {"critical_initial", solver.initial_critical_step()},
                     {"critical_at_end", solver.critical_step()}, {"limit", solver.describe_step_limit()}};
   j["wall_time_s"] = summary.wall_seconds;
   j["timing_s"] = {{"stress_passes", solver.stress_seconds()}, {"contact", solver.contact_seconds()},
@@ -264,6 +292,9 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
                  {"balance_error_relative", std::abs(en.balance_error()) / en.scale()},
                  {"max_balance_error_relative", summary.max_relative_balance_error}};
   j["outputs"] = summary.outputs;
+  nlohmann::json vm = nlohmann::json::object();
+  for (std::size_t b = 0; b < model.blocks.size(); ++b) vm[model.blocks[b].name] = summary.von_mises_peak[b];
+  j["peak_von_mises_at_outputs"] = vm;
   if (!model.contact_pairs.empty()) {
     nlohmann::json pairs = nlohmann::json::array();
     for (const auto& p : model.contact_pairs)
@@ -284,7 +315,8 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   staged.commit();
   log::info() << summary.status << ": " << summary.steps << " steps to t = " << summary.end_time << " s in "
               << summary.wall_seconds << " s; energy balance error " << std::abs(en.balance_error()) / en.scale() * 100
-              << " % of the largest energy; results in " << output_dir.string();
+              << " % of the largest energy; " << summary.outputs << " states; results in " << output_dir.string();
+  summary.run_json = j;
   if (summary.status == "failed")
     throw NumericalError(failure.get<std::string>() + " (last good state and history written to " + output_dir.string() + ")");
   return summary;

@@ -44,14 +44,19 @@ const SectionSpec& run_section() {
        opt(number("time_step", "s", "fixed user step; refused above the stable limit unless force_time_step", 0, false),
            "0 (automatic)"),
        typed("force_time_step", ValueType::boolean, "", "accept a user time_step above the stable limit", false, "false"),
-       typed("output_times", ValueType::number_list, "s", "times at which results are written", false, "[end_time]"),
-       opt(number("output_interval", "s", "write results every interval (alternative to output_times)", 0, false), "0"),
+       typed("output_times", ValueType::number_list, "s",
+             "times at which results are written, exactly (the state at end_time is always written too)", false, "[]"),
+       opt(number("output_interval", "s", "also write results at every k * interval", 0, false), "0"),
        opt(number("energy_tolerance", "", "energy-balance error, relative to the largest energy, that stops the run as unstable", 0, true),
            "0.25"),
        typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
        opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
        opt(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false), "0"),
-       opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0")}};
+       opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0"),
+       opt(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false),
+           "10000"),
+       opt(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false),
+           "1e7")}};
   return s;
 }
 
@@ -353,9 +358,23 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
     run.gravity_ramp_time = r.number(t, *spec.find("gravity_ramp_time"), "run", 0);
     run.threads = static_cast<int>(r.number(t, *spec.find("threads"), "run", 0));
     run.history_every = static_cast<int>(r.number(t, *spec.find("history_every"), "run", 0));
+    run.max_outputs = r.number(t, *spec.find("max_outputs"), "run", 10000);
+    run.max_steps = r.number(t, *spec.find("max_steps"), "run", 1e7);
     for (double time : run.output_times)
       if (time > run.end_time) r.fail("run.output_times", "times <= run.end_time", std::to_string(time));
-    if (run.output_times.empty() && run.output_interval <= 0) run.output_times = {run.end_time};
+    // Counted before anything is built: an interval of 1e-9 s over 1000 s is 10^12 states.
+    if (run.output_interval > 0) {
+      const double count = std::floor(run.end_time / run.output_interval * (1 + 1e-12));
+      if (count + static_cast<double>(run.output_times.size()) > run.max_outputs) {
+        std::ostringstream f;
+        f << count << " states (every " << run.output_interval << " s to " << run.end_time << " s)";
+        r.fail("run.output_interval", "at most run.max_outputs = " + std::to_string(static_cast<long long>(run.max_outputs)) +
+                                          " output states (raise run.max_outputs to allow more)",
+               f.str());
+      }
+    }
+    if (static_cast<double>(run.output_times.size()) > run.max_outputs)
+      r.fail("run.output_times", "at most run.max_outputs output states", std::to_string(run.output_times.size()));
   }
   if (const toml::node* n = root.get("damping")) {
     const auto& spec = damping_section();
@@ -512,6 +531,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
           r.fail(path, "`master_body` and `master_surface` (or a rigid `plane`)", "missing");
         require_body(c.master_body, path + ".master_body");
       }
+      if (!c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface)
+        r.fail(path, "a master surface other than the slave surface (self-contact of one surface is not supported yet)",
+               "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself");
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
       if (c.two_pass && c.plane) r.fail(path + ".two_pass", "false for a rigid plane", "true");

@@ -86,3 +86,49 @@ TEST(Objects, BadBoxParameters) {
   EXPECT_THROW(mesher::mesh_box({0.1, 0, 0.1}, {0, 0, 0}, 0.01), InputError);
   EXPECT_THROW(mesher::mesh_box({0.1, 0.1, 0.1}, {0, 0, 0}, -1), InputError);
 }
+
+// Runaway guard: a 1e12-tet box is refused before gmsh starts (it used to run out of memory).
+TEST(Objects, HugeMeshesAreRefusedUpFront) {
+  try {
+    mesher::mesh_box({1, 1, 1}, {0, 0, 0}, 1e-4);
+    FAIL() << "expected a refusal";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--max-elements"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("6e+12 tets"), std::string::npos) << e.what();
+  }
+}
+
+// tactus's STL reader: binary and ASCII give the same closed surface; a binary header whose
+// count does not match the file size is refused (no third-party reader sees it).
+TEST(Objects, StlReaderBinaryAndAscii) {
+  testkit::TempDir dir;
+  write_cube_stl(dir / "a.stl", 2.0, false);
+  const auto a = mesher::read_stl(dir / "a.stl");
+  EXPECT_EQ(a.vertices.size(), 8u);
+  EXPECT_EQ(a.triangles.size(), 12u);
+  EXPECT_EQ(a.boundary_edges + a.non_manifold_edges, 0u);
+  {
+    std::ofstream o(dir / "b.stl", std::ios::binary);
+    o << std::string(80, ' ');
+    const std::uint32_t n = 12;
+    o.write(reinterpret_cast<const char*>(&n), 4);
+    for (const auto& t : a.triangles) {
+      float rec[12] = {0, 0, 0};
+      for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) rec[3 + 3 * k + c] = static_cast<float>(a.vertices[t[k]][c]);
+      o.write(reinterpret_cast<const char*>(rec), 48);
+      o.write("\0\0", 2);
+    }
+  }
+  const auto b = mesher::read_stl(dir / "b.stl");
+  EXPECT_EQ(b.vertices, a.vertices);
+  EXPECT_EQ(b.triangles, a.triangles);
+  std::filesystem::resize_file(dir / "b.stl", 84 + 50 * 11);
+  {
+    std::fstream f(dir / "b.stl", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(80);
+    const std::uint32_t n = 4000000000u;  // far more than the file holds
+    f.write(reinterpret_cast<const char*>(&n), 4);
+  }
+  EXPECT_THROW(mesher::read_stl(dir / "b.stl"), InputError);
+}

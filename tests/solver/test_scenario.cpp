@@ -246,3 +246,27 @@ TEST_F(ScenarioFile, ContactOverlapAtStartIsReported) {
     EXPECT_NE(msg.find("body 'pad'"), std::string::npos) << msg;
   }
 }
+
+// Silently accepted before: a surface in contact with itself (no self-contact exists yet).
+TEST_F(ScenarioFile, ContactOfASurfaceWithItselfIsRefused) {
+  expect_error(replace(contact_scenario(0.0105, "master_surface = \"zmax\""), "master_body = \"tool\"", "master_body = \"pad\""),
+               {"contact[0]", "self-contact", "\"pad/zmax\" against itself"});
+}
+
+// Silently accepted before: a duplicated node used by tets (a crack in the mesh).
+TEST_F(ScenarioFile, CrackedMeshIsRefused) {
+  TetMesh m = samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01);
+  // Give one tet its own copy of a node it shares with its neighbours.
+  const int shared = m.tets[0][0];
+  m.nodes.push_back(m.nodes[static_cast<std::size_t>(shared)]);
+  m.tets[0][0] = static_cast<int>(m.nodes.size()) - 1;
+  write_msh(dir / "pad.msh", m);
+  expect_error(kValid, {"pad.msh", "a crack", "conforming"}, true);
+}
+
+// Runaway guards: counted and refused before anything is built.
+TEST_F(ScenarioFile, RunawayOutputScheduleIsRefused) {
+  expect_error(replace(replace(kValid, "end_time = 1e-3", "end_time = 1000"), "output_times = [5e-4, 1e-3]", "output_interval = 1e-9"),
+               {"run.output_interval", "run.max_outputs", "1e+12 states"});
+  expect_error(replace(kValid, "output_times = [5e-4, 1e-3]", "output_interval = 1e-300"), {"run.output_interval", "run.max_outputs"});
+}

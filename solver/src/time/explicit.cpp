@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/solver/schedule.hpp"
 
 namespace tactus::solver {
 
@@ -32,7 +33,10 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   for (std::size_t i = 0; i < ndof; ++i) contact_inv_mass_[i] = model.constrained[i] ? 0.0 : inv_mass_[i];
   contact_.set_threads(forces_.threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
+  schedule_ = output_schedule(run);
+  while (next_target_ < schedule_.size() && schedule_[next_target_] <= 0) ++next_target_;
   stress_pass();
+  initial_critical_ = pass_.critical_step;
   double kinetic = 0;
   for (std::size_t i = 0; i < ndof; ++i) kinetic += 0.5 * model.mass[i / 3] * v_half_[i] * v_half_[i];
   energy_.kinetic = kinetic;
@@ -52,7 +56,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
     }
     user_dt_ = run.time_step;
   }
-  dt_next_ = choose_step();
+  choose_step();
 }
 
 void ExplicitSolver::stress_pass() {
@@ -73,12 +77,19 @@ void ExplicitSolver::stress_pass() {
   }
 }
 
-double ExplicitSolver::choose_step() const {
-  double dt = user_dt_ > 0 ? user_dt_ : run_.time_step_safety * pass_.critical_step;
-  // Land exactly on the end time instead of overshooting it.
-  const double remaining = run_.end_time - time_;
-  if (remaining > 0 && dt > remaining) dt = remaining;
-  return dt;
+void ExplicitSolver::choose_step() {
+  const double nominal = user_dt_ > 0 ? user_dt_ : run_.time_step_safety * pass_.critical_step;
+  // A user step may exceed the critical one only when forced; landing never adds to it.
+  const double limit = user_dt_ > 0 ? std::max(user_dt_, pass_.critical_step) : pass_.critical_step;
+  nominal_next_ = nominal;
+  next_lands_ = false;
+  if (next_target_ >= schedule_.size()) {
+    dt_next_ = nominal;
+    return;
+  }
+  const StepChoice c = choose_landing_step(schedule_[next_target_] - time_, nominal, limit);
+  dt_next_ = c.dt;
+  next_lands_ = c.lands;
 }
 
 std::string ExplicitSolver::describe_step_limit() const {
@@ -179,12 +190,24 @@ void ExplicitSolver::advance_position() {
   const double dt = dt_next_;
 #pragma omp parallel for num_threads(forces_.threads()) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) u_[i] += dt * v_half_[i];
-  time_ += dt;
+  min_step_ratio_ = std::min(min_step_ratio_, dt / nominal_next_);
+  if (next_lands_) {
+    time_ = schedule_[next_target_++];  // exactly, not the sum of the steps
+  } else {
+    time_ += dt;
+  }
   ++step_;
   dt_prev_ = dt;
   velocity_advanced_ = false;
   stress_pass();
-  dt_next_ = choose_step();
+  if (pass_.critical_step < 1e-3 * initial_critical_) {
+    std::ostringstream o;
+    o << "the stable time step collapsed to " << pass_.critical_step << " s at step " << step_ << ", t = " << time_
+      << " s, below 1e-3 of the initial " << initial_critical_ << " s: " << model_.describe_element(pass_.limiting_element)
+      << " is being crushed or its material stiffens without bound (fibres?); the run would not finish";
+    throw NumericalError(o.str());
+  }
+  choose_step();
 }
 
 std::size_t ExplicitSolver::memory_bytes() const {

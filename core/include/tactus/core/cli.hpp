@@ -2,7 +2,8 @@
 // The command-line convention shared by every tactus executable: --help, --version,
 // -o/--output, --force, -v/--verbose (repeatable), -q/--quiet; errors reported as one line
 // "<program>: error: <what>" with a non-zero exit (1 bad input or an output that cannot be
-// written, 2 usage, 3 numerical failure, 4 internal error, 128 + signal when interrupted).
+// written, 2 usage, 3 numerical failure, 4 internal error, 5 a reference check failed,
+// 128 + signal when interrupted).
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <functional>

@@ -39,6 +39,12 @@ class WriteError : public Error {
   std::string path_;
 };
 
+// A run that finished but whose figures differ from a stored reference beyond tolerance.
+class CheckFailed : public Error {
+ public:
+  using Error::Error;
+};
+
 // A physics or numerical failure during a run: NaN, an inverted element, energy blow-up.
 class NumericalError : public Error {
  public:

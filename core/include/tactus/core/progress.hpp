@@ -17,6 +17,8 @@ class Progress {
 
   // Cheap to call every iteration: redraws at most ~10 times a second.
   void update(std::size_t done, const std::string& note = {});
+  // Whether update() would redraw now (so a caller builds its note only then).
+  bool due() const;
   void finish(const std::string& note = {});
   double elapsed_seconds() const;
 

@@ -25,7 +25,12 @@ struct ImageMeshParams {
   bool restore_volumes = true;      // offset surfaces to the label volumes (see image_mesher.cpp)
   bool peel_skin_slivers = true;    // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
   unsigned seed = 0;
+  double max_elements = 1e7;        // refused above this many expected tets (a runaway guard; raise it knowingly)
 };
+
+// The number of tets CGAL's cell-size criterion is expected to give for these labels, from each
+// subdomain's volume and cell size (tets average about a tenth of their circumradius cubed).
+double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& params);
 
 // Physical groups written: volumes by label (1 "soft_tissue", 2.. the label table's names, e.g.
 // "bone_02"), surfaces 1001 "skin" (soft tissue / outside) and 1002 "bone_interface".

@@ -11,10 +11,23 @@
 
 namespace tactus::mesher {
 
-TetMesh mesh_box(const Vec3& size, const Vec3& origin, double element_size, const std::string& name = "block");
+// About this many tets for a volume V meshed at element size h: 6 V / h^3 (gmsh's Delaunay gives
+// 5-6); meshes expected above `max_elements` are refused before gmsh starts.
+TetMesh mesh_box(const Vec3& size, const Vec3& origin, double element_size, const std::string& name = "block",
+                 double max_elements = 1e7);
+
+// A triangle surface read from STL (ASCII or binary) by tactus's own reader: vertices merged
+// where their coordinates are equal, every value checked.
+struct StlSurface {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  std::size_t boundary_edges = 0, non_manifold_edges = 0;  // edges with one, or more than two, triangles
+};
+StlSurface read_stl(const std::filesystem::path& file);
 
 // Meshes the volume bounded by a closed, 2-manifold STL surface (units as in the file, scaled
 // by `scale` to metres). An open STL (boundary edges) is refused with their count.
-TetMesh mesh_stl_object(const std::filesystem::path& stl, double element_size, double scale, const std::string& name = "object");
+TetMesh mesh_stl_object(const std::filesystem::path& stl, double element_size, double scale, const std::string& name = "object",
+                        double max_elements = 1e7);
 
 }  // namespace tactus::mesher

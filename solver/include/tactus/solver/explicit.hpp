@@ -45,6 +45,14 @@ class ExplicitSolver {
   double time() const { return time_; }
   std::size_t step_index() const { return step_; }
   double time_step() const { return dt_next_; }          // dt^{n+1/2}
+  double last_step() const { return dt_prev_; }          // dt^{n-1/2}: the step that reached t^n
+  // The output times the run lands on exactly (schedule.hpp), ending with end_time.
+  const std::vector<double>& schedule() const { return schedule_; }
+  // True when t^n is exactly the end time.
+  bool finished() const { return time_ == run_.end_time; }
+  // Smallest ratio of a step taken to the nominal step at that time (>= 0.5 by construction).
+  double min_step_ratio() const { return min_step_ratio_; }
+  double initial_critical_step() const { return initial_critical_; }
   double critical_step() const { return pass_.critical_step; }
   std::size_t limiting_element() const { return pass_.limiting_element; }
   const StressPassResult& stress_pass() const { return pass_; }
@@ -70,7 +78,7 @@ class ExplicitSolver {
 
  private:
   void stress_pass();
-  double choose_step() const;
+  void choose_step();  // sets dt_next_ and whether it lands on the next scheduled time
   double external_force(std::size_t dof) const;
 
   const Model& model_;
@@ -86,6 +94,10 @@ class ExplicitSolver {
   double pending_contact_normal_ = 0, pending_contact_friction_ = 0;
   double stress_seconds_ = 0, contact_seconds_ = 0;
   double time_ = 0, dt_prev_ = 0, dt_next_ = 0, user_dt_ = 0;
+  std::vector<double> schedule_;
+  std::size_t next_target_ = 0;  // first scheduled time > time_
+  bool next_lands_ = false;
+  double nominal_next_ = 0, min_step_ratio_ = 1, initial_critical_ = 0;
   double pending_external_ = 0, pending_damping_ = 0;  // F^{n-1} . du^{n-1/2} halves (Belytschko's trapezoid)
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;

@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "tactus/core/output.hpp"
 #include "tactus/solver/scenario.hpp"
 
@@ -28,6 +30,8 @@ struct RunSummary {
   double energy_balance_error = 0;           // final, J
   double max_relative_balance_error = 0;     // max over steps of |error| / scale
   std::size_t outputs = 0;
+  std::vector<double> von_mises_peak;  // per material block, over the output states
+  nlohmann::json run_json;             // what run.json holds
 };
 
 // Writes into `out` (checks its free space against the estimated size first) and commits it.

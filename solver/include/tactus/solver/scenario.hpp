@@ -27,6 +27,8 @@ struct RunSpec {
   double gravity_ramp_time = 0;
   int threads = 0;  // 0: all cores
   int history_every = 0;  // 0: automatic (about 2000 rows)
+  double max_outputs = 10000;  // runaway guards: refused above these
+  double max_steps = 1e7;
 };
 
 struct DampingSpec {
