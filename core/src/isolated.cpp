@@ -11,6 +11,7 @@
 #include <cstring>
 #include <new>
 #include <cstdio>
+#include <filesystem>
 
 #include "tactus/core/interrupt.hpp"
 
@@ -74,6 +75,14 @@ std::uint64_t physical_memory() {
 }
 
 }  // namespace
+
+IsolationLimits limits_for_file(const std::string& file, double base, double per_mb) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  IsolationLimits l;
+  l.seconds = base + per_mb * (ec ? 0.0 : static_cast<double>(size) / 1e6);
+  return l;
+}
 
 std::string run_isolated(const std::string& file, const std::string& kind, const std::function<void(ByteWriter&)>& work,
                          IsolationLimits limits) {

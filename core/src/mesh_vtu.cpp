@@ -170,7 +170,7 @@ VtuContents read_vtu(const fs::path& file) {
     w.put_vector(v.mesh.tet_group);
     put_fields(w, v.point_fields);
     put_fields(w, v.cell_fields);
-  });
+  }, limits_for_file(fname));
   ByteReader r(bytes);
   VtuContents out;
   out.mesh.nodes = r.get_vector<Vec3>();

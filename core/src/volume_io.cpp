@@ -331,7 +331,7 @@ Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* 
     w.put_vector(v.data);
     w.put<std::uint64_t>(table.size());
     for (const auto& [id, name] : table) w.put(id), w.put_string(name);
-  });
+  }, limits_for_file(fname, 20, 2));
   ByteReader r(bytes);
   Volume<T> v;
   v.dims = r.get<std::array<int, 3>>();
@@ -403,7 +403,7 @@ Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
     }
     w.put(d), w.put(spacing), w.put(origin);
     w.put_vector(data);
-  });
+  }, limits_for_file(fname, 20, 2));
   ByteReader r(bytes);
   Volume<T> v;
   v.dims = r.get<std::array<int, 3>>();

@@ -143,9 +143,11 @@ Anatomy build_anatomy(double flexion) {
 }  // namespace
 
 Phantom make_hand_phantom(const PhantomParams& p) {
-  if (!(p.voxel_mm > 0) || !(p.slice_mm > 0))
-    throw InputError("phantom parameters", "voxel_mm/slice_mm", "positive sizes");
-  if (p.noise_hu < 0 || p.blur_voxels < 0) throw InputError("phantom parameters", "noise/blur", "values >= 0");
+  for (double v : {p.voxel_mm, p.slice_mm})
+    if (!(v >= 0.05 && v <= 50)) throw InputError("phantom parameters", "--voxel-mm/--slice-mm", "voxel sizes from 0.05 to 50 mm", std::to_string(v));
+  if (!(p.noise_hu >= 0 && p.noise_hu <= 5000) || !(p.blur_voxels >= 0 && p.blur_voxels <= 20))
+    throw InputError("phantom parameters", "--noise/--blur", "noise 0..5000 HU and blur 0..20 voxels");
+  if (!(std::abs(p.flexion_deg) <= 90)) throw InputError("phantom parameters", "--flexion", "an angle within +-90 degrees", std::to_string(p.flexion_deg));
   const Anatomy h = build_anatomy(p.flexion_deg * M_PI / 180);
 
   // Bounding box of the envelope, sampled on a coarse grid, plus the margin.
@@ -175,6 +177,8 @@ Phantom make_hand_phantom(const PhantomParams& p) {
   Phantom out;
   const std::array<double, 3> spacing_m{step[0] * 1e-3, step[1] * 1e-3, step[2] * 1e-3};
   const std::array<double, 3> origin_m{origin_mm[0] * 1e-3, origin_mm[1] * 1e-3, origin_mm[2] * 1e-3};
+  // 1 (truth) + 2 (CT) + 4 + 4 (HU and its blur buffer) bytes per voxel: refused before allocating.
+  validate_volume_geometry(dims, spacing_m, origin_m, 11, "phantom parameters", "--voxel-mm/--slice-mm");
   out.truth = Volume<std::uint8_t>(dims, spacing_m, origin_m, 0);
   out.ct = Volume<std::int16_t>(dims, spacing_m, origin_m, 0);
   out.labels[0] = "background";

@@ -1,6 +1,10 @@
 #include "tactus/segment/stack.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -133,6 +137,20 @@ std::map<std::uint64_t, fs::path> list_slices(const fs::path& folder) {
   return slices;
 }
 
+// Runs f with stderr closed: libpng and libtiff print their own complaints about corrupt data,
+// which tactus reports once, in its own words.
+template <class F>
+auto quietly(F&& f) {
+  std::fflush(stderr);
+  const int saved = dup(STDERR_FILENO);
+  const int null = open("/dev/null", O_WRONLY);
+  if (null >= 0) dup2(null, STDERR_FILENO), close(null);
+  auto result = f();
+  std::fflush(stderr);
+  if (saved >= 0) dup2(saved, STDERR_FILENO), close(saved);
+  return result;
+}
+
 }  // namespace
 
 SliceStack read_slice_stack(const fs::path& folder) {
@@ -189,7 +207,7 @@ SliceStack read_slice_stack(const fs::path& folder) {
     Progress progress("read slices", slices.size());
     int k = 0;
     for (const auto& [num, path] : slices) {
-      const cv::Mat img = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+      const cv::Mat img = quietly([&] { return cv::imread(path.string(), cv::IMREAD_UNCHANGED); });
       if (img.empty()) throw InputError(path.string(), "", "a readable 8- or 16-bit PNG/TIFF image", "unreadable");
       if (img.channels() != 1) throw InputError(path.string(), "", "a single-channel (grey) image", std::to_string(img.channels()) + " channels");
       if (img.depth() != CV_8U && img.depth() != CV_16U) throw InputError(path.string(), "", "8- or 16-bit unsigned pixels", "another pixel type");
@@ -214,7 +232,7 @@ SliceStack read_slice_stack(const fs::path& folder) {
     progress.finish();
     w.put(nx), w.put(ny), w.put(depth);
     w.put_vector(stored);
-  });
+  }, IsolationLimits{30.0 + 0.5 * static_cast<double>(slices.size()), 0});
   ByteReader r(bytes);
   SliceStack out;
   const int nx = r.get<int>(), ny = r.get<int>();

@@ -6,7 +6,10 @@
 #   2. a re-run skips all five stages;
 #   3. a run that ends before the bodies meet: the report says no contact occurred;
 #   4. a stage failing mid-way (bad scenario): the pipeline names it, earlier outputs stay;
-#   5. a results folder with a missing state file: tactus-post refuses it, naming the file.
+#   5. a results folder with a missing state file: tactus-post refuses it, naming the file;
+#   6. interrupts: SIGTERM during the solve stops it cleanly (no partial folder, the stale report
+#      removed, pipeline.json "interrupted"); a second pipeline on a locked folder is refused;
+#      a folder tactus did not write is refused as the work folder.
 # Usage: e2e.sh <build dir>
 set -euo pipefail
 BUILD=$(cd "$1" && pwd)
@@ -38,6 +41,7 @@ run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 | tee "$T/third.log"
 grep -q "segment: unchanged, skipped" "$T/third.log" || fail "segment re-ran although its input did not change"
 grep -q "== solve: done" "$T/third.log" || fail "solve did not re-run with a new end time"
 "$PY" "$SRC/tests/pipeline/check_report.py" "$T/work/solve" "$T/work/report" --expect-no-contact
+cp -r "$T/work/solve" "$T/broken"   # for 5.
 
 echo "--- 4. a stage failing mid-way"
 sed 's/^friction = 0.3/friction = -0.3/' "$SRC/pipeline/scenarios/hand_block.toml" > "$T/bad.toml"
@@ -46,9 +50,11 @@ cat "$T/fourth.err"
 grep -q "stage 'solve' failed" "$T/fourth.err" || fail "the failing stage is not named"
 grep -q "contact\[0\].friction" "$T/fourth.err" || fail "the solver's message is not shown"
 [ -f "$T/work/mesh/mesh.msh" ] && [ -f "$T/work/segment/labels.h5" ] || fail "earlier stages' outputs were removed"
+[ ! -e "$T/work/report" ] || fail "a report describing older results was left behind after the failed solve"
+"$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='failed' and j['failed_stage']=='solve' else 1)" \
+  || fail "pipeline.json does not record the failed solve"
 
 echo "--- 5. a results folder missing a state file"
-cp -r "$T/work/solve" "$T/broken"
 rm "$T/broken/results/state_0000.vtu"
 set +e
 "$BUILD/postproc/tactus-post" "$T/broken" -o "$T/broken_report" --no-pictures 2> "$T/fifth.err"
@@ -58,4 +64,31 @@ cat "$T/fifth.err"
 [ "$rc" -eq 1 ] || fail "tactus-post exit code $rc (expected 1)"
 grep -q "state_0000.vtu is missing" "$T/fifth.err" || fail "the missing file is not named"
 [ ! -e "$T/broken_report" ] || fail "a report was left behind"
+echo "--- 6. interrupts, the lock, a foreign work folder"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-3 > /dev/null   # a complete run again, report included
+"$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/work" --end-time 2e-3 \
+  --mesh-args "$MESH_ARGS" --object "$OBJECT" -q > "$T/sixth.log" 2> "$T/sixth.err" &
+pid=$!
+for _ in $(seq 1 100); do grep -q "== solve:" "$T/sixth.log" 2>/dev/null && break; sleep 0.2; done
+sleep 1
+# While it runs: a second pipeline on the same folder is refused.
+if "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/work" -q 2> "$T/lock.err"; then
+  fail "a second pipeline ran on a locked folder"
+fi
+grep -q "another tactus-pipeline (pid $pid) is running" "$T/lock.err" || { cat "$T/lock.err"; fail "the lock message"; }
+kill -TERM $pid
+set +e; wait $pid; rc=$?; set -e
+cat "$T/sixth.err"
+[ "$rc" -eq 143 ] || fail "interrupted pipeline exit code $rc (expected 143)"
+grep -q "interrupted" "$T/sixth.err" || fail "no interrupt message"
+"$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='interrupted' and j['failed_stage']=='solve' else 1)" \
+  || fail "pipeline.json does not record the interrupt"
+[ -z "$(find "$T/work" -name '*.partial-*')" ] || fail "partial output left: $(find "$T/work" -name '*.partial-*')"
+[ ! -e "$T/work/report" ] || fail "the old report was left looking current"
+pgrep -f "tactus-solve.*$T/work" > /dev/null && fail "the solver is still running"
+mkdir -p "$T/mine" && echo "my notes" > "$T/mine/notes.txt"
+if "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/mine" -q 2> "$T/foreign.err"; then
+  fail "a foreign folder was used"
+fi
+grep -q "did not write" "$T/foreign.err" && [ "$(cat "$T/mine/notes.txt")" = "my notes" ] || fail "the foreign folder message or content"
 echo "e2e: all good"

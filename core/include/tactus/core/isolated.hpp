@@ -82,6 +82,10 @@ struct IsolationLimits {
   std::uint64_t memory_bytes = 0;  // address-space limit; 0: the machine's physical memory
 };
 
+// A time limit for reading a file of this size: `base` seconds plus `per_mb` per megabyte. A
+// reader that loops forever on a corrupt file (VTK's XML reader does, on some) is stopped by it.
+IsolationLimits limits_for_file(const std::string& file, double base = 10, double per_mb = 1);
+
 // Runs `work` in a child process and returns what it wrote. InputErrors thrown by `work` come
 // back as the same message; other exceptions, crashes, hangs and memory exhaustion become an
 // InputError naming `file` and saying that this `kind` of file (e.g. "HDF5 file") is corrupt.

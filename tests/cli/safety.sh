@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# cli/safety: what a new user did that lost data or crashed (the bad-input probe), now refused with
+# one clear message and the user's files untouched; interrupts leave nothing half-written.
+# Usage: safety.sh BUILD_DIR
+set -u
+B=$(cd "$1" && pwd)
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fail=0
+bad() { echo "FAIL: $*"; fail=1; }
+expect() {  # expect RC FRAGMENT -- command...   (stderr must contain FRAGMENT)
+  local want=$1 frag=$2
+  shift 3
+  local err rc
+  err=$("$@" 2>&1 >/dev/null)
+  rc=$?
+  if [ "$rc" != "$want" ] || ! grep -qF -- "$frag" <<<"$err"; then bad "$* -> rc $rc (want $want), stderr: $err"; fi
+}
+
+"$B/data_samples/tactus-sample-mesh" --size 0.02 0.02 0.02 --cells 4 4 4 -o "$T/case/cube.msh" -q
+cat > "$T/case/s.toml" <<'TOML'
+[run]
+end_time = 0.05
+[[bodies]]
+name = "cube"
+mesh = "cube.msh"
+materials = { "*" = "rubber" }
+initial_velocity = [0.1, 0, 0]
+[materials.rubber]
+type = "neo_hookean"
+mu = 3000.0
+bulk = 50000.0
+density = 1000.0
+TOML
+
+# 1. Data loss: a folder with a user's thesis, the current folder, the results being read.
+mkdir -p "$T/mydata" && echo "my thesis" > "$T/mydata/thesis.tex"
+expect 1 "did not write" -- "$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/mydata"
+[ "$(cat "$T/mydata/thesis.tex")" = "my thesis" ] || bad "thesis.tex changed"
+(cd "$T/case" && expect 1 "current folder" -- "$B/solver/tactus-solve" "$T/case/s.toml" -o .)
+[ -f "$T/case/s.toml" ] && [ -f "$T/case/cube.msh" ] || bad "the case folder lost files"
+"$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/res" -q || bad "a valid run failed"
+expect 1 "is an input" -- "$B/postproc/tactus-post" "$T/res" -o "$T/res" --no-pictures
+[ -f "$T/res/run.json" ] || bad "tactus-post deleted the results it read"
+"$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/res" -q || bad "replacing its own previous output failed"
+cp -a "$T/res" "$T/other"   # another tool's output: replaced only with --force
+expect 1 "holds the output of tactus-solve" -- "$B/postproc/tactus-post" "$T/res" -o "$T/other" --no-pictures
+"$B/postproc/tactus-post" "$T/res" -o "$T/other" --no-pictures --force -q && [ -f "$T/other/summary.md" ] || bad "--force did not replace"
+expect 1 "cannot" -- "$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/case/cube.msh/out"
+expect 1 "cannot" -- "$B/solver/tactus-solve" "$T/case/s.toml" -o /proc/tactus-out
+
+# 2. Values that were ignored or crashed.
+for v in 0 -1 nan; do expect 1 "--end-time" -- "$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/e" --end-time "$v"; done
+sed 's/end_time = 0.05/end_time = 1e11/' "$T/case/s.toml" > "$T/case/long.toml"
+expect 1 "run.max_steps" -- "$B/solver/tactus-solve" "$T/case/long.toml" -o "$T/e"
+cp -r "$T/res" "$T/res_bad" && sed -i 's/"steps": [0-9]*/"steps": "many"/' "$T/res_bad/run.json" && rm -f "$T/res_bad/.tactus-output.json"
+expect 1 "run.json: steps" -- "$B/postproc/tactus-post" "$T/res_bad" -o "$T/rep" --no-pictures
+expect 1 "cannot" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.01 -o "$T/case/cube.msh/x.msh"
+expect 1 "--max-elements" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.0001 -o "$T/huge.msh"
+expect 1 "did not write" -- "$B/data_samples/tactus-sample-mesh" -o "$T/mydata/thesis.tex"
+
+# 3. Interrupts: SIGINT and SIGTERM stop a run cleanly; a killed run's staging is removed next time.
+sed 's/end_time = 0.05/end_time = 500/; s/\[run\]/[run]\ntime_step = 1e-6\nmax_steps = 1e12/' "$T/case/s.toml" > "$T/case/slow.toml"
+for sig in INT TERM; do
+  "$B/solver/tactus-solve" "$T/case/slow.toml" -o "$T/slow" -q 2> "$T/sig.err" &
+  pid=$!
+  sleep 1.5
+  kill -$sig $pid
+  wait $pid
+  rc=$?
+  want=$([ $sig = INT ] && echo 130 || echo 143)
+  [ "$rc" = "$want" ] || bad "SIG$sig: exit $rc (want $want): $(cat "$T/sig.err")"
+  grep -q "interrupted (SIG$sig); partial output removed" "$T/sig.err" || bad "SIG$sig message: $(cat "$T/sig.err")"
+  [ ! -e "$T/slow" ] && [ -z "$(ls -d "$T"/slow.partial-* 2>/dev/null)" ] || bad "SIG$sig left output behind"
+done
+"$B/solver/tactus-solve" "$T/case/slow.toml" -o "$T/slow" -q 2>/dev/null &
+pid=$!
+sleep 1.5
+kill -9 $pid
+wait $pid 2>/dev/null
+[ -n "$(ls -d "$T"/slow.partial-$pid 2>/dev/null)" ] || bad "kill -9 left no staging folder (test premise)"
+"$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/slow" -q || bad "the run after the killed one failed"
+[ -z "$(ls -d "$T"/slow.partial-* 2>/dev/null)" ] || bad "the stale staging of the killed run is still there"
+
+[ $fail = 0 ] && echo "all safety checks passed"
+exit $fail

@@ -1,0 +1,423 @@
+// tactus-fuzz: deterministic mutation fuzzing of every reader of user files. For each reader a
+// valid input is made, then mutated N times (bit flips, interesting bytes and numbers, inserted,
+// deleted, duplicated and truncated runs, duplicated and dropped lines), each mutation read in a
+// forked child with a time and memory limit. Outcomes: accepted, refused (a tactus error: the
+// expected answer to corrupt input), or a failure: crash (signal), hang (time limit) or internal
+// error (an exception that is not a tactus error). Failing inputs are saved for regression tests.
+//
+//   tactus-fuzz [--readers a,b,..] [--mutations N] [--seed S] [--save DIR]
+//   tactus-fuzz --replay READER FILE...     (the regression corpus: each file in place of the seed)
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/mesh.hpp"
+#include "tactus/core/volume.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
+#include "tactus/data_samples/phantom.hpp"
+#include "tactus/postproc/results.hpp"
+#include "tactus/postproc/summary.hpp"
+#include "tactus/segment/stack.hpp"
+#include "tactus/solver/model.hpp"
+#include "tactus/solver/run.hpp"
+#include "tactus/solver/scenario.hpp"
+
+namespace fs = std::filesystem;
+using namespace tactus;
+
+namespace {
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+void write_file(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary | std::ios::trunc) << s; }
+
+// One reader under test: a folder with a valid input, the file in it that gets mutated, and the
+// call that reads it.
+struct Target {
+  std::string name;
+  fs::path file;                // mutated in place (the seed restored before each mutation)
+  bool text = false;            // text mutations (numbers, lines) in addition to bytes
+  std::function<void()> read;   // throws tactus errors on bad input
+  // Applied after mutating: lets mutations through a format's checksums to the decoder behind them.
+  std::function<std::string(std::string)> fixup = [](std::string s) { return s; };
+};
+
+// Recomputes every PNG chunk CRC that the chunk structure still allows, so the mutated image data
+// reaches the decoder (in its isolated child) instead of stopping at tactus's CRC check.
+std::string fix_png_crcs(std::string s) {
+  auto crc32 = [](const unsigned char* p, std::size_t n) {
+    std::uint32_t c = 0xFFFFFFFFu;
+    for (std::size_t i = 0; i < n; ++i) {
+      c ^= p[i];
+      for (int k = 0; k < 8; ++k) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return ~c;
+  };
+  std::size_t pos = 8;
+  auto* u = reinterpret_cast<unsigned char*>(s.data());
+  while (pos + 12 <= s.size()) {
+    const std::uint32_t len = (std::uint32_t{u[pos]} << 24) | (std::uint32_t{u[pos + 1]} << 16) | (std::uint32_t{u[pos + 2]} << 8) | u[pos + 3];
+    if (len > s.size() - pos - 12) break;
+    const std::uint32_t c = crc32(u + pos + 4, len + 4);
+    for (int k = 0; k < 4; ++k) u[pos + 8 + len + k] = static_cast<unsigned char>(c >> (24 - 8 * k));
+    pos += 12 + len;
+  }
+  return s;
+}
+
+// --------------------------------------------------------------------------------------------
+// Seed inputs, all small so each read takes milliseconds.
+const char* kScenario = R"(# two bodies, contact, boundaries, hgo with fibres
+[run]
+end_time = 1e-3
+output_times = [5e-4, 1e-3]
+time_step_safety = 0.9
+
+[damping]
+alpha = 10.0
+
+[[bodies]]
+name = "pad"
+mesh = "pad.msh"
+materials = { "*" = "skin" }
+initial_velocity = [0.0, 0.0, -1.0]
+
+[[bodies]]
+name = "base"
+mesh = "base.msh"
+materials = { "*" = "bone" }
+translate = [0.0, 0.0, -0.0105]
+
+[materials.skin]
+type = "hgo"
+c1 = 10206.9
+k1 = 1.7
+k2 = 882.847
+k = 1.0e8
+density = 1050.0
+fibres = [[1, 1, 0], [1, -1, 0]]
+
+[materials.bone]
+type = "linear_elastic"
+E = 10e9
+nu = 0.22
+density = 2150
+
+[[boundary]]
+body = "base"
+group = "zmin"
+type = "fixed"
+
+[[contact]]
+slave_body = "pad"
+slave_surface = "zmin"
+master_body = "base"
+master_surface = "zmax"
+friction = 0.3
+)";
+
+std::vector<Target> make_targets(const fs::path& work) {
+  std::vector<Target> t;
+  fs::create_directories(work);
+  {  // scenario: read and build (meshes, placement, materials, boundaries, contact surfaces)
+    const fs::path d = work / "scenario";
+    fs::create_directories(d);
+    write_msh(d / "pad.msh", samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01));
+    write_msh(d / "base.msh", samples::make_box_mesh(2, 2, 1, 0.01, 0.01, 0.01));
+    write_file(d / "s.toml", kScenario);
+    t.push_back({"scenario", d / "s.toml", true, [d] { solver::build_model(solver::read_scenario(d / "s.toml")); }});
+  }
+  for (bool binary : {false, true}) {  // .msh, both encodings
+    const fs::path d = work / (binary ? "msh_binary" : "msh_ascii");
+    fs::create_directories(d);
+    TetMesh m = samples::make_box_mesh(2, 2, 1, 0.02, 0.02, 0.01);
+    samples::perturb_interior_nodes(m, 0.01, 0.2, 3);
+    write_msh(d / "m.msh", m, binary);
+    t.push_back({d.filename().string(), d / "m.msh", !binary, [d] { read_msh(d / "m.msh"); }});
+  }
+  {  // slice stack: stack.json and one PNG slice
+    samples::PhantomParams p;
+    p.voxel_mm = p.slice_mm = 8.0;
+    const fs::path d = work / "stack";
+    samples::write_slice_stack(samples::make_hand_phantom(p).ct, d);
+    t.push_back({"stack_json", d / "stack.json", true, [d] { segment::read_slice_stack(d); }});
+    fs::path slice;
+    for (const auto& e : fs::directory_iterator(d))
+      if (e.path().extension() == ".png") slice = std::max(slice, e.path());
+    Target png{"png", slice, false, [d] { segment::read_slice_stack(d); }};
+    png.fixup = fix_png_crcs;
+    t.push_back(png);
+  }
+  {  // labels.h5
+    Volume<std::uint8_t> v({6, 5, 4}, {1e-3, 1e-3, 2e-3}, {0, 0, 0});
+    for (std::size_t i = 0; i < v.size(); ++i) v.data[i] = static_cast<std::uint8_t>(i % 3);
+    LabelTable table{{0, "background"}, {1, "soft_tissue"}, {2, "bone_02"}};
+    const fs::path d = work / "labels";
+    write_h5(d / "labels.h5", "/labels", v, &table);
+    t.push_back({"labels_h5", d / "labels.h5", false, [d] {
+                   LabelTable lt;
+                   read_h5<std::uint8_t>(d / "labels.h5", "/labels", &lt);
+                 }});
+  }
+  {  // a results folder: run.json, history.csv, a state .vtu
+    const fs::path d = work / "results";
+    fs::create_directories(d);
+    write_msh(d / "cube.msh", samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01));
+    write_file(d / "s.toml", R"([run]
+end_time = 2e-4
+[[bodies]]
+name = "cube"
+mesh = "cube.msh"
+materials = { "*" = "m" }
+initial_velocity = [1.0, 0, 0]
+[materials.m]
+type = "neo_hookean"
+mu = 1e5
+bulk = 1e6
+density = 1000
+)");
+    log::set_level(log::Level::quiet);
+    solver::run_simulation(solver::read_scenario(d / "s.toml"), d / "out");
+    fs::remove(d / "out" / ".tactus-output.json");  // mutated files are read, never replaced
+    const fs::path out = d / "out";
+    auto report = [out] { postproc::summarize(postproc::read_results(out)); };
+    t.push_back({"run_json", out / "run.json", true, report});
+    t.push_back({"history_csv", out / "history.csv", true, report});
+    t.push_back({"vtu", out / "results" / "state_0000.vtu", true, [out] { read_vtu(out / "results" / "state_0000.vtu"); }});
+  }
+  return t;
+}
+
+// --------------------------------------------------------------------------------------------
+// Mutations.
+const std::vector<std::string> kNumbers = {"0",    "-1",         "1e308",       "-1e308",       "nan",         "inf",  "-inf", "1e-308",
+                                           "1e30", "99999999999", "-2147483649", "4294967296", "18446744073709551616", "-0", "2.5"};
+
+std::string mutate(std::string s, bool text, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  auto pick = [&](std::size_t n) { return n == 0 ? std::size_t{0} : static_cast<std::size_t>(rng() % n); };
+  const int rounds = 1 + static_cast<int>(rng() % 3);
+  for (int r = 0; r < rounds; ++r) {
+    const int op = static_cast<int>(rng() % (text ? 10 : 6));
+    const std::size_t n = s.size();
+    switch (op) {
+      case 0:  // flip bits
+        for (int k = 0, m = 1 + static_cast<int>(rng() % 8); k < m && n; ++k) s[pick(n)] ^= static_cast<char>(1 << (rng() % 8));
+        break;
+      case 1: {  // interesting bytes
+        static const char bytes[] = {'\0', '\xff', '\x7f', '\x80', '-', '9', ' ', '\n', '"', '$', '[', '{', '}', ','};
+        for (int k = 0, m = 1 + static_cast<int>(rng() % 4); k < m && n; ++k) s[pick(n)] = bytes[pick(sizeof bytes)];
+        break;
+      }
+      case 2: {  // delete a run
+        const std::size_t at = pick(n), len = std::min<std::size_t>(1 + pick(64), n - at);
+        s.erase(at, len);
+        break;
+      }
+      case 3: {  // insert random bytes
+        std::string ins(1 + pick(64), '\0');
+        for (char& c : ins) c = static_cast<char>(rng());
+        s.insert(pick(n + 1), ins);
+        break;
+      }
+      case 4: {  // duplicate a chunk elsewhere
+        if (!n) break;
+        const std::size_t at = pick(n), len = std::min<std::size_t>(1 + pick(256), n - at);
+        s.insert(pick(n + 1), s.substr(at, len));
+        break;
+      }
+      case 5:  // truncate
+        s.resize(pick(n + 1));
+        break;
+      case 6: case 7: {  // replace a number with an interesting one
+        std::vector<std::pair<std::size_t, std::size_t>> numbers;
+        for (std::size_t i = 0; i < n;) {
+          if (std::isdigit(static_cast<unsigned char>(s[i]))) {
+            std::size_t j = i;
+            while (j < n && (std::isdigit(static_cast<unsigned char>(s[j])) || s[j] == '.' || s[j] == 'e' || s[j] == '-' || s[j] == '+')) ++j;
+            numbers.emplace_back(i, j - i);
+            i = j;
+          } else {
+            ++i;
+          }
+        }
+        if (numbers.empty()) break;
+        const auto [at, len] = numbers[pick(numbers.size())];
+        s.replace(at, len, kNumbers[pick(kNumbers.size())]);
+        break;
+      }
+      case 8: case 9: {  // duplicate or drop a line
+        std::vector<std::size_t> starts{0};
+        for (std::size_t i = 0; i < n; ++i)
+          if (s[i] == '\n' && i + 1 < n) starts.push_back(i + 1);
+        const std::size_t k = pick(starts.size());
+        const std::size_t begin = starts[k], end = k + 1 < starts.size() ? starts[k + 1] : n;
+        const std::string line = s.substr(begin, end - begin);
+        if (op == 8) s.insert(begin, line); else s.erase(begin, end - begin);
+        break;
+      }
+      default: break;
+    }
+  }
+  return s;
+}
+
+// --------------------------------------------------------------------------------------------
+enum class Outcome { accepted, refused, crash, hang, internal };
+const char* outcome_name(Outcome o) {
+  switch (o) {
+    case Outcome::accepted: return "accepted";
+    case Outcome::refused: return "refused";
+    case Outcome::crash: return "CRASH";
+    case Outcome::hang: return "HANG";
+    case Outcome::internal: return "INTERNAL ERROR";
+  }
+  return "";
+}
+
+struct Limits {
+  unsigned seconds = 60;  // above the readers' own limits (10 s + 1 s/MB for these small files)
+  std::uint64_t memory = std::uint64_t{4} << 30;
+};
+
+// Reads in a child: exit 0 accepted, 10 refused (tactus error), 20 internal (other exception).
+Outcome read_in_child(const Target& t, const Limits& lim, std::string& detail) {
+  int fds[2];
+  if (pipe(fds) != 0) return Outcome::internal;
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    alarm(lim.seconds);
+#if !defined(__SANITIZE_ADDRESS__)
+    rlimit r{static_cast<rlim_t>(lim.memory), static_cast<rlim_t>(lim.memory)};
+    setrlimit(RLIMIT_AS, &r);
+#endif
+    int code = 0;
+    std::string what;
+    try {
+      t.read();
+    } catch (const tactus::Error& e) {
+      code = 10, what = e.what();
+    } catch (const std::exception& e) {
+      code = 20, what = e.what();
+    } catch (...) {
+      code = 20, what = "unknown exception";
+    }
+    if (::write(fds[1], what.data(), std::min<std::size_t>(what.size(), 4000)) < 0) code = 30;
+    _exit(code);
+  }
+  close(fds[1]);
+  char buf[4096];
+  const ssize_t got = read(fds[0], buf, sizeof buf);
+  detail.assign(buf, got > 0 ? static_cast<std::size_t>(got) : 0);
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (WIFSIGNALED(status)) {
+    detail = std::string("signal ") + strsignal(WTERMSIG(status));
+    return WTERMSIG(status) == SIGALRM ? Outcome::hang : Outcome::crash;
+  }
+  switch (WEXITSTATUS(status)) {
+    case 0: return Outcome::accepted;
+    case 10: return Outcome::refused;
+    default: return Outcome::internal;
+  }
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string x; std::getline(ss, x, sep);)
+    if (!x.empty()) out.push_back(x);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  std::string readers, save;
+  long mutations = 100;
+  std::uint64_t seed = 1;
+  std::string replay_reader;
+  std::vector<std::string> replay_files;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    auto next = [&] {
+      if (i + 1 >= args.size()) {
+        std::fprintf(stderr, "tactus-fuzz: %s needs a value\n", args[i].c_str());
+        std::exit(2);
+      }
+      return args[++i];
+    };
+    if (args[i] == "--readers") readers = next();
+    else if (args[i] == "--mutations") mutations = std::stol(next());
+    else if (args[i] == "--seed") seed = std::stoull(next());
+    else if (args[i] == "--save") save = next();
+    else if (args[i] == "--replay") {
+      replay_reader = next();
+      while (i + 1 < args.size()) replay_files.push_back(args[++i]);
+    } else {
+      std::fprintf(stderr, "usage: tactus-fuzz [--readers a,b] [--mutations N] [--seed S] [--save DIR] | --replay READER FILE...\n");
+      return 2;
+    }
+  }
+  log::set_level(log::Level::quiet);
+  const fs::path work = fs::temp_directory_path() / ("tactus-fuzz-" + std::to_string(getpid()));
+  std::vector<Target> targets = make_targets(work);
+  const std::vector<std::string> wanted = split(replay_reader.empty() ? readers : replay_reader, ',');
+  Limits lim;
+  int failures = 0;
+  std::printf("%-12s %9s %9s %9s %6s %6s %9s %8s\n", "reader", "inputs", "accepted", "refused", "crash", "hang", "internal", "seconds");
+  for (const Target& t : targets) {
+    if (!wanted.empty() && std::find(wanted.begin(), wanted.end(), t.name) == wanted.end()) continue;
+    const std::string original = read_file(t.file);
+    std::map<Outcome, long> count;
+    const auto t0 = std::chrono::steady_clock::now();
+    const long n = replay_reader.empty() ? mutations : static_cast<long>(replay_files.size());
+    for (long k = 0; k < n; ++k) {
+      const std::string input = replay_reader.empty() ? t.fixup(mutate(original, t.text, seed * 1000003ULL + static_cast<std::uint64_t>(k)))
+                                                      : read_file(replay_files[static_cast<std::size_t>(k)]);
+      write_file(t.file, input);
+      std::string detail;
+      const Outcome o = read_in_child(t, lim, detail);
+      ++count[o];
+      if (o == Outcome::crash || o == Outcome::hang || o == Outcome::internal) {
+        ++failures;
+        std::string where = replay_reader.empty() ? "mutation " + std::to_string(k) : replay_files[static_cast<std::size_t>(k)];
+        if (!save.empty() && replay_reader.empty()) {
+          fs::create_directories(fs::path(save) / t.name);
+          const fs::path keep = fs::path(save) / t.name / ("seed" + std::to_string(seed) + "-" + std::to_string(k) + t.file.extension().string());
+          write_file(keep, input);
+          where += " (saved as " + keep.string() + ")";
+        }
+        std::printf("  %s: %s on %s: %s\n", t.name.c_str(), outcome_name(o), where.c_str(), detail.substr(0, 300).c_str());
+      }
+    }
+    write_file(t.file, original);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("%-12s %9ld %9ld %9ld %6ld %6ld %9ld %8.1f\n", t.name.c_str(), n, count[Outcome::accepted], count[Outcome::refused],
+                count[Outcome::crash], count[Outcome::hang], count[Outcome::internal], seconds);
+    std::fflush(stdout);
+  }
+  std::error_code ec;
+  fs::remove_all(work, ec);
+  std::printf(failures ? "tactus-fuzz: %d failing inputs\n" : "tactus-fuzz: no crash, hang or internal error\n", failures);
+  return failures ? 1 : 0;
+}
