@@ -55,6 +55,9 @@ sed 's/end_time = 0.05/end_time = 1e11/' "$T/case/s.toml" > "$T/case/long.toml"
 expect 1 "run.max_steps" -- "$B/solver/tactus-solve" "$T/case/long.toml" -o "$T/e"
 cp -r "$T/res" "$T/res_bad" && sed -i 's/"steps": [0-9]*/"steps": "many"/' "$T/res_bad/run.json" && rm -f "$T/res_bad/.tactus-output.json"
 expect 1 "run.json: steps" -- "$B/postproc/tactus-post" "$T/res_bad" -o "$T/rep" --no-pictures
+mkdir -p "$T/nostates" && cp "$T/res/run.json" "$T/res/history.csv" "$T/nostates/" \
+  && printf '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n  </Collection>\n</VTKFile>\n' > "$T/nostates/results.pvd"
+expect 1 "at least one output state" -- "$B/postproc/tactus-post" "$T/nostates" -o "$T/rep" --no-pictures
 expect 1 "cannot" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.01 -o "$T/case/cube.msh/x.msh"
 expect 1 "--max-elements" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.0001 -o "$T/huge.msh"
 expect 1 "did not write" -- "$B/data_samples/tactus-sample-mesh" -o "$T/mydata/thesis.tex"

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "tactus/core/error.hpp"
@@ -121,6 +123,18 @@ TEST(VolumeErrors, NonPositiveSpacing) {
   v.spacing[1] = 0;
   write_h5(dir / "v.h5", "/labels", v);
   expect_input_error([&] { read_h5<std::uint8_t>(dir / "v.h5", "/labels"); }, {"spacing", "voxel size", "0 m along y"});
+}
+
+TEST(VolumeErrors, NonFiniteSpacingOrOrigin) {
+  TempDir dir;
+  auto v = random_volume<std::uint8_t>(1);
+  v.spacing[0] = std::numeric_limits<double>::infinity();
+  write_h5(dir / "v.h5", "/labels", v);
+  expect_input_error([&] { read_h5<std::uint8_t>(dir / "v.h5", "/labels"); }, {"spacing", "inf m along x"});
+  v = random_volume<std::uint8_t>(1);
+  v.origin[2] = std::nan("");
+  write_h5(dir / "w.h5", "/labels", v);
+  expect_input_error([&] { read_h5<std::uint8_t>(dir / "w.h5", "/labels"); }, {"origin", "along z"});
 }
 
 #include <hdf5.h>

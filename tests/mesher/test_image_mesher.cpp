@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -183,7 +184,22 @@ TEST(ImageMesherErrors, NoSoftTissue) {
 TEST(ImageMesherErrors, NonPositiveSpacing) {
   auto v = small_labels();
   v.spacing[2] = 0;
-  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"spacing", "positive"});
+  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"spacing", "voxel size"});
+  v.spacing[2] = std::numeric_limits<double>::infinity();  // segfaulted inside CGAL
+  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"spacing", "inf m along z"});
+}
+// A labelled body one voxel thick sent CGAL's initial point search into an endless loop.
+TEST(ImageMesherErrors, OneVoxelThickBodyIsRefused) {
+  Volume<std::uint8_t> v({12, 12, 5}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 0);
+  for (int y = 2; y < 10; ++y)
+    for (int x = 2; x < 10; ++x) v.at(x, y, 2) = 1;
+  expect_input_error([&] { mesher::mesh_label_volume(v, {}, {}); }, {"3 voxels thick", "1 voxel(s) along z"});
+}
+// A mesh far beyond the element limit is refused before CGAL starts.
+TEST(ImageMesherErrors, HugeMeshRefusedUpFront) {
+  mesher::ImageMeshParams p;
+  p.cell_size_mm = p.bone_cell_size_mm = 0.001;
+  expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"--max-elements", "tets at cell size"});
 }
 TEST(ImageMesherErrors, ImpossibleCriteria) {
   mesher::ImageMeshParams p;

@@ -154,3 +154,13 @@ TEST(Schedule, ReferenceCheckNamesTheFigureThatMoved) {
     if (!c.ok) failed.push_back(c.name);
   EXPECT_EQ(failed, (std::vector<std::string>{"energy.kinetic", "steps"}));
 }
+
+// Outputs closer than half a step (output_interval 2e-10 s wrote 600 identical states a second)
+// are refused, naming the two times and the step.
+TEST(Schedule, OutputsCloserThanHalfAStepAreRefused) {
+  testkit::TempDir dir;
+  Scenario sc = cube(dir.path(), 2e-3, 1e-4);
+  sc.run.output_interval = 2e-5;
+  testkit::expect_input_error([&] { run_simulation(sc, dir / "out"); }, {"run.output_interval", "half a time step", "0 s and 2e-05 s"});
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}

@@ -56,6 +56,19 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
     }
     user_dt_ = run.time_step;
   }
+  // Scheduled times closer than half a step apart cannot be landed on without tiny steps (each
+  // state would repeat the one before): refused, naming them.
+  const double nominal = user_dt_ > 0 ? user_dt_ : run.time_step_safety * pass_.critical_step;
+  double before = 0;
+  for (double t : schedule_) {
+    if (t > 0 && t - before < 0.5 * nominal) {
+      std::ostringstream o, f;
+      o << "output times at least half a time step apart (the step is " << nominal << " s, " << describe_step_limit() << ")";
+      f << before << " s and " << t << " s";
+      throw InputError("scenario", run.output_interval > 0 ? "run.output_interval" : "run.output_times", o.str(), f.str());
+    }
+    before = t;
+  }
   choose_step();
 }
 
