@@ -72,6 +72,12 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
   } catch (const std::exception& e) {
     std::cerr << program << ": internal error: " << e.what() << '\n';
     return 4;
+  } catch (const std::string& e) {  // (gmsh's API throws strings)
+    std::cerr << program << ": internal error: " << e << '\n';
+    return 4;
+  } catch (...) {
+    std::cerr << program << ": internal error: an unknown exception\n";
+    return 4;
   }
 }
 

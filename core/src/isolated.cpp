@@ -36,7 +36,7 @@ void send(int fd, char tag, const std::string& payload) {
   write_all(fd, payload.data(), payload.size());
 }
 
-std::uint64_t physical_memory() {
+[[maybe_unused]] std::uint64_t physical_memory() {
   const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && size > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(size) : 0;
 }

@@ -190,8 +190,14 @@ TetMesh mesh_stl_object(const std::filesystem::path& stl, double h, double scale
   }
   gmsh::model::mesh::addNodes(2, 1, node_tags, coords);
   gmsh::model::mesh::addElementsByType(1, 2, element_tags, element_nodes);
-  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, false, M_PI);
-  gmsh::model::mesh::createGeometry();
+  // Patches split until each is parametrizable: a smooth closed surface (a sphere, a cylinder
+  // handle's round end) has no feature edge to split it, and gmsh cannot parametrize it whole.
+  try {
+    gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
+    gmsh::model::mesh::createGeometry();
+  } catch (...) {  // gmsh's API throws strings
+    throw InputError(file, "", "a surface gmsh can rebuild for meshing", GmshSession::last_error());
+  }
   gmsh::vectorpair surfaces;
   gmsh::model::getEntities(surfaces, 2);
   std::vector<int> tags;

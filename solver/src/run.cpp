@@ -41,7 +41,7 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   }
   std::vector<MeshField> point_fields{disp, vel};
   if (contact && !contact->empty()) {
-    // Contact at this time: pressure r_n / A, tangential traction r_t / A, status, gap (DESIGN.md).
+    // Contact at this time: pressure r_n / A, tangential traction r_t / A, status, gap (docs/design.md).
     std::vector<double> pressure, traction, status, gap;
     contact->node_fields(pressure, traction, status, gap);
     MeshField p{"contact_pressure", 1, std::vector<double>(N)}, t{"contact_traction", 3, std::vector<double>(3 * N)},

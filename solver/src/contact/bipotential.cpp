@@ -22,7 +22,7 @@ inline V3 cross(const V3& a, const V3& b) {
 }
 inline double norm(const V3& a) { return std::sqrt(dot(a, a)); }
 
-// The bi-potential augmented traction (eq. 11, DESIGN.md): tau = r + rho(-u_t - (u_n + mu|u_t|) n),
+// The bi-potential augmented traction (eq. 11, docs/design.md): tau = r + rho(-u_t - (u_n + mu|u_t|) n),
 // where u_n already contains h/dt.
 inline V3 augmented_traction(const V3& r, const V3& u_t, double u_n, const V3& n, double mu, double rho) {
   const double ut = norm(u_t), s = u_n + mu * ut;

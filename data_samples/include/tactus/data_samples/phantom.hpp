@@ -36,7 +36,7 @@ struct Phantom {
 
 Phantom make_hand_phantom(const PhantomParams& params);
 
-// Writes the DESIGN.md slice stack: slice_NNNN.png (16-bit, stored = HU - rescale_intercept)
+// Writes the slice stack of docs/design.md: slice_NNNN.png (16-bit, stored = HU - rescale_intercept)
 // and stack.json (spacing_mm, origin_mm, rescale_slope 1, rescale_intercept -1024, slices) into
 // `folder` (created; the caller stages it: tactus-phantom writes through an OutputFolder).
 void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::path& folder);

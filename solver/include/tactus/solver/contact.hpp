@@ -1,7 +1,7 @@
 #pragma once
 // Frictional contact by the bi-potential method (paper §2.1, eqs. 1-12), node to surface.
 //
-// Conventions (DESIGN.md): for a slave node s and its closest master point m on a triangle with
+// Conventions (docs/design.md): for a slave node s and its closest master point m on a triangle with
 // outward normal n, the gap is h = (x_s - x_m) . n (negative = penetration); the reaction r acts
 // on the slave node and -r is shared over the triangle's nodes with the barycentric weights N_i;
 // r = r_t + r_n n with Signorini h >= 0, r_n >= 0, h r_n = 0 (eq. 5) and the Coulomb cone
@@ -49,7 +49,7 @@ std::vector<std::array<int, 3>> surface_triangles(const Model& model, int tag);
 // The scenario's [[contact]] entries as directed pairs (two per two_pass entry) on model.contact_pairs.
 void add_scenario_contacts(Model& model, const Scenario& scenario);
 
-// The closed-form projection on the Coulomb cone K_mu in the frame of n (DESIGN.md, eq. 12):
+// The closed-form projection on the Coulomb cone K_mu in the frame of n (docs/design.md, eq. 12):
 // r = tau inside the cone; 0 in the polar cone (mu |tau_t| <= -tau_n); otherwise onto its surface
 // r_n = (tau_n + mu |tau_t|) / (1 + mu^2), r_t = mu r_n tau_t / |tau_t|.
 std::array<double, 3> coulomb_cone_projection(const std::array<double, 3>& tau, const std::array<double, 3>& n, double mu);

@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Compares two regression-set folders (run.sh) bit for bit: every array of every state .vtu,
+history.csv, and run.json's figures (not its timings). Prints one line per case.
+    compare.py A B"""
+import json
+import os
+import sys
+
+import numpy as np
+from vtk.util.numpy_support import vtk_to_numpy
+import vtk
+
+
+def arrays(path):
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(path)
+    r.Update()
+    g = r.GetOutput()
+    out = {"points": vtk_to_numpy(g.GetPoints().GetData())}
+    for kind, data in (("point", g.GetPointData()), ("cell", g.GetCellData())):
+        for i in range(data.GetNumberOfArrays()):
+            out[kind + ":" + data.GetArrayName(i)] = vtk_to_numpy(data.GetArray(i))
+    return out
+
+
+def figures(path):
+    j = json.load(open(path))
+    for k in ("wall_time_s", "timing_s", "scenario", "tactus_version"):
+        j.pop(k, None)
+    j.get("time_step", {}).pop("limit", None)
+    return j
+
+
+def compare(a, b):
+    diffs = []
+    for root, _, files in os.walk(a):
+        for f in sorted(files):
+            pa = os.path.join(root, f)
+            pb = os.path.join(b, os.path.relpath(pa, a))
+            if f.endswith(".vtu"):
+                A, B = arrays(pa), arrays(pb)
+                for k in sorted(set(A) | set(B)):
+                    if k not in A or k not in B:
+                        diffs.append(f"{f}: {k} only in one")
+                    elif A[k].shape != B[k].shape or not np.array_equal(A[k], B[k], equal_nan=True):
+                        d = np.nanmax(np.abs(A[k].astype(float) - B[k].astype(float))) if A[k].shape == B[k].shape else "shape"
+                        diffs.append(f"{f}: {k} differs (max {d})")
+            elif f == "history.csv":
+                if open(pa).read() != open(pb).read():
+                    diffs.append("history.csv differs")
+            elif f == "run.json":
+                if figures(pa) != figures(pb):
+                    diffs.append("run.json figures differ")
+    return diffs
+
+
+def main():
+    a, b = sys.argv[1], sys.argv[2]
+    bad = 0
+    for case in sorted(os.listdir(a)):
+        if not os.path.isdir(os.path.join(a, case)):
+            continue
+        d = compare(os.path.join(a, case), os.path.join(b, case))
+        print(f"{case:18s} {'bit-identical' if not d else 'DIFFERENT: ' + '; '.join(d[:4])}")
+        bad += bool(d)
+    sys.exit(1 if bad else 0)
+
+
+if __name__ == "__main__":
+    main()
