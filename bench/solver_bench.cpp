@@ -28,9 +28,14 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 Material bench_material(const std::string& name) {
-  if (name == "neo_hookean") return NeoHookean{3000.0, 50000.0, 1000.0};
-  if (name == "linear_elastic") return LinearElastic::from({{"E", 1e9}, {"nu", 0.3}, {"density", 2000}});
-  return Hgo{10206.9, 1.7, 882.847, 1e8, 1050, Vec3d(0.8660254, 0.5, 0), Vec3d(0.8660254, -0.5, 0)};
+  MaterialValues v;
+  if (name == "neo_hookean") v.numbers = {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}};
+  if (name == "linear_elastic") v.numbers = {{"E", 1e9}, {"nu", 0.3}, {"density", 2000}};
+  if (name == "hgo") {
+    v.numbers = {{"c1", 10206.9}, {"k1", 1.7}, {"k2", 882.847}, {"k", 1e8}, {"density", 1050}};
+    v.vectors["fibres"] = {Vec3{0.8660254, 0.5, 0}, Vec3{0.8660254, -0.5, 0}};
+  }
+  return Material::make(name, v);
 }
 
 // A deformed state: a smooth 3 % stretch/shear field with a little noise, so hgo fibres engage.
@@ -99,7 +104,7 @@ void cube(const std::filesystem::path& work) {
   sc.run.time_step = 1e-4;
   sc.run.output_times = {0.1, 0.2};
   sc.damping.alpha = 50;
-  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}}, {}};
+  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}}, {}}};
   BodySpec body;
   body.name = "cube";
   body.mesh = work / "cube.msh";
@@ -147,7 +152,7 @@ void contact_scaling(const std::vector<int>& sizes) {
       iterations = std::max(iterations, solver.contact_report().iterations);
     }
     const double contact_s = solver.contact_seconds() - contact0, stress_s = solver.stress_seconds() - stress0;
-    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master_triangles.size() / 3, pair.slave_nodes.size(),
+    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(),
                 m.num_elements, active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations);
     std::fflush(stdout);
   }

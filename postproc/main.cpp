@@ -8,6 +8,8 @@
 #include <memory>
 #include <string>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <vector>
@@ -94,6 +96,13 @@ int main(int argc, char** argv) {
   app.add_option("results", results_dir, "results folder (results.pvd, history.csv, run.json)")->required();
   app.add_option("--times", times, "times (s) of the von Mises pictures, nearest output state (default: all)");
   app.add_flag("--no-pictures", no_pictures, "numbers only (no rendering, no display needed)");
+  postproc::RenderOptions ro;
+  std::vector<double> view, section_normal;
+  app.add_option("--pressure-body", ro.pressure_body, "body the pressure map shows (default: the one carrying the highest pressure)");
+  app.add_option("--view", view, "direction from the model to the camera of the stress pictures, x y z "
+                                  "(default: along the model's axis of least extent)")->expected(3);
+  app.add_option("--section-normal", section_normal, "normal of the section plane, x y z (default: the longest axis of the "
+                                                     "body carrying the pressure)")->expected(3);
   return cli::run(app, argc, argv, common, [&] {
     const std::filesystem::path out = common.output.empty()
                                           ? std::filesystem::path(results_dir).parent_path() / "report"
@@ -104,8 +113,15 @@ int main(int argc, char** argv) {
     if (!no_pictures) {
       std::unique_ptr<VirtualDisplay> display;
       if (!std::getenv("DISPLAY") || !*std::getenv("DISPLAY")) display = std::make_unique<VirtualDisplay>();
-      postproc::RenderOptions ro;
       ro.times = times;
+      auto direction = [](const std::vector<double>& d, const char* option) -> std::optional<Vec3> {
+        if (d.empty()) return std::nullopt;
+        if (!std::all_of(d.begin(), d.end(), [](double x) { return std::isfinite(x); }) || std::hypot(d[0], d[1], d[2]) == 0)
+          throw InputError("command line", option, "a non-zero direction x y z");
+        return Vec3{d[0], d[1], d[2]};
+      };
+      ro.view = direction(view, "--view");
+      ro.section_normal = direction(section_normal, "--section-normal");
       summary.pictures = postproc::render_report(results, summary, staged.path(), ro);
     }
     std::ofstream(staged.path() / "summary.json") << postproc::summary_json(summary);

@@ -50,7 +50,11 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
 
   auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
-  auto* mtest = app.add_subcommand("material-test", "Cauchy stress vs stretch of one material of a scenario, as CSV");
+  auto* results_ref = app.add_subcommand("results-reference", "print the reference of the result files (Markdown, or --json)");
+  bool results_json = false;
+  results_ref->add_flag("--json", results_json, "as JSON (what the Python tools read)");
+  auto* mtest = app.add_subcommand("material-point", "Cauchy stress vs stretch of one material of a scenario, as CSV");
+  mtest->alias("material-test");
   std::string mt_scenario, mt_material, mt_mode = "uniaxial", mt_output;
   double mt_max = 1.3;
   int mt_samples = 30;
@@ -66,8 +70,12 @@ int main(int argc, char** argv) {
       std::cout << solver::scenario_reference_markdown();
       return;
     }
+    if (results_ref->parsed()) {
+      std::cout << (results_json ? solver::results_reference_json().dump(2) + "\n" : solver::results_reference_markdown());
+      return;
+    }
     if (mtest->parsed()) {
-      const std::string csv = solver::material_test_csv(solver::read_scenario(mt_scenario), mt_material, mt_mode, mt_max, mt_samples);
+      const std::string csv = solver::material_point_csv(solver::read_scenario(mt_scenario), mt_material, mt_mode, mt_max, mt_samples);
       if (mt_output.empty()) {
         std::cout << csv;
       } else {

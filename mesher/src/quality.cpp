@@ -114,7 +114,9 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   if (step.element >= 0) {
     const auto* g = mesh.find_group(3, step.group);
     j["critical_time_step"] = {{"dt_s", step.dt}, {"element", step.element + 1}, {"group", g ? g->name : ""},
-                               {"length_m", step.length}, {"wave_speed_m_per_s", wave_speed.at(step.group)}};
+                               {"length_m", step.length}, {"wave_speed_m_per_s", wave_speed.at(step.group)},
+                               {"note", "for the wave speeds given with --wave-speed (1000 m/s everywhere when none: the step "
+                                        "then scales as 1000 / speed)"}};
   }
   return j;
 }

@@ -22,6 +22,7 @@
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
+#include <vtkPolyDataNormals.h>
 #include <vtkProperty.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
@@ -35,17 +36,23 @@
 #include <vtkWindowToImageFilter.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 
 namespace fs = std::filesystem;
 
 namespace tactus::postproc {
+
+namespace cc = contracts::cell;
+namespace cp = contracts::point;
+namespace hc = contracts::history;
 
 namespace {
 
@@ -60,10 +67,10 @@ vtkSmartPointer<vtkUnstructuredGrid> load(const fs::path& file) {
 
 // Cells of one body (cell field "body" == index), or everything when the field is absent.
 vtkSmartPointer<vtkUnstructuredGrid> body_cells(vtkUnstructuredGrid* g, int body) {
-  if (!g->GetCellData()->GetArray("body")) return g;
+  if (!g->GetCellData()->GetArray(cc::body.name)) return g;
   vtkNew<vtkThreshold> t;
   t->SetInputData(g);
-  t->SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_CELLS, "body");
+  t->SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_CELLS, cc::body.name);
   t->SetLowerThreshold(body - 0.5);
   t->SetUpperThreshold(body + 0.5);
   t->SetThresholdFunction(vtkThreshold::THRESHOLD_BETWEEN);
@@ -139,7 +146,7 @@ void write_png(vtkRenderWindow* window, const fs::path& file) {
   writer->SetFileName(file.string().c_str());
   writer->SetInputConnection(grab->GetOutputPort());
   writer->Write();
-  if (!fs::exists(file)) throw InputError(file.string(), "", "a writable report folder", "PNG not written");
+  if (!fs::exists(file)) throw WriteError(file.string(), "VTK did not write the picture");
 }
 
 vtkSmartPointer<vtkRenderWindow> offscreen(int w, int h) {
@@ -155,17 +162,81 @@ vtkSmartPointer<vtkRenderer> white_renderer() {
   return r;
 }
 
-// Camera on `direction` from the centre of `bounds`, z up (or y up when looking along z).
-void look(vtkRenderer* r, const double* bounds, const std::array<double, 3>& direction, double zoom) {
+// Camera on `direction` from the centre of `bounds`, `up` up (made perpendicular to the view).
+void look(vtkRenderer* r, const double* bounds, const Vec3& direction, Vec3 up, double zoom) {
   const double c[3] = {0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]), 0.5 * (bounds[4] + bounds[5])};
+  const Vec3 d = (1.0 / norm(direction)) * direction;
+  up = up - dot(up, d) * d;
+  if (norm(up) < 1e-6) up = std::abs(d[2]) < 0.9 ? Vec3{0, 0, 1} : Vec3{0, 1, 0};
   vtkCamera* cam = r->GetActiveCamera();
   cam->SetFocalPoint(c);
-  cam->SetPosition(c[0] + direction[0], c[1] + direction[1], c[2] + direction[2]);
-  const double len = std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
-  const bool along_z = std::abs(direction[2]) > 0.9 * len;
-  cam->SetViewUp(0, along_z ? 1 : 0, along_z ? 0 : 1);
+  cam->SetPosition(c[0] + d[0], c[1] + d[1], c[2] + d[2]);
+  cam->SetViewUp(up.data());
   r->ResetCamera(const_cast<double*>(bounds));
   cam->Zoom(zoom);
+}
+
+// Principal axes of a point set, by increasing extent (eigenvectors of the covariance), each
+// signed so that its largest component is positive (a deterministic choice).
+std::array<Vec3, 3> principal_axes(vtkPoints* points) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  const vtkIdType n = points->GetNumberOfPoints();
+  for (vtkIdType i = 0; i < n; ++i) mean += Eigen::Vector3d(points->GetPoint(i));
+  mean /= std::max<double>(1, static_cast<double>(n));
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (vtkIdType i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = Eigen::Vector3d(points->GetPoint(i)) - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);  // eigenvalues ascending
+  std::array<Vec3, 3> axes;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Vector3d v = es.eigenvectors().col(k);
+    Eigen::Index big;
+    v.cwiseAbs().maxCoeff(&big);
+    if (v[big] < 0) v = -v;
+    axes[static_cast<std::size_t>(k)] = {v[0], v[1], v[2]};
+  }
+  return axes;
+}
+
+// The body carrying the highest contact pressure in state g (cell field "body" of the cells
+// around each pressed point), or -1 without pressure.
+int body_with_pressure(vtkUnstructuredGrid* g) {
+  vtkDataArray* p = g->GetPointData()->GetArray(cp::contact_pressure.name);
+  vtkDataArray* body = g->GetCellData()->GetArray(cc::body.name);
+  if (!p || !body) return -1;
+  double best = 0;
+  int best_body = -1;
+  for (vtkIdType c = 0; c < g->GetNumberOfCells(); ++c) {
+    vtkIdType npts;
+    const vtkIdType* ids;
+    g->GetCellPoints(c, npts, ids);
+    for (vtkIdType k = 0; k < npts; ++k)
+      if (p->GetComponent(ids[k], 0) > best) best = p->GetComponent(ids[k], 0), best_body = static_cast<int>(body->GetComponent(c, 0));
+  }
+  return best_body;
+}
+
+// The pressure-weighted outward normal of a body's surface where it is pressed: the side its
+// contact faces.
+Vec3 pressed_side(vtkPolyData* surface) {
+  vtkNew<vtkPolyDataNormals> normals;
+  normals->SetInputData(surface);
+  normals->ComputePointNormalsOn();
+  normals->AutoOrientNormalsOn();  // outward for a closed surface
+  normals->SplittingOff();
+  normals->Update();
+  vtkPolyData* out = normals->GetOutput();
+  vtkDataArray* n = out->GetPointData()->GetNormals();
+  vtkDataArray* p = out->GetPointData()->GetArray(cp::contact_pressure.name);
+  Vec3 sum{0, 0, 0};
+  if (n && p)
+    for (vtkIdType i = 0; i < out->GetNumberOfPoints(); ++i) {
+      const double w = p->GetComponent(i, 0);
+      if (w > 0) sum = sum + w * Vec3{n->GetComponent(i, 0), n->GetComponent(i, 1), n->GetComponent(i, 2)};
+    }
+  return norm(sum) > 0 ? sum : Vec3{1, 0, 0};
 }
 
 std::string ms(double t) {
@@ -181,15 +252,17 @@ std::size_t nearest_frame(const Results& r, double t) {
   return best;
 }
 
-int body_index(const Results& r, const std::string& name, int fallback) {
+int body_index(const Results& r, const std::string& name) {
   for (std::size_t b = 0; b < r.bodies.size(); ++b)
     if (r.bodies[b] == name) return static_cast<int>(b);
-  return fallback;
+  std::string names;
+  for (const auto& b : r.bodies) names += (names.empty() ? "" : ", ") + b;
+  throw InputError("command line", "--pressure-body", "a body of the run (" + names + ")", "\"" + name + "\"");
 }
 
 void plot(const History& h, const fs::path& file, const std::string& title, const std::string& ylabel,
           const std::vector<std::pair<std::string, double>>& series, int w, int hgt) {
-  if (!h.has("time")) return;
+  if (!h.has(hc::time.name)) return;
   vtkNew<vtkTable> table;
   vtkNew<vtkDoubleArray> t;
   t->SetName("time (ms)");
@@ -203,7 +276,7 @@ void plot(const History& h, const fs::path& file, const std::string& title, cons
       present.push_back(name);
     }
   if (present.empty()) return;
-  const auto& time = h.column("time");
+  const auto& time = h.column(hc::time.name);
   table->SetNumberOfRows(static_cast<vtkIdType>(time.size()));
   for (std::size_t i = 0; i < time.size(); ++i) {
     table->SetValue(static_cast<vtkIdType>(i), 0, time[i] * 1e3);
@@ -236,6 +309,131 @@ void plot(const History& h, const fs::path& file, const std::string& title, cons
 
 }  // namespace
 
+namespace {
+
+struct Views {
+  Vec3 view, up;    // the stress pictures
+  double span = 1;  // the model's largest extent
+  double bounds[6]{};
+};
+
+Views choose_views(vtkUnstructuredGrid* g, const RenderOptions& opt) {
+  Views v;
+  g->GetBounds(v.bounds);
+  v.span = std::max({v.bounds[1] - v.bounds[0], v.bounds[3] - v.bounds[2], v.bounds[5] - v.bounds[4]});
+  const auto axes = principal_axes(g->GetPoints());
+  v.view = opt.view ? *opt.view : -1.0 * axes[0];  // along the least extent: the largest projected area
+  v.up = axes[2];                                  // the longest axis up
+  return v;
+}
+
+std::string von_mises_picture(const Results& r, std::size_t k, const Views& v, vtkLookupTable* vm_lut, const fs::path& report,
+                              const RenderOptions& opt) {
+  const auto g = load(r.frames[k].file);
+  auto window = offscreen(opt.width, opt.height);
+  auto ren = white_renderer();
+  window->AddRenderer(ren);
+  ren->AddActor(colored(surface(g), cc::von_mises.name, true, vm_lut));
+  add_scalar_bar(ren, vm_lut, "von Mises (Pa)");
+  add_text(ren, "t = " + ms(r.frames[k].time) + " ms   von Mises stress on the deformed bodies (log scale)", 20, opt.height - 40);
+  look(ren, v.bounds, 2 * v.span * v.view, v.up, 1.3);
+  const std::string name = "von_mises_t" + ms(r.frames[k].time) + "ms.png";
+  write_png(window, report / name);
+  return name;
+}
+
+// A section through the peak pressure (or the middle), normal to the longest axis of the body
+// with the pressure (or of the model): materials and von Mises side by side.
+bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLookupTable* vm_lut, const fs::path& report,
+                     const RenderOptions& opt) {
+  const std::size_t k = s.contact_occurred ? nearest_frame(r, s.peak_pressure_outputs.time) : r.frames.size() - 1;
+  const auto g = load(r.frames[k].file);
+  const int pb = opt.pressure_body.empty() ? body_with_pressure(g) : body_index(r, opt.pressure_body);
+  const auto axes = principal_axes(pb >= 0 ? body_cells(g, pb)->GetPoints() : g->GetPoints());
+  const Vec3 normal = opt.section_normal ? (1.0 / norm(*opt.section_normal)) * *opt.section_normal : axes[2];
+  double b[6];
+  g->GetBounds(b);
+  Vec3 origin{0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5])};
+  if (s.contact_occurred && s.peak_pressure_outputs.index > 0) origin = s.peak_pressure_outputs.position;
+  vtkNew<vtkPlane> plane;
+  plane->SetOrigin(origin.data());
+  plane->SetNormal(normal.data());
+  vtkNew<vtkCutter> cut;
+  cut->SetInputData(g);
+  cut->SetCutFunction(plane);
+  cut->Update();
+  vtkPolyData* section = cut->GetOutput();
+  if (section->GetNumberOfCells() == 0) return false;
+  auto window = offscreen(opt.width * 2, opt.height);
+  const double nm = std::max<double>(1, static_cast<double>(r.materials.size()) - 1);
+  auto mat_lut = rainbow(0, nm, false);
+  mat_lut->SetHueRange(0.1, 0.75);
+  mat_lut->SetNumberOfTableValues(static_cast<vtkIdType>(nm + 1));
+  mat_lut->Build();
+  double sb[6];
+  section->GetBounds(sb);
+  std::ostringstream caption;
+  caption << std::setprecision(3) << "section through (" << ms(origin[0]) << ", " << ms(origin[1]) << ", " << ms(origin[2])
+          << ") mm, normal (" << normal[0] << ", " << normal[1] << ", " << normal[2] << "), t = " << ms(r.frames[k].time) << " ms";
+  for (int side = 0; side < 2; ++side) {
+    auto ren = white_renderer();
+    ren->SetViewport(0.5 * side, 0, 0.5 * side + 0.5, 1);
+    window->AddRenderer(ren);
+    if (side == 0) {
+      ren->AddActor(colored(section, cc::material.name, true, mat_lut));
+      std::string legend = "materials:";
+      for (std::size_t m = 0; m < r.materials.size(); ++m) legend += "  " + std::to_string(m) + " " + r.materials[m];
+      add_text(ren, legend, 20, 20, 18);
+      add_scalar_bar(ren, mat_lut, "material");
+    } else {
+      ren->AddActor(colored(section, cc::von_mises.name, true, vm_lut));
+      add_scalar_bar(ren, vm_lut, "von Mises (Pa)");
+    }
+    add_text(ren, caption.str(), 20, opt.height - 40, 18);
+    look(ren, sb, 2 * v.span * normal, axes[1], 1.2);
+  }
+  write_png(window, report / "section.png");
+  return true;
+}
+
+// The contact pressure on the body that carries it, seen from the side its contact faces.
+void pressure_picture(const Results& r, const Summary& s, const Views& v, const fs::path& report, const RenderOptions& opt) {
+  const std::size_t k = nearest_frame(r, s.peak_pressure_outputs.time);
+  const auto g = load(r.frames[k].file);
+  const int pb = opt.pressure_body.empty() ? std::max(0, body_with_pressure(g)) : body_index(r, opt.pressure_body);
+  const auto body = surface(body_cells(g, pb));
+  double hb[6];
+  body->GetBounds(hb);
+  auto window = offscreen(opt.width, opt.height);
+  auto ren = white_renderer();
+  window->AddRenderer(ren);
+  auto p_lut = rainbow(0, s.peak_pressure_outputs.value, false);
+  p_lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
+  p_lut->SetTableRange(1e-9 * s.peak_pressure_outputs.value, s.peak_pressure_outputs.value);
+  ren->AddActor(colored(body, cp::contact_pressure.name, false, p_lut));
+  vtkNew<vtkSphereSource> marker;
+  marker->SetCenter(s.peak_pressure_outputs.position.data());
+  marker->SetRadius(0.012 * v.span);
+  vtkNew<vtkPolyDataMapper> mm;
+  mm->SetInputConnection(marker->GetOutputPort());
+  vtkNew<vtkActor> ma;
+  ma->SetMapper(mm);
+  ma->GetProperty()->SetColor(0, 0, 0);
+  ren->AddActor(ma);
+  add_scalar_bar(ren, p_lut, "contact pressure (Pa)");
+  std::ostringstream caption;
+  const std::string name = pb >= 0 && static_cast<std::size_t>(pb) < r.bodies.size() ? r.bodies[static_cast<std::size_t>(pb)] : "body";
+  caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   contact pressure on " << name << "; peak "
+          << s.peak_pressure_outputs.value / 1e6 << " MPa (black dot) at (" << ms(s.peak_pressure_outputs.position[0]) << ", "
+          << ms(s.peak_pressure_outputs.position[1]) << ", " << ms(s.peak_pressure_outputs.position[2]) << ") mm";
+  add_text(ren, caption.str(), 20, opt.height - 40, 18);
+  const auto axes = principal_axes(body->GetPoints());
+  look(ren, hb, 2 * v.span * pressed_side(body), axes[2], 1.2);
+  write_png(window, report / "pressure.png");
+}
+
+}  // namespace
+
 std::vector<std::string> render_report(const Results& r, const Summary& s, const fs::path& report, const RenderOptions& opt) {
   std::vector<std::string> written;
   if (r.frames.empty()) {
@@ -248,123 +446,29 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
       for (double t : opt.times) chosen.push_back(nearest_frame(r, t));
     std::sort(chosen.begin(), chosen.end());
     chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
-
     // One fixed, logarithmic colour scale over every chosen state: soft tissue (kPa) and bone
     // (MPa) differ by orders of magnitude, and the spreading from the contact shows on a log scale.
     double vm_max = 0;
     for (const auto& m : s.von_mises) vm_max = std::max(vm_max, m.von_mises.value);
     if (!(vm_max > 0)) vm_max = 1;
     auto vm_lut = rainbow(vm_max * 1e-4, vm_max, true);
-    // The view of the first state frames them all (bodies move little over a run).
-    double bounds[6];
-    const auto first = load(r.frames[chosen.front()].file);
-    first->GetBounds(bounds);
-    const double span = std::max({bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4]});
-    for (std::size_t k : chosen) {
-      const auto g = load(r.frames[k].file);
-      auto window = offscreen(opt.width, opt.height);
-      auto ren = white_renderer();
-      window->AddRenderer(ren);
-      ren->AddActor(colored(surface(g), "von_mises", true, vm_lut));
-      add_scalar_bar(ren, vm_lut, "von Mises (Pa)");
-      add_text(ren, "t = " + ms(r.frames[k].time) + " ms   von Mises stress on the deformed bodies (log scale)", 20, opt.height - 40);
-      look(ren, bounds, {0, -2 * span, 0}, 1.3);
-      const std::string name = "von_mises_t" + ms(r.frames[k].time) + "ms.png";
-      write_png(window, report / name);
-      written.push_back(name);
-    }
-
-    // Section through the hand, normal to its long axis (z), at the peak pressure of the outputs
-    // (or mid-height): bone, soft tissue and block, with their stress.
-    {
-      const std::size_t k = s.contact_occurred ? nearest_frame(r, s.peak_pressure_outputs.time) : r.frames.size() - 1;
-      const auto g = load(r.frames[k].file);
-      double b[6];
-      g->GetBounds(b);
-      const double z = s.contact_occurred && s.peak_pressure_outputs.index > 0 ? s.peak_pressure_outputs.position[2] : 0.5 * (b[4] + b[5]);
-      vtkNew<vtkPlane> plane;
-      plane->SetOrigin(0, 0, z);
-      plane->SetNormal(0, 0, 1);
-      vtkNew<vtkCutter> cut;
-      cut->SetInputData(g);
-      cut->SetCutFunction(plane);
-      cut->Update();
-      vtkPolyData* section = cut->GetOutput();
-      if (section->GetNumberOfCells() > 0) {
-        auto window = offscreen(opt.width * 2, opt.height);
-        const double nm = std::max<double>(1, static_cast<double>(r.materials.size()) - 1);
-        auto mat_lut = rainbow(0, nm, false);
-        mat_lut->SetHueRange(0.1, 0.75);
-        mat_lut->SetNumberOfTableValues(static_cast<vtkIdType>(nm + 1));
-        mat_lut->Build();
-        double sb[6];
-        section->GetBounds(sb);
-        for (int side = 0; side < 2; ++side) {
-          auto ren = white_renderer();
-          ren->SetViewport(0.5 * side, 0, 0.5 * side + 0.5, 1);
-          window->AddRenderer(ren);
-          if (side == 0) {
-            ren->AddActor(colored(section, "material", true, mat_lut));
-            std::string legend = "materials:";
-            for (std::size_t m = 0; m < r.materials.size(); ++m) legend += "  " + std::to_string(m) + " " + r.materials[m];
-            add_text(ren, legend, 20, 20, 18);
-            add_scalar_bar(ren, mat_lut, "material");
-          } else {
-            ren->AddActor(colored(section, "von_mises", true, vm_lut));
-            add_scalar_bar(ren, vm_lut, "von Mises (Pa)");
-          }
-          add_text(ren, "section z = " + ms(z) + " mm, t = " + ms(r.frames[k].time) + " ms", 20, opt.height - 40);
-          look(ren, sb, {0, 0, 2 * span}, 1.2);
-        }
-        write_png(window, report / "section.png");
-        written.push_back("section.png");
-      }
-    }
-
-    // Contact pressure on the skin (the hand seen from the block), peak marked.
+    // The views of the first state frame them all (bodies move little over a run).
+    const Views views = choose_views(load(r.frames[chosen.front()].file), opt);
+    for (std::size_t k : chosen) written.push_back(von_mises_picture(r, k, views, vm_lut, report, opt));
+    if (section_picture(r, s, views, vm_lut, report, opt)) written.push_back("section.png");
     if (s.contact_occurred && s.peak_pressure_outputs.value > 0) {
-      const std::size_t k = nearest_frame(r, s.peak_pressure_outputs.time);
-      const auto g = load(r.frames[k].file);
-      const auto hand = surface(body_cells(g, body_index(r, "hand", 0)));
-      double hb[6];
-      hand->GetBounds(hb);
-      auto window = offscreen(opt.width, opt.height);
-      auto ren = white_renderer();
-      window->AddRenderer(ren);
-      auto p_lut = rainbow(0, s.peak_pressure_outputs.value, false);
-      p_lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
-      p_lut->SetTableRange(1e-9 * s.peak_pressure_outputs.value, s.peak_pressure_outputs.value);
-      ren->AddActor(colored(hand, "contact_pressure", false, p_lut));
-      vtkNew<vtkSphereSource> marker;
-      marker->SetCenter(s.peak_pressure_outputs.position.data());
-      marker->SetRadius(0.012 * span);
-      vtkNew<vtkPolyDataMapper> mm;
-      mm->SetInputConnection(marker->GetOutputPort());
-      vtkNew<vtkActor> ma;
-      ma->SetMapper(mm);
-      ma->GetProperty()->SetColor(0, 0, 0);
-      ren->AddActor(ma);
-      add_scalar_bar(ren, p_lut, "contact pressure (Pa)");
-      std::ostringstream caption;
-      caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   contact pressure on the skin; peak "
-              << s.peak_pressure_outputs.value / 1e6 << " MPa (black dot) at (" << ms(s.peak_pressure_outputs.position[0]) << ", "
-              << ms(s.peak_pressure_outputs.position[1]) << ", " << ms(s.peak_pressure_outputs.position[2]) << ") mm";
-      add_text(ren, caption.str(), 20, opt.height - 40, 18);
-      // From the block's side (+x: the direction of travel), so the contact patch faces the viewer.
-      look(ren, hb, {2 * span, 0, 0}, 1.2);
-      write_png(window, report / "pressure.png");
+      pressure_picture(r, s, views, report, opt);
       written.push_back("pressure.png");
     }
   }
-
   const History& h = r.history;
   const int pw = 900, ph = 600;
-  plot(h, report / "plot_contact_force.png", "total contact force", "N", {{"contact_force", 1.0}}, pw, ph);
-  plot(h, report / "plot_contact_area.png", "contact area", "mm^2", {{"contact_area", 1e6}}, pw, ph);
-  plot(h, report / "plot_peak_pressure.png", "peak contact pressure", "MPa", {{"peak_pressure", 1e-6}}, pw, ph);
+  plot(h, report / "plot_contact_force.png", "total contact force", "N", {{hc::contact_force.name, 1.0}}, pw, ph);
+  plot(h, report / "plot_contact_area.png", "contact area", "mm^2", {{hc::contact_area.name, 1e6}}, pw, ph);
+  plot(h, report / "plot_peak_pressure.png", "peak contact pressure", "MPa", {{hc::peak_pressure.name, 1e-6}}, pw, ph);
   plot(h, report / "plot_energies.png", "energies", "J",
-       {{"kinetic_energy", 1.0}, {"internal_energy", 1.0}, {"contact_work_normal", 1.0}, {"contact_work_friction", 1.0},
-        {"energy_balance_error", 1.0}},
+       {{hc::kinetic_energy.name, 1.0}, {hc::internal_energy.name, 1.0}, {hc::contact_work_normal.name, 1.0},
+        {hc::contact_work_friction.name, 1.0}, {hc::energy_balance_error.name, 1.0}},
        pw, ph);
   for (const char* f : {"plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png"})
     if (fs::exists(report / f)) written.push_back(f);

@@ -7,11 +7,17 @@
 #include <regex>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 
 namespace fs = std::filesystem;
 
 namespace tactus::postproc {
+
+namespace rk = contracts::run_json;
+namespace hc = contracts::history;
+namespace cc = contracts::cell;
+namespace cp = contracts::point;
 
 const std::vector<double>& History::column(const std::string& name) const {
   auto it = columns.find(name);
@@ -59,25 +65,25 @@ void validate_run_json(const nlohmann::json& j, const std::string& file) {
     return v.is_array() && std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) { return x.is_string(); });
   };
   const auto object = [](const nlohmann::json& v) { return v.is_object(); };
-  require(j, "", "status", "a string", string);
-  require(j, "", "materials", "an array of material names", names);
-  require(j, "", "bodies", "an array of body names", names);
-  for (const char* k : {"steps", "nodes", "tets"}) require(j, "", k, "a count (integer >= 0)", count);
-  for (const char* k : {"end_time", "wall_time_s"}) require(j, "", k, "a number", number);
-  require(j, "", "time_step", "an object", object);
-  for (const char* k : {"min", "max"}) require(j["time_step"], "time_step.", k, "a number", number);
-  require(j, "", "energy", "an object", object);
+  require(j, "", rk::status, "a string", string);
+  require(j, "", rk::materials, "an array of material names", names);
+  require(j, "", rk::bodies, "an array of body names", names);
+  for (const char* k : {rk::steps, rk::nodes, rk::tets}) require(j, "", k, "a count (integer >= 0)", count);
+  for (const char* k : {rk::end_time, rk::wall_time}) require(j, "", k, "a number", number);
+  require(j, "", rk::time_step, "an object", object);
+  for (const char* k : {"min", "max"}) require(j[rk::time_step], "time_step.", k, "a number", number);
+  require(j, "", rk::energy, "an object", object);
   for (const char* k : {"initial", "balance_error", "contact_work_normal", "contact_work_friction"})
-    require(j["energy"], "energy.", k, "a number", number);
-  if (j.contains("timing_s")) {
-    require(j, "", "timing_s", "an object", object);
-    for (const char* k : {"stress_passes", "contact"}) require(j["timing_s"], "timing_s.", k, "a number", number);
+    require(j[rk::energy], "energy.", k, "a number", number);
+  if (j.contains(rk::timing)) {
+    require(j, "", rk::timing, "an object", object);
+    for (const char* k : {"stress_passes", "contact"}) require(j[rk::timing], "timing_s.", k, "a number", number);
   }
-  if (j.contains("message") && !j["message"].is_null() && !j["message"].is_string())
-    throw InputError(file, "message", "a string or null", j["message"].dump().substr(0, 60));
-  if (j.contains("contact")) {
-    const auto& c = j["contact"];
-    require(j, "", "contact", "an object", object);
+  if (j.contains(rk::message) && !j[rk::message].is_null() && !j[rk::message].is_string())
+    throw InputError(file, rk::message, "a string or null", j[rk::message].dump().substr(0, 60));
+  if (j.contains(rk::contact)) {
+    const auto& c = j[rk::contact];
+    require(j, "", rk::contact, "an object", object);
     require(c, "contact.", "steps_in_contact", "a count", count);
     for (const char* k : {"peak_force", "peak_area", "peak_pressure"}) {
       require(c, "contact.", k, "an object", object);
@@ -130,8 +136,8 @@ Results read_results(const fs::path& folder) {
   const auto j = nlohmann::json::parse(r.run_json, nullptr, false);
   if (j.is_discarded() || !j.is_object()) throw InputError(rj_file, "", "a JSON object (run.json written by tactus-solve)", "malformed JSON");
   validate_run_json(j, rj_file);
-  for (const char* key : {"materials", "bodies"}) {
-    auto& names = std::string(key) == "materials" ? r.materials : r.bodies;
+  for (const char* key : {rk::materials, rk::bodies}) {
+    auto& names = std::string(key) == rk::materials ? r.materials : r.bodies;
     for (const auto& n : j[key]) names.push_back(n.get<std::string>());
   }
   return r;

@@ -7,10 +7,16 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/mesh.hpp"
 
 namespace tactus::postproc {
+
+namespace rk = contracts::run_json;
+namespace hc = contracts::history;
+namespace cc = contracts::cell;
+namespace cp = contracts::point;
 
 namespace {
 
@@ -37,26 +43,26 @@ Summary summarize(const Results& r) {
   Summary s;
   const auto j = nlohmann::json::parse(r.run_json);
   auto num = [&](const nlohmann::json& node, const char* key) { return node.contains(key) && node[key].is_number() ? node[key].get<double>() : 0.0; };
-  s.status = j.value("status", "");
-  if (j.contains("message") && j["message"].is_string()) s.message = j["message"].get<std::string>();
-  s.steps = j.value("steps", std::size_t{0});
-  s.nodes = j.value("nodes", std::size_t{0});
-  s.tets = j.value("tets", std::size_t{0});
-  s.end_time = num(j, "end_time");
-  s.wall_time = num(j, "wall_time_s");
-  if (j.contains("time_step")) s.dt_min = num(j["time_step"], "min"), s.dt_max = num(j["time_step"], "max");
-  if (j.contains("timing_s")) s.stress_seconds = num(j["timing_s"], "stress_passes"), s.contact_seconds = num(j["timing_s"], "contact");
-  if (j.contains("energy")) {
-    const auto& e = j["energy"];
+  s.status = j.value(rk::status, "");
+  if (j.contains(rk::message) && j[rk::message].is_string()) s.message = j[rk::message].get<std::string>();
+  s.steps = j.value(rk::steps, std::size_t{0});
+  s.nodes = j.value(rk::nodes, std::size_t{0});
+  s.tets = j.value(rk::tets, std::size_t{0});
+  s.end_time = num(j, rk::end_time);
+  s.wall_time = num(j, rk::wall_time);
+  if (j.contains(rk::time_step)) s.dt_min = num(j[rk::time_step], "min"), s.dt_max = num(j[rk::time_step], "max");
+  if (j.contains(rk::timing)) s.stress_seconds = num(j[rk::timing], "stress_passes"), s.contact_seconds = num(j[rk::timing], "contact");
+  if (j.contains(rk::energy)) {
+    const auto& e = j[rk::energy];
     s.initial_energy = num(e, "initial"), s.balance_error = num(e, "balance_error");
     s.contact_work_normal = num(e, "contact_work_normal"), s.contact_work_friction = num(e, "contact_work_friction");
   }
   const History& h = r.history;
-  if (h.has("kinetic_energy") && h.rows() > 0) s.initial_kinetic = h.column("kinetic_energy").front();
+  if (h.has(hc::kinetic_energy.name) && h.rows() > 0) s.initial_kinetic = h.column(hc::kinetic_energy.name).front();
 
   // Every step (history rows are every few steps; run.json holds the per-step peaks).
-  if (j.contains("contact")) {
-    const auto& c = j["contact"];
+  if (j.contains(rk::contact)) {
+    const auto& c = j[rk::contact];
     if (c.contains("peak_pressure")) {
       const auto& p = c["peak_pressure"];
       s.peak_pressure_steps.value = num(p, "value"), s.peak_pressure_steps.time = num(p, "time");
@@ -74,8 +80,8 @@ Summary summarize(const Results& r) {
   for (const Frame& f : r.frames) {
     const VtuContents v = read_vtu(f.file);
     const std::string file = f.file.string();
-    const MeshField& vm = need_cell(v, "von_mises", file);
-    const MeshField& mat = need_cell(v, "material", file);
+    const MeshField& vm = need_cell(v, cc::von_mises.name, file);
+    const MeshField& mat = need_cell(v, cc::material.name, file);
     FrameSummary fs;
     fs.time = f.time;
     fs.file = f.file.filename().string();
@@ -88,7 +94,7 @@ Summary summarize(const Results& r) {
         s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1};
       }
     }
-    if (const MeshField* p = v.point_field("contact_pressure")) {
+    if (const MeshField* p = v.point_field(cp::contact_pressure.name)) {
       for (std::size_t i = 0; i < p->values.size(); ++i) {
         const double pi = p->values[i];
         if (pi > 0) ++fs.contact_nodes;
@@ -97,10 +103,10 @@ Summary summarize(const Results& r) {
           s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1};
       }
     }
-    if (h.has("contact_force") && h.rows() > 0) {  // nearest history row
-      const auto& t = h.column("time");
+    if (h.has(hc::contact_force.name) && h.rows() > 0) {  // nearest history row
+      const auto& t = h.column(hc::time.name);
       const std::size_t k = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), f.time - 1e-15) - t.begin());
-      fs.contact_force = h.column("contact_force")[std::min(k, t.size() - 1)];
+      fs.contact_force = h.column(hc::contact_force.name)[std::min(k, t.size() - 1)];
     }
     s.frames.push_back(fs);
   }

@@ -8,7 +8,8 @@
 int main() {
   using namespace tactus;
   const TetMesh mesh = samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01);
-  const solver::Model model = solver::build_model(mesh, solver::NeoHookean{3000.0, 50000.0, 1000.0});
+  const solver::Material rubber = solver::Material::make("neo_hookean", {{{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}}, {}});
+  const solver::Model model = solver::build_model(mesh, rubber);
   solver::RunSpec run;
   run.end_time = 1e-3;
   const solver::ExplicitSolver s(model, run, solver::DampingSpec{});

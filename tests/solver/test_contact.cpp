@@ -16,9 +16,11 @@
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "material_kit.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
+using namespace tactus::solver::testkit;
 
 namespace {
 
@@ -62,7 +64,7 @@ struct SignoriniCheck {
   double adhesive = 0, open_with_reaction = 0, cone = 0, penetration = 0;
 };
 void check_signorini(const ExplicitSolver& s, SignoriniCheck& worst, double element) {
-  const ContactState& st = s.contact().state();
+  const ContactRows& st = s.contact().rows();
   const auto& v = s.half_step_velocity();
   const auto& pairs = s.contact().pairs();
   double rmax = 1e-300;
@@ -73,14 +75,10 @@ void check_signorini(const ExplicitSolver& s, SignoriniCheck& worst, double elem
     const double rn = dot(r, n);
     const double rt = norm(axpy(-rn, n, r));
     const ContactPair& p = pairs[static_cast<std::size_t>(st.pair[k])];
-    V3 u{0, 0, 0};
-    const std::size_t sl = static_cast<std::size_t>(st.slave[k]);
-    for (int d = 0; d < 3; ++d) u[d] = v[3 * sl + d];
-    if (st.triangle[k] >= 0)
-      for (int i = 0; i < 3; ++i) {
-        const std::size_t mi = static_cast<std::size_t>(p.master_triangles[3 * static_cast<std::size_t>(st.triangle[k]) + i]);
-        for (int d = 0; d < 3; ++d) u[d] -= st.weights[3 * k + i] * v[3 * mi + d];
-      }
+    V3 u{0, 0, 0};  // the row's relative velocity: sum of weight x velocity over its dofs
+    for (auto a = st.start[k]; a < st.start[k + 1]; ++a)
+      for (int d = 0; d < 3; ++d)
+        u[d] += st.weights[static_cast<std::size_t>(a)] * v[3 * static_cast<std::size_t>(st.nodes[static_cast<std::size_t>(a)]) + d];
     const double next_gap = st.gap[k] + s.time_step() * dot(u, n);
     worst.adhesive = std::max(worst.adhesive, -rn / rmax);
     if (next_gap > 1e-6 * element) worst.open_with_reaction = std::max(worst.open_with_reaction, std::abs(rn) / rmax);
@@ -168,7 +166,7 @@ void two_bars_impact(bool two_pass) {
   const double E = 1e7, rho = 1000, L = 0.1, a = 0.01, v0 = 0.1, c = std::sqrt(E / rho);
   const TetMesh left = samples::make_box_mesh(40, 1, 1, L, a, a);
   const TetMesh right = samples::make_box_mesh(40, 1, 1, L, a, a, {L + 1e-6, 0, 0});
-  Model model = build_model(merge(left, right), LinearElastic::from({{"E", E}, {"nu", 0.0}, {"density", rho}}));
+  Model model = build_model(merge(left, right), linear_elastic(E, 0.0, rho));
   for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i] = model.X[3 * i] < L + 1e-7 ? v0 : -v0;
   ContactPair pair;
   pair.name = "bars";
@@ -241,11 +239,11 @@ struct InclineRun {
 };
 InclineRun run_incline(double theta, double mu, const std::vector<double>& times) {
   const TetMesh mesh = samples::make_box_mesh(4, 4, 2, 0.02, 0.02, 0.01);
-  Model model = build_model(mesh, LinearElastic::from({{"E", 1e7}, {"nu", 0.3}, {"density", 1000.0}}));
+  Model model = build_model(mesh, linear_elastic(1e7, 0.3, 1000.0));
   ContactPair plane;
   plane.name = "incline";
   plane.friction = mu;
-  plane.rigid_plane = true;
+  set_rigid_plane(plane, {0, 0, 0}, {0, 0, 1});
   set_slave_surface(plane, model, group_faces(model, 15));  // zmin
   model.contact_pairs.push_back(plane);
   model.contact_settings.tolerance = 1e-10;
@@ -350,14 +348,14 @@ TEST(Contact, HertzSphereOnRigidPlane) {
   const double R = 0.01, E = 1e7, nu = 0.3, rho = 1000;
   const double Es = E / (1 - nu * nu), d_target = 0.01 * R;  // contact radius sqrt(R d) = 0.1 R
   const TetMesh mesh = graded_sphere(R, {0, 0, 1e-7}, 2e-4, 2.5e-3, 1.5e-3);
-  Model model = build_model(mesh, LinearElastic::from({{"E", E}, {"nu", nu}, {"density", rho}}));
+  Model model = build_model(mesh, linear_elastic(E, nu, rho));
   double m = 0;
   for (double mi : model.mass) m += mi;
   const double v = std::sqrt(std::pow(d_target, 2.5) * 16 * Es * std::sqrt(R) / (15 * m));
   for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i + 2] = -v;
   ContactPair plane;
   plane.name = "floor";
-  plane.rigid_plane = true;
+  set_rigid_plane(plane, {0, 0, 0}, {0, 0, 1});
   set_slave_surface(plane, model, group_faces(model, 20));
   model.contact_pairs.push_back(plane);
   model.contact_settings.tolerance = 1e-8;

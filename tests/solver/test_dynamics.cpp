@@ -9,9 +9,11 @@
 #include "linear_reference.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "material_kit.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
+using namespace tactus::solver::testkit;
 
 namespace {
 RunSpec run_until(double end_time) {
@@ -27,7 +29,7 @@ RunSpec run_until(double end_time) {
 TEST(Dynamics, BarWaveSpeed) {
   const double E = 1e7, rho = 1000, c = std::sqrt(E / rho), v0 = 0.01;
   const TetMesh mesh = samples::make_box_mesh(200, 1, 1, 1.0, 0.02, 0.02);
-  Model model = build_model(mesh, LinearElastic::from({{"E", E}, {"nu", 0.0}, {"density", rho}}));
+  Model model = build_model(mesh, linear_elastic(E, 0.0, rho));
   constrain_nodes(model, [](const double* X) { return X[0] < 1e-9; }, {true, false, false}, {v0, 0, 0});
   ExplicitSolver solver(model, run_until(0.009), DampingSpec{});
   const double stations[2] = {0.5, 0.75};
@@ -62,7 +64,7 @@ TEST(Dynamics, BarWaveSpeed) {
 // within 0.5 % over 10,000 steps of a large rotating and deforming motion.
 TEST(Dynamics, FreeBodyConservesEnergy) {
   const TetMesh mesh = samples::make_box_mesh(4, 4, 4, 0.1, 0.1, 0.1);
-  Model model = build_model(mesh, NeoHookean{3000.0, 50000.0, 1000.0});
+  Model model = build_model(mesh, neo_hookean(3000.0, 50000.0, 1000.0));
   for (std::size_t i = 0; i < model.num_nodes; ++i) {
     const double x = model.X[3 * i] - 0.05, y = model.X[3 * i + 1] - 0.05, z = model.X[3 * i + 2] - 0.05;
     const double w = 2.0;  // rad/s spin about z, plus an expansion and a shear mode
@@ -91,7 +93,7 @@ TEST(Dynamics, FreeBodyConservesEnergy) {
 TEST(Dynamics, CantileverFirstFrequencyMatchesEigenvalue) {
   const double E = 1e7, nu = 0.3, rho = 1000;
   const TetMesh mesh = samples::make_box_mesh(10, 2, 2, 0.1, 0.01, 0.01);
-  Model model = build_model(mesh, LinearElastic::from({{"E", E}, {"nu", nu}, {"density", rho}}));
+  Model model = build_model(mesh, linear_elastic(E, nu, rho));
   constrain_nodes(model, [](const double* X) { return X[0] < 1e-9; }, {true, true, true});
   const auto modes = testkit::generalized_modes(model, testkit::linear_stiffness(model, E, nu));
   const double omega = std::sqrt(modes.omega2[0]);

@@ -6,7 +6,7 @@
 #include <random>
 #include <sstream>
 
-#include "tactus/solver/materials.hpp"
+#include "tactus/solver/material.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
 
@@ -14,12 +14,17 @@ using namespace tactus::solver;
 
 namespace {
 
-double energy(const Material& m, const Mat3& F) {
-  return std::visit([&](const auto& x) { return x.evaluate(F).W; }, m);
+double energy(const Material& m, const Mat3& F) { return m.evaluate(F).W; }
+Mat3 first_piola(const Material& m, const Mat3& F) { return m.evaluate(F).P; }
+
+// The laws through the registry, as a scenario would make them.
+Material law(const std::string& type, std::map<std::string, double> numbers, std::vector<tactus::Vec3> fibres = {}) {
+  MaterialValues v;
+  v.numbers = std::move(numbers);
+  if (!fibres.empty()) v.vectors["fibres"] = fibres;
+  return Material::make(type, v);
 }
-Mat3 first_piola(const Material& m, const Mat3& F) {
-  return std::visit([&](const auto& x) { return x.evaluate(F).P; }, m);
-}
+Material neo_hookean(double mu, double bulk, double rho) { return law("neo_hookean", {{"mu", mu}, {"bulk", bulk}, {"density", rho}}); }
 
 // W as a function of C alone: F = C^{1/2} (symmetric root; W depends on F only through C).
 double energy_of_C(const Material& m, const Mat3& C) {
@@ -60,22 +65,19 @@ Mat3 random_rotation(std::mt19937& rng) {
   return q.normalized().toRotationMatrix();
 }
 
-// The paper's tissue, with the bulk modulus lowered so the fibre and matrix terms are not lost
-// next to the volumetric one in a relative comparison, and a stiff-k variant.
-Hgo paper_hgo(double k = 1.0e8) {
-  Hgo h;
-  h.c1 = 10206.9, h.k1 = 1.7, h.k2 = 882.847, h.k = k, h.density = 1050;
-  h.a1 = Vec3d(std::cos(0.5236), std::sin(0.5236), 0);
-  h.a2 = Vec3d(std::cos(0.5236), -std::sin(0.5236), 0);
-  return h;
+// The paper's tissue (fibres at +-30 deg in the x-y plane), with the bulk modulus lowered so the
+// fibre and matrix terms are not lost next to the volumetric one in a relative comparison, and a
+// stiff-k variant.
+const tactus::Vec3 kFibre1{std::cos(0.5236), std::sin(0.5236), 0}, kFibre2{std::cos(0.5236), -std::sin(0.5236), 0};
+Material paper_hgo(double k = 1.0e8, double k1 = 1.7, double k2 = 882.847) {
+  return law("hgo", {{"c1", 10206.9}, {"k1", k1}, {"k2", k2}, {"k", k}, {"density", 1050}}, {kFibre1, kFibre2});
 }
 
 std::vector<Material> materials_under_test() {
-  Hgo strong = paper_hgo(2.0e5);
-  strong.k1 = 2.0e4;  // fibres that dominate, to exercise the fibre terms
-  strong.k2 = 5.0;
-  return {NeoHookean{3000.0, 50000.0, 1000.0}, LinearElastic::from({{"E", 10e9}, {"nu", 0.22}, {"density", 2150}}),
-          paper_hgo(2.0e5), paper_hgo(), strong};
+  return {neo_hookean(3000.0, 50000.0, 1000.0), law("linear_elastic", {{"E", 10e9}, {"nu", 0.22}, {"density", 2150}}),
+          paper_hgo(2.0e5), paper_hgo(), paper_hgo(2.0e5, 2.0e4, 5.0) /* fibres that dominate */,
+          law("mooney_rivlin", {{"c10", 2000.0}, {"c01", 800.0}, {"bulk", 50000.0}, {"density", 1000}}),
+          law("mooney_rivlin", {{"c10", 0.0}, {"c01", 1500.0}, {"bulk", 2.0e5}, {"density", 1000}})};
 }
 
 }  // namespace
@@ -90,7 +92,7 @@ TEST(Materials, SecondPiolaIsTwiceDerivativeOfEnergy) {
       const Mat3 C = F.transpose() * F;
       const Mat3 S = F.inverse() * first_piola(m, F);
       const Mat3 S_fd = fd_second_piola(m, C, 1e-4);
-      EXPECT_LE((S - S_fd).norm(), 1e-6 * S.norm()) << material_type_name(m) << " trial " << trial << "\nS=\n"
+      EXPECT_LE((S - S_fd).norm(), 1e-6 * S.norm()) << m.type_name() << " trial " << trial << "\nS=\n"
                                                      << S << "\nS_fd=\n" << S_fd;
       EXPECT_LE((S - S.transpose()).norm(), 1e-12 * S.norm()) << "S must be symmetric";
     }
@@ -105,7 +107,7 @@ TEST(Materials, ObjectiveUnderRotation) {
       const Mat3 F = random_F(rng, 0.1), Q = random_rotation(rng);
       const Mat3 P = first_piola(m, F), PQ = first_piola(m, Q * F);
       const Mat3 S = F.inverse() * P, SQ = (Q * F).inverse() * PQ;
-      EXPECT_LE((S - SQ).norm(), 1e-10 * S.norm()) << material_type_name(m);
+      EXPECT_LE((S - SQ).norm(), 1e-10 * S.norm()) << m.type_name();
       EXPECT_NEAR(energy(m, F), energy(m, Q * F), 1e-10 * std::abs(energy(m, F)) + 1e-12);
       const Mat3 sigma = cauchy_stress(F, P), sigmaQ = cauchy_stress(Q * F, PQ);
       EXPECT_LE((Q * sigma * Q.transpose() - sigmaQ).norm(), 1e-10 * sigma.norm());
@@ -122,15 +124,14 @@ TEST(Materials, StressFreeAtIdentity) {
 // Oracle: with the fibres shortened (isochoric J4bar < 1) the hgo law equals the same law with
 // k1 = 0, which is the neo-Hookean law with mu = 2 c1.
 TEST(Materials, FibresSlackInCompression) {
-  Hgo h = paper_hgo(2.0e5);
-  h.k1 = 1e5;  // a large k1 would show at once if compressed fibres carried load
-  Hgo no_fibres = h;
-  no_fibres.k1 = 0;
-  const NeoHookean nh{2 * h.c1, h.k, h.density};
+  const Material h = paper_hgo(2.0e5, 1e5);  // a large k1 would show at once if compressed fibres carried load
+  const Material no_fibres = paper_hgo(2.0e5, 0.0);
+  const Material nh = neo_hookean(2 * 10206.9, 2.0e5, 1050);
   // Compress along x (both fibres have a large x component) with lateral expansion.
   Mat3 F = Mat3::Identity();
   F(0, 0) = 0.85, F(1, 1) = 1.02, F(2, 2) = 1.08;
-  for (const Vec3d& a : {h.a1, h.a2}) ASSERT_LT(std::cbrt(1 / (F.determinant() * F.determinant())) * (F * a).squaredNorm(), 1.0);
+  for (const tactus::Vec3& a : {kFibre1, kFibre2})
+    ASSERT_LT(std::cbrt(1 / (F.determinant() * F.determinant())) * (F * Vec3d(a.data())).squaredNorm(), 1.0);
   EXPECT_LE((h.evaluate(F).P - no_fibres.evaluate(F).P).norm(), 1e-12 * no_fibres.evaluate(F).P.norm());
   EXPECT_LE((h.evaluate(F).P - nh.evaluate(F).P).norm(), 1e-10 * nh.evaluate(F).P.norm());
   EXPECT_DOUBLE_EQ(h.evaluate(F).W, no_fibres.evaluate(F).W);
@@ -203,8 +204,8 @@ Scenario hgo_scenario(double theta, double k) {
   MaterialInstance m;
   m.name = "tissue";
   m.type = "hgo";
-  m.params = {{"c1", 10206.9}, {"k1", 1.7e3}, {"k2", 20.0}, {"k", k}, {"density", 1050}};
-  m.fibres = std::array<Vec3a, 2>{Vec3a{std::cos(theta), std::sin(theta), 0}, Vec3a{std::cos(theta), -std::sin(theta), 0}};
+  m.values.numbers = {{"c1", 10206.9}, {"k1", 1.7e3}, {"k2", 20.0}, {"k", k}, {"density", 1050}};
+  m.values.vectors["fibres"] = {tactus::Vec3{std::cos(theta), std::sin(theta), 0}, tactus::Vec3{std::cos(theta), -std::sin(theta), 0}};
   sc.materials["tissue"] = m;
   return sc;
 }
@@ -217,7 +218,7 @@ TEST(Materials, HgoUniaxialCurveAlongAcrossAndOblique) {
   for (double theta : {0.0, 0.5236, 1.5708}) {  // along the fibres, +-30 deg, across
     const double k = 1.0e6;
     const Scenario sc = hgo_scenario(theta, k);
-    const auto rows = parse_csv(material_test_csv(sc, "tissue", "uniaxial", 1.15, 15));
+    const auto rows = parse_csv(material_point_csv(sc, "tissue", "uniaxial", 1.15, 15));
     const PrincipalHgo ref{10206.9, 1.7e3, 20.0, k, theta};
     double peak = 0;
     for (const auto& r : rows) peak = std::max(peak, std::abs(r[4]));
@@ -229,8 +230,8 @@ TEST(Materials, HgoUniaxialCurveAlongAcrossAndOblique) {
     }
   }
   // Along the fibres the response is much stiffer than across (fibres slack when crossed).
-  const auto along = parse_csv(material_test_csv(hgo_scenario(0.0, 1e6), "tissue", "uniaxial", 1.15, 3));
-  const auto across = parse_csv(material_test_csv(hgo_scenario(1.5708, 1e6), "tissue", "uniaxial", 1.15, 3));
+  const auto along = parse_csv(material_point_csv(hgo_scenario(0.0, 1e6), "tissue", "uniaxial", 1.15, 3));
+  const auto across = parse_csv(material_point_csv(hgo_scenario(1.5708, 1e6), "tissue", "uniaxial", 1.15, 3));
   EXPECT_GT(along.back()[4], 3 * across.back()[4]);
 }
 
@@ -238,11 +239,39 @@ TEST(Materials, HgoUniaxialCurveAlongAcrossAndOblique) {
 // sigma_xy = mu gamma and sigma_xx - sigma_yy = mu gamma^2.
 TEST(Materials, NeoHookeanSimpleShearClosedForm) {
   Scenario sc;
-  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000}}, {}};
-  const auto rows = parse_csv(material_test_csv(sc, "rubber", "shear", 0.5, 5));
+  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000}}, {}}};
+  const auto rows = parse_csv(material_point_csv(sc, "rubber", "shear", 0.5, 5));
   for (const auto& r : rows) {
     const double g = r[0];
     EXPECT_NEAR(r[7], 3000.0 * g, 1e-9 * 3000.0);
     EXPECT_NEAR(r[4] - r[5], 3000.0 * g * g, 1e-9 * 3000.0);
   }
+}
+
+// Mooney-Rivlin, added as one file and one registration line (docs/adding-a-material.md).
+// Oracles: with c01 = 0 it is neo_hookean with mu = 2 c10 (to round-off); in simple shear (J = 1)
+// the closed form sigma_xy = 2 (c10 + c01) gamma holds at every gamma (the I1 and I2 terms are
+// both linear in gamma there), and sigma_xx - sigma_yy = 2 c10 gamma^2 - ... is checked through
+// the same material-point driver users call.
+TEST(Materials, MooneyRivlinReducesToNeoHookeanAndShearsInClosedForm) {
+  std::mt19937 rng(7);
+  const Material mr = law("mooney_rivlin", {{"c10", 1500.0}, {"c01", 0.0}, {"bulk", 5.0e4}, {"density", 1000}});
+  const Material nh = neo_hookean(3000.0, 5.0e4, 1000);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Mat3 F = random_F(rng, 0.2);
+    EXPECT_LE((mr.evaluate(F).P - nh.evaluate(F).P).norm(), 1e-12 * nh.evaluate(F).P.norm());
+    EXPECT_NEAR(mr.evaluate(F).W, nh.evaluate(F).W, 1e-12 * std::abs(nh.evaluate(F).W) + 1e-15);
+  }
+  Scenario sc;
+  sc.materials["skin"] = MaterialInstance{"skin", "mooney_rivlin", {{{"c10", 2000.0}, {"c01", 800.0}, {"bulk", 1e6}, {"density", 1000}}, {}}};
+  const auto rows = parse_csv(material_point_csv(sc, "skin", "shear", 0.6, 6));
+  for (const auto& r : rows) {
+    const double g = r[0];
+    // Simple shear F = I + g e_x (x) e_y: B = F F^T, sigma = 2 (c10 + c01 I1) B - 2 c01 B^2 + p I,
+    // so sigma_xy = 2 (c10 + c01 I1) g - 2 c01 (B^2)_xy with I1 = 3 + g^2 and (B^2)_xy = g (2 + g^2).
+    const double expected = 2 * (2000.0 + 800.0 * (3 + g * g)) * g - 2 * 800.0 * g * (2 + g * g);
+    EXPECT_NEAR(r[7], expected, 1e-9 * 2800.0) << "gamma " << g;
+    EXPECT_NEAR(r[7], 2 * (2000.0 + 800.0) * g, 1e-9 * 2800.0);  // which is 2 (c10 + c01) g
+  }
+  std::printf("mooney_rivlin: shear stress at gamma 0.6: %.6f Pa (2 (c10 + c01) gamma = %.6f)\n", rows.back()[7], 2 * 2800.0 * 0.6);
 }

@@ -7,9 +7,11 @@
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "material_kit.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
+using namespace tactus::solver::testkit;
 
 namespace {
 
@@ -51,8 +53,8 @@ void patch_test(const Material& material) {
 
 }  // namespace
 
-TEST(Patch, ConstantStressNeoHookean) { patch_test(NeoHookean{3000.0, 50000.0, 1000.0}); }
-TEST(Patch, ConstantStressLinearElastic) { patch_test(LinearElastic::from({{"E", 1e9}, {"nu", 0.3}, {"density", 2000}})); }
+TEST(Patch, ConstantStressNeoHookean) { patch_test(neo_hookean(3000.0, 50000.0, 1000.0)); }
+TEST(Patch, ConstantStressLinearElastic) { patch_test(linear_elastic(1e9, 0.3, 2000)); }
 TEST(Patch, ConstantStressHgo) {
-  patch_test(Hgo{10206.9, 1.7, 882.847, 1e8, 1050, Vec3d(0.8660254, 0.5, 0), Vec3d(0.8660254, -0.5, 0)});
+  patch_test(paper_hgo());
 }

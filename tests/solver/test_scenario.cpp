@@ -109,8 +109,8 @@ TEST_F(ScenarioFile, PerElementFibresFromFile) {
       replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", "fibres = [[1, -1, 0], [1, 1, 0]]"),
       "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nfibres = \"fibres.vtu\"")));
   const Model a = build_model(constant), b = build_model(per_element);
-  ASSERT_FALSE(a.blocks[0].element_fibres);
-  ASSERT_TRUE(b.blocks[0].element_fibres);
+  ASSERT_FALSE(a.blocks[0].per_element_data());
+  ASSERT_TRUE(b.blocks[0].per_element_data());
   // Stretch along x so both fibre families are loaded.
   const std::size_t ndof = 3 * a.num_nodes;
   std::vector<double> u(ndof, 0.0);
@@ -145,8 +145,7 @@ TEST_F(ScenarioFile, UnknownMaterialType) {
   expect_error(replace(kValid, "\"linear_elastic\"", "\"mooney\""), {"materials.bone.type", "hgo", "mooney"});
 }
 TEST_F(ScenarioFile, HgoWithoutFibres) {
-  expect_error(replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", ""), {"materials.skin.fibres", "fibre directions for hgo"},
-               true);
+  expect_error(replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", ""), {"materials.skin.fibres", "element data for hgo"}, true);
 }
 TEST_F(ScenarioFile, BodyNamesUndefinedMaterial) {
   expect_error(replace(kValid, "body = \"skin\"", "body = \"skn\""), {"bodies[0].materials.body", "skn"});
@@ -211,12 +210,12 @@ TEST_F(ScenarioFile, ContactPairReads) {
   const Model m = build_model(sc);
   ASSERT_EQ(m.contact_pairs.size(), 2u);  // two passes
   EXPECT_EQ(m.contact_pairs[0].slave_nodes.size(), 9u);
-  EXPECT_EQ(m.contact_pairs[0].master_triangles.size(), 3u * 8u);
+  EXPECT_EQ(m.contact_pairs[0].master->triangles().size(), 3u * 8u);
   double area = 0;
   for (double a : m.contact_pairs[0].slave_area) area += a;
   EXPECT_NEAR(area, 1e-4, 1e-15);  // the 1 cm x 1 cm face
   // Master normals point out of the tool (its zmin face: -z).
-  const auto& t = m.contact_pairs[0].master_triangles;
+  const auto& t = m.contact_pairs[0].master->triangles();
   const double* a = &m.X[3 * t[0]], *b = &m.X[3 * t[1]], *c = &m.X[3 * t[2]];
   const double nz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
   EXPECT_LT(nz, 0.0);

@@ -29,7 +29,7 @@ Scenario cube(const std::filesystem::path& dir, double end_time, double time_ste
   sc.run.end_time = end_time;
   sc.run.time_step = time_step;
   sc.damping.alpha = 50;
-  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}}, {}};
+  sc.materials["rubber"] = MaterialInstance{"rubber", "neo_hookean", {{{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}}, {}}};
   BodySpec body;
   body.name = "cube";
   body.mesh = dir / "cube.msh";

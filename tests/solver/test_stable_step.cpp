@@ -13,10 +13,12 @@
 #include "tactus/core/error.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/run.hpp"
+#include "material_kit.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
+using namespace tactus::solver::testkit;
 
 namespace {
 
@@ -28,7 +30,7 @@ Model single_tet() {
   m.tets = {{0, 1, 2, 3}};
   m.tet_group = {1};
   m.groups = {{3, 1, "body"}};
-  return build_model(m, LinearElastic::from({{"E", kE}, {"nu", kNu}, {"density", kRho}}));
+  return build_model(m, linear_elastic(kE, kNu, kRho));
 }
 
 double true_limit(const Model& m) {
@@ -57,7 +59,7 @@ TEST(StableStep, CriticalStepBelowTrueLimit) {
 
   TetMesh mesh = samples::make_box_mesh(4, 3, 3, 0.04, 0.03, 0.03);
   samples::perturb_interior_nodes(mesh, 0.01, 0.25, 3);
-  const Model box = build_model(mesh, LinearElastic::from({{"E", kE}, {"nu", kNu}, {"density", kRho}}));
+  const Model box = build_model(mesh, linear_elastic(kE, kNu, kRho));
   const ExplicitSolver s2(box, run, DampingSpec{});
   EXPECT_LE(s2.critical_step(), true_limit(box));
 }
@@ -67,12 +69,14 @@ TEST(StableStep, CriticalStepBelowTrueLimit) {
 TEST(StableStep, SolverStepEqualsCoreFunction) {
   TetMesh mesh = samples::make_box_mesh(5, 4, 3, 0.05, 0.04, 0.03);
   samples::perturb_interior_nodes(mesh, 0.01, 0.3, 8);
-  const LinearElastic mat = LinearElastic::from({{"E", kE}, {"nu", kNu}, {"density", kRho}});
+  const Material mat = linear_elastic(kE, kNu, kRho);
   const Model model = build_model(mesh, mat);
   RunSpec run;
   run.end_time = 1;
   const ExplicitSolver s(model, run, DampingSpec{});
-  const CriticalStep core = critical_time_step(mesh, [&](int) { return std::sqrt((mat.lambda + 2 * mat.mu) / kRho); });
+  // The P-wave modulus lambda + 2 mu = K + 4 mu / 3.
+  const CriticalStep core =
+      critical_time_step(mesh, [&](int) { return std::sqrt((mat.small_strain_bulk() + 4 * mat.small_strain_shear() / 3) / kRho); });
   EXPECT_NEAR(s.critical_step(), core.dt, 1e-12 * core.dt);
   EXPECT_EQ(static_cast<std::size_t>(model.input_element[s.limiting_element()]), static_cast<std::size_t>(core.element));
 }
@@ -150,7 +154,7 @@ TEST(StableStep, FailedRunWritesLastGoodState) {
   sc.run.end_time = 1e-3;
   sc.run.force_time_step = true;
   sc.run.output_times = {1e-3};
-  sc.materials["steel"] = MaterialInstance{"steel", "linear_elastic", {{"E", kE}, {"nu", kNu}, {"density", kRho}}, {}};
+  sc.materials["steel"] = MaterialInstance{"steel", "linear_elastic", {{{"E", kE}, {"nu", kNu}, {"density", kRho}}, {}}};
   BodySpec body;
   body.name = "cube";
   body.mesh = dir / "cube.msh";

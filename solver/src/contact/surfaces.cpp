@@ -14,12 +14,7 @@ namespace tactus::solver {
 
 namespace {
 
-using V3 = std::array<double, 3>;
-V3 at(const Model& m, int v) { return {m.X[3 * v], m.X[3 * v + 1], m.X[3 * v + 2]}; }
-V3 sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-V3 cross(const V3& a, const V3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const V3& a) { return std::sqrt(dot(a, a)); }
+Vec3 at(const Model& m, int v) { return load3(&m.X[3 * static_cast<std::size_t>(v)]); }
 
 std::uint64_t face_key(int a, int b, int c) {
   int v[3] = {a, b, c};
@@ -30,16 +25,14 @@ std::uint64_t face_key(int a, int b, int c) {
 double mean_edge(const Model& m, const std::vector<std::array<int, 3>>& tris) {
   double sum = 0;
   for (const auto& t : tris)
-    for (int k = 0; k < 3; ++k) sum += norm(sub(at(m, t[k]), at(m, t[(k + 1) % 3])));
+    for (int k = 0; k < 3; ++k) sum += norm(at(m, t[k]) - at(m, t[(k + 1) % 3]));
   return tris.empty() ? 0.0 : sum / (3.0 * static_cast<double>(tris.size()));
 }
 
 // Triangles of a body's physical surface group, in internal numbering.
 std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body, const std::string& group,
                                                 const std::string& file, const std::string& key) {
-  const PhysicalGroup* g = nullptr;
-  for (const PhysicalGroup* pg : m.body_groups(body))
-    if (pg->dim == 2 && pg->name == group) g = pg;
+  const PhysicalGroup* g = m.body_group(body, 2, group);
   if (!g) {
     std::string names;
     for (const PhysicalGroup* pg : m.body_groups(body))
@@ -47,16 +40,18 @@ std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body
     throw InputError(file, key, "a physical surface group of body '" + m.bodies[body].name + "' (" + (names.empty() ? "it has none" : names) + ")",
                      "\"" + group + "\"");
   }
-  std::vector<std::array<int, 3>> out = surface_triangles(m, g->tag);
+  std::vector<std::array<int, 3>> out = surface_triangles(m, body, g->tag);
   if (out.empty()) throw InputError(file, key, "a surface group with triangles", "group \"" + group + "\" is empty");
   return out;
 }
 
 }  // namespace
 
-std::vector<std::array<int, 3>> surface_triangles(const Model& m, int tag) {
+std::vector<std::array<int, 3>> surface_triangles(const Model& m, int tag) { return surface_triangles(m, 0, tag); }
+
+std::vector<std::array<int, 3>> surface_triangles(const Model& m, std::size_t body, int tag) {
   std::vector<std::array<int, 3>> out;
-  for (std::size_t t = 0; t < m.input_mesh.triangles.size(); ++t)
+  for (std::size_t t = m.bodies[body].triangle_begin; t < m.bodies[body].triangle_end; ++t)
     if (m.input_mesh.triangle_group[t] == tag) {
       std::array<int, 3> tri{};
       for (int k = 0; k < 3; ++k) tri[k] = m.node_of_input[static_cast<std::size_t>(m.input_mesh.triangles[t][k])];
@@ -69,7 +64,7 @@ void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std:
   std::unordered_map<int, double> area;
   std::vector<int> order;
   for (const auto& t : triangles) {
-    const double a = 0.5 * norm(cross(sub(at(m, t[1]), at(m, t[0])), sub(at(m, t[2]), at(m, t[0]))));
+    const double a = 0.5 * norm(cross(at(m, t[1]) - at(m, t[0]), at(m, t[2]) - at(m, t[0])));
     for (int v : t) {
       auto [it, inserted] = area.emplace(v, 0.0);
       if (inserted) order.push_back(v);
@@ -80,7 +75,7 @@ void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std:
   pair.slave_nodes.assign(order.begin(), order.end());
   pair.slave_area.clear();
   for (int v : order) pair.slave_area.push_back(area[v]);
-  if (pair.rigid_plane && pair.master_edge <= 0) pair.master_edge = mean_edge(m, triangles);
+  if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);  // a rigid plane: the slave's own size
 }
 
 void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles,
@@ -97,7 +92,7 @@ void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std
       if (it != index.end() && opposite[it->second] < 0) opposite[it->second] = c[f[3]];
     }
   }
-  pair.master_triangles.clear();
+  std::vector<std::int32_t> oriented;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     std::array<int, 3> tri = triangles[t];
     if (opposite[t] < 0) {
@@ -105,11 +100,17 @@ void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std
       f << "triangle " << t + 1 << " of the surface is not a face of any tet";
       throw InputError("mesh", where, "a surface made of tet faces", f.str());
     }
-    const V3 n = cross(sub(at(m, tri[1]), at(m, tri[0])), sub(at(m, tri[2]), at(m, tri[0])));
-    if (dot(n, sub(at(m, opposite[t]), at(m, tri[0]))) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
-    for (int v : tri) pair.master_triangles.push_back(v);
+    const Vec3 n = cross(at(m, tri[1]) - at(m, tri[0]), at(m, tri[2]) - at(m, tri[0]));
+    if (dot(n, at(m, opposite[t]) - at(m, tri[0])) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
+    for (int v : tri) oriented.push_back(v);
   }
-  pair.master_edge = mean_edge(m, triangles);
+  pair.master = deformable_surface_master(std::move(oriented));
+  pair.search_scale = mean_edge(m, triangles);
+}
+
+void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_normal) {
+  const double len = norm(outward_normal);
+  pair.master = rigid_plane_master(point, {outward_normal[0] / len, outward_normal[1] / len, outward_normal[2] / len});
 }
 
 void add_scenario_contacts(Model& m, const Scenario& sc) {
@@ -128,11 +129,7 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       ContactPair p;
       p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " -> rigid plane";
       p.friction = cs.friction;
-      p.rigid_plane = true;
-      p.plane_point = (*cs.plane)[0];
-      const V3 n = (*cs.plane)[1];
-      const double len = norm(n);
-      for (int d = 0; d < 3; ++d) p.plane_normal[d] = n[d] / len;
+      set_rigid_plane(p, (*cs.plane)[0], (*cs.plane)[1]);
       set_slave_surface(p, m, slave_tris);
       m.contact_pairs.push_back(std::move(p));
       continue;
@@ -150,8 +147,8 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       p.friction = cs.friction;
       set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"));
       set_slave_surface(p, m, swap ? master_tris : slave_tris);
-      log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master_triangles.size() / 3
-                     << " master triangles, mean master edge " << p.master_edge * 1e3 << " mm";
+      log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master->describe() << ", mean master edge "
+                     << p.search_scale * 1e3 << " mm";
       m.contact_pairs.push_back(std::move(p));
     }
   }

@@ -139,7 +139,7 @@ void ExplicitSolver::advance_velocity() {
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
-    contact_report_ = contact_.solve(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
+    contact_report_ = contact_.correct_velocities(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
     contact_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 

@@ -10,9 +10,9 @@
 #include <string_view>
 #include <vector>
 
-namespace tactus {
+#include "tactus/core/vec3.hpp"
 
-using Vec3 = std::array<double, 3>;
+namespace tactus {
 
 struct PhysicalGroup {
   int dim = 3;  // 3: volume (material/subdomain), 2: surface

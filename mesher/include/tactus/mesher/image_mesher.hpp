@@ -4,8 +4,10 @@
 // interfaces"): one subdomain per label, nodes shared across every interface.
 #include <string>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/mesh.hpp"
 #include "tactus/core/volume.hpp"
+#include "tactus/mesher/post_passes.hpp"
 
 namespace tactus::mesher {
 
@@ -22,6 +24,7 @@ struct ImageMeshParams {
   double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this
   double optimiser_time_limit_s = 30;
   int relocate_passes = 6;          // node relocation of the tets that set the stable step (0: off)
+  PostPassParams post;              // the post-passes' thresholds (post_passes.hpp)
   bool restore_volumes = true;      // offset surfaces to the label volumes (see image_mesher.cpp)
   bool peel_skin_slivers = true;    // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
   unsigned seed = 0;
@@ -34,7 +37,7 @@ double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& 
 
 // Physical groups written: volumes by label (1 "soft_tissue", 2.. the label table's names, e.g.
 // "bone_02"), surfaces 1001 "skin" (soft tissue / outside) and 1002 "bone_interface".
-constexpr int kSkinTag = 1001, kBoneInterfaceTag = 1002;
+constexpr int kSkinTag = contracts::kSkinTag, kBoneInterfaceTag = contracts::kBoneInterfaceTag;
 
 TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& params);
 

@@ -8,29 +8,36 @@
 
 #include "tactus/core/mesh.hpp"
 #include "tactus/solver/contact.hpp"
-#include "tactus/solver/materials.hpp"
+#include "tactus/solver/material.hpp"
 #include "tactus/solver/scenario.hpp"
 
 namespace tactus::solver {
 
 // Tets of one material, contiguous in element order: the force kernel dispatches on the
-// material once per block, never per element.
+// material once per block, never per element. The law's per-element data (hgo: fibre directions)
+// belongs to the block: its own array when the elements bring their own (a body's fibres file),
+// else the material's constants for every element (stride 0).
 struct MaterialBlock {
   std::string name;  // material name in the scenario
   Material material;
-  std::size_t begin = 0, end = 0;  // element range
-  bool element_fibres = false;     // hgo: directions from Model::fibres instead of the material's
+  std::size_t begin = 0, end = 0;   // element range
+  std::vector<double> element_data;  // material.type().element_data_size per element, or empty
+
+  bool per_element_data() const { return !element_data.empty(); }
+  const double* data() const { return per_element_data() ? element_data.data() : material.constant_element_data().data(); }
+  std::size_t data_stride() const { return per_element_data() ? material.type().element_data_size : 0; }
+  const double* data_of(std::size_t e) const { return data() + data_stride() * (e - begin); }
 };
 
+// A body: its ranges in the input numbering of Model::input_mesh, whose tet_group and
+// triangle_group hold the tags of the body's own mesh file (two bodies may use the same tags).
 struct BodyRange {
   std::string name;
-  std::size_t node_begin = 0, node_end = 0;  // in original (input) numbering
-  std::size_t tet_begin = 0, tet_end = 0;    // the body's tets in input_mesh
+  std::size_t node_begin = 0, node_end = 0;
+  std::size_t tet_begin = 0, tet_end = 0;
+  std::size_t triangle_begin = 0, triangle_end = 0;
+  std::size_t group_begin = 0, group_end = 0;  // its physical groups in input_mesh.groups
 };
-
-// Physical group tags are per mesh file: body b's groups are stored with tag + b * kBodyTagStride
-// (meshes use tags up to ~1000 + labels, e.g. the mesher's skin 1001).
-inline constexpr int kBodyTagStride = 1000000;
 
 struct Model {
   // Nodes (internal, locality-ordered numbering), 3 doubles per node.
@@ -45,7 +52,6 @@ struct Model {
   std::vector<double> grad;        // 9 per tet: grad N_1, grad N_2, grad N_3 (grad N_0 = -sum)
   std::vector<double> volume;      // reference volume
   std::vector<MaterialBlock> blocks;
-  std::vector<double> fibres;      // 6 per tet (a_1, a_2) when some hgo block has element_fibres
 
   // Constraints: per dof (3 per node), 0 free, 1 prescribed velocity; value in constraint_velocity.
   std::vector<std::uint8_t> constrained;
@@ -55,8 +61,9 @@ struct Model {
   std::vector<std::int32_t> node_of_input;     // internal index of input node i
   std::vector<std::int32_t> element_of_input;  // internal index of input tet e
   std::vector<std::int32_t> input_element;     // input index of internal tet
-  TetMesh input_mesh;                          // all bodies, input numbering, placed coordinates
+  TetMesh input_mesh;                          // all bodies, input numbering, placed coordinates, file tags
   std::vector<BodyRange> bodies;
+  std::vector<std::int32_t> tet_body;          // body of each input tet
 
   // Contact (internal numbering): directed slave -> master pairs and the iteration settings.
   std::vector<ContactPair> contact_pairs;
@@ -67,8 +74,11 @@ struct Model {
   const MaterialBlock& block_of(std::size_t internal) const;
   // Input-numbering index of an internal node (a search: for messages and reports, not loops).
   std::size_t input_node(std::size_t internal) const;
-  // The physical groups of body b (tags within its stride), in file order.
+  // The physical groups of body b, in file order; one of them by dimension and name (or nullptr).
   std::vector<const PhysicalGroup*> body_groups(std::size_t body) const;
+  const PhysicalGroup* body_group(std::size_t body, int dim, const std::string& name) const;
+  // The body an input node belongs to.
+  std::size_t body_of_node(std::size_t input_node) const;
 };
 
 // Reads every body's mesh, places it, assigns materials and constraints, lumps mass and
@@ -77,7 +87,7 @@ Model build_model(const Scenario& scenario);
 
 // Same, from an in-memory mesh (tests and benchmarks): one body, one material for every group.
 Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name = "material",
-                  const Vec3a& initial_velocity = {0, 0, 0}, bool reorder = true);
+                  const Vec3& initial_velocity = {0, 0, 0}, bool reorder = true);
 
 // Reorders nodes and elements along a Morton (Z-order) curve so that neighbouring tets share
 // cache lines; exposed for the benchmarks.
@@ -90,5 +100,5 @@ namespace tactus::solver {
 // Constrains the chosen components of every node whose reference position satisfies `select`
 // to the given velocity (0 = fixed). Returns how many nodes were selected. For tests/benchmarks.
 std::size_t constrain_nodes(Model& model, const std::function<bool(const double* X)>& select,
-                            std::array<bool, 3> components, const Vec3a& velocity = {0, 0, 0});
+                            std::array<bool, 3> components, const Vec3& velocity = {0, 0, 0});
 }  // namespace tactus::solver

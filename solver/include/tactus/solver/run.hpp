@@ -41,9 +41,13 @@ RunSummary run_simulation(const Scenario& scenario, const std::filesystem::path&
 // Every file a scenario reads (the scenario, meshes, fibre files): inputs an output may not replace.
 std::vector<std::filesystem::path> scenario_inputs(const Scenario& scenario);
 
-// tactus-solve material-test: Cauchy stress against stretch as CSV.
+// docs/results-reference.md and .json: every result field, history column and run.json key.
+std::string results_reference_markdown();
+nlohmann::json results_reference_json();
+
+// The material-point driver (tactus-solve material-point): Cauchy stress against stretch as CSV.
 // mode: "uniaxial" (lateral stresses solved to zero), "equibiaxial" (sigma_zz = 0), "shear" (F = I + gamma e_x (x) e_y).
-std::string material_test_csv(const Scenario& scenario, const std::string& material, const std::string& mode,
+std::string material_point_csv(const Scenario& scenario, const std::string& material, const std::string& mode,
                               double max_value, int samples);
 
 }  // namespace tactus::solver

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "tactus/core/vec3.hpp"
+#include "tactus/solver/material.hpp"
 #include "tactus/solver/parameters.hpp"
 
 namespace tactus::solver {
-
-using Vec3a = std::array<double, 3>;
 
 struct RunSpec {
   double end_time = 0;
@@ -23,7 +23,7 @@ struct RunSpec {
   std::vector<double> output_times;
   double output_interval = 0;
   double energy_tolerance = 0.25;  // relative energy-balance error that stops a run as unstable
-  Vec3a gravity{0, 0, 0};
+  Vec3 gravity{0, 0, 0};
   double gravity_ramp_time = 0;
   int threads = 0;  // 0: all cores
   int history_every = 0;  // 0: automatic (about 2000 rows)
@@ -38,16 +38,15 @@ struct DampingSpec {
 
 struct MaterialInstance {
   std::string name, type;
-  std::map<std::string, double> params;
-  std::optional<std::array<Vec3a, 2>> fibres;  // hgo: a_1, a_2 (normalised)
+  MaterialValues values;  // validated against the law's declarations
 };
 
 struct BodySpec {
   std::string name;
   std::filesystem::path mesh;
   double scale = 1.0;  // applied to mesh coordinates before translate (e.g. 1e-3 for mm meshes)
-  Vec3a translate{0, 0, 0};
-  Vec3a initial_velocity{0, 0, 0};
+  Vec3 translate{0, 0, 0};
+  Vec3 initial_velocity{0, 0, 0};
   std::filesystem::path fibres;  // optional .vtu with per-tet cell data fibre_1, fibre_2
   // Placement against an earlier body: moved along one axis to leave against_gap between the
   // bounding boxes (e.g. the block 0.5 mm from the hand, whatever the hand mesh).
@@ -60,16 +59,16 @@ struct BodySpec {
 struct BoundarySpec {
   std::string body;
   std::string group;  // physical surface or volume group name, or empty when a box is given
-  std::optional<std::array<Vec3a, 2>> box;  // [min, max] in placed coordinates
+  std::optional<std::array<Vec3, 2>> box;  // [min, max] in placed coordinates
   std::string type;   // "fixed" or "velocity"
-  Vec3a velocity{0, 0, 0};
+  Vec3 velocity{0, 0, 0};
   std::array<bool, 3> components{true, true, true};
 };
 
 // [[contact]]: slave nodes of one body's surface against another body's surface or a rigid plane.
 struct ContactSpec {
   std::string slave_body, slave_surface, master_body, master_surface;
-  std::optional<std::array<Vec3a, 2>> plane;  // point, outward normal (rigid plane master)
+  std::optional<std::array<Vec3, 2>> plane;  // point, outward normal (rigid plane master)
   double friction = 0;                        // Coulomb coefficient mu
   bool two_pass = false;                      // also the master's nodes against the slave surface
 };

@@ -1,22 +1,19 @@
-// tactus-solve material-test: homogeneous deformations of one material point, for users fitting
-// parameters. Lateral stretches are found by Newton iteration (finite-difference Jacobian) so the
-// lateral Cauchy stresses vanish.
+// The material-point driver (tactus-solve material-point): homogeneous deformations of one
+// material point, for users fitting parameters. Lateral stretches are found by Newton iteration
+// (finite-difference Jacobian) so the lateral Cauchy stresses vanish.
 #include <Eigen/Dense>
 #include <iomanip>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
-#include "tactus/solver/materials.hpp"
+#include "tactus/solver/material.hpp"
 #include "tactus/solver/run.hpp"
 
 namespace tactus::solver {
 
 namespace {
 
-Mat3 cauchy_of(const Material& mat, const Mat3& F) {
-  const Mat3 P = std::visit([&](const auto& m) { return m.evaluate(F).P; }, mat);
-  return cauchy_stress(F, P);
-}
+Mat3 cauchy_of(const Material& mat, const Mat3& F) { return cauchy_stress(F, mat.evaluate(F).P); }
 
 // Solves for the free diagonal stretches (indices in `free`) so that sigma_ii = 0 there.
 Mat3 relax_lateral(const Material& mat, Mat3 F, const std::vector<int>& free, double stress_scale) {
@@ -42,12 +39,12 @@ Mat3 relax_lateral(const Material& mat, Mat3 F, const std::vector<int>& free, do
       F(free[k], free[k]) += step;
     }
   }
-  throw NumericalError("material-test: lateral stresses did not converge to zero (is the material stable here?)");
+  throw NumericalError("material-point: lateral stresses did not converge to zero (is the material stable here?)");
 }
 
 }  // namespace
 
-std::string material_test_csv(const Scenario& sc, const std::string& name, const std::string& mode, double max_value,
+std::string material_point_csv(const Scenario& sc, const std::string& name, const std::string& mode, double max_value,
                               int samples) {
   auto it = sc.materials.find(name);
   if (it == sc.materials.end()) {
@@ -55,17 +52,15 @@ std::string material_test_csv(const Scenario& sc, const std::string& name, const
     for (const auto& [n, m] : sc.materials) known += (known.empty() ? "" : ", ") + n;
     throw InputError(sc.file.string(), "--material", "a material of the scenario (" + known + ")", "\"" + name + "\"");
   }
-  Material mat = make_material(it->second.type, it->second.params);
-  if (auto* h = std::get_if<Hgo>(&mat); h && it->second.fibres) {
-    const auto& f = *it->second.fibres;
-    h->a1 = Vec3d(f[0][0], f[0][1], f[0][2]);
-    h->a2 = Vec3d(f[1][0], f[1][1], f[1][2]);
-  }
+  const Material mat = Material::make(it->second.type, it->second.values, "materials." + name);
+  if (mat.needs_element_data())
+    throw InputError(sc.file.string(), "materials." + name, "the material's own element data (hgo: its fibres) for a material point",
+                     "none: its elements take theirs from a file");
   if (mode != "uniaxial" && mode != "equibiaxial" && mode != "shear")
     throw InputError("command line", "--mode", "uniaxial, equibiaxial or shear", "\"" + mode + "\"");
   if (samples < 1) throw InputError("command line", "--samples", "at least 1", std::to_string(samples));
   if (mode != "shear" && !(max_value > 0)) throw InputError("command line", "--max", "a stretch > 0", std::to_string(max_value));
-  const double scale = material_bulk(mat) + material_shear(mat);
+  const double scale = mat.small_strain_bulk() + mat.small_strain_shear();
   std::ostringstream o;
   o << std::setprecision(10);
   o << (mode == "shear" ? "gamma" : "stretch") << ",F_xx,F_yy,F_zz,sigma_xx,sigma_yy,sigma_zz,sigma_xy,sigma_yz,sigma_xz\n";

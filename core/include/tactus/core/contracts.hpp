@@ -1,0 +1,117 @@
+#pragma once
+// The file contracts between the stages, declared once: label ids, mesh group names and tags,
+// result field names, history.csv columns and run.json keys. Writers and readers (the solver,
+// postproc, the mesher, segment) use these names; `tactus-solve results-reference` prints them as
+// docs/results-reference.md and .json (the Python pipeline and test scripts read the JSON), and a
+// test keeps both files equal to these declarations.
+#include <array>
+
+namespace tactus::contracts {
+
+// --- labels.h5 -------------------------------------------------------------------------------
+inline constexpr int kBackgroundLabel = 0;
+inline constexpr int kSoftTissueLabel = 1;
+inline constexpr int kFirstBoneLabel = 2;  // 2.. one id per bone
+inline constexpr const char* kSoftTissueName = "soft_tissue";
+inline constexpr const char* kLabelsDataset = "/labels";
+
+// --- meshes ------------------------------------------------------------------------------------
+// Surfaces of the mesher's anatomy meshes, and of gmsh objects.
+inline constexpr int kSkinTag = 1001, kBoneInterfaceTag = 1002, kObjectSurfaceTag = 20;
+inline constexpr const char* kSkinGroup = "skin";
+inline constexpr const char* kBoneInterfaceGroup = "bone_interface";
+inline constexpr const char* kObjectSurfaceGroup = "surface";
+
+// --- results: state .vtu fields ----------------------------------------------------------------
+struct FieldSpec {
+  const char* name;
+  int components;
+  const char* unit;
+  const char* doc;
+};
+
+namespace point {
+inline constexpr FieldSpec displacement{"displacement", 3, "m", "u = x - X"};
+inline constexpr FieldSpec velocity{"velocity", 3, "m/s", "v at the state's time"};
+inline constexpr FieldSpec contact_pressure{"contact_pressure", 1, "Pa", "normal reaction over the node's tributary area (slave nodes)"};
+inline constexpr FieldSpec contact_traction{"contact_traction", 3, "Pa", "tangential (friction) reaction over the tributary area"};
+inline constexpr FieldSpec contact_status{"contact_status", 1, "", "-1 far from any master, 0 open, 1 stick, 2 slip"};
+inline constexpr FieldSpec contact_gap{"contact_gap", 1, "m", "gap h to the master (NaN when far)"};
+inline constexpr std::array<const FieldSpec*, 6> all{&displacement, &velocity, &contact_pressure, &contact_traction, &contact_status,
+                                                      &contact_gap};
+}  // namespace point
+
+namespace cell {
+inline constexpr FieldSpec group{"group", 1, "", "physical volume tag in the body's own mesh file"};
+inline constexpr FieldSpec cauchy_stress{"cauchy_stress", 6, "Pa", "Cauchy stress (xx, yy, zz, xy, yz, xz)"};
+inline constexpr FieldSpec von_mises{"von_mises", 1, "Pa", "von Mises stress of the Cauchy stress"};
+inline constexpr FieldSpec material{"material", 1, "", "index into run.json materials"};
+inline constexpr FieldSpec body{"body", 1, "", "index into run.json bodies"};
+inline constexpr FieldSpec jacobian{"J", 1, "", "volume ratio det F"};
+inline constexpr std::array<const FieldSpec*, 6> all{&group, &cauchy_stress, &von_mises, &material, &body, &jacobian};
+}  // namespace cell
+
+// --- results: history.csv ----------------------------------------------------------------------
+struct ColumnSpec {
+  const char* name;
+  const char* unit;
+  const char* doc;
+};
+
+namespace history {
+inline constexpr ColumnSpec step{"step", "", "step index n"};
+inline constexpr ColumnSpec time{"time", "s", "t^n"};
+inline constexpr ColumnSpec dt{"dt", "s", "the step that reached t^n"};
+inline constexpr ColumnSpec kinetic_energy{"kinetic_energy", "J", "kinetic energy at t^n"};
+inline constexpr ColumnSpec internal_energy{"internal_energy", "J", "strain energy at t^n"};
+inline constexpr ColumnSpec damping_work{"damping_work", "J", "work of the Rayleigh damping forces so far"};
+inline constexpr ColumnSpec external_work{"external_work", "J", "work of gravity and of the supports (prescribed dofs) so far"};
+inline constexpr ColumnSpec contact_work_normal{"contact_work_normal", "J", "energy taken out by the normal contact reactions"};
+inline constexpr ColumnSpec contact_work_friction{"contact_work_friction", "J", "energy dissipated by friction"};
+inline constexpr ColumnSpec energy_balance_error{"energy_balance_error", "J",
+                                                 "kinetic + internal + damping + contact work - external work - initial energy"};
+inline constexpr ColumnSpec critical_step{"critical_step", "s", "the stable limit min L_e / c_e at t^n"};
+inline constexpr ColumnSpec contact_force{"contact_force", "N", "|sum of the contact reactions on the slave nodes|"};
+inline constexpr ColumnSpec contact_force_x{"contact_force_x", "N", "its x component"};
+inline constexpr ColumnSpec contact_force_y{"contact_force_y", "N", "its y component"};
+inline constexpr ColumnSpec contact_force_z{"contact_force_z", "N", "its z component"};
+inline constexpr ColumnSpec contact_normal_force{"contact_normal_force", "N", "sum of the normal reactions"};
+inline constexpr ColumnSpec contact_area{"contact_area", "m^2", "tributary area of the nodes pressed"};
+inline constexpr ColumnSpec peak_pressure{"peak_pressure", "Pa", "largest nodal contact pressure this step"};
+inline constexpr ColumnSpec peak_pressure_x{"peak_pressure_x", "m", "where: x"};
+inline constexpr ColumnSpec peak_pressure_y{"peak_pressure_y", "m", "where: y"};
+inline constexpr ColumnSpec peak_pressure_z{"peak_pressure_z", "m", "where: z"};
+inline constexpr ColumnSpec contact_nodes{"contact_nodes", "", "slave nodes pressed"};
+inline constexpr ColumnSpec stick_nodes{"stick_nodes", "", "of which sticking"};
+inline constexpr ColumnSpec slip_nodes{"slip_nodes", "", "of which slipping"};
+inline constexpr ColumnSpec uzawa_iterations{"uzawa_iterations", "", "Uzawa sweeps this step"};
+inline constexpr std::array<const ColumnSpec*, 25> all{
+    &step,          &time,           &dt,           &kinetic_energy,  &internal_energy, &damping_work,        &external_work,
+    &contact_work_normal, &contact_work_friction, &energy_balance_error, &critical_step, &contact_force, &contact_force_x,
+    &contact_force_y, &contact_force_z, &contact_normal_force, &contact_area, &peak_pressure, &peak_pressure_x, &peak_pressure_y,
+    &peak_pressure_z, &contact_nodes, &stick_nodes, &slip_nodes, &uzawa_iterations};
+}  // namespace history
+
+// --- results: run.json (the keys readers use) ---------------------------------------------------
+namespace run_json {
+inline constexpr const char* status = "status";            // "completed" | "failed"
+inline constexpr const char* message = "message";          // why it failed, or null
+inline constexpr const char* materials = "materials";      // names behind the cell field "material"
+inline constexpr const char* bodies = "bodies";            // names behind the cell field "body"
+inline constexpr const char* steps = "steps";
+inline constexpr const char* nodes = "nodes";
+inline constexpr const char* tets = "tets";
+inline constexpr const char* end_time = "end_time";        // s, exactly the end time reached
+inline constexpr const char* output_times = "output_times";
+inline constexpr const char* outputs = "outputs";
+inline constexpr const char* wall_time = "wall_time_s";
+inline constexpr const char* time_step = "time_step";      // {min, max, safety, min_ratio_to_nominal, critical_initial, ...}
+inline constexpr const char* timing = "timing_s";          // {stress_passes, contact, rest}
+inline constexpr const char* energy = "energy";            // {initial, kinetic, internal, ..., balance_error}
+inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
+inline constexpr const char* contact = "contact";          // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
+inline constexpr std::array<const char*, 16> all{status,   message, materials, bodies, steps,  nodes,  tets,           end_time,
+                                                 output_times, outputs, wall_time, time_step, timing, energy, peak_von_mises, contact};
+}  // namespace run_json
+
+}  // namespace tactus::contracts

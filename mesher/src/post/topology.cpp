@@ -1,0 +1,65 @@
+// Mesh adjacency shared by the post-passes, and the boundary triangles rebuilt from the labels.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "tactus/core/contracts.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/core/stable_step.hpp"
+#include "tactus/mesher/post_passes.hpp"
+#include "tactus/mesher/quality.hpp"
+#include "topology.hpp"
+
+namespace tactus::mesher {
+
+// The tets around every node.
+std::vector<std::vector<std::size_t>> tets_around_nodes(const TetMesh& mesh) {
+  std::vector<std::vector<std::size_t>> tets_of(mesh.nodes.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (int v : mesh.tets[e]) tets_of[static_cast<std::size_t>(v)].push_back(e);
+  return tets_of;
+}
+
+// Half the cross product of a triangle's edges: its normal (orientation of the triangle) with
+// length equal to its area.
+std::array<double, 3> area_normal(const TetMesh& mesh, const std::array<int, 3>& f) {
+  const Vec3 &a = mesh.nodes[static_cast<std::size_t>(f[0])], &b = mesh.nodes[static_cast<std::size_t>(f[1])],
+             &c = mesh.nodes[static_cast<std::size_t>(f[2])];
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  return {0.5 * (u[1] * w[2] - u[2] * w[1]), 0.5 * (u[2] * w[0] - u[0] * w[2]), 0.5 * (u[0] * w[1] - u[1] * w[0])};
+}
+
+std::array<int, 3> sorted_face(int a, int b, int c) {
+  std::array<int, 3> f{a, b, c};
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+// Boundary triangles from the tets' labels: the faces between different labels (0 = outside),
+// skin where one side is outside, bone interface otherwise; oriented out of the higher label
+// (soft tissue under the skin, the bone at an interface), as CGAL's facets are above.
+void rebuild_boundary_triangles(TetMesh& mesh) {
+  std::map<std::array<int, 3>, std::vector<std::size_t>> owners;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (const auto& f : kFaces) owners[sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]])].push_back(e);
+  mesh.triangles.clear();
+  mesh.triangle_group.clear();
+  for (const auto& [key, tets] : owners) {
+    const int la = mesh.tet_group[tets[0]], lb = tets.size() > 1 ? mesh.tet_group[tets[1]] : 0;
+    if (la == lb) continue;
+    const std::size_t inner = tets.size() > 1 && lb > la ? tets[1] : tets[0];
+    const auto& t = mesh.tets[inner];
+    int apex = 0;
+    for (int v : t)
+      if (v != key[0] && v != key[1] && v != key[2]) apex = v;
+    std::array<int, 3> tri = key;
+    if (tet_volume(mesh.nodes[static_cast<std::size_t>(tri[0])], mesh.nodes[static_cast<std::size_t>(tri[1])],
+                   mesh.nodes[static_cast<std::size_t>(tri[2])], mesh.nodes[static_cast<std::size_t>(apex)]) > 0)
+      std::swap(tri[1], tri[2]);  // the apex behind the triangle: its normal points out of `inner`
+    mesh.triangles.push_back(tri);
+    mesh.triangle_group.push_back(std::min(la, lb) == 0 ? contracts::kSkinTag : contracts::kBoneInterfaceTag);
+  }
+}
+
+}  // namespace tactus::mesher

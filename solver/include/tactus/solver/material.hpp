@@ -1,0 +1,154 @@
+#pragma once
+// Hyperelastic materials of the total-Lagrangian solver.
+//
+// A material law is one file in solver/src/materials/ plus one registration line in
+// solver/src/materials/registry.cpp (docs/adding-a-material.md shows a whole example). The law
+// declares its parameters (name, unit, range, default, doc), any per-element data it needs
+// (hgo: two fibre directions per tet) and extra result fields, and evaluates, from the deformation
+// gradient F of a one-point tet:
+//   P        the first Piola-Kirchhoff stress (P = F S, S = 2 dW/dC, paper eq. 18),
+//   W        the strain energy per reference volume,
+//   modulus  the current P-wave modulus (Pa) for the stable time step (K + 4 mu / 3, plus the
+//            fibres' current tangent stiffness for hgo).
+// The registry turns each law into a MaterialType: the scenario reader validates against its
+// declarations, the key reference is generated from them, and the stress pass, the output pass and
+// the material-point driver call its kernels once per block of elements (never a virtual call per
+// element: the element loop is compiled for each law).
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tactus/core/mesh.hpp"
+#include "tactus/solver/parameters.hpp"
+
+namespace tactus::solver {
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3d = Eigen::Vector3d;
+
+// F^{-T} J = cof(F): the cofactor matrix, so F^{-T} = cof(F) / J without a division per entry.
+inline Mat3 cofactor(const Mat3& F) {
+  Mat3 c;
+  c(0, 0) = F(1, 1) * F(2, 2) - F(1, 2) * F(2, 1);
+  c(0, 1) = F(1, 2) * F(2, 0) - F(1, 0) * F(2, 2);
+  c(0, 2) = F(1, 0) * F(2, 1) - F(1, 1) * F(2, 0);
+  c(1, 0) = F(0, 2) * F(2, 1) - F(0, 1) * F(2, 2);
+  c(1, 1) = F(0, 0) * F(2, 2) - F(0, 2) * F(2, 0);
+  c(1, 2) = F(0, 1) * F(2, 0) - F(0, 0) * F(2, 1);
+  c(2, 0) = F(0, 1) * F(1, 2) - F(0, 2) * F(1, 1);
+  c(2, 1) = F(0, 2) * F(1, 0) - F(0, 0) * F(1, 2);
+  c(2, 2) = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
+  return c;
+}
+
+// x^{-1/3} for x > 0, to 1e-15 relative (measured worst 6.7e-16 over 1e-6..1e6). libm's cbrt
+// (with its frexp/scalbn) took a quarter of a neo-Hookean update; this is a bit-level first guess
+// refined by four division-free Newton steps on 1/y^3 = x:  y <- y (4 - x y^3) / 3.
+inline double inv_cbrt(double x) {
+  std::uint64_t i;
+  std::memcpy(&i, &x, sizeof i);
+  i = 0x553ef0ff289dd796ULL - i / 3;
+  double y;
+  std::memcpy(&y, &i, sizeof y);
+  for (int k = 0; k < 4; ++k) y = y * (4.0 - x * y * y * y) * (1.0 / 3.0);
+  return y;
+}
+
+// The per-element material evaluation must inline into the force loop.
+#define TACTUS_KERNEL_INLINE [[gnu::always_inline]] inline
+
+struct StressPoint {
+  Mat3 P;
+  double W = 0;
+  double modulus = 0;
+};
+
+// Validated values of one [materials.<name>] section: numbers, and the law's vector keys
+// (hgo: `fibres`).
+struct MaterialValues {
+  std::map<std::string, double> numbers;
+  std::map<std::string, std::vector<Vec3>> vectors;
+  std::string source = "material";  // the file they came from, for messages
+};
+
+// A cell field a law adds to the results (hgo: fibre_stretch).
+struct ResultFieldSpec {
+  std::string name;
+  int components = 1;
+  std::string doc;
+};
+
+struct StressKernelArgs;  // kernels/element_loop.hpp
+struct OutputKernelArgs;
+struct ThreadAccumulator;
+
+// One registered law: its declarations and its kernels (made by make_material_type<Law>()).
+struct MaterialType {
+  std::string name;        // the scenario's `type`
+  SectionSpec parameters;  // every key of its [materials.<name>] section but `type`
+  // Per-element data: doubles per tet, and the cell fields of a body's element-data file
+  // (bodies.fibres) it is made from (hgo: fibre_1, fibre_2).
+  std::size_t element_data_size = 0;
+  std::vector<std::pair<std::string, int>> element_fields;
+  std::vector<ResultFieldSpec> result_fields;
+
+  // Builds the law from validated values; `constants` receives its element data when the section
+  // gives it (hgo with `fibres`), else stays empty and every element must get it from a file.
+  std::shared_ptr<const void> (*create)(const MaterialValues& values, const std::string& where, std::vector<double>& constants) = nullptr;
+  // Element data of one tet from the element fields' values (in element_fields order).
+  void (*element_data_from_fields)(const double* fields, double* data, const std::string& where) = nullptr;
+  StressPoint (*evaluate)(const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) = nullptr;
+  void (*result_values)(const void* law, const Mat3& F, const double* data, double* out) = nullptr;  // result_fields, in order
+  double (*density)(const void* law) = nullptr;
+  double (*small_strain_bulk)(const void* law) = nullptr;   // for Rayleigh beta and the initial step
+  double (*small_strain_shear)(const void* law) = nullptr;
+  void (*stress_pass)(const StressKernelArgs& args, ThreadAccumulator& acc) = nullptr;
+};
+
+// Every registered law, in registration order.
+const std::vector<const MaterialType*>& material_types();
+// The law named `type`, or an InputError naming `where` and listing the known ones.
+const MaterialType& material_type(const std::string& type, const std::string& where = "material type");
+// "neo_hookean | linear_elastic | hgo | ...".
+std::string material_type_list();
+
+// A law with its parameters: a cheap handle, shared by the blocks that use it.
+class Material {
+ public:
+  Material() = default;
+  // Validates `values` against the law's declarations (InputError naming `where`.key).
+  static Material make(const std::string& type, const MaterialValues& values, const std::string& where = "material");
+
+  const MaterialType& type() const { return *type_; }
+  const std::string& type_name() const { return type_->name; }
+  const void* law() const { return law_.get(); }
+  double density() const { return type_->density(law_.get()); }
+  double small_strain_bulk() const { return type_->small_strain_bulk(law_.get()); }
+  double small_strain_shear() const { return type_->small_strain_shear(law_.get()); }
+  // The law's element data from its own section (empty when every element must bring its own).
+  const std::vector<double>& constant_element_data() const { return constants_; }
+  bool needs_element_data() const { return type_->element_data_size > 0 && constants_.empty(); }
+
+  // P, W and modulus at F; `data`: this element's data (default: the constants).
+  StressPoint evaluate(const Mat3& F, const double* data = nullptr) const;
+
+ private:
+  const MaterialType* type_ = nullptr;
+  std::shared_ptr<const void> law_;
+  std::vector<double> constants_;
+};
+
+// Cauchy stress sigma = F S F^T / J = P F^T / J (paper eq. 18), and its von Mises value.
+inline Mat3 cauchy_stress(const Mat3& F, const Mat3& P) { return P * F.transpose() / F.determinant(); }
+inline double von_mises(const Mat3& s) {
+  const double a = s(0, 0) - s(1, 1), b = s(1, 1) - s(2, 2), c = s(2, 2) - s(0, 0);
+  return std::sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * (s(0, 1) * s(0, 1) + s(1, 2) * s(1, 2) + s(0, 2) * s(0, 2)));
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,82 @@
+// The integrator's view of contact: detection by each pair's master kind, then the bi-potential
+// solve over the rows, as one velocity correction per step.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "bipotential.hpp"
+#include "detection.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/solver/contact.hpp"
+#include "tactus/solver/model.hpp"
+
+namespace tactus::solver {
+
+ContactSolver::ContactSolver(const Model& model)
+    : model_(model), pairs_(model.contact_pairs), settings_(model.contact_settings), scratch_(std::make_unique<DetectionScratch>()) {
+  x_.resize(3 * model.num_nodes);
+  for (const auto& p : pairs_) last_reaction_.emplace_back(3 * p.slave_nodes.size(), 0.0);
+}
+
+ContactSolver::~ContactSolver() = default;
+
+void ContactSolver::detect(const double* u, double search_factor) {
+  rows_.clear();
+  const std::size_t ndof = 3 * model_.num_nodes;
+#pragma omp parallel for num_threads(threads_) schedule(static) if (ndof > 30000)
+  for (std::size_t i = 0; i < ndof; ++i) x_[i] = model_.X[i] + u[i];
+  for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
+    const ContactPair& p = pairs_[pi];
+    p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, *scratch_, rows_, threads_);
+  }
+}
+
+void ContactSolver::check_initial_overlap(const double* u) const {
+  ContactSolver probe(model_);
+  probe.detect(u, std::max(settings_.search_factor, 2.0));
+  const ContactRows& rows = probe.rows_;
+  std::size_t worst = rows.size();
+  double worst_h = 0;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const double tol = 1e-3 * std::max(pairs_[static_cast<std::size_t>(rows.pair[k])].search_scale, 1e-12);
+    if (rows.gap[k] < -tol && rows.gap[k] < worst_h) worst = k, worst_h = rows.gap[k];
+  }
+  if (worst == rows.size()) return;
+  const ContactPair& p = pairs_[static_cast<std::size_t>(rows.pair[worst])];
+  std::size_t input_node = model_.input_node(static_cast<std::size_t>(rows.slave(worst)));
+  const BodyRange& body = model_.bodies[model_.body_of_node(input_node)];
+  input_node -= body.node_begin;
+  std::ostringstream found, expected;
+  found << "node " << input_node + 1 << " of body '" << body.name << "' is " << -worst_h * 1e3 << " mm inside the master surface";
+  expected << "bodies apart or touching at t = 0 (overlap < " << 1e-3 * p.search_scale * 1e3 << " mm); move them apart with bodies.translate";
+  throw InputError("scenario", p.name, expected.str(), found.str());
+}
+
+ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass,
+                                                    double velocity_per_force, double dt, double dt_prev) {
+  if (pairs_.empty()) return {};
+  detect(u, settings_.search_factor);
+  return solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev});
+}
+
+void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status,
+                                std::vector<double>& gap) const {
+  const std::size_t N = model_.num_nodes;
+  pressure.assign(N, 0.0);
+  traction.assign(3 * N, 0.0);
+  status.assign(N, -1.0);
+  gap.assign(N, std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    const std::size_t s = static_cast<std::size_t>(rows_.slave(k));
+    const double* r = &rows_.reaction[3 * k];
+    const double* n = &rows_.normal[3 * k];
+    const double rn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
+    pressure[s] += rn / rows_.area[k];
+    for (int d = 0; d < 3; ++d) traction[3 * s + d] += (r[d] - rn * n[d]) / rows_.area[k];
+    status[s] = std::max(status[s], static_cast<double>(rows_.status[k]));
+    if (std::isnan(gap[s]) || rows_.gap[k] < gap[s]) gap[s] = rows_.gap[k];
+  }
+}
+
+}  // namespace tactus::solver

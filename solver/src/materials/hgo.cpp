@@ -1,0 +1,104 @@
+// hgo: Holzapfel-Gasser-Ogden with two fibre families (paper eqs. 20-26):
+//   W = c1 (I1bar - 3) + sum_a k1/(2 k2) [exp(k2 (J4bar_a - 1)^2) - 1] + k/2 (J - 1)^2,
+//   I1bar = I1 I3^{-1/3}, J4bar_a = J4_a I3^{-1/3}, J4_a = |F a_a|^2 (eq. 17).
+// Fibres bear load only in tension. The tension switch tests J4bar (the isochoric fibre stretch),
+// as FEBio does, so a fibre is slack whenever its isochoric stretch is <= 1. Differentiating
+// (eq. 25 with dI1bar/dC = J^{-2/3}(I - I1/3 C^{-1}) etc.) and pushing by F:
+//   P = 2 c1 J^{-2/3} (F - I1/3 F^{-T}) + sum_a 2 psi'_a J^{-2/3} ((F a) (x) a - J4_a/3 F^{-T})
+//       + k (J - 1) J F^{-T},   psi'(x) = k1 (x - 1) exp(k2 (x - 1)^2) for x > 1, else 0.
+// Per-element data: the two unit fibre directions a_1, a_2 in the reference configuration, from
+// the material's `fibres` or, per tet, from the cell fields fibre_1, fibre_2 of bodies.fibres.
+#include <sstream>
+
+#include "law.hpp"
+
+namespace tactus::solver {
+namespace {
+
+// A unit vector from `a` (3 values); a zero vector is an error naming `file` and `where`.
+void unit(const double* a, double* out, const std::string& file, const std::string& where) {
+  const double len = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  if (!(len > 1e-12)) throw InputError(file, where, "a non-zero direction", "zero vector");
+  for (int c = 0; c < 3; ++c) out[c] = a[c] / len;
+}
+
+struct Hgo {
+  static constexpr const char* kName = "hgo";
+  static constexpr std::size_t kElementData = 6;  // a_1, a_2
+  double c1 = 0, k1 = 0, k2 = 0, k = 0, density = 0;
+
+  static SectionSpec parameters() {
+    ValueSpec fibres;
+    fibres.key = "fibres";
+    fibres.type = ValueType::vec3_list;
+    fibres.doc = "the two fibre directions a_1, a_2 in the reference frame (normalised); required unless every body "
+                 "using the material gives per-element fibres";
+    return {"",
+            "Holzapfel-Gasser-Ogden with two fibre families (paper eqs. 20-26); fibres carry load only in tension.",
+            {number("c1", "Pa", "matrix shear parameter (shear modulus = 2 c1)", 0, true),
+             number("k1", "Pa", "fibre stiffness", 0, false), number("k2", "", "fibre exponential stiffening", 0, true),
+             number("k", "Pa", "bulk (volumetric penalty) modulus in k/2 (J-1)^2", 0, true),
+             number("density", "kg/m^3", "mass density in the reference configuration", 0, true), fibres}};
+  }
+  static Hgo create(const MaterialValues& v, const std::string& where, std::vector<double>& constants) {
+    if (auto it = v.vectors.find("fibres"); it != v.vectors.end()) {
+      const auto& f = it->second;
+      if (f.size() != 2)
+        throw InputError(v.source, where + ".fibres",
+                         "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
+                         std::to_string(f.size()) + " directions");
+      constants.resize(6);
+      for (int i = 0; i < 2; ++i) unit(f[i].data(), constants.data() + 3 * i, v.source, where + ".fibres[" + std::to_string(i) + "]");
+    }
+    return {parameter(v, "c1"), parameter(v, "k1"), parameter(v, "k2"), parameter(v, "k"), parameter(v, "density")};
+  }
+  static std::vector<std::pair<std::string, int>> element_fields() { return {{"fibre_1", 3}, {"fibre_2", 3}}; }
+  static void element_data_from_fields(const double* fields, double* data, const std::string& where) {
+    unit(fields, data, where, "fibre_1");
+    unit(fields + 3, data + 3, where, "fibre_2");
+  }
+  static std::vector<ResultFieldSpec> result_fields() {
+    return {{"fibre_stretch", 2, "stretch |F a| of the two fibre families (hgo; 0 elsewhere)"}};
+  }
+  void result_values(const Mat3& F, const double* data, double* out) const {
+    out[0] = (F * Vec3d(data)).norm();
+    out[1] = (F * Vec3d(data + 3)).norm();
+  }
+  double small_strain_bulk() const { return k; }
+  double small_strain_shear() const { return 2.0 * c1; }
+
+  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* data) const {
+    const Vec3d f1(data), f2(data + 3);
+    const double I1 = F.squaredNorm();
+    const double Jm23 = inv_cbrt(J * J);
+    StressPoint s;
+    double cof_coeff = k * (J - 1.0) - 2.0 * c1 * Jm23 * I1 / (3.0 * J);
+    s.P = (2.0 * c1 * Jm23) * F;
+    s.W = c1 * (Jm23 * I1 - 3.0) + 0.5 * k * (J - 1.0) * (J - 1.0);
+    double fibre_modulus = 0;
+    const Vec3d* dirs[2] = {&f1, &f2};
+    for (const Vec3d* a : dirs) {
+      const Vec3d Fa = F * (*a);
+      const double J4 = Fa.squaredNorm();
+      const double J4bar = Jm23 * J4;
+      if (J4bar <= 1.0) continue;  // slack in compression (switch on J4bar, as FEBio)
+      const double d = J4bar - 1.0;
+      const double e = std::exp(k2 * d * d);
+      const double dpsi = k1 * d * e;                          // dW/dJ4bar
+      const double d2psi = k1 * e * (1.0 + 2.0 * k2 * d * d);  // d2W/dJ4bar2
+      s.P.noalias() += (2.0 * dpsi * Jm23) * Fa * a->transpose();
+      cof_coeff -= 2.0 * dpsi * Jm23 * J4 / (3.0 * J);
+      s.W += k1 / (2.0 * k2) * (e - 1.0);
+      // Current tangent along the fibre, d(tau_ff)/d(ln lambda) / J = (4 psi'' J4bar^2 + 4 psi' J4bar) / J.
+      fibre_modulus += (4.0 * d2psi * J4bar * J4bar + 4.0 * dpsi * J4bar) / J;
+    }
+    s.P += cof_coeff * cof;
+    s.modulus = k + 8.0 * c1 / 3.0 + fibre_modulus;
+    return s;
+  }
+};
+
+}  // namespace
+}  // namespace tactus::solver
+
+TACTUS_MATERIAL(Hgo)

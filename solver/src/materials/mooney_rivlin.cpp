@@ -1,0 +1,48 @@
+// mooney_rivlin: the compressible (decoupled) Mooney-Rivlin law,
+//   W = c10 (I1bar - 3) + c01 (I2bar - 3) + K/2 (J - 1)^2,
+//   I1bar = J^{-2/3} I1, I2bar = J^{-4/3} I2, I2 = (I1^2 - tr C^2) / 2.
+// With dI1/dF = 2F, dI2/dF = 2 (I1 F - F F^T F) and dJ/dF = cof(F):
+//   P = c10 J^{-2/3} (2F - 2/3 I1 cof/J) + c01 J^{-4/3} (2 (I1 F - F F^T F) - 4/3 I2 cof/J) + K (J - 1) cof.
+// Small-strain shear modulus 2 (c10 + c01); with c01 = 0 it is neo_hookean with mu = 2 c10.
+// (Added as the worked example of docs/adding-a-material.md: this file and one registry line.)
+#include "law.hpp"
+
+namespace tactus::solver {
+namespace {
+
+struct MooneyRivlin {
+  static constexpr const char* kName = "mooney_rivlin";
+  double c10 = 0, c01 = 0, bulk = 0, density = 0;
+
+  static SectionSpec parameters() {
+    return {"", "Compressible Mooney-Rivlin: W = c10 (I1bar - 3) + c01 (I2bar - 3) + bulk/2 (J - 1)^2.",
+            {number("c10", "Pa", "first-invariant coefficient", 0, false), number("c01", "Pa", "second-invariant coefficient", 0, false),
+             number("bulk", "Pa", "bulk modulus", 0, true),
+             number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
+  }
+  static MooneyRivlin create(const MaterialValues& v, const std::string& where, std::vector<double>&) {
+    MooneyRivlin m{parameter(v, "c10"), parameter(v, "c01"), parameter(v, "bulk"), parameter(v, "density")};
+    if (!(m.c10 + m.c01 > 0)) throw InputError(v.source, where, "c10 + c01 > 0 (a positive shear modulus)", "0");
+    return m;
+  }
+  double small_strain_bulk() const { return bulk; }
+  double small_strain_shear() const { return 2.0 * (c10 + c01); }
+
+  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
+    const Mat3 C = F.transpose() * F;
+    const double I1 = C.trace();
+    const double I2 = 0.5 * (I1 * I1 - C.squaredNorm());
+    const double Jm23 = inv_cbrt(J * J), Jm43 = Jm23 * Jm23;
+    StressPoint s;
+    s.P = (2.0 * c10 * Jm23) * F + (2.0 * c01 * Jm43) * (I1 * F - F * C) +
+          (bulk * (J - 1.0) - (2.0 / 3.0) * c10 * Jm23 * I1 / J - (4.0 / 3.0) * c01 * Jm43 * I2 / J) * cof;
+    s.W = c10 * (Jm23 * I1 - 3.0) + c01 * (Jm43 * I2 - 3.0) + 0.5 * bulk * (J - 1.0) * (J - 1.0);
+    s.modulus = bulk + 4.0 * small_strain_shear() / 3.0;
+    return s;
+  }
+};
+
+}  // namespace
+}  // namespace tactus::solver
+
+TACTUS_MATERIAL(MooneyRivlin)

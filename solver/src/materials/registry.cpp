@@ -1,0 +1,59 @@
+// The registered material laws: one line each (a law is its own file, materials/<law>.cpp).
+#include "tactus/core/error.hpp"
+#include "tactus/solver/material.hpp"
+
+#define TACTUS_MATERIALS(X) \
+  X(NeoHookean)             \
+  X(LinearElastic)          \
+  X(Hgo)                    \
+  X(MooneyRivlin)
+
+#define TACTUS_DECLARE(Law) const tactus::solver::MaterialType& tactus_material_##Law();
+TACTUS_MATERIALS(TACTUS_DECLARE)
+#undef TACTUS_DECLARE
+
+namespace tactus::solver {
+
+const std::vector<const MaterialType*>& material_types() {
+#define TACTUS_LIST(Law) &tactus_material_##Law(),
+  static const std::vector<const MaterialType*> types{TACTUS_MATERIALS(TACTUS_LIST)};
+#undef TACTUS_LIST
+  return types;
+}
+
+std::string material_type_list() {
+  std::string s;
+  for (const MaterialType* t : material_types()) s += (s.empty() ? "" : " | ") + t->name;
+  return s;
+}
+
+const MaterialType& material_type(const std::string& type, const std::string& where) {
+  for (const MaterialType* t : material_types())
+    if (t->name == type) return *t;
+  throw InputError("scenario", where, "one of " + material_type_list(), "\"" + type + "\"");
+}
+
+Material Material::make(const std::string& type, const MaterialValues& values, const std::string& where) {
+  Material m;
+  m.type_ = &material_type(type, where + ".type");  // (an InputError naming "scenario" as the file)
+  // Values that did not come through the scenario reader (tests, benchmarks) are checked here the
+  // same way: every declared number present (or defaulted) and in range.
+  MaterialValues checked = values;
+  for (const ValueSpec& s : m.type_->parameters.keys) {
+    if (s.type != ValueType::number) continue;
+    auto it = checked.numbers.find(s.key);
+    if (it == checked.numbers.end()) throw InputError(values.source, where + "." + s.key, s.doc, "missing");
+    if (!s.in_range(it->second))
+      throw InputError(values.source, where + "." + s.key, "a value " + s.range_text() + (s.unit.empty() ? "" : " in " + s.unit),
+                       std::to_string(it->second));
+  }
+  m.law_ = m.type_->create(checked, where, m.constants_);
+  return m;
+}
+
+StressPoint Material::evaluate(const Mat3& F, const double* data) const {
+  const Mat3 cof = cofactor(F);
+  return type_->evaluate(law_.get(), F, cof, F.row(0).dot(cof.row(0)), data ? data : constants_.data());
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,320 @@
+// Building the model from a scenario, in named steps: read and place each body, make the
+// material blocks (with the laws' per-element data), apply the boundaries, then the element
+// geometry, lumped mass, locality order and contact surfaces.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
+#include "tactus/solver/model.hpp"
+
+namespace tactus::solver {
+
+void compute_element_geometry(Model& m);  // model.cpp
+void lump_mass(Model& m);
+
+namespace {
+
+// Two nodes of one mesh at the same place, both used by tets: the mesh is cracked there (the
+// interface was meshed twice instead of sharing its nodes), and the two sides would separate
+// under load without any error. Found by sorting along x and comparing neighbours within 1e-9 of
+// the mesh size.
+void check_no_duplicate_nodes(const TetMesh& mesh, const std::string& file) {
+  std::vector<char> used(mesh.nodes.size(), 0);
+  for (const auto& t : mesh.tets)
+    for (int v : t) used[static_cast<std::size_t>(v)] = 1;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < mesh.nodes.size(); ++i)
+    if (used[i]) {
+      order.push_back(i);
+      for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], mesh.nodes[i][c]), hi[c] = std::max(hi[c], mesh.nodes[i][c]);
+    }
+  const double tol = 1e-9 * std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return mesh.nodes[a][0] < mesh.nodes[b][0]; });
+  for (std::size_t k = 0; k < order.size(); ++k)
+    for (std::size_t l = k + 1; l < order.size() && mesh.nodes[order[l]][0] - mesh.nodes[order[k]][0] <= tol; ++l) {
+      const Vec3 &a = mesh.nodes[order[k]], &b = mesh.nodes[order[l]];
+      if (std::abs(a[1] - b[1]) > tol || std::abs(a[2] - b[2]) > tol) continue;
+      std::ostringstream f;
+      f << "nodes " << std::min(order[k], order[l]) + 1 << " and " << std::max(order[k], order[l]) + 1 << " at (" << a[0] << ", " << a[1]
+        << ", " << a[2] << ") both belong to tets: a crack";
+      throw InputError(file, "$Nodes", "a conforming mesh, each point one node (merge the duplicates, e.g. gmsh's Coherence)", f.str());
+    }
+}
+
+// The cell fields of a body's element-data file (bodies.fibres: a .vtu of the body's mesh),
+// matched to the mesh's tets by their node sets, so the file's element order does not matter.
+// Returns, per tet, the values of `fields` (name, components) in order.
+std::vector<std::vector<double>> read_element_fields(const std::filesystem::path& file, const TetMesh& mesh, const std::string& key,
+                                                     const std::vector<std::pair<std::string, int>>& fields) {
+  const VtuContents vtu = read_vtu(file);
+  if (vtu.mesh.nodes.size() != mesh.nodes.size() || vtu.mesh.tets.size() != mesh.tets.size())
+    throw InputError(file.string(), key,
+                     "a .vtu of the body's mesh (" + std::to_string(mesh.nodes.size()) + " nodes, " + std::to_string(mesh.tets.size()) +
+                         " tets)",
+                     std::to_string(vtu.mesh.nodes.size()) + " nodes, " + std::to_string(vtu.mesh.tets.size()) + " tets");
+  std::vector<const MeshField*> found;
+  for (const auto& [name, components] : fields) {
+    const MeshField* f = vtu.cell_field(name);
+    if (!f || f->components != components)
+      throw InputError(file.string(), name, "cell data with " + std::to_string(components) + " components per tet", f ? "other" : "missing");
+    found.push_back(f);
+  }
+  std::map<std::array<int, 4>, std::size_t> index;
+  for (std::size_t e = 0; e < vtu.mesh.tets.size(); ++e) {
+    auto key4 = vtu.mesh.tets[e];
+    std::sort(key4.begin(), key4.end());
+    index[key4] = e;
+  }
+  std::vector<std::vector<double>> out(mesh.tets.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    auto key4 = mesh.tets[e];
+    std::sort(key4.begin(), key4.end());
+    auto it = index.find(key4);
+    if (it == index.end())
+      throw InputError(file.string(), "tet " + std::to_string(e + 1), "the same tets (node numbers) as the body's mesh", "no matching tet");
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      const auto n = static_cast<std::size_t>(fields[k].second);
+      out[e].insert(out[e].end(), found[k]->values.begin() + static_cast<std::ptrdiff_t>(n * it->second),
+                    found[k]->values.begin() + static_cast<std::ptrdiff_t>(n * (it->second + 1)));
+    }
+  }
+  return out;
+}
+
+// Every law's element fields, for a body's element-data file (the union, in registration order).
+std::vector<std::pair<std::string, int>> all_element_fields(const Scenario& sc, const BodySpec& body) {
+  std::vector<std::pair<std::string, int>> fields;
+  for (const auto& [group, mat] : body.materials)
+    for (const auto& f : material_type(sc.materials.at(mat).type).element_fields)
+      if (std::find(fields.begin(), fields.end(), f) == fields.end()) fields.push_back(f);
+  return fields;
+}
+
+// Scale, translate, then `against`: moved along one axis to leave the gap to an earlier body.
+void place_body(const Scenario& sc, std::size_t bi, const Model& m, TetMesh& mesh) {
+  const BodySpec& body = sc.bodies[bi];
+  for (auto& x : mesh.nodes)
+    for (int c = 0; c < 3; ++c) x[c] = x[c] * body.scale + body.translate[c];
+  if (body.against.empty()) return;
+  const int a = body.against_axis;
+  std::size_t other = 0;
+  while (sc.bodies[other].name != body.against) ++other;
+  double other_lo = 1e300, other_hi = -1e300, lo = 1e300, hi = -1e300;
+  for (std::size_t i = m.bodies[other].node_begin; i < m.bodies[other].node_end; ++i)
+    other_lo = std::min(other_lo, m.input_mesh.nodes[i][a]), other_hi = std::max(other_hi, m.input_mesh.nodes[i][a]);
+  for (const auto& x : mesh.nodes) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
+  const double shift = body.against_side > 0 ? other_hi + body.against_gap - lo : other_lo - body.against_gap - hi;
+  for (auto& x : mesh.nodes) x[a] += shift;
+  log::verbose() << "bodies[" << bi << "] '" << body.name << "' moved by " << shift << " m along " << "xyz"[a] << " to lie "
+                 << body.against_gap << " m from '" << body.against << "'";
+}
+
+// What the blocks need to know about every input tet.
+struct TetAssignment {
+  std::vector<std::string> material;                     // material name
+  std::vector<std::optional<std::vector<double>>> data;  // element-field values from the body's file
+};
+
+// Reads body bi, places it and appends it to the model's input mesh (its groups keep their file
+// tags; the body is recorded by range), assigning a material to each of its tets.
+void append_body(const Scenario& sc, std::size_t bi, Model& m, TetAssignment& tets) {
+  const BodySpec& body = sc.bodies[bi];
+  const std::string key = "bodies[" + std::to_string(bi) + "]";
+  TetMesh mesh = read_msh(body.mesh);
+  check_no_duplicate_nodes(mesh, body.mesh.string());
+  const auto fields = all_element_fields(sc, body);
+  std::vector<std::vector<double>> field_values;
+  if (!body.fibres.empty()) field_values = read_element_fields(body.fibres, mesh, key + ".fibres", fields);
+  place_body(sc, bi, m, mesh);
+  TetMesh& all = m.input_mesh;
+  const std::size_t node0 = all.nodes.size();
+  m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size(), all.tets.size(), all.tets.size() + mesh.tets.size(),
+                      all.triangles.size(), all.triangles.size() + mesh.triangles.size(), all.groups.size(),
+                      all.groups.size() + mesh.groups.size()});
+  all.groups.insert(all.groups.end(), mesh.groups.begin(), mesh.groups.end());
+  all.nodes.insert(all.nodes.end(), mesh.nodes.begin(), mesh.nodes.end());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    std::array<int, 4> t = mesh.tets[e];
+    for (int& v : t) v += static_cast<int>(node0);
+    all.tets.push_back(t);
+    all.tet_group.push_back(mesh.tet_group[e]);
+    m.tet_body.push_back(static_cast<std::int32_t>(bi));
+    const std::string& gname = mesh.find_group(3, mesh.tet_group[e])->name;
+    auto it = body.materials.find(gname);
+    if (it == body.materials.end()) it = body.materials.find("*");
+    if (it == body.materials.end()) {
+      std::string groups;
+      for (const auto& g : mesh.groups)
+        if (g.dim == 3) groups += (groups.empty() ? "" : ", ") + g.name;
+      throw InputError(sc.file.string(), key + ".materials",
+                       "a material for physical volume '" + gname + "' of " + body.mesh.string() + " (its volume groups: " + groups +
+                           "; or a \"*\" entry)",
+                       "none");
+    }
+    tets.material.push_back(it->second);
+    if (field_values.empty()) tets.data.emplace_back();
+    else tets.data.emplace_back(std::move(field_values[e]));
+  }
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    std::array<int, 3> tri = mesh.triangles[t];
+    for (int& v : tri) v += static_cast<int>(node0);
+    all.triangles.push_back(tri);
+    all.triangle_group.push_back(mesh.triangle_group[t]);
+  }
+  for (const auto& [gname, mat] : body.materials)
+    if (gname != "*" && !mesh.find_group(3, gname))
+      throw InputError(sc.file.string(), key + ".materials." + gname, "the name of a physical volume group in " + body.mesh.string(),
+                       "no such group");
+}
+
+// One block per material (in the scenario's order), its elements in input order; a law's element
+// data from the bodies' files where given, else the material's constants.
+std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssignment& tets) {
+  std::vector<std::size_t> order;
+  for (const auto& [name, inst] : sc.materials) {
+    MaterialBlock b;
+    b.name = name;
+    b.material = Material::make(inst.type, inst.values, "materials." + name);
+    b.begin = order.size();
+    for (std::size_t e = 0; e < m.num_elements; ++e)
+      if (tets.material[e] == name) order.push_back(e);
+    b.end = order.size();
+    if (b.end == b.begin) continue;
+    const MaterialType& type = b.material.type();
+    const std::size_t n = type.element_data_size;
+    bool from_files = false;
+    for (std::size_t k = b.begin; k < b.end && n > 0; ++k) {
+      if (tets.data[order[k]]) from_files = true;
+      else if (b.material.needs_element_data()) {
+        std::string keys;
+        for (const ValueSpec& s : type.parameters.keys)
+          if (s.type == ValueType::vec3_list) keys += (keys.empty() ? "" : ", ") + s.key;
+        throw InputError(sc.file.string(), "materials." + name + "." + keys,
+                         "element data for " + type.name + ": " + keys + " here, or a per-element `fibres` file on body '" +
+                             sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].name + "'",
+                         "none");
+      }
+    }
+    if (from_files) {
+      b.element_data.resize(n * (b.end - b.begin));
+      for (std::size_t k = b.begin; k < b.end; ++k) {
+        double* out = &b.element_data[n * (k - b.begin)];
+        const std::size_t body = static_cast<std::size_t>(m.tet_body[order[k]]);
+        if (const auto& d = tets.data[order[k]])
+          type.element_data_from_fields(d->data(), out, sc.bodies[body].fibres.string() + ": tet " +
+                                                              std::to_string(order[k] - m.bodies[body].tet_begin + 1));
+        else
+          std::copy(b.material.constant_element_data().begin(), b.material.constant_element_data().end(), out);
+      }
+    }
+    m.blocks.push_back(std::move(b));
+  }
+  return order;
+}
+
+// The nodes a [[boundary]] entry selects (input numbering), by physical group or box.
+std::vector<char> boundary_selection(const Scenario& sc, const Model& m, std::size_t k) {
+  const BoundarySpec& bc = sc.boundaries[k];
+  const std::string key = "boundary[" + std::to_string(k) + "]";
+  std::size_t bi = 0;
+  while (sc.bodies[bi].name != bc.body) ++bi;
+  const BodyRange& range = m.bodies[bi];
+  std::vector<char> selected(m.num_nodes, 0);
+  if (!bc.group.empty()) {
+    bool found = false;  // a name may be both a surface and a volume group: both select
+    for (const PhysicalGroup* g : m.body_groups(bi)) {
+      if (g->name != bc.group) continue;
+      found = true;
+      if (g->dim == 2) {
+        for (std::size_t t = range.triangle_begin; t < range.triangle_end; ++t)
+          if (m.input_mesh.triangle_group[t] == g->tag)
+            for (int v : m.input_mesh.triangles[t]) selected[static_cast<std::size_t>(v)] = 1;
+      } else {
+        for (std::size_t t = range.tet_begin; t < range.tet_end; ++t)
+          if (m.input_mesh.tet_group[t] == g->tag)
+            for (int v : m.input_mesh.tets[t]) selected[static_cast<std::size_t>(v)] = 1;
+      }
+    }
+    if (!found) {
+      std::string groups;
+      for (const PhysicalGroup* pg : m.body_groups(bi)) groups += (groups.empty() ? "" : ", ") + pg->name;
+      throw InputError(sc.file.string(), key + ".group", "a physical group of body '" + bc.body + "' (" + groups + ")", "\"" + bc.group + "\"");
+    }
+  } else {
+    const auto& box = *bc.box;
+    for (std::size_t i = range.node_begin; i < range.node_end; ++i) {
+      bool in = true;
+      for (int c = 0; c < 3; ++c) in = in && m.X[3 * i + c] >= box[0][c] && m.X[3 * i + c] <= box[1][c];
+      selected[i] = in;
+    }
+  }
+  return selected;
+}
+
+void apply_boundaries(const Scenario& sc, Model& m) {
+  m.constrained.assign(3 * m.num_nodes, 0);
+  m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
+  for (std::size_t k = 0; k < sc.boundaries.size(); ++k) {
+    const BoundarySpec& bc = sc.boundaries[k];
+    const std::vector<char> selected = boundary_selection(sc, m, k);
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < m.num_nodes; ++i) {
+      if (!selected[i]) continue;
+      ++count;
+      for (int c = 0; c < 3; ++c)
+        if (bc.components[c]) {
+          m.constrained[3 * i + c] = 1;
+          m.constraint_velocity[3 * i + c] = bc.type == "velocity" ? bc.velocity[c] : 0.0;
+        }
+    }
+    const std::string key = "boundary[" + std::to_string(k) + "]";
+    if (count == 0) throw InputError(sc.file.string(), key, "a selection containing nodes of body '" + bc.body + "'", "no node");
+    log::verbose() << key << ": " << count << " nodes " << bc.type;
+  }
+}
+
+}  // namespace
+
+Model build_model(const Scenario& sc) {
+  Model m;
+  TetAssignment tets;
+  for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) append_body(sc, bi, m, tets);
+
+  m.num_nodes = m.input_mesh.nodes.size();
+  m.num_elements = m.input_mesh.tets.size();
+  m.X.resize(3 * m.num_nodes);
+  for (std::size_t i = 0; i < m.num_nodes; ++i)
+    for (int c = 0; c < 3; ++c) m.X[3 * i + c] = m.input_mesh.nodes[i][c];
+  m.initial_velocity.assign(3 * m.num_nodes, 0.0);
+  for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi)
+    for (std::size_t i = m.bodies[bi].node_begin; i < m.bodies[bi].node_end; ++i)
+      for (int c = 0; c < 3; ++c) m.initial_velocity[3 * i + c] = sc.bodies[bi].initial_velocity[c];
+
+  const std::vector<std::size_t> order = make_blocks(sc, m, tets);
+  m.conn.resize(4 * m.num_elements);
+  m.input_element.resize(m.num_elements);
+  m.element_of_input.resize(m.num_elements);
+  for (std::size_t k = 0; k < m.num_elements; ++k) {
+    for (int a = 0; a < 4; ++a) m.conn[4 * k + a] = m.input_mesh.tets[order[k]][a];
+    m.input_element[k] = static_cast<std::int32_t>(order[k]);
+    m.element_of_input[order[k]] = static_cast<std::int32_t>(k);
+  }
+  m.node_of_input.resize(m.num_nodes);
+  std::iota(m.node_of_input.begin(), m.node_of_input.end(), 0);
+
+  apply_boundaries(sc, m);  // on input numbering, before reordering
+  compute_element_geometry(m);
+  lump_mass(m);
+  reorder_for_locality(m);
+  add_scenario_contacts(m, sc);
+  m.contact_settings = sc.contact_solver;
+  return m;
+}
+
+}  // namespace tactus::solver

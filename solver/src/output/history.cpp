@@ -1,0 +1,73 @@
+// history.csv: one table of columns (names from core/contracts.hpp), which writes both the header
+// and every row, so the two can never drift apart.
+#include <array>
+#include <cmath>
+#include <iomanip>
+
+#include "results.hpp"
+#include "tactus/core/contracts.hpp"
+#include "tactus/core/error.hpp"
+
+namespace tactus::solver {
+
+namespace {
+
+namespace h = contracts::history;
+
+double magnitude(const Vec3& f) { return std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]); }
+
+struct Column {
+  const contracts::ColumnSpec* spec;
+  double (*value)(const HistoryRow&);
+};
+
+// In the order of contracts::history::all (a test keeps them equal).
+const std::array<Column, h::all.size()> kColumns{{
+    {&h::step, [](const HistoryRow& r) { return static_cast<double>(r.step); }},
+    {&h::time, [](const HistoryRow& r) { return r.time; }},
+    {&h::dt, [](const HistoryRow& r) { return r.dt; }},
+    {&h::kinetic_energy, [](const HistoryRow& r) { return r.energy->kinetic; }},
+    {&h::internal_energy, [](const HistoryRow& r) { return r.energy->internal; }},
+    {&h::damping_work, [](const HistoryRow& r) { return r.energy->damping_work; }},
+    {&h::external_work, [](const HistoryRow& r) { return r.energy->external_work; }},
+    {&h::contact_work_normal, [](const HistoryRow& r) { return r.energy->contact_normal_work; }},
+    {&h::contact_work_friction, [](const HistoryRow& r) { return r.energy->contact_friction_work; }},
+    {&h::energy_balance_error, [](const HistoryRow& r) { return r.energy->balance_error(); }},
+    {&h::critical_step, [](const HistoryRow& r) { return r.critical_step; }},
+    {&h::contact_force, [](const HistoryRow& r) { return magnitude(r.contact->force); }},
+    {&h::contact_force_x, [](const HistoryRow& r) { return r.contact->force[0]; }},
+    {&h::contact_force_y, [](const HistoryRow& r) { return r.contact->force[1]; }},
+    {&h::contact_force_z, [](const HistoryRow& r) { return r.contact->force[2]; }},
+    {&h::contact_normal_force, [](const HistoryRow& r) { return r.contact->normal_force; }},
+    {&h::contact_area, [](const HistoryRow& r) { return r.contact->area; }},
+    {&h::peak_pressure, [](const HistoryRow& r) { return r.contact->peak_pressure; }},
+    {&h::peak_pressure_x, [](const HistoryRow& r) { return r.peak_at[0]; }},
+    {&h::peak_pressure_y, [](const HistoryRow& r) { return r.peak_at[1]; }},
+    {&h::peak_pressure_z, [](const HistoryRow& r) { return r.peak_at[2]; }},
+    {&h::contact_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->active); }},
+    {&h::stick_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->sticking); }},
+    {&h::slip_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->slipping); }},
+    {&h::uzawa_iterations, [](const HistoryRow& r) { return static_cast<double>(r.contact->iterations); }},
+}};
+
+}  // namespace
+
+HistoryWriter::HistoryWriter(const std::filesystem::path& file) : out_(file), file_(file) {
+  for (std::size_t k = 0; k < kColumns.size(); ++k) out_ << (k ? "," : "") << kColumns[k].spec->name;
+  out_ << '\n' << std::setprecision(17);
+}
+
+void HistoryWriter::write(const HistoryRow& row) {
+  for (std::size_t k = 0; k < kColumns.size(); ++k) {
+    if (k) out_ << ',';
+    out_ << kColumns[k].value(row);  // (counts print as integers: 17 digits of 3.0 is "3")
+  }
+  out_ << '\n';
+}
+
+void HistoryWriter::close() {
+  out_.close();
+  if (out_.fail()) throw WriteError(file_.string(), "the file system refused the history");
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,65 @@
+#pragma once
+// What a run writes (solver/include/tactus/solver/run.hpp lists the files): the state .vtu files
+// and their results.pvd listing, history.csv from one table of columns, and run.json. Names come
+// from the file contracts (core/contracts.hpp).
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tactus/solver/contact.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/model.hpp"
+
+namespace tactus::solver {
+
+// The state at one time as a .vtu (input numbering). Returns each block's largest von Mises.
+std::vector<double> write_state(const Model& m, const std::filesystem::path& file, const std::vector<double>& u,
+                                const std::vector<double>& v, const ContactSolver* contact);
+void write_pvd(const std::filesystem::path& file, const std::vector<std::pair<double, std::string>>& entries);
+
+// One history row's inputs.
+struct HistoryRow {
+  std::size_t step = 0;
+  double time = 0, dt = 0, critical_step = 0;
+  const Energies* energy = nullptr;
+  const ContactStepReport* contact = nullptr;
+  Vec3 peak_at{0, 0, 0};
+};
+
+// history.csv: its header and rows both come from the one column table (history.cpp).
+class HistoryWriter {
+ public:
+  explicit HistoryWriter(const std::filesystem::path& file);
+  void write(const HistoryRow& row);
+  void close();
+
+ private:
+  std::ofstream out_;
+  std::filesystem::path file_;
+};
+
+// The peaks over a run that run.json reports (contact over every step, von Mises at the outputs).
+struct RunPeaks {
+  double force = 0, force_time = 0, area = 0, area_time = 0, pressure = 0, pressure_time = 0;
+  Vec3 pressure_at{0, 0, 0};
+  std::size_t pressure_node = 0;
+  int max_iterations = 0;
+  std::size_t unconverged_steps = 0, contact_steps = 0;
+  std::vector<double> von_mises;  // per block
+  void add_contact_step(const ContactStepReport& c, double t, const Vec3& peak_at);
+};
+
+}  // namespace tactus::solver
+
+namespace tactus::solver {
+struct RunSummary;
+// run.json (keys from core/contracts.hpp run_json).
+nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary,
+                        const RunPeaks& peaks, const nlohmann::json& failure);
+}  // namespace tactus::solver

@@ -1,0 +1,81 @@
+// run.json: the run's facts and figures, with the keys of core/contracts.hpp.
+#include <cmath>
+
+#include "results.hpp"
+#include "tactus/core/contracts.hpp"
+#include "tactus/core/version.hpp"
+#include "tactus/solver/run.hpp"
+
+namespace tactus::solver {
+
+namespace {
+
+nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPeaks& peaks) {
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const auto& p : model.contact_pairs)
+    pairs.push_back({{"name", p.name}, {"friction", p.friction}, {"slave_nodes", p.slave_nodes.size()}, {"master", p.master->describe()}});
+  const std::size_t peak_input_node = model.input_node(peaks.pressure_node);
+  return {{"pairs", pairs},
+          {"steps_in_contact", peaks.contact_steps},
+          {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},
+          {"peak_area", {{"value", peaks.area}, {"time", peaks.area_time}}},
+          {"peak_pressure",
+           {{"value", peaks.pressure}, {"time", peaks.pressure_time}, {"position", peaks.pressure_at},
+            {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
+          {"uzawa", {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations},
+                     {"unconverged_steps", peaks.unconverged_steps}}}};
+}
+
+}  // namespace
+
+nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary,
+                        const RunPeaks& peaks, const nlohmann::json& failure) {
+  namespace k = contracts::run_json;
+  const Energies& en = solver.energies();
+  nlohmann::json j;
+  j["tactus_version"] = kVersion;
+  j["scenario"] = sc.file.string();
+  j[k::status] = summary.status;
+  j[k::message] = failure;
+  j["units"] = "SI (m, kg, s, Pa, J)";
+  // Names behind the "material" and "body" cell fields of the results (their values index these).
+  j[k::materials] = nlohmann::json::array();
+  for (const auto& b : model.blocks) j[k::materials].push_back(b.name);
+  j[k::bodies] = nlohmann::json::array();
+  for (const auto& b : model.bodies) j[k::bodies].push_back(b.name);
+  j[k::nodes] = model.num_nodes;
+  j[k::tets] = model.num_elements;
+  j["threads"] = solver.threads();
+  j[k::steps] = summary.steps;
+  j[k::end_time] = summary.end_time;
+  j[k::output_times] = solver.schedule();
+  j[k::time_step] = {{"min", summary.dt_min},
+                     {"max", summary.dt_max},
+                     {"safety", sc.run.time_step_safety},
+                     {"min_ratio_to_nominal", solver.min_step_ratio()},
+                     {"critical_initial", solver.initial_critical_step()},
+                     {"critical_at_end", solver.critical_step()},
+                     {"limit", solver.describe_step_limit()}};
+  j[k::wall_time] = summary.wall_seconds;
+  j[k::timing] = {{"stress_passes", solver.stress_seconds()},
+                  {"contact", solver.contact_seconds()},
+                  {"rest", summary.wall_seconds - solver.stress_seconds() - solver.contact_seconds()}};
+  j[k::energy] = {{"initial", en.initial},
+                  {"kinetic", en.kinetic},
+                  {"internal", en.internal},
+                  {"damping_work", en.damping_work},
+                  {"external_work", en.external_work},
+                  {"contact_work_normal", en.contact_normal_work},
+                  {"contact_work_friction", en.contact_friction_work},
+                  {"balance_error", en.balance_error()},
+                  {"balance_error_relative", std::abs(en.balance_error()) / en.scale()},
+                  {"max_balance_error_relative", summary.max_relative_balance_error}};
+  j[k::outputs] = summary.outputs;
+  nlohmann::json vm = nlohmann::json::object();
+  for (std::size_t b = 0; b < model.blocks.size(); ++b) vm[model.blocks[b].name] = summary.von_mises_peak[b];
+  j[k::peak_von_mises] = vm;
+  if (!model.contact_pairs.empty()) j[k::contact] = contact_json(sc, model, peaks);
+  return j;
+}
+
+}  // namespace tactus::solver

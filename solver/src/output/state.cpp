@@ -1,0 +1,117 @@
+// The state .vtu files and their results.pvd listing (field names from core/contracts.hpp).
+#include <algorithm>
+#include <fstream>
+#include <iomanip>
+
+#include "results.hpp"
+#include "tactus/core/contracts.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/solver/internal_force.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tactus::solver {
+
+namespace cp = contracts::point;
+namespace cc = contracts::cell;
+
+// Cell and point fields of one state, in the input numbering.
+// Returns the largest von Mises stress of each material block in this state.
+std::vector<double> write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
+                                const ContactSolver* contact) {
+  std::vector<double> block_peak(m.blocks.size(), 0.0);
+  const std::size_t N = m.num_nodes, E = m.num_elements;
+  MeshField disp{cp::displacement.name, 3, std::vector<double>(3 * N)}, vel{cp::velocity.name, 3, std::vector<double>(3 * N)};
+  std::vector<Vec3> current(N);
+  for (std::size_t i = 0; i < N; ++i) {
+    const std::size_t k = static_cast<std::size_t>(m.node_of_input[i]);
+    for (int c = 0; c < 3; ++c) {
+      disp.values[3 * i + c] = u[3 * k + c];
+      vel.values[3 * i + c] = v[3 * k + c];
+      current[i][c] = m.X[3 * k + c] + u[3 * k + c];
+    }
+  }
+  std::vector<MeshField> point_fields{disp, vel};
+  if (contact && !contact->empty()) {
+    // Contact at this time: pressure r_n / A, tangential traction r_t / A, status, gap (docs/design.md).
+    std::vector<double> pressure, traction, status, gap;
+    contact->node_fields(pressure, traction, status, gap);
+    MeshField p{cp::contact_pressure.name, 1, std::vector<double>(N)}, t{cp::contact_traction.name, 3, std::vector<double>(3 * N)},
+        st{cp::contact_status.name, 1, std::vector<double>(N)}, g{cp::contact_gap.name, 1, std::vector<double>(N)};
+    for (std::size_t i = 0; i < N; ++i) {
+      const std::size_t k = static_cast<std::size_t>(m.node_of_input[i]);
+      p.values[i] = pressure[k], st.values[i] = status[k], g.values[i] = gap[k];
+      for (int c = 0; c < 3; ++c) t.values[3 * i + c] = traction[3 * k + c];
+    }
+    point_fields.push_back(std::move(p));
+    point_fields.push_back(std::move(t));
+    point_fields.push_back(std::move(st));
+    point_fields.push_back(std::move(g));
+  }
+  MeshField stress{cc::cauchy_stress.name, 6, std::vector<double>(6 * E)}, vm{cc::von_mises.name, 1, std::vector<double>(E)},
+      material{cc::material.name, 1, std::vector<double>(E)}, jac{cc::jacobian.name, 1, std::vector<double>(E)},
+      body{cc::body.name, 1, std::vector<double>(E)};
+  for (std::size_t e = 0; e < E; ++e) body.values[e] = static_cast<double>(m.tet_body[e]);
+  // The result fields the laws of this model add (hgo: fibre_stretch), 0 on the other laws' tets.
+  std::vector<MeshField> law_fields;
+  for (const auto& b : m.blocks)
+    for (const auto& f : b.material.type().result_fields)
+      if (std::none_of(law_fields.begin(), law_fields.end(), [&](const MeshField& x) { return x.name == f.name; }))
+        law_fields.push_back({f.name, f.components, std::vector<double>(static_cast<std::size_t>(f.components) * E)});
+  for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
+    const MaterialBlock& b = m.blocks[bi];
+    const MaterialType& type = b.material.type();
+    std::vector<MeshField*> targets;
+    for (const auto& f : type.result_fields)
+      for (auto& x : law_fields)
+        if (x.name == f.name) targets.push_back(&x);
+    std::size_t count = 0;
+    for (const auto& f : type.result_fields) count += static_cast<std::size_t>(f.components);
+    std::vector<double> values(count);
+    for (std::size_t e = b.begin; e < b.end; ++e) {
+      const Mat3 F = Mat3::Identity() + nodal_gradient(u.data(), &m.conn[4 * e], &m.grad[9 * e]);
+      const Mat3 P = b.material.evaluate(F, b.data_of(e)).P;
+      const Mat3 s = cauchy_stress(F, P);
+      const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
+      const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
+      for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
+      vm.values[out] = von_mises(s);
+      block_peak[bi] = std::max(block_peak[bi], vm.values[out]);
+      material.values[out] = static_cast<double>(bi);
+      jac.values[out] = F.row(0).dot(cofactor(F).row(0));
+      if (targets.empty()) continue;
+      type.result_values(b.material.law(), F, b.data_of(e), values.data());
+      std::size_t at = 0;
+      for (MeshField* f : targets) {
+        const auto n = static_cast<std::size_t>(f->components);
+        for (std::size_t c = 0; c < n; ++c) f->values[n * out + c] = values[at++];
+      }
+    }
+  }
+  std::vector<MeshField> cell_fields{stress, vm, material, body, jac};
+  for (auto& f : law_fields) cell_fields.push_back(std::move(f));
+  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current);
+  return block_peak;
+}
+
+void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::string>>& entries) {
+  std::ofstream o(file);
+  o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  o << std::setprecision(12);
+  for (const auto& [t, name] : entries) o << "    <DataSet timestep=\"" << t << "\" part=\"0\" file=\"" << name << "\"/>\n";
+  o << "  </Collection>\n</VTKFile>\n";
+  if (!o) throw WriteError(file.string(), "the file system refused the listing");
+}
+
+void RunPeaks::add_contact_step(const ContactStepReport& cr, double t, const Vec3& peak_at) {
+  max_iterations = std::max(max_iterations, cr.iterations);
+  if (cr.active == 0) return;
+  ++contact_steps;
+  const double f = norm(cr.force);
+  if (f > force) force = f, force_time = t;
+  if (cr.area > area) area = cr.area, area_time = t;
+  if (cr.peak_pressure > pressure)
+    pressure = cr.peak_pressure, pressure_time = t, pressure_at = peak_at, pressure_node = static_cast<std::size_t>(cr.peak_node);
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,29 @@
+#pragma once
+// Materials for the solver tests, made through the registry exactly as a scenario makes them.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "tactus/solver/material.hpp"
+
+namespace tactus::solver::testkit {
+
+inline Material make_law(const std::string& type, std::map<std::string, double> numbers, std::vector<Vec3> fibres = {}) {
+  MaterialValues v;
+  v.numbers = std::move(numbers);
+  if (!fibres.empty()) v.vectors["fibres"] = std::move(fibres);
+  return Material::make(type, v);
+}
+inline Material neo_hookean(double mu, double bulk, double density) {
+  return make_law("neo_hookean", {{"mu", mu}, {"bulk", bulk}, {"density", density}});
+}
+inline Material linear_elastic(double E, double nu, double density) {
+  return make_law("linear_elastic", {{"E", E}, {"nu", nu}, {"density", density}});
+}
+// The paper's tissue (§3.2) with fibres at +-30 deg to x in the x-y plane.
+inline Material paper_hgo(double k = 1.0e8) {
+  return make_law("hgo", {{"c1", 10206.9}, {"k1", 1.7}, {"k2", 882.847}, {"k", k}, {"density", 1050}},
+                  {Vec3{0.8660254, 0.5, 0}, Vec3{0.8660254, -0.5, 0}});
+}
+
+}  // namespace tactus::solver::testkit
