@@ -6,7 +6,10 @@
 
 #include "tactus/solver/material.hpp"
 
-namespace tactus::solver::testkit {
+namespace tactus::testkit {
+
+using solver::Material;
+using solver::MaterialValues;
 
 inline Material make_law(const std::string& type, std::map<std::string, double> numbers, std::vector<Vec3> fibres = {}) {
   MaterialValues v;
@@ -26,4 +29,4 @@ inline Material paper_hgo(double k = 1.0e8) {
                   {Vec3{0.8660254, 0.5, 0}, Vec3{0.8660254, -0.5, 0}});
 }
 
-}  // namespace tactus::solver::testkit
+}  // namespace tactus::testkit

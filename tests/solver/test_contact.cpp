@@ -20,13 +20,11 @@
 
 using namespace tactus;
 using namespace tactus::solver;
-using namespace tactus::solver::testkit;
+using namespace tactus::testkit;
 
 namespace {
 
-using V3 = std::array<double, 3>;
-double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const V3& a) { return std::sqrt(dot(a, a)); }
+using V3 = Vec3;
 V3 axpy(double s, const V3& a, const V3& b) { return {s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2]}; }
 
 V3 random_unit(std::mt19937_64& rng) {

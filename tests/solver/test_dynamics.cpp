@@ -13,7 +13,7 @@
 
 using namespace tactus;
 using namespace tactus::solver;
-using namespace tactus::solver::testkit;
+using namespace tactus::testkit;
 
 namespace {
 RunSpec run_until(double end_time) {

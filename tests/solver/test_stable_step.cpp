@@ -18,7 +18,7 @@
 
 using namespace tactus;
 using namespace tactus::solver;
-using namespace tactus::solver::testkit;
+using namespace tactus::testkit;
 
 namespace {
 
