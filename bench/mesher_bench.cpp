@@ -3,8 +3,8 @@
 // Labels: the segmentation of the phantom's CT (what the pipeline meshes; default) or its truth.
 #include <sys/resource.h>
 
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <map>
 
@@ -57,12 +57,12 @@ int main(int argc, char** argv) {
       double worst_bone = 1;
       for (const auto& [group, g] : q["groups"].items())
         if (group != "soft_tissue") worst_bone = std::min(worst_bone, g["min_over_median_length"].get<double>());
-      std::printf("%s (%s labels): %zu tets, %zu nodes in %.1f s, peak memory %.0f MB; min dihedral %.2f deg, %.3f %% below 10 deg; "
-                  "L_e min/median per subdomain: soft tissue %.3f, worst bone %.3f; critical step %.3g s\n",
-                  name.c_str(), source.c_str(), m.tets.size(), m.nodes.size(), t, static_cast<double>(ru.ru_maxrss) / 1024.0,
-                  q["all"]["min_dihedral_deg"].get<double>(), 100 * q["all"]["fraction_min_dihedral_below_10deg"].get<double>(),
-                  q["groups"]["soft_tissue"]["min_over_median_length"].get<double>(), worst_bone,
-                  q["critical_time_step"]["dt_s"].get<double>());
+      std::printf(
+          "%s (%s labels): %zu tets, %zu nodes in %.1f s, peak memory %.0f MB; min dihedral %.2f deg, %.3f %% below 10 deg; "
+          "L_e min/median per subdomain: soft tissue %.3f, worst bone %.3f; critical step %.3g s\n",
+          name.c_str(), source.c_str(), m.tets.size(), m.nodes.size(), t, static_cast<double>(ru.ru_maxrss) / 1024.0,
+          q["all"]["min_dihedral_deg"].get<double>(), 100 * q["all"]["fraction_min_dihedral_below_10deg"].get<double>(),
+          q["groups"]["soft_tissue"]["min_over_median_length"].get<double>(), worst_bone, q["critical_time_step"]["dt_s"].get<double>());
       std::fflush(stdout);
     }
   });

@@ -14,8 +14,8 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/cli.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
@@ -77,8 +77,7 @@ void throughput(const std::vector<int>& sizes) {
         const Model m = build_model(mesh, bench_material(mat), mat, {0, 0, 0}, reorder);
         for (int threads : {1, 2}) {
           const double rate = updates_per_second(m, threads);
-          std::printf("%-15s %9zu %8s %7d %14.2f %14.2f\n", mat, m.num_elements, reorder ? "morton" : "shuffled", threads,
-                      rate / 1e6, 1e9 / rate);
+          std::printf("%-15s %9zu %8s %7d %14.2f %14.2f\n", mat, m.num_elements, reorder ? "morton" : "shuffled", threads, rate / 1e6, 1e9 / rate);
           std::fflush(stdout);
         }
       }
@@ -115,13 +114,12 @@ void cube(const std::filesystem::path& work) {
   const auto t0 = Clock::now();
   const RunSummary s = run_simulation(sc, work / "results");
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  std::printf("cube: 48000 tets, %zu steps, wall %.2f s (%.2f M tet-steps/s end to end), energy balance error %.2e relative\n",
-              s.steps, wall, 48000.0 * static_cast<double>(s.steps) / wall / 1e6, s.max_relative_balance_error);
+  std::printf("cube: 48000 tets, %zu steps, wall %.2f s (%.2f M tet-steps/s end to end), energy balance error %.2e relative\n", s.steps, wall,
+              48000.0 * static_cast<double>(s.steps) / wall / 1e6, s.max_relative_balance_error);
 }
 
 void contact_scaling(const std::vector<int>& sizes) {
-  std::printf("%9s %9s %11s %9s %12s %12s %8s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms",
-              "ratio", "iterations");
+  std::printf("%9s %9s %11s %9s %12s %12s %8s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms", "ratio", "iterations");
   for (int n : sizes) {
     TetMesh lower = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01);
     const TetMesh upper = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01, {0, 0, 0.01});
@@ -146,14 +144,14 @@ void contact_scaling(const std::vector<int>& sizes) {
     double contact0 = 0, stress0 = 0;
     for (int k = 0; k < steps + 2; ++k) {
       if (k == 2) contact0 = solver.contact_seconds(), stress0 = solver.stress_seconds();  // after warm-up
-      solver.advance_velocity();  // free update + contact (detection + Uzawa)
-      solver.advance_position();  // position update + stress pass
+      solver.advance_velocity();                                                           // free update + contact (detection + Uzawa)
+      solver.advance_position();                                                           // position update + stress pass
       active = std::max(active, solver.contact_report().active);
       iterations = std::max(iterations, solver.contact_report().iterations);
     }
     const double contact_s = solver.contact_seconds() - contact0, stress_s = solver.stress_seconds() - stress0;
-    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(),
-                m.num_elements, active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations);
+    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(), m.num_elements,
+                active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations);
     std::fflush(stdout);
   }
   std::printf("per step: contact_ms = detection + Uzawa (Gauss-Seidel, sequential); stress_ms = stress pass (2 threads)\n");

@@ -28,9 +28,8 @@ int main(int argc, char** argv) {
     write_h5(out.path() / "truth.h5", "/labels", ph.truth, &ph.labels);
     write_vti(out.path() / "truth.vti", ph.truth, "labels");
     out.commit();
-    log::info() << "phantom: " << ph.ct.dims[0] << " x " << ph.ct.dims[1] << " x " << ph.ct.dims[2] << " voxels ("
-                << p.voxel_mm << " x " << p.voxel_mm << " x " << p.slice_mm << " mm), " << ph.labels.size() - 2
-                << " bones, written to " << common.output << " in "
+    log::info() << "phantom: " << ph.ct.dims[0] << " x " << ph.ct.dims[1] << " x " << ph.ct.dims[2] << " voxels (" << p.voxel_mm << " x "
+                << p.voxel_mm << " x " << p.slice_mm << " mm), " << ph.labels.size() - 2 << " bones, written to " << common.output << " in "
                 << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
   });
 }

@@ -3,10 +3,10 @@
 // scenario. Meshes of segmented anatomy come from the mesher stage (tactus-mesh).
 #include <cmath>
 
-#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/output.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 
 int main(int argc, char** argv) {
   using namespace tactus;
@@ -28,8 +28,7 @@ int main(int argc, char** argv) {
       if (cells[c] < 1) throw InputError("command line", "--cells", "at least one cell per axis");
       tets *= cells[c];
     }
-    if (tets > 5e7)
-      throw InputError("command line", "--cells", "at most 50 million tets (6 per cell)", std::to_string(static_cast<long long>(tets)));
+    if (tets > 5e7) throw InputError("command line", "--cells", "at most 50 million tets (6 per cell)", std::to_string(static_cast<long long>(tets)));
     TetMesh m = samples::make_box_mesh(cells[0], cells[1], cells[2], size[0], size[1], size[2], origin);
     if (!inclusion.empty()) {
       m.groups.push_back({3, 2, "bone"});

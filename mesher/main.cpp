@@ -3,10 +3,10 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
-#include <memory>
-#include <type_traits>
 #include <fstream>
+#include <memory>
 #include <sstream>
+#include <type_traits>
 
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
@@ -31,8 +31,10 @@ std::vector<std::filesystem::path> output_files(const std::filesystem::path& out
 template <class Output>
 void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, const std::map<int, double>& speeds) {
   const auto path = [&](std::size_t i) {
-    if constexpr (std::is_same_v<Output, tactus::OutputFiles>) return out.staged(first + i);
-    else return out.path() / std::vector<std::string>{"mesh.msh", "mesh.vtu", "quality.json"}[i];
+    if constexpr (std::is_same_v<Output, tactus::OutputFiles>)
+      return out.staged(first + i);
+    else
+      return out.path() / std::vector<std::string>{"mesh.msh", "mesh.vtu", "quality.json"}[i];
   };
   tactus::write_msh(path(0), mesh);
   tactus::write_vtu(path(1), mesh);
@@ -46,8 +48,8 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
          << report["critical_time_step"]["element"].get<long>() << " in " << report["critical_time_step"]["group"].get<std::string>()
          << ", L_e min/median " << all["min_over_median_length"].get<double>() << ")";
   tactus::log::info() << "mesh: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets; min dihedral "
-                      << all["min_dihedral_deg"].get<double>() << " deg, "
-                      << 100 * all["fraction_min_dihedral_below_10deg"].get<double>() << " % of tets below 10 deg" << step.str();
+                      << all["min_dihedral_deg"].get<double>() << " deg, " << 100 * all["fraction_min_dihedral_below_10deg"].get<double>()
+                      << " % of tets below 10 deg" << step.str();
 }
 
 // The P-wave speed of every volume group from --wave-speed GROUP=SPEED arguments ("*" for the
@@ -71,7 +73,8 @@ std::map<int, double> wave_speeds(const tactus::TetMesh& mesh, const std::vector
     speeds[g.tag] = it != by_name.end() ? it->second : (args.empty() ? 1000.0 : 0.0);
   }
   for (const auto& [name, v] : by_name)
-    if (name != "*" && !mesh.find_group(3, name)) throw tactus::InputError("command line", "--wave-speed", "a volume group of the mesh", "\"" + name + "\"");
+    if (name != "*" && !mesh.find_group(3, name))
+      throw tactus::InputError("command line", "--wave-speed", "a volume group of the mesh", "\"" + name + "\"");
   return speeds;
 }
 
@@ -122,8 +125,9 @@ int main(int argc, char** argv) {
   app.add_flag("--no-volume-restore", keep_surfaces, "keep CGAL's surfaces (bones then come out 3-4 % small)");
   app.add_option("--seed", p.seed, "random seed")->capture_default_str();
   app.add_option("--max-elements", p.max_elements, "refuse meshes expected to have more tets than this")->capture_default_str();
-  app.add_option("--wave-speed", speed_args, "GROUP=SPEED: P-wave speed (m/s) of a physical volume for the step report "
-                                             "(repeatable; GROUP \"*\" for the rest; e.g. soft_tissue=9760 \"*\"=2540)");
+  app.add_option("--wave-speed", speed_args,
+                 "GROUP=SPEED: P-wave speed (m/s) of a physical volume for the step report "
+                 "(repeatable; GROUP \"*\" for the rest; e.g. soft_tissue=9760 \"*\"=2540)");
 
   app.fallthrough();  // -o, -v given after a subcommand belong to the main command
   auto* box = app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh");
@@ -139,7 +143,6 @@ int main(int argc, char** argv) {
   stl->add_option("file", stl_file, "closed STL surface")->required();
   stl->add_option("--element-size", h, "element size, m")->capture_default_str();
   stl->add_option("--scale", stl_scale, "factor from STL units to m (1e-3 for mm)")->capture_default_str();
-
 
   return cli::run(app, argc, argv, common, [&] {
     const std::filesystem::path out = common.output;

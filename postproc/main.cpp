@@ -52,7 +52,7 @@ class VirtualDisplay {
     pid_ = fork();
     if (pid_ == 0) {
       prctl(PR_SET_PDEATHSIG, SIGTERM);  // no server left behind if tactus-post dies
-      tactus::unblock_stop_signals();     // (tactus-post blocks them for its interrupt watcher)
+      tactus::unblock_stop_signals();    // (tactus-post blocks them for its interrupt watcher)
       close(fds[0]);
       const std::string fd = std::to_string(fds[1]), display = ":" + std::to_string(number);
       const int null = open("/dev/null", O_WRONLY);
@@ -85,9 +85,10 @@ class VirtualDisplay {
 
 int main(int argc, char** argv) {
   using namespace tactus;
-  CLI::App app{"tactus-post: a results folder of tactus-solve -> report with the stress and contact-pressure pictures, "
-               "time plots, summary.json and summary.md",
-               "tactus-post"};
+  CLI::App app{
+      "tactus-post: a results folder of tactus-solve -> report with the stress and contact-pressure pictures, "
+      "time plots, summary.json and summary.md",
+      "tactus-post"};
   cli::CommonOptions common;
   cli::add_common_options(app, common, "report folder (default: report next to the results folder)");
   std::string results_dir;
@@ -99,14 +100,17 @@ int main(int argc, char** argv) {
   postproc::RenderOptions ro;
   std::vector<double> view, section_normal;
   app.add_option("--pressure-body", ro.pressure_body, "body the pressure map shows (default: the one carrying the highest pressure)");
-  app.add_option("--view", view, "direction from the model to the camera of the stress pictures, x y z "
-                                  "(default: along the model's axis of least extent)")->expected(3);
-  app.add_option("--section-normal", section_normal, "normal of the section plane, x y z (default: the longest axis of the "
-                                                     "body carrying the pressure)")->expected(3);
+  app.add_option("--view", view,
+                 "direction from the model to the camera of the stress pictures, x y z "
+                 "(default: along the model's axis of least extent)")
+      ->expected(3);
+  app.add_option("--section-normal", section_normal,
+                 "normal of the section plane, x y z (default: the longest axis of the "
+                 "body carrying the pressure)")
+      ->expected(3);
   return cli::run(app, argc, argv, common, [&] {
-    const std::filesystem::path out = common.output.empty()
-                                          ? std::filesystem::path(results_dir).parent_path() / "report"
-                                          : std::filesystem::path(common.output);
+    const std::filesystem::path out =
+        common.output.empty() ? std::filesystem::path(results_dir).parent_path() / "report" : std::filesystem::path(common.output);
     OutputFolder staged(out, common.output_rules({results_dir}));
     const postproc::Results results = postproc::read_results(results_dir);
     postproc::Summary summary = postproc::summarize(results);

@@ -30,23 +30,28 @@ void guard_reference_path(const std::filesystem::path& p) {
 
 int main(int argc, char** argv) {
   using namespace tactus;
-  CLI::App app{"tactus-solve: explicit total-Lagrangian dynamics (HGO soft tissue, elastic bone) of a scenario.toml",
-               "tactus-solve"};
+  CLI::App app{"tactus-solve: explicit total-Lagrangian dynamics (HGO soft tissue, elastic bone) of a scenario.toml", "tactus-solve"};
   cli::CommonOptions common;
   cli::add_common_options(app, common, "output folder for results (default: results next to the scenario)");
   std::string scenario_file;
   app.add_option("scenario", scenario_file, "scenario.toml")->check(CLI::ExistingFile);
   std::string mesh_dir;
-  app.add_option("--meshes", mesh_dir, "folder that relative mesh and fibre paths of the scenario start from "
-                                       "(default: the scenario's folder)")->check(CLI::ExistingDirectory);
+  app.add_option("--meshes", mesh_dir,
+                 "folder that relative mesh and fibre paths of the scenario start from "
+                 "(default: the scenario's folder)")
+      ->check(CLI::ExistingDirectory);
   double end_time = 0;
-  auto* end_time_opt = app.add_option("--end-time", end_time, "stop at this time (s) instead of the scenario's run.end_time; later "
-                                                              "output times are dropped");
+  auto* end_time_opt = app.add_option("--end-time", end_time,
+                                      "stop at this time (s) instead of the scenario's run.end_time; later "
+                                      "output times are dropped");
   std::string check_file, write_reference;
-  app.add_option("--check", check_file, "compare the run's figures with a stored reference (JSON) and print each difference; "
-                                        "exit 5 when one is beyond its tolerance")->check(CLI::ExistingFile);
-  app.add_option("--write-reference", write_reference, "write the run's figures as a reference with default tolerances "
-                                                       "(replaces only an existing tactus reference)");
+  app.add_option("--check", check_file,
+                 "compare the run's figures with a stored reference (JSON) and print each difference; "
+                 "exit 5 when one is beyond its tolerance")
+      ->check(CLI::ExistingFile);
+  app.add_option("--write-reference", write_reference,
+                 "write the run's figures as a reference with default tolerances "
+                 "(replaces only an existing tactus reference)");
   app.require_subcommand(0, 1);
 
   auto* keys = app.add_subcommand("keys", "print the reference of every scenario key (Markdown)");
@@ -107,8 +112,7 @@ int main(int argc, char** argv) {
     const solver::RunSummary summary = solver::run_simulation(sc, output);
     if (!write_reference.empty()) {
       StagedOutput staged(write_reference);
-      std::ofstream(staged.path()) << solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2)
-                                   << '\n';
+      std::ofstream(staged.path()) << solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2) << '\n';
       staged.commit();
       log::info() << "reference written: " << write_reference;
     }

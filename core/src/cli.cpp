@@ -10,12 +10,9 @@
 
 namespace tactus::cli {
 
-OutputRules CommonOptions::output_rules(std::vector<std::filesystem::path> inputs) const {
-  return {program, std::move(inputs), force};
-}
+OutputRules CommonOptions::output_rules(std::vector<std::filesystem::path> inputs) const { return {program, std::move(inputs), force}; }
 
-void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help,
-                        const std::string& required_output) {
+void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help, const std::string& required_output) {
   options.output_required = required_output;
   app.set_version_flag("--version", std::string("tactus ") + kVersion);
   app.add_flag("-v,--verbose", options.verbose, "More detail in the log (repeat for debug)");
@@ -39,13 +36,12 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
   } catch (const CLI::ParseError& e) {
     return usage(e);
   }
-  log::set_level(options.quiet ? log::Level::quiet
+  log::set_level(options.quiet          ? log::Level::quiet
                  : options.verbose >= 2 ? log::Level::debug
                  : options.verbose == 1 ? log::Level::verbose
                                         : log::Level::info);
   try {
-    if (!options.output_required.empty() && options.output.empty())
-      throw InputError("command line", "-o/--output", options.output_required);
+    if (!options.output_required.empty() && options.output.empty()) throw InputError("command line", "-o/--output", options.output_required);
     body();
     return 0;
   } catch (const CLI::ParseError& e) {

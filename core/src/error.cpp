@@ -3,8 +3,7 @@
 namespace tactus {
 
 namespace {
-std::string compose(const std::string& file, const std::string& field, const std::string& expected,
-                    const std::string& found) {
+std::string compose(const std::string& file, const std::string& field, const std::string& expected, const std::string& found) {
   std::string msg = file;
   if (!field.empty()) msg += ": " + field;
   msg += ": expected " + expected;
@@ -19,7 +18,6 @@ InputError::InputError(std::string file, std::string field, std::string expected
 InputError::InputError(Formatted, std::string file, std::string field, const std::string& message)
     : Error(message), file_(std::move(file)), field_(std::move(field)) {}
 
-WriteError::WriteError(std::string path, std::string reason)
-    : Error(path + ": cannot write: " + reason), path_(std::move(path)) {}
+WriteError::WriteError(std::string path, std::string reason) : Error(path + ": cannot write: " + reason), path_(std::move(path)) {}
 
 }  // namespace tactus

@@ -26,10 +26,14 @@ std::set<std::filesystem::path>& staging_paths() {
 
 const char* signal_name(int s) {
   switch (s) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    case SIGHUP: return "SIGHUP";
-    default: return "signal";
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
+    default:
+      return "signal";
   }
 }
 
@@ -49,8 +53,7 @@ const char* signal_name(int s) {
 
 }  // namespace
 
-Interrupted::Interrupted(int s)
-    : Error(std::string("interrupted (") + signal_name(s) + "); partial output removed"), signal_(s) {}
+Interrupted::Interrupted(int s) : Error(std::string("interrupted (") + signal_name(s) + "); partial output removed"), signal_(s) {}
 
 bool interrupt_requested() noexcept { return g_signal.load(std::memory_order_relaxed) != 0; }
 

@@ -8,10 +8,10 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstring>
-#include <new>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <new>
 
 #include "tactus/core/interrupt.hpp"
 
@@ -84,8 +84,7 @@ IsolationLimits limits_for_file(const std::string& file, double base, double per
   return l;
 }
 
-std::string run_isolated(const std::string& file, const std::string& kind, const std::function<void(ByteWriter&)>& work,
-                         IsolationLimits limits) {
+std::string run_isolated(const std::string& file, const std::string& kind, const std::function<void(ByteWriter&)>& work, IsolationLimits limits) {
   int fds[2];
   if (pipe(fds) != 0) throw Error("cannot create a pipe for the " + kind + " reader");
   std::fflush(nullptr);
@@ -117,8 +116,9 @@ std::string run_isolated(const std::string& file, const std::string& kind, const
     const int s = WTERMSIG(status);
     if (s == SIGINT || s == SIGTERM || s == SIGHUP) throw Interrupted(s);  // Ctrl-C reached the child first
     if (s == SIGALRM)
-      throw InputError(file, "", corrupt, "the reader did not finish within " + std::to_string(static_cast<int>(limits.seconds)) +
-                                              " s (a corrupt or absurdly large file)");
+      throw InputError(
+          file, "", corrupt,
+          "the reader did not finish within " + std::to_string(static_cast<int>(limits.seconds)) + " s (a corrupt or absurdly large file)");
     if (s == SIGKILL) throw InputError(file, "", corrupt, "the reader was killed (out of memory?)");
     throw InputError(file, "", corrupt, std::string("the reader crashed on it (") + strsignal(s) + "): the file is corrupt");
   }
@@ -130,14 +130,17 @@ std::string run_isolated(const std::string& file, const std::string& kind, const
   std::string payload = data.substr(1 + sizeof n);
   if (payload.size() != n) throw InputError(file, "", corrupt, "the reader's result was cut short");
   switch (tag) {
-    case 'O': return payload;
+    case 'O':
+      return payload;
     case 'E': {
       ByteReader r(payload);
       const std::string f = r.get_string(), field = r.get_string(), message = r.get_string();
       throw InputError(InputError::Formatted{}, f, field, message);
     }
-    case 'M': throw InputError(file, "", corrupt, "it asks for more memory than this machine has (corrupt sizes?)");
-    default: throw InputError(file, "", corrupt, "unreadable (" + payload + ")");
+    case 'M':
+      throw InputError(file, "", corrupt, "it asks for more memory than this machine has (corrupt sizes?)");
+    default:
+      throw InputError(file, "", corrupt, "unreadable (" + payload + ")");
   }
 }
 

@@ -108,8 +108,7 @@ TetMesh tet_mesh_from_gmsh_model(const std::string& fname) {
   }
   auto node_index = [&](std::size_t tag) {
     auto it = index_of.find(tag);
-    if (it == index_of.end())
-      throw InputError(fname, "$Elements", "node tags defined in $Nodes", "tag " + std::to_string(tag));
+    if (it == index_of.end()) throw InputError(fname, "$Elements", "node tags defined in $Nodes", "tag " + std::to_string(tag));
     return it->second;
   };
 
@@ -128,15 +127,14 @@ TetMesh tet_mesh_from_gmsh_model(const std::string& fname) {
       if (dim == 3) {
         gmsh::model::mesh::getElementsByType(kGmshTet, etags, enodes, entity);
         for (std::size_t e = 0; e < etags.size(); ++e) {
-          mesh.tets.push_back({node_index(enodes[4 * e]), node_index(enodes[4 * e + 1]),
-                               node_index(enodes[4 * e + 2]), node_index(enodes[4 * e + 3])});
+          mesh.tets.push_back(
+              {node_index(enodes[4 * e]), node_index(enodes[4 * e + 1]), node_index(enodes[4 * e + 2]), node_index(enodes[4 * e + 3])});
           mesh.tet_group.push_back(tag);
         }
       } else {
         gmsh::model::mesh::getElementsByType(kGmshTriangle, etags, enodes, entity);
         for (std::size_t e = 0; e < etags.size(); ++e) {
-          mesh.triangles.push_back({node_index(enodes[3 * e]), node_index(enodes[3 * e + 1]),
-                                    node_index(enodes[3 * e + 2])});
+          mesh.triangles.push_back({node_index(enodes[3 * e]), node_index(enodes[3 * e + 1]), node_index(enodes[3 * e + 2])});
           mesh.triangle_group.push_back(tag);
         }
       }

@@ -26,8 +26,7 @@ namespace {
 
 vtkSmartPointer<vtkDoubleArray> to_vtk(const MeshField& f, std::size_t expected_tuples, const std::string& file) {
   if (f.components < 1 || f.values.size() != expected_tuples * static_cast<std::size_t>(f.components))
-    throw InputError(file, "field " + f.name,
-                     std::to_string(expected_tuples) + " tuples of " + std::to_string(f.components),
+    throw InputError(file, "field " + f.name, std::to_string(expected_tuples) + " tuples of " + std::to_string(f.components),
                      std::to_string(f.values.size()) + " values");
   auto a = vtkSmartPointer<vtkDoubleArray>::New();
   a->SetName(f.name.c_str());
@@ -43,19 +42,17 @@ MeshField from_vtk(vtkDataArray* a) {
   f.components = a->GetNumberOfComponents();
   f.values.resize(static_cast<std::size_t>(a->GetNumberOfTuples() * f.components));
   for (vtkIdType i = 0; i < a->GetNumberOfTuples(); ++i)
-    for (int c = 0; c < f.components; ++c)
-      f.values[static_cast<std::size_t>(i * f.components + c)] = a->GetComponent(i, c);
+    for (int c = 0; c < f.components; ++c) f.values[static_cast<std::size_t>(i * f.components + c)] = a->GetComponent(i, c);
   return f;
 }
 
 }  // namespace
 
-void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields,
-               const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes) {
+void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
+               const std::vector<Vec3>* current_nodes) {
   const std::string fname = file.string();
   const auto& xyz = current_nodes ? *current_nodes : mesh.nodes;
-  if (xyz.size() != mesh.nodes.size())
-    throw InputError(fname, "current nodes", std::to_string(mesh.nodes.size()) + " positions");
+  if (xyz.size() != mesh.nodes.size()) throw InputError(fname, "current nodes", std::to_string(mesh.nodes.size()) + " positions");
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(static_cast<vtkIdType>(xyz.size()));
@@ -131,7 +128,8 @@ VtuContents read_vtu_direct(const fs::path& file) {
         throw InputError(fname, "cell " + std::to_string(c), "point ids below " + std::to_string(np), std::to_string(ids[k]));
     out.mesh.tets.push_back({static_cast<int>(ids[0]), static_cast<int>(ids[1]), static_cast<int>(ids[2]), static_cast<int>(ids[3])});
     const double g = group ? group->GetComponent(c, 0) : 1.0;
-    if (!(g >= 1 && g <= 2e9) || g != std::floor(g)) throw InputError(fname, "group of cell " + std::to_string(c), "a positive integer tag", std::to_string(g));
+    if (!(g >= 1 && g <= 2e9) || g != std::floor(g))
+      throw InputError(fname, "group of cell " + std::to_string(c), "a positive integer tag", std::to_string(g));
     out.mesh.tet_group.push_back(static_cast<int>(g));
   }
   for (int tag : out.mesh.tet_group)
@@ -163,14 +161,17 @@ VtuContents read_vtu(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an existing .vtu file", "no such file");
   // VTK's XML reader is not hardened against hostile bytes: it reads in an isolated child process.
-  const std::string bytes = run_isolated(fname, "VTK unstructured grid (.vtu)", [&](ByteWriter& w) {
-    const VtuContents v = read_vtu_direct(file);
-    w.put_vector(v.mesh.nodes);
-    w.put_vector(v.mesh.tets);
-    w.put_vector(v.mesh.tet_group);
-    put_fields(w, v.point_fields);
-    put_fields(w, v.cell_fields);
-  }, limits_for_file(fname));
+  const std::string bytes = run_isolated(
+      fname, "VTK unstructured grid (.vtu)",
+      [&](ByteWriter& w) {
+        const VtuContents v = read_vtu_direct(file);
+        w.put_vector(v.mesh.nodes);
+        w.put_vector(v.mesh.tets);
+        w.put_vector(v.mesh.tet_group);
+        put_fields(w, v.point_fields);
+        put_fields(w, v.cell_fields);
+      },
+      limits_for_file(fname));
   ByteReader r(bytes);
   VtuContents out;
   out.mesh.nodes = r.get_vector<Vec3>();

@@ -30,26 +30,46 @@ constexpr double kMaxCoordinate = 1e9;  // |x| beyond this is not a mesh of anyt
 // Nodes per element type (gmsh's numbering), for skipping the types tactus does not use.
 int nodes_per_element(int type) {
   switch (type) {
-    case 1: return 2;    // line
-    case 2: return 3;    // triangle
-    case 3: return 4;    // quadrangle
-    case 4: return 4;    // tetrahedron
-    case 5: return 8;    // hexahedron
-    case 6: return 6;    // prism
-    case 7: return 5;    // pyramid
-    case 8: return 3;    // 3-node line
-    case 9: return 6;    // 6-node triangle
-    case 10: return 9;   // 9-node quadrangle
-    case 11: return 10;  // 10-node tetrahedron
-    case 12: return 27;  // 27-node hexahedron
-    case 13: return 18;  // 18-node prism
-    case 14: return 14;  // 14-node pyramid
-    case 15: return 1;   // point
-    case 16: return 8;   // 8-node quadrangle
-    case 17: return 20;  // 20-node hexahedron
-    case 18: return 15;  // 15-node prism
-    case 19: return 13;  // 13-node pyramid
-    default: return 0;
+    case 1:
+      return 2;  // line
+    case 2:
+      return 3;  // triangle
+    case 3:
+      return 4;  // quadrangle
+    case 4:
+      return 4;  // tetrahedron
+    case 5:
+      return 8;  // hexahedron
+    case 6:
+      return 6;  // prism
+    case 7:
+      return 5;  // pyramid
+    case 8:
+      return 3;  // 3-node line
+    case 9:
+      return 6;  // 6-node triangle
+    case 10:
+      return 9;  // 9-node quadrangle
+    case 11:
+      return 10;  // 10-node tetrahedron
+    case 12:
+      return 27;  // 27-node hexahedron
+    case 13:
+      return 18;  // 18-node prism
+    case 14:
+      return 14;  // 14-node pyramid
+    case 15:
+      return 1;  // point
+    case 16:
+      return 8;  // 8-node quadrangle
+    case 17:
+      return 20;  // 20-node hexahedron
+    case 18:
+      return 15;  // 15-node prism
+    case 19:
+      return 13;  // 13-node pyramid
+    default:
+      return 0;
   }
 }
 
@@ -140,7 +160,7 @@ class Cursor {
 
 // What the sections give, before assembling the TetMesh.
 struct RawMesh {
-  std::map<std::pair<int, int>, std::string> names;               // (dim, physical tag) -> name
+  std::map<std::pair<int, int>, std::string> names;                 // (dim, physical tag) -> name
   std::map<std::pair<int, int>, std::vector<int>> entity_physical;  // (dim, entity tag) -> physical tags (4.1)
   std::vector<std::uint64_t> node_tags;
   std::vector<Vec3> coords;
@@ -249,8 +269,7 @@ void read_nodes_41(Cursor& c, Number& num, RawMesh& raw) {
     }
     (void)first;
   }
-  if (raw.node_tags.size() != total)
-    c.fail("$Nodes", std::to_string(total) + " nodes as declared", std::to_string(raw.node_tags.size()));
+  if (raw.node_tags.size() != total) c.fail("$Nodes", std::to_string(total) + " nodes as declared", std::to_string(raw.node_tags.size()));
   c.expect("$EndNodes", "$Nodes");
 }
 
@@ -276,7 +295,8 @@ void read_elements_41(Cursor& c, Number& num, RawMesh& raw) {
     auto& list = type == kTet ? raw.tets : raw.triangles;
     const bool keep = type == kTet || type == kTriangle;
     if (keep && ((type == kTet && dim != 3) || (type == kTriangle && dim != 2)))
-      c.fail(where, "tetrahedra on volume entities and triangles on surface entities", "type " + std::to_string(type) + " on a dimension-" + std::to_string(dim) + " entity");
+      c.fail(where, "tetrahedra on volume entities and triangles on surface entities",
+             "type " + std::to_string(type) + " on a dimension-" + std::to_string(dim) + " entity");
     for (std::uint64_t i = 0; i < n; ++i) {
       num.size(where + " element tag");
       if (keep) list.push_back({dim, entity, -1, raw.element_nodes.size()});
@@ -297,7 +317,8 @@ void read_nodes_22(Cursor& c, bool binary, RawMesh& raw) {
   if (binary) c.line();
   for (std::uint64_t i = 0; i < n; ++i) {
     const std::string where = "$Nodes node " + std::to_string(i + 1);
-    raw.node_tags.push_back(binary ? static_cast<std::uint64_t>(c.binary<std::int32_t>(where)) : c.ascii_integer<std::uint64_t>(where, 0, std::numeric_limits<std::int64_t>::max()));
+    raw.node_tags.push_back(binary ? static_cast<std::uint64_t>(c.binary<std::int32_t>(where))
+                                   : c.ascii_integer<std::uint64_t>(where, 0, std::numeric_limits<std::int64_t>::max()));
     raw.coords.push_back({num.real(where), num.real(where), num.real(where)});
   }
   c.expect("$EndNodes", "$Nodes");
@@ -347,7 +368,8 @@ void read_elements_22(Cursor& c, bool binary, RawMesh& raw) {
       if (nn == 0) c.fail(where, "a known gmsh element type (1-19)", std::to_string(type));
       const int ntags = c.ascii_integer<int>(where + " tag count", 0, 64);
       tags.clear(), nodes.clear();
-      for (int k = 0; k < ntags; ++k) tags.push_back(c.ascii_integer<int>(where + " tag", std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
+      for (int k = 0; k < ntags; ++k)
+        tags.push_back(c.ascii_integer<int>(where + " tag", std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
       for (int k = 0; k < nn; ++k) nodes.push_back(c.ascii_integer<std::uint64_t>(where + " node", 0, std::numeric_limits<std::int64_t>::max()));
       element(type, tags, nodes);
       ++done;
@@ -392,8 +414,8 @@ TetMesh assemble(const RawMesh& raw, bool v41, const std::string& fname) {
   }
   for (const auto& [dim, tag] : groups) {
     auto it = raw.names.find({dim, tag});
-    mesh.groups.push_back({dim, tag, it != raw.names.end() && !it->second.empty() ? it->second
-                                                                                    : (dim == 3 ? "volume_" : "surface_") + std::to_string(tag)});
+    mesh.groups.push_back(
+        {dim, tag, it != raw.names.end() && !it->second.empty() ? it->second : (dim == 3 ? "volume_" : "surface_") + std::to_string(tag)});
   }
   auto node = [&](std::uint64_t tag, const char* what, std::size_t k) {
     auto it = index_of.find(tag);
@@ -465,15 +487,15 @@ TetMesh read_msh(const fs::path& file) {
   const std::string_view version = c.token("$MeshFormat version");
   const bool v41 = version == "4.1";
   if (!v41 && version != "2.2")
-    c.fail("$MeshFormat", "MSH version 4.1 or 2.2 (convert with: gmsh file.msh -save -format msh41)", "version " + std::string(version.substr(0, 20)));
+    c.fail("$MeshFormat", "MSH version 4.1 or 2.2 (convert with: gmsh file.msh -save -format msh41)",
+           "version " + std::string(version.substr(0, 20)));
   const int file_type = c.ascii_integer<int>("$MeshFormat file type", 0, 1);
   const int data_size = c.ascii_integer<int>("$MeshFormat data size", 4, 8);
   if (data_size != 8 && data_size != 4) c.fail("$MeshFormat data size", "4 or 8");
   const bool binary = file_type == 1;
   if (binary) {
     c.line();  // the rest of the version line
-    if (c.binary<std::int32_t>("$MeshFormat endianness") != 1)
-      c.fail("$MeshFormat", "a binary file of this machine's byte order (the integer 1)");
+    if (c.binary<std::int32_t>("$MeshFormat endianness") != 1) c.fail("$MeshFormat", "a binary file of this machine's byte order (the integer 1)");
   }
   c.expect("$EndMeshFormat", "$MeshFormat");
   RawMesh raw;
@@ -487,13 +509,21 @@ TetMesh read_msh(const fs::path& file) {
     if (name.rfind("End", 0) == 0) c.fail("section header", "a $Section", "an unmatched $" + name);
     const bool known = name == "PhysicalNames" || name == "Entities" || name == "Nodes" || name == "Elements";
     if (known && !seen.insert(name).second) c.fail("$" + name, "one $" + name + " section", "two");
-    if (name == "PhysicalNames") read_physical_names(c, raw);
-    else if (name == "Entities" && v41) read_entities(c, num, raw);
+    if (name == "PhysicalNames")
+      read_physical_names(c, raw);
+    else if (name == "Entities" && v41)
+      read_entities(c, num, raw);
     else if (name == "Nodes") {
-      if (v41) read_nodes_41(c, num, raw); else read_nodes_22(c, binary, raw);
+      if (v41)
+        read_nodes_41(c, num, raw);
+      else
+        read_nodes_22(c, binary, raw);
     } else if (name == "Elements") {
       if (!seen.count("Nodes")) c.fail("$Elements", "$Nodes before $Elements");
-      if (v41) read_elements_41(c, num, raw); else read_elements_22(c, binary, raw);
+      if (v41)
+        read_elements_41(c, num, raw);
+      else
+        read_elements_22(c, binary, raw);
     } else if (name == "PartitionedEntities") {
       c.fail("$PartitionedEntities", "an unpartitioned mesh (tactus reads whole meshes)");
     } else {

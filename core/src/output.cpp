@@ -148,8 +148,7 @@ void check_place(const fs::path& final, const OutputRules& rules, const std::str
     const fs::path in = canonical_path(input);
     if (in == abs) throw WriteError(final.string(), "it is an input of this run (" + input.string() + "); choose another output");
     if (is_same_or_ancestor(abs, in))
-      throw WriteError(final.string(), "it contains an input of this run (" + input.string() +
-                                           "); tactus would replace it: choose a new folder");
+      throw WriteError(final.string(), "it contains an input of this run (" + input.string() + "); tactus would replace it: choose a new folder");
   }
 }
 
@@ -197,21 +196,20 @@ std::string first_entry(const fs::path& dir) {
 void check_folder_replaceable(const fs::path& final, const OutputRules& rules) {
   std::error_code ec;
   if (!fs::exists(fs::symlink_status(final, ec))) return;
-  if (fs::is_symlink(fs::symlink_status(final, ec)))
-    throw WriteError(final.string(), "it is a link; give the folder itself, or a new folder");
+  if (fs::is_symlink(fs::symlink_status(final, ec))) throw WriteError(final.string(), "it is a link; give the folder itself, or a new folder");
   if (!fs::is_directory(final, ec)) throw WriteError(final.string(), "it is a file, not a folder; choose a new folder");
   if (fs::is_empty(final, ec)) return;
   const json marker = read_marker(final / kFolderMarker);
   if (marker.is_null() || !marker.contains("files") || !marker["files"].is_object() || marker.value("state", "") != "complete") {
     std::size_t n = 0;
     for (auto it = fs::directory_iterator(final, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) ++n;
-    throw WriteError(final.string(), "it is a folder tactus did not write (" + std::to_string(n) + " entries, e.g. '" +
-                                         first_entry(final) + "'); tactus never replaces it: choose a new or empty folder");
+    throw WriteError(final.string(), "it is a folder tactus did not write (" + std::to_string(n) + " entries, e.g. '" + first_entry(final) +
+                                         "'); tactus never replaces it: choose a new or empty folder");
   }
   const std::string writer = marker.value("tool", "");
   if (writer != rules.tool && !rules.force)
-    throw WriteError(final.string(), "it holds the output of " + writer + ", not of " + rules.tool +
-                                         "; give --force to replace it, or choose another folder");
+    throw WriteError(final.string(),
+                     "it holds the output of " + writer + ", not of " + rules.tool + "; give --force to replace it, or choose another folder");
   std::string odd;
   const json now = snapshot(final, &odd);
   if (!odd.empty()) throw WriteError(final.string(), "'" + odd + "' in it was not written by tactus; move it away first");
@@ -232,7 +230,7 @@ void remove_listed(const fs::path& dir, const json& files) {
   std::vector<fs::path> dirs;
   for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
     if (it->is_directory() && !it->is_symlink()) dirs.push_back(it->path());
-  std::sort(dirs.rbegin(), dirs.rend());  // deepest first
+  std::sort(dirs.rbegin(), dirs.rend());         // deepest first
   for (const auto& d : dirs) fs::remove(d, ec);  // only removes empty folders
   fs::remove(dir, ec);
 }
@@ -309,8 +307,7 @@ void check_file_replaceable(const fs::path& final, const OutputRules& rules, con
   if (!fs::is_regular_file(st)) throw WriteError(final.string(), "something other than a file is there; choose another name");
   const std::string name = final.filename().string();
   const json& files = manifest["files"];
-  if (!files.contains(name))
-    throw WriteError(final.string(), "the file exists and tactus did not write it; choose another name, or move it away");
+  if (!files.contains(name)) throw WriteError(final.string(), "the file exists and tactus did not write it; choose another name, or move it away");
   const json& entry = files[name];
   if (entry.value("size", std::uintmax_t{0}) != fs::file_size(final, ec) || entry.value("mtime_ns", std::int64_t{0}) != mtime_ns(final))
     throw WriteError(final.string(), "the file changed since tactus wrote it; choose another name, or move it away");

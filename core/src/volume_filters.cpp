@@ -11,7 +11,8 @@ void gaussian_blur(Volume<float>& volume, double sigma) {
   const int radius = static_cast<int>(std::ceil(3 * sigma));
   std::vector<float> k(static_cast<std::size_t>(2 * radius + 1));
   double sum = 0;
-  for (int i = -radius; i <= radius; ++i) sum += k[static_cast<std::size_t>(i + radius)] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
+  for (int i = -radius; i <= radius; ++i)
+    sum += k[static_cast<std::size_t>(i + radius)] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
   for (auto& w : k) w = static_cast<float>(w / sum);
   const long n[3] = {volume.dims[0], volume.dims[1], volume.dims[2]};
   const long stride[3] = {1, n[0], n[0] * n[1]};

@@ -28,9 +28,8 @@ namespace fs = std::filesystem;
 
 namespace tactus {
 
-void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing,
-                              const std::array<double, 3>& origin, std::size_t bytes_per_voxel, const std::string& file,
-                              const std::string& field) {
+void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing, const std::array<double, 3>& origin,
+                              std::size_t bytes_per_voxel, const std::string& file, const std::string& field) {
   const char* axis = "xyz";
   double voxels = 1;
   for (int a = 0; a < 3; ++a) {
@@ -79,13 +78,21 @@ namespace {
 template <class T>
 hid_t native_type();
 template <>
-hid_t native_type<std::uint8_t>() { return H5T_NATIVE_UINT8; }
+hid_t native_type<std::uint8_t>() {
+  return H5T_NATIVE_UINT8;
+}
 template <>
-hid_t native_type<std::uint16_t>() { return H5T_NATIVE_UINT16; }
+hid_t native_type<std::uint16_t>() {
+  return H5T_NATIVE_UINT16;
+}
 template <>
-hid_t native_type<std::int16_t>() { return H5T_NATIVE_INT16; }
+hid_t native_type<std::int16_t>() {
+  return H5T_NATIVE_INT16;
+}
 template <>
-hid_t native_type<float>() { return H5T_NATIVE_FLOAT; }
+hid_t native_type<float>() {
+  return H5T_NATIVE_FLOAT;
+}
 
 // RAII for HDF5 identifiers, so every error path closes what it opened.
 class H5Handle {
@@ -130,17 +137,13 @@ void write_string_attribute(hid_t obj, const char* name, const std::string& valu
   H5Awrite(attr.get(), type.get(), value.c_str());
 }
 
-std::array<double, 3> read_double3_attribute(hid_t obj, const char* name, const std::string& file,
-                                             const std::string& dataset) {
-  if (H5Aexists(obj, name) <= 0)
-    throw InputError(file, dataset + "@" + name, "an attribute of 3 numbers (x, y, z)", "none");
+std::array<double, 3> read_double3_attribute(hid_t obj, const char* name, const std::string& file, const std::string& dataset) {
+  if (H5Aexists(obj, name) <= 0) throw InputError(file, dataset + "@" + name, "an attribute of 3 numbers (x, y, z)", "none");
   H5Handle attr(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
   H5Handle space(H5Aget_space(attr.get()), H5Sclose);
-  if (H5Sget_simple_extent_npoints(space.get()) != 3)
-    throw InputError(file, dataset + "@" + name, "3 numbers (x, y, z)");
+  if (H5Sget_simple_extent_npoints(space.get()) != 3) throw InputError(file, dataset + "@" + name, "3 numbers (x, y, z)");
   std::array<double, 3> v{};
-  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, v.data()) < 0)
-    throw InputError(file, dataset + "@" + name, "numeric values");
+  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, v.data()) < 0) throw InputError(file, dataset + "@" + name, "numeric values");
   return v;
 }
 
@@ -203,9 +206,9 @@ void read_voxels(hid_t ds, hid_t ftype, const hsize_t shape[3], Volume<T>& v, co
       if (!(value >= lo && value <= hi)) {
         std::ostringstream f;
         f << value << " at voxel (x " << i % shape[2] << ", y " << i / shape[2] << ", z " << z << ")";
-        throw InputError(file, dataset, std::string("values a ") + (std::is_integral_v<T> ? "label" : "voxel") +
-                                            " of this volume can hold, in [" + std::to_string(static_cast<long long>(lo)) + ", " +
-                                            std::to_string(static_cast<long long>(hi)) + "]",
+        throw InputError(file, dataset,
+                         std::string("values a ") + (std::is_integral_v<T> ? "label" : "voxel") + " of this volume can hold, in [" +
+                             std::to_string(static_cast<long long>(lo)) + ", " + std::to_string(static_cast<long long>(hi)) + "]",
                          f.str());
       }
       out[i] = static_cast<T>(value);
@@ -216,8 +219,7 @@ void read_voxels(hid_t ds, hid_t ftype, const hsize_t shape[3], Volume<T>& v, co
 }  // namespace
 
 template <class T>
-void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>& volume,
-              const LabelTable* labels) {
+void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>& volume, const LabelTable* labels) {
   if (volume.size() != static_cast<std::size_t>(volume.dims[0]) * volume.dims[1] * volume.dims[2])
     throw InputError(file.string(), dataset, "data size equal to nx*ny*nz");
   QuietHdf5 quiet;
@@ -225,8 +227,7 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
   {
     H5Handle f(H5Fcreate(out.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
     if (!f.valid()) throw WriteError(file.string(), "HDF5 cannot create the file");
-    const hsize_t shape[3] = {static_cast<hsize_t>(volume.dims[2]), static_cast<hsize_t>(volume.dims[1]),
-                              static_cast<hsize_t>(volume.dims[0])};
+    const hsize_t shape[3] = {static_cast<hsize_t>(volume.dims[2]), static_cast<hsize_t>(volume.dims[1]), static_cast<hsize_t>(volume.dims[0])};
     H5Handle space(H5Screate_simple(3, shape, nullptr), H5Sclose);
     // Chunked + deflate: label volumes compress ~20x, CT a little; chunks of whole slices.
     H5Handle plist(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
@@ -235,12 +236,9 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
       H5Pset_chunk(plist.get(), 3, chunk);
       H5Pset_deflate(plist.get(), 4);
     }
-    H5Handle ds(H5Dcreate2(f.get(), dataset.c_str(), native_type<T>(), space.get(), H5P_DEFAULT,
-                           plist.get(), H5P_DEFAULT),
-                H5Dclose);
+    H5Handle ds(H5Dcreate2(f.get(), dataset.c_str(), native_type<T>(), space.get(), H5P_DEFAULT, plist.get(), H5P_DEFAULT), H5Dclose);
     if (!ds.valid()) throw InputError(file.string(), dataset, "a dataset that can be created");
-    if (volume.size() > 0 &&
-        H5Dwrite(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, volume.data.data()) < 0)
+    if (volume.size() > 0 && H5Dwrite(ds.get(), native_type<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, volume.data.data()) < 0)
       throw WriteError(file.string(), "HDF5 failed writing " + dataset);
     write_double3_attribute(ds.get(), "spacing", volume.spacing);
     write_double3_attribute(ds.get(), "origin", volume.origin);
@@ -265,21 +263,18 @@ Volume<T> read_h5_direct(const fs::path& file, const std::string& dataset, Label
   if (H5Fis_hdf5(file.c_str()) <= 0) throw InputError(fname, "", "an HDF5 file", "not HDF5 or corrupt");
   H5Handle f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!f.valid()) throw InputError(fname, "", "a readable HDF5 file", "cannot open (truncated?)");
-  if (H5Lexists(f.get(), dataset.c_str(), H5P_DEFAULT) <= 0)
-    throw InputError(fname, dataset, "a dataset named " + dataset, "none");
+  if (H5Lexists(f.get(), dataset.c_str(), H5P_DEFAULT) <= 0) throw InputError(fname, dataset, "a dataset named " + dataset, "none");
   H5Handle ds(H5Dopen2(f.get(), dataset.c_str(), H5P_DEFAULT), H5Dclose);
   if (!ds.valid()) throw InputError(fname, dataset, "a readable dataset");
   H5Handle space(H5Dget_space(ds.get()), H5Sclose);
   if (H5Sget_simple_extent_ndims(space.get()) != 3)
-    throw InputError(fname, dataset, "a 3-D dataset (z, y, x)",
-                     std::to_string(H5Sget_simple_extent_ndims(space.get())) + " dimensions");
+    throw InputError(fname, dataset, "a 3-D dataset (z, y, x)", std::to_string(H5Sget_simple_extent_ndims(space.get())) + " dimensions");
   hsize_t shape[3];
   H5Sget_simple_extent_dims(space.get(), shape, nullptr);
   H5Handle ftype(H5Dget_type(ds.get()), H5Tclose);
   const H5T_class_t cls = H5Tget_class(ftype.get());
   if (cls != H5T_INTEGER && cls != H5T_FLOAT) throw InputError(fname, dataset, "numeric voxels");
-  if (std::is_integral_v<T> && cls != H5T_INTEGER)
-    throw InputError(fname, dataset, "integer voxels", "floating-point voxels");
+  if (std::is_integral_v<T> && cls != H5T_INTEGER) throw InputError(fname, dataset, "integer voxels", "floating-point voxels");
 
   Volume<T> v;
   for (int a = 0; a < 3; ++a)
@@ -292,8 +287,8 @@ Volume<T> read_h5_direct(const fs::path& file, const std::string& dataset, Label
   validate_volume_geometry(v.dims, v.spacing, v.origin, sizeof(T), fname, dataset);
   // The declared shape must be backed by the file: stored bytes cannot be more than ~1000x
   // smaller than the raw data (deflate's limit), so a 6 kB file cannot declare 10^15 voxels.
-  const double raw = static_cast<double>(shape[0]) * static_cast<double>(shape[1]) * static_cast<double>(shape[2]) *
-                     static_cast<double>(H5Tget_size(ftype.get()));
+  const double raw =
+      static_cast<double>(shape[0]) * static_cast<double>(shape[1]) * static_cast<double>(shape[2]) * static_cast<double>(H5Tget_size(ftype.get()));
   const double stored = static_cast<double>(H5Dget_storage_size(ds.get()));
   std::error_code ec;
   const double file_size = static_cast<double>(fs::file_size(file, ec));
@@ -303,8 +298,7 @@ Volume<T> read_h5_direct(const fs::path& file, const std::string& dataset, Label
                          " volume with " + std::to_string(static_cast<long long>(stored)) + " bytes stored in a " +
                          std::to_string(static_cast<long long>(file_size)) + "-byte file (truncated or corrupt)");
   const std::string units = read_string_attribute(ds.get(), "units", fname, dataset);
-  if (!units.empty() && units != "m")
-    throw InputError(fname, dataset + "@units", "\"m\" (tactus stores SI lengths)", "\"" + units + "\"");
+  if (!units.empty() && units != "m") throw InputError(fname, dataset + "@units", "\"m\" (tactus stores SI lengths)", "\"" + units + "\"");
   v.data.resize(static_cast<std::size_t>(shape[0] * shape[1] * shape[2]));
   read_voxels(ds.get(), ftype.get(), shape, v, fname, dataset);
   if (labels) {
@@ -324,14 +318,17 @@ Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* 
   if (!fs::exists(file, ec)) throw InputError(fname, "", "an existing HDF5 file", "no such file");
   if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an HDF5 file", "not a regular file");
   // libhdf5 is not hardened against hostile bytes: it reads in an isolated child process.
-  const std::string bytes = run_isolated(fname, "HDF5 file", [&](ByteWriter& w) {
-    LabelTable table;
-    const Volume<T> v = read_h5_direct<T>(file, dataset, labels ? &table : nullptr);
-    w.put(v.dims), w.put(v.spacing), w.put(v.origin);
-    w.put_vector(v.data);
-    w.put<std::uint64_t>(table.size());
-    for (const auto& [id, name] : table) w.put(id), w.put_string(name);
-  }, limits_for_file(fname, 20, 2));
+  const std::string bytes = run_isolated(
+      fname, "HDF5 file",
+      [&](ByteWriter& w) {
+        LabelTable table;
+        const Volume<T> v = read_h5_direct<T>(file, dataset, labels ? &table : nullptr);
+        w.put(v.dims), w.put(v.spacing), w.put(v.origin);
+        w.put_vector(v.data);
+        w.put<std::uint64_t>(table.size());
+        for (const auto& [id, name] : table) w.put(id), w.put_string(name);
+      },
+      limits_for_file(fname, 20, 2));
   ByteReader r(bytes);
   Volume<T> v;
   v.dims = r.get<std::array<int, 3>>();
@@ -376,34 +373,37 @@ Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an existing .vti file", "no such file");
   // VTK's XML reader is not hardened against hostile bytes: it reads in an isolated child process.
-  const std::string bytes = run_isolated(fname, "VTK image (.vti)", [&](ByteWriter& w) {
-    vtkObject::GlobalWarningDisplayOff();  // (in the child: our message replaces VTK's)
-    vtkNew<vtkXMLImageDataReader> reader;
-    reader->SetFileName(file.c_str());
-    reader->Update();
-    vtkImageData* image = reader->GetOutput();
-    if (reader->GetErrorCode() != 0 || !image || image->GetNumberOfPoints() == 0)
-      throw InputError(fname, "", "a VTK XML image (.vti)", "unreadable or empty");
-    vtkDataArray* array = image->GetPointData()->GetArray(array_name.c_str());
-    if (!array) throw InputError(fname, array_name, "a point-data array named " + array_name);
-    std::array<int, 3> d{};
-    std::array<double, 3> spacing{}, origin{};
-    image->GetDimensions(d.data());
-    image->GetSpacing(spacing.data());
-    image->GetOrigin(origin.data());
-    validate_volume_geometry(d, spacing, origin, sizeof(T), fname, array_name);
-    if (array->GetNumberOfTuples() != image->GetNumberOfPoints() || array->GetNumberOfComponents() != 1)
-      throw InputError(fname, array_name, "one value per voxel");
-    std::vector<T> data(static_cast<std::size_t>(array->GetNumberOfTuples()));
-    const double lo = static_cast<double>(std::numeric_limits<T>::lowest()), hi = static_cast<double>(std::numeric_limits<T>::max());
-    for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i) {
-      const double value = array->GetComponent(i, 0);
-      if (!(value >= lo && value <= hi)) throw InputError(fname, array_name, "values this volume type can hold", std::to_string(value));
-      data[static_cast<std::size_t>(i)] = static_cast<T>(value);
-    }
-    w.put(d), w.put(spacing), w.put(origin);
-    w.put_vector(data);
-  }, limits_for_file(fname, 20, 2));
+  const std::string bytes = run_isolated(
+      fname, "VTK image (.vti)",
+      [&](ByteWriter& w) {
+        vtkObject::GlobalWarningDisplayOff();  // (in the child: our message replaces VTK's)
+        vtkNew<vtkXMLImageDataReader> reader;
+        reader->SetFileName(file.c_str());
+        reader->Update();
+        vtkImageData* image = reader->GetOutput();
+        if (reader->GetErrorCode() != 0 || !image || image->GetNumberOfPoints() == 0)
+          throw InputError(fname, "", "a VTK XML image (.vti)", "unreadable or empty");
+        vtkDataArray* array = image->GetPointData()->GetArray(array_name.c_str());
+        if (!array) throw InputError(fname, array_name, "a point-data array named " + array_name);
+        std::array<int, 3> d{};
+        std::array<double, 3> spacing{}, origin{};
+        image->GetDimensions(d.data());
+        image->GetSpacing(spacing.data());
+        image->GetOrigin(origin.data());
+        validate_volume_geometry(d, spacing, origin, sizeof(T), fname, array_name);
+        if (array->GetNumberOfTuples() != image->GetNumberOfPoints() || array->GetNumberOfComponents() != 1)
+          throw InputError(fname, array_name, "one value per voxel");
+        std::vector<T> data(static_cast<std::size_t>(array->GetNumberOfTuples()));
+        const double lo = static_cast<double>(std::numeric_limits<T>::lowest()), hi = static_cast<double>(std::numeric_limits<T>::max());
+        for (vtkIdType i = 0; i < array->GetNumberOfTuples(); ++i) {
+          const double value = array->GetComponent(i, 0);
+          if (!(value >= lo && value <= hi)) throw InputError(fname, array_name, "values this volume type can hold", std::to_string(value));
+          data[static_cast<std::size_t>(i)] = static_cast<T>(value);
+        }
+        w.put(d), w.put(spacing), w.put(origin);
+        w.put_vector(data);
+      },
+      limits_for_file(fname, 20, 2));
   ByteReader r(bytes);
   Volume<T> v;
   v.dims = r.get<std::array<int, 3>>();
@@ -413,11 +413,10 @@ Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
   return v;
 }
 
-#define TACTUS_VOLUME_IO(T)                                                                     \
-  template void write_h5<T>(const fs::path&, const std::string&, const Volume<T>&,              \
-                            const LabelTable*);                                                 \
-  template Volume<T> read_h5<T>(const fs::path&, const std::string&, LabelTable*);              \
-  template void write_vti<T>(const fs::path&, const Volume<T>&, const std::string&);            \
+#define TACTUS_VOLUME_IO(T)                                                                            \
+  template void write_h5<T>(const fs::path&, const std::string&, const Volume<T>&, const LabelTable*); \
+  template Volume<T> read_h5<T>(const fs::path&, const std::string&, LabelTable*);                     \
+  template void write_vti<T>(const fs::path&, const Volume<T>&, const std::string&);                   \
   template Volume<T> read_vti<T>(const fs::path&, const std::string&);
 TACTUS_VOLUME_IO(std::uint8_t)
 TACTUS_VOLUME_IO(std::uint16_t)

@@ -14,12 +14,18 @@ namespace tactus {
 
 template <class T>
 auto make_vtk_array() {
-  if constexpr (std::is_same_v<T, std::uint8_t>) return vtkSmartPointer<vtkUnsignedCharArray>::New();
-  else if constexpr (std::is_same_v<T, std::uint16_t>) return vtkSmartPointer<vtkUnsignedShortArray>::New();
-  else if constexpr (std::is_same_v<T, std::int16_t>) return vtkSmartPointer<vtkShortArray>::New();
-  else if constexpr (std::is_same_v<T, std::int32_t>) return vtkSmartPointer<vtkIntArray>::New();
-  else if constexpr (std::is_same_v<T, float>) return vtkSmartPointer<vtkFloatArray>::New();
-  else return vtkSmartPointer<vtkDoubleArray>::New();
+  if constexpr (std::is_same_v<T, std::uint8_t>)
+    return vtkSmartPointer<vtkUnsignedCharArray>::New();
+  else if constexpr (std::is_same_v<T, std::uint16_t>)
+    return vtkSmartPointer<vtkUnsignedShortArray>::New();
+  else if constexpr (std::is_same_v<T, std::int16_t>)
+    return vtkSmartPointer<vtkShortArray>::New();
+  else if constexpr (std::is_same_v<T, std::int32_t>)
+    return vtkSmartPointer<vtkIntArray>::New();
+  else if constexpr (std::is_same_v<T, float>)
+    return vtkSmartPointer<vtkFloatArray>::New();
+  else
+    return vtkSmartPointer<vtkDoubleArray>::New();
 }
 
 }  // namespace tactus

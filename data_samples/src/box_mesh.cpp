@@ -12,8 +12,7 @@ TetMesh make_box_mesh(int nx, int ny, int nz, double lx, double ly, double lz, V
   auto id = [&](int i, int j, int k) { return i + (nx + 1) * (j + (ny + 1) * k); };
   for (int k = 0; k <= nz; ++k)
     for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i)
-        m.nodes.push_back({origin[0] + lx * i / nx, origin[1] + ly * j / ny, origin[2] + lz * k / nz});
+      for (int i = 0; i <= nx; ++i) m.nodes.push_back({origin[0] + lx * i / nx, origin[1] + ly * j / ny, origin[2] + lz * k / nz});
   static const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)

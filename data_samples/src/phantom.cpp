@@ -9,11 +9,11 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <sstream>
-#include <iomanip>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/staged_output.hpp"
@@ -55,8 +55,7 @@ struct RoundedBox {
   V3 centre, half;
   double round;
   double distance(V3 p) const {
-    const double qx = std::abs(p.x - centre.x) - half.x, qy = std::abs(p.y - centre.y) - half.y,
-                 qz = std::abs(p.z - centre.z) - half.z;
+    const double qx = std::abs(p.x - centre.x) - half.x, qy = std::abs(p.y - centre.y) - half.y, qz = std::abs(p.z - centre.z) - half.z;
     const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0), oz = std::max(qz, 0.0);
     return std::sqrt(ox * ox + oy * oy + oz * oz) + std::min(std::max({qx, qy, qz}), 0.0) - round;
   }
@@ -147,7 +146,8 @@ Phantom make_hand_phantom(const PhantomParams& p) {
     if (!(v >= 0.05 && v <= 50)) throw InputError("phantom parameters", "--voxel-mm/--slice-mm", "voxel sizes from 0.05 to 50 mm", std::to_string(v));
   if (!(p.noise_hu >= 0 && p.noise_hu <= 5000) || !(p.blur_voxels >= 0 && p.blur_voxels <= 20))
     throw InputError("phantom parameters", "--noise/--blur", "noise 0..5000 HU and blur 0..20 voxels");
-  if (!(std::abs(p.flexion_deg) <= 90)) throw InputError("phantom parameters", "--flexion", "an angle within +-90 degrees", std::to_string(p.flexion_deg));
+  if (!(std::abs(p.flexion_deg) <= 90))
+    throw InputError("phantom parameters", "--flexion", "an angle within +-90 degrees", std::to_string(p.flexion_deg));
   const Anatomy h = build_anatomy(p.flexion_deg * M_PI / 180);
 
   // Bounding box of the envelope, sampled on a coarse grid, plus the margin.

@@ -3,11 +3,11 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Image_3.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
+#include <CGAL/Mesh_3/initialize_triangulation_from_labeled_image.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
 #include <CGAL/Mesh_constant_domain_field_3.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
-#include <CGAL/Mesh_3/initialize_triangulation_from_labeled_image.h>
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 
@@ -20,10 +20,10 @@
 #include <set>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/stable_step.hpp"
-#include "tactus/core/contracts.hpp"
 #include "tactus/mesher/post_passes.hpp"
 #include "tactus/mesher/quality.hpp"
 
@@ -90,11 +90,11 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
   if (const double n = expected_tets(labels, p); n > p.max_elements) {
     std::ostringstream f;
     f << "about " << n << " tets at cell size " << p.cell_size_mm << " mm (bone " << p.bone_cell_size_mm << " mm)";
-    throw InputError("labels", "cell size", "a mesh of at most " + std::to_string(static_cast<long long>(p.max_elements)) +
-                                                " tets (coarser --cell-size / --bone-cell-size, or raise --max-elements)",
+    throw InputError("labels", "cell size",
+                     "a mesh of at most " + std::to_string(static_cast<long long>(p.max_elements)) +
+                         " tets (coarser --cell-size / --bone-cell-size, or raise --max-elements)",
                      f.str());
   }
-
 }
 
 // CGAL's labelled-image mesher on the labels (in millimetres: CGAL's criteria are absolute
@@ -102,10 +102,14 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
 class CgalImageMesher {
  public:
   CgalImageMesher(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p)
-      : labels_(labels), table_(table), p_(p), image_(make_image(labels)), seed_(reseed(p.seed)),
-        domain_(Domain::create_labeled_image_mesh_domain(image_, CGAL::parameters::relative_error_bound = 1e-6,
-                                                         CGAL::parameters::value_outside = 0)),
-        size_(p.cell_size_mm), facet_size_(p.facet_size_mm) {
+      : labels_(labels),
+        table_(table),
+        p_(p),
+        image_(make_image(labels)),
+        seed_(reseed(p.seed)),
+        domain_(Domain::create_labeled_image_mesh_domain(image_, CGAL::parameters::relative_error_bound = 1e-6, CGAL::parameters::value_outside = 0)),
+        size_(p.cell_size_mm),
+        facet_size_(p.facet_size_mm) {
     // Finer cells in bone, and finer facets on the bone surfaces: facets are chords of the
     // boundary, so a convex bone meshed with the skin's facet size loses ~13 % of its volume.
     for (const auto& [id, name] : table)
@@ -115,8 +119,7 @@ class CgalImageMesher {
       }
     criteria_ = std::make_unique<Criteria>(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = facet_size_,
                                            CGAL::parameters::facet_distance = p.facet_distance_mm,
-                                           CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge,
-                                           CGAL::parameters::cell_size = size_);
+                                           CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge, CGAL::parameters::cell_size = size_);
     for (auto v : labels.data)
       if (v) wanted_.insert(v);
   }
@@ -124,8 +127,8 @@ class CgalImageMesher {
   // Default initialisation (random surface sampling) gives the better elements; labels it missed
   // get surface points of their own, and as a last resort CGAL seeds every component of every label.
   void refine() {
-    c3t3_ = CGAL::make_mesh_3<C3t3>(domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
-                                    CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+    c3t3_ = CGAL::make_mesh_3<C3t3>(domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(), CGAL::parameters::no_perturb(),
+                                    CGAL::parameters::no_exude());
     std::set<int> missing = missing_labels();
     for (int attempt = 0; attempt < 4 && !missing_labels().empty(); ++attempt) {
       for (int l : missing_labels()) missing.insert(l);
@@ -137,8 +140,7 @@ class CgalImageMesher {
   void optimise() {
     const double limit = p_.optimiser_time_limit_s;
     CGAL::refine_mesh_3(
-        c3t3_, domain_, *criteria_,
-        p_.odt ? CGAL::parameters::odt(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_odt(),
+        c3t3_, domain_, *criteria_, p_.odt ? CGAL::parameters::odt(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_odt(),
         p_.lloyd ? CGAL::parameters::lloyd(CGAL::parameters::time_limit = limit) : CGAL::parameters::no_lloyd(),
         p_.perturb ? CGAL::parameters::perturb(CGAL::parameters::time_limit = limit, CGAL::parameters::sliver_bound = p_.exude_sliver_bound_deg)
                    : CGAL::parameters::no_perturb(),
@@ -159,9 +161,9 @@ class CgalImageMesher {
   }
 
   static CGAL::Image_3 make_image(const Volume<std::uint8_t>& labels) {
-    _image* im = _createImage(static_cast<std::size_t>(labels.dims[0]), static_cast<std::size_t>(labels.dims[1]),
-                              static_cast<std::size_t>(labels.dims[2]), 1, labels.spacing[0] * 1e3, labels.spacing[1] * 1e3,
-                              labels.spacing[2] * 1e3, 1, WK_FIXED, SGN_UNSIGNED);
+    _image* im =
+        _createImage(static_cast<std::size_t>(labels.dims[0]), static_cast<std::size_t>(labels.dims[1]), static_cast<std::size_t>(labels.dims[2]), 1,
+                     labels.spacing[0] * 1e3, labels.spacing[1] * 1e3, labels.spacing[2] * 1e3, 1, WK_FIXED, SGN_UNSIGNED);
     std::memcpy(im->data, labels.data.data(), labels.size());
     return CGAL::Image_3(im);
   }
@@ -218,7 +220,8 @@ class CgalImageMesher {
               const double d = std::pow(static_cast<double>(i) - sum[0] / static_cast<double>(n), 2) +
                                std::pow(static_cast<double>(j) - sum[1] / static_cast<double>(n), 2) +
                                std::pow(static_cast<double>(k) - sum[2] / static_cast<double>(n), 2);
-              if (d < best) best = d, c[0] = static_cast<double>(i) * sp[0], c[1] = static_cast<double>(j) * sp[1], c[2] = static_cast<double>(k) * sp[2];
+              if (d < best)
+                best = d, c[0] = static_cast<double>(i) * sp[0], c[1] = static_cast<double>(j) * sp[1], c[2] = static_cast<double>(k) * sp[2];
             }
       // Rays along the axes and the diagonals, each cut at its first voxel outside the label.
       for (int dx = -1; dx <= 1; ++dx)
@@ -235,7 +238,8 @@ class CgalImageMesher {
               ++steps;
             }
             for (int a = 0; a < 3; ++a) q[a] += 2 * step * d[a];
-            const auto hit = domain.construct_intersection_object()(Domain::Segment_3(Domain::Point_3(c[0], c[1], c[2]), Domain::Point_3(q[0], q[1], q[2])));
+            const auto hit =
+                domain.construct_intersection_object()(Domain::Segment_3(Domain::Point_3(c[0], c[1], c[2]), Domain::Point_3(q[0], q[1], q[2])));
             if (std::get<2>(hit) == 2) points.emplace_back(std::get<0>(hit), std::get<1>(hit));
             log::debug() << "mesher: label " << l << " ray from (" << c[0] << ", " << c[1] << ", " << c[2] << ") mm, " << steps
                          << " steps inside, hit dimension " << std::get<2>(hit);
@@ -246,8 +250,8 @@ class CgalImageMesher {
       const auto v = c3t3.triangulation().insert(cwp(point));
       if (v != Tr::Vertex_handle()) c3t3.set_dimension(v, 2), c3t3.set_index(v, idx);
     }
-    CGAL::refine_mesh_3(c3t3, domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
-                        CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+    CGAL::refine_mesh_3(c3t3, domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(), CGAL::parameters::no_perturb(),
+                        CGAL::parameters::no_exude());
   }
 
   void seed_everything(const std::set<int>& still) {
@@ -260,8 +264,8 @@ class CgalImageMesher {
       ::initialize_triangulation_from_labeled_image(c3t3_, domain_, image_, *criteria_, static_cast<unsigned char>(0));
       std::cout.rdbuf(saved);
     }
-    CGAL::refine_mesh_3(c3t3_, domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
-                        CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+    CGAL::refine_mesh_3(c3t3_, domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(), CGAL::parameters::no_perturb(),
+                        CGAL::parameters::no_exude());
   }
 
   const Volume<std::uint8_t>& labels_;
@@ -292,8 +296,8 @@ TetMesh CgalImageMesher::extract(std::vector<int>& triangle_inner, std::map<int,
   };
   for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
     std::array<int, 4> t = {node(c->vertex(0)), node(c->vertex(1)), node(c->vertex(2)), node(c->vertex(3))};
-    if (tet_volume(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
-                   mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]) < 0)
+    if (tet_volume(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])], mesh.nodes[static_cast<std::size_t>(t[2])],
+                   mesh.nodes[static_cast<std::size_t>(t[3])]) < 0)
       std::swap(t[2], t[3]);
     mesh.tets.push_back(t);
     const int label = static_cast<int>(c3t3.subdomain_index(c));
@@ -335,8 +339,8 @@ void check_every_label_meshed(const Volume<std::uint8_t>& labels, const LabelTab
   for (const auto& [label, n] : voxels)
     if (!per_label.count(label)) {
       auto it = table.find(label);
-      throw NumericalError("mesher: label " + std::to_string(label) + " (" + (it != table.end() ? it->second : "?") + ", " +
-                           std::to_string(n) + " voxels) received no tetrahedra; refine --bone-cell-size/--bone-facet-size");
+      throw NumericalError("mesher: label " + std::to_string(label) + " (" + (it != table.end() ? it->second : "?") + ", " + std::to_string(n) +
+                           " voxels) received no tetrahedra; refine --bone-cell-size/--bone-facet-size");
     }
 }
 
@@ -373,8 +377,7 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   }
   mesh.groups.push_back({2, contracts::kSkinTag, contracts::kSkinGroup});
   mesh.groups.push_back({2, contracts::kBoneInterfaceTag, contracts::kBoneInterfaceGroup});
-  log::verbose() << "mesher: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets, " << mesh.triangles.size()
-                 << " boundary triangles";
+  log::verbose() << "mesher: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets, " << mesh.triangles.size() << " boundary triangles";
   return mesh;
 }
 

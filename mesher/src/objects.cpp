@@ -40,8 +40,8 @@ void check_expected_tets(double volume, double h, double max_elements, const std
   if (expected > max_elements) {
     std::ostringstream f;
     f << "about " << expected << " tets for " << volume << " m^3 at element size " << h << " m";
-    throw InputError(source, "element size", "a mesh of at most " + std::to_string(static_cast<long long>(max_elements)) +
-                                                 " tets (raise --max-elements to allow more)",
+    throw InputError(source, "element size",
+                     "a mesh of at most " + std::to_string(static_cast<long long>(max_elements)) + " tets (raise --max-elements to allow more)",
                      f.str());
   }
 }
@@ -52,7 +52,8 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
   for (int a = 0; a < 3; ++a) {
     if (!(size[a] > 0) || !std::isfinite(size[a]) || size[a] > 1e3)
       throw InputError("box", "size", "edge lengths from 0 to 1000 m", std::to_string(size[a]));
-    if (!std::isfinite(origin[a]) || std::abs(origin[a]) > 1e3) throw InputError("box", "origin", "a finite corner within 1 km", std::to_string(origin[a]));
+    if (!std::isfinite(origin[a]) || std::abs(origin[a]) > 1e3)
+      throw InputError("box", "origin", "a finite corner within 1 km", std::to_string(origin[a]));
   }
   if (!(h > 0) || h > 2 * std::max({size[0], size[1], size[2]}))
     throw InputError("box", "element size", "a size > 0 m and not larger than the box", std::to_string(h));
@@ -116,9 +117,9 @@ StlSurface read_stl(const std::filesystem::path& stl) {
     std::istringstream text(b);
     std::string word;
     if (!(text >> word) || word != "solid")
-      throw InputError(file, "", "an STL file (ASCII starting with 'solid', or binary with 84 + 50 n bytes)",
-                       b.size() >= 84 ? "a binary header declaring " + std::to_string(count) + " triangles in " + std::to_string(b.size()) + " bytes"
-                                      : "neither");
+      throw InputError(
+          file, "", "an STL file (ASCII starting with 'solid', or binary with 84 + 50 n bytes)",
+          b.size() >= 84 ? "a binary header declaring " + std::to_string(count) + " triangles in " + std::to_string(b.size()) + " bytes" : "neither");
     std::size_t t = 0;
     while (text >> word) {
       if (word != "vertex") continue;

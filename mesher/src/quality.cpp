@@ -44,8 +44,7 @@ TetQuality tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
   const auto num = [&] {
     const auto vw = cross(v, w), wu = cross(w, u), uv = cross(u, v);
     const double uu = dot(u, u), vv = dot(v, v), ww = dot(w, w);
-    return std::array<double, 3>{uu * vw[0] + vv * wu[0] + ww * uv[0], uu * vw[1] + vv * wu[1] + ww * uv[1],
-                                 uu * vw[2] + vv * wu[2] + ww * uv[2]};
+    return std::array<double, 3>{uu * vw[0] + vv * wu[0] + ww * uv[0], uu * vw[1] + vv * wu[1] + ww * uv[1], uu * vw[2] + vv * wu[2] + ww * uv[2]};
   }();
   const double R = norm(num) / (12.0 * std::abs(q.volume));
   q.radius_ratio = 3.0 * r_in / R;
@@ -113,10 +112,14 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   });
   if (step.element >= 0) {
     const auto* g = mesh.find_group(3, step.group);
-    j["critical_time_step"] = {{"dt_s", step.dt}, {"element", step.element + 1}, {"group", g ? g->name : ""},
-                               {"length_m", step.length}, {"wave_speed_m_per_s", wave_speed.at(step.group)},
-                               {"note", "for the wave speeds given with --wave-speed (1000 m/s everywhere when none: the step "
-                                        "then scales as 1000 / speed)"}};
+    j["critical_time_step"] = {{"dt_s", step.dt},
+                               {"element", step.element + 1},
+                               {"group", g ? g->name : ""},
+                               {"length_m", step.length},
+                               {"wave_speed_m_per_s", wave_speed.at(step.group)},
+                               {"note",
+                                "for the wave speeds given with --wave-speed (1000 m/s everywhere when none: the step "
+                                "then scales as 1000 / speed)"}};
   }
   return j;
 }

@@ -200,24 +200,6 @@ std::array<Vec3, 3> principal_axes(vtkPoints* points) {
   return axes;
 }
 
-// The body carrying the highest contact pressure in state g (cell field "body" of the cells
-// around each pressed point), or -1 without pressure.
-int body_with_pressure(vtkUnstructuredGrid* g) {
-  vtkDataArray* p = g->GetPointData()->GetArray(cp::contact_pressure.name);
-  vtkDataArray* body = g->GetCellData()->GetArray(cc::body.name);
-  if (!p || !body) return -1;
-  double best = 0;
-  int best_body = -1;
-  for (vtkIdType c = 0; c < g->GetNumberOfCells(); ++c) {
-    vtkIdType npts;
-    const vtkIdType* ids;
-    g->GetCellPoints(c, npts, ids);
-    for (vtkIdType k = 0; k < npts; ++k)
-      if (p->GetComponent(ids[k], 0) > best) best = p->GetComponent(ids[k], 0), best_body = static_cast<int>(body->GetComponent(c, 0));
-  }
-  return best_body;
-}
-
 // The pressure-weighted outward normal of a body's surface where it is pressed: the side its
 // contact faces.
 Vec3 pressed_side(vtkPolyData* surface) {
@@ -258,6 +240,13 @@ int body_index(const Results& r, const std::string& name) {
   std::string names;
   for (const auto& b : r.bodies) names += (names.empty() ? "" : ", ") + b;
   throw InputError("command line", "--pressure-body", "a body of the run (" + names + ")", "\"" + name + "\"");
+}
+
+// The body the pressure is mapped on: --pressure-body, else the one carrying the peak pressure at
+// the outputs (the contact pairs' slave side); -1 without contact.
+int pressure_body(const Results& r, const Summary& s, const RenderOptions& opt) {
+  if (!opt.pressure_body.empty()) return body_index(r, opt.pressure_body);
+  return s.peak_pressure_outputs.body.empty() ? -1 : body_index(r, s.peak_pressure_outputs.body);
 }
 
 void plot(const History& h, const fs::path& file, const std::string& title, const std::string& ylabel,
@@ -344,11 +333,10 @@ std::string von_mises_picture(const Results& r, std::size_t k, const Views& v, v
 
 // A section through the peak pressure (or the middle), normal to the longest axis of the body
 // with the pressure (or of the model): materials and von Mises side by side.
-bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLookupTable* vm_lut, const fs::path& report,
-                     const RenderOptions& opt) {
+bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLookupTable* vm_lut, const fs::path& report, const RenderOptions& opt) {
   const std::size_t k = s.contact_occurred ? nearest_frame(r, s.peak_pressure_outputs.time) : r.frames.size() - 1;
   const auto g = load(r.frames[k].file);
-  const int pb = opt.pressure_body.empty() ? body_with_pressure(g) : body_index(r, opt.pressure_body);
+  const int pb = pressure_body(r, s, opt);
   const auto axes = principal_axes(pb >= 0 ? body_cells(g, pb)->GetPoints() : g->GetPoints());
   const Vec3 normal = opt.section_normal ? (1.0 / norm(*opt.section_normal)) * *opt.section_normal : axes[2];
   double b[6];
@@ -373,8 +361,8 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
   double sb[6];
   section->GetBounds(sb);
   std::ostringstream caption;
-  caption << std::setprecision(3) << "section through (" << ms(origin[0]) << ", " << ms(origin[1]) << ", " << ms(origin[2])
-          << ") mm, normal (" << normal[0] << ", " << normal[1] << ", " << normal[2] << "), t = " << ms(r.frames[k].time) << " ms";
+  caption << std::setprecision(3) << "section through (" << ms(origin[0]) << ", " << ms(origin[1]) << ", " << ms(origin[2]) << ") mm, normal ("
+          << normal[0] << ", " << normal[1] << ", " << normal[2] << "), t = " << ms(r.frames[k].time) << " ms";
   for (int side = 0; side < 2; ++side) {
     auto ren = white_renderer();
     ren->SetViewport(0.5 * side, 0, 0.5 * side + 0.5, 1);
@@ -400,7 +388,7 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
 void pressure_picture(const Results& r, const Summary& s, const Views& v, const fs::path& report, const RenderOptions& opt) {
   const std::size_t k = nearest_frame(r, s.peak_pressure_outputs.time);
   const auto g = load(r.frames[k].file);
-  const int pb = opt.pressure_body.empty() ? std::max(0, body_with_pressure(g)) : body_index(r, opt.pressure_body);
+  const int pb = std::max(0, pressure_body(r, s, opt));
   const auto body = surface(body_cells(g, pb));
   double hb[6];
   body->GetBounds(hb);
@@ -467,8 +455,11 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
   plot(h, report / "plot_contact_area.png", "contact area", "mm^2", {{hc::contact_area.name, 1e6}}, pw, ph);
   plot(h, report / "plot_peak_pressure.png", "peak contact pressure", "MPa", {{hc::peak_pressure.name, 1e-6}}, pw, ph);
   plot(h, report / "plot_energies.png", "energies", "J",
-       {{hc::kinetic_energy.name, 1.0}, {hc::internal_energy.name, 1.0}, {hc::contact_work_normal.name, 1.0},
-        {hc::contact_work_friction.name, 1.0}, {hc::energy_balance_error.name, 1.0}},
+       {{hc::kinetic_energy.name, 1.0},
+        {hc::internal_energy.name, 1.0},
+        {hc::contact_work_normal.name, 1.0},
+        {hc::contact_work_friction.name, 1.0},
+        {hc::energy_balance_error.name, 1.0}},
        pw, ph);
   for (const char* f : {"plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png"})
     if (fs::exists(report / f)) written.push_back(f);

@@ -56,7 +56,8 @@ History read_history_csv(const fs::path& file) {
 void validate_run_json(const nlohmann::json& j, const std::string& file) {
   // Every key the report uses, with its type: a wrong type is named, never an internal error.
   auto require = [&](const nlohmann::json& node, const std::string& path, const char* key, const char* what, auto is) {
-    if (!node.contains(key) || !is(node[key])) throw InputError(file, path + key, what, node.contains(key) ? node[key].dump().substr(0, 60) : "missing");
+    if (!node.contains(key) || !is(node[key]))
+      throw InputError(file, path + key, what, node.contains(key) ? node[key].dump().substr(0, 60) : "missing");
   };
   const auto number = [](const nlohmann::json& v) { return v.is_number(); };
   const auto count = [](const nlohmann::json& v) { return v.is_number_unsigned() || (v.is_number_integer() && v.get<long long>() >= 0); };
@@ -91,8 +92,9 @@ void validate_run_json(const nlohmann::json& j, const std::string& file) {
     }
     const auto& p = c["peak_pressure"];
     if (p.contains("position"))
-      require(p, "contact.peak_pressure.", "position", "[x, y, z]",
-              [](const nlohmann::json& v) { return v.is_array() && v.size() == 3 && std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) { return x.is_number(); }); });
+      require(p, "contact.peak_pressure.", "position", "[x, y, z]", [](const nlohmann::json& v) {
+        return v.is_array() && v.size() == 3 && std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) { return x.is_number(); });
+      });
     if (p.contains("node") && !p["node"].is_null() && !p["node"].is_number_integer())
       throw InputError(file, "contact.peak_pressure.node", "a node number or null", p["node"].dump().substr(0, 60));
   }
@@ -117,14 +119,12 @@ Results read_results(const fs::path& folder) {
       throw InputError(pvd.string(), "DataSet timestep", "a number", (*it)[1].str());
     }
     f.file = r.folder / (*it)[2].str();
-    if (!fs::exists(f.file))
-      throw InputError(pvd.string(), "DataSet file", "an existing state file", f.file.string() + " is missing");
+    if (!fs::exists(f.file)) throw InputError(pvd.string(), "DataSet file", "an existing state file", f.file.string() + " is missing");
     r.frames.push_back(f);
   }
   if (s.find("<Collection") == std::string::npos) throw InputError(pvd.string(), "", "a VTK Collection file", "other content");
   if (r.frames.empty())
-    throw InputError(pvd.string(), "DataSet", "at least one output state to report on",
-                     "none (the run wrote no state: see run.json)");
+    throw InputError(pvd.string(), "DataSet", "at least one output state to report on", "none (the run wrote no state: see run.json)");
   std::stable_sort(r.frames.begin(), r.frames.end(), [](const Frame& a, const Frame& b) { return a.time < b.time; });
   r.history = read_history_csv(folder / "history.csv");
   std::ifstream rj(folder / "run.json");

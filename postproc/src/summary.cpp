@@ -34,7 +34,25 @@ const MeshField& need_cell(const VtuContents& v, const std::string& name, const 
 }
 
 nlohmann::json peak_json(const PeakAt& p, const char* unit) {
-  return {{"value", p.value}, {"unit", unit}, {"time_s", p.time}, {"position_m", p.position}, {"index", p.index}};
+  nlohmann::json j = {{"value", p.value}, {"unit", unit}, {"time_s", p.time}, {"position_m", p.position}, {"index", p.index}};
+  if (!p.body.empty()) j["body"] = p.body;
+  return j;
+}
+
+// The body (run.json name) of the cells around a node: the body a contact pressure acts on.
+std::string body_of_node(const VtuContents& v, std::size_t node, const std::vector<std::string>& bodies, const std::string& file) {
+  const MeshField* body = v.cell_field(cc::body.name);
+  if (!body) return "";
+  for (std::size_t e = 0; e < v.mesh.tets.size(); ++e)
+    for (int k : v.mesh.tets[e])
+      if (static_cast<std::size_t>(k) == node) {
+        const auto b = static_cast<std::size_t>(body->values[e]);
+        if (body->values[e] < 0 || b >= bodies.size())
+          throw InputError(file, cc::body.name, "indices below " + std::to_string(bodies.size()) + " (run.json bodies)",
+                           std::to_string(body->values[e]));
+        return bodies[b];
+      }
+  return "";
 }
 
 }  // namespace
@@ -91,17 +109,20 @@ Summary summarize(const Results& r) {
       if (m >= M) throw InputError(file, "material", "indices below " + std::to_string(M) + " (run.json materials)", std::to_string(m));
       if (vm.values[e] > fs.von_mises_max[m]) fs.von_mises_max[m] = vm.values[e];
       if (vm.values[e] > s.von_mises[m].von_mises.value) {
-        s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1};
+        s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
       }
     }
     if (const MeshField* p = v.point_field(cp::contact_pressure.name)) {
+      const long previous_peak = s.peak_pressure_outputs.index;
       for (std::size_t i = 0; i < p->values.size(); ++i) {
         const double pi = p->values[i];
         if (pi > 0) ++fs.contact_nodes;
         if (pi > fs.contact_pressure_max) fs.contact_pressure_max = pi;
         if (pi > s.peak_pressure_outputs.value)
-          s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1};
+          s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1, ""};
       }
+      if (s.peak_pressure_outputs.index != previous_peak)
+        s.peak_pressure_outputs.body = body_of_node(v, static_cast<std::size_t>(s.peak_pressure_outputs.index - 1), r.bodies, file);
     }
     if (h.has(hc::contact_force.name) && h.rows() > 0) {  // nearest history row
       const auto& t = h.column(hc::time.name);
@@ -115,9 +136,17 @@ Summary summarize(const Results& r) {
 
 std::string summary_json(const Summary& s) {
   nlohmann::json j;
-  j["run"] = {{"status", s.status},       {"message", s.message},     {"steps", s.steps},         {"nodes", s.nodes},
-              {"tets", s.tets},           {"end_time_s", s.end_time}, {"dt_min_s", s.dt_min},     {"dt_max_s", s.dt_max},
-              {"wall_time_s", s.wall_time}, {"stress_pass_s", s.stress_seconds}, {"contact_s", s.contact_seconds}};
+  j["run"] = {{"status", s.status},
+              {"message", s.message},
+              {"steps", s.steps},
+              {"nodes", s.nodes},
+              {"tets", s.tets},
+              {"end_time_s", s.end_time},
+              {"dt_min_s", s.dt_min},
+              {"dt_max_s", s.dt_max},
+              {"wall_time_s", s.wall_time},
+              {"stress_pass_s", s.stress_seconds},
+              {"contact_s", s.contact_seconds}};
   j["energy"] = {{"initial_J", s.initial_energy},
                  {"initial_kinetic_J", s.initial_kinetic},
                  {"balance_error_J", s.balance_error},
@@ -138,8 +167,12 @@ std::string summary_json(const Summary& s) {
   for (const auto& f : s.frames) {
     nlohmann::json fv = nlohmann::json::object();
     for (std::size_t m = 0; m < f.von_mises_max.size(); ++m) fv[s.von_mises[m].material] = f.von_mises_max[m];
-    frames.push_back({{"time_s", f.time}, {"file", f.file}, {"von_mises_max_Pa", fv}, {"contact_pressure_max_Pa", f.contact_pressure_max},
-                      {"contact_nodes", f.contact_nodes}, {"contact_force_N", f.contact_force}});
+    frames.push_back({{"time_s", f.time},
+                      {"file", f.file},
+                      {"von_mises_max_Pa", fv},
+                      {"contact_pressure_max_Pa", f.contact_pressure_max},
+                      {"contact_nodes", f.contact_nodes},
+                      {"contact_force_N", f.contact_force}});
   }
   j["outputs"] = frames;
   j["pictures"] = s.pictures;
@@ -155,11 +188,12 @@ std::string summary_markdown(const Summary& s) {
   };
   o << std::setprecision(4);
   o << "# tactus report\n\n";
-  o << "Run " << s.status << (s.message.empty() ? "" : ": " + s.message) << ". " << s.steps << " steps to t = " << s.end_time * 1e3
-    << " ms, dt " << s.dt_min << " .. " << s.dt_max << " s, " << s.nodes << " nodes, " << s.tets << " tets; wall time "
-    << s.wall_time << " s (stress passes " << s.stress_seconds << " s, contact " << s.contact_seconds << " s).\n\n";
+  o << "Run " << s.status << (s.message.empty() ? "" : ": " + s.message) << ". " << s.steps << " steps to t = " << s.end_time * 1e3 << " ms, dt "
+    << s.dt_min << " .. " << s.dt_max << " s, " << s.nodes << " nodes, " << s.tets << " tets; wall time " << s.wall_time << " s (stress passes "
+    << s.stress_seconds << " s, contact " << s.contact_seconds << " s).\n\n";
   o << "Energy balance error " << s.balance_error << " J";
-  if (s.initial_kinetic > 0) o << " (" << 100 * std::abs(s.balance_error) / s.initial_kinetic << " % of the initial kinetic energy " << s.initial_kinetic << " J)";
+  if (s.initial_kinetic > 0)
+    o << " (" << 100 * std::abs(s.balance_error) / s.initial_kinetic << " % of the initial kinetic energy " << s.initial_kinetic << " J)";
   o << "; contact work: normal " << s.contact_work_normal << " J, frictional dissipation " << s.contact_work_friction << " J.\n\n";
   o << "## Peak von Mises stress (over the output states)\n\n| material | peak (MPa) | time (ms) | where (element centroid) |\n|---|---|---|---|\n";
   for (const auto& m : s.von_mises)
@@ -170,8 +204,9 @@ std::string summary_markdown(const Summary& s) {
     o << "No contact occurred during the run: no pressure map, zero contact force.\n";
   } else {
     o << "| quantity | value | time (ms) | where |\n|---|---|---|---|\n";
-    o << "| peak pressure, output states | " << s.peak_pressure_outputs.value / 1e6 << " MPa | " << s.peak_pressure_outputs.time * 1e3
-      << " | node " << s.peak_pressure_outputs.index << ", " << mm(s.peak_pressure_outputs.position) << " |\n";
+    o << "| peak pressure, output states | " << s.peak_pressure_outputs.value / 1e6 << " MPa | " << s.peak_pressure_outputs.time * 1e3 << " | node "
+      << s.peak_pressure_outputs.index << (s.peak_pressure_outputs.body.empty() ? "" : " on " + s.peak_pressure_outputs.body) << ", "
+      << mm(s.peak_pressure_outputs.position) << " |\n";
     o << "| peak pressure, any step | " << s.peak_pressure_steps.value / 1e6 << " MPa | " << s.peak_pressure_steps.time * 1e3 << " | node "
       << s.peak_pressure_steps.index << ", " << mm(s.peak_pressure_steps.position) << " |\n";
     o << "| largest contact area | " << s.largest_area.value * 1e6 << " mm^2 | " << s.largest_area.time * 1e3 << " | |\n";

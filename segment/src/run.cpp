@@ -37,9 +37,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   j["dims"] = stack.hu.dims;
   j["spacing_m"] = stack.hu.spacing;
   j["bit_depth"] = stack.bit_depth;
-  j["thresholds"] = {{"body_hu", s.body_threshold_hu}, {"body_source", s.body_threshold_source}, {"bone_hu", s.bone_threshold_hu},
-                     {"bone_source", s.bone_threshold_source},
-                     {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
+  j["thresholds"] = {{"body_hu", s.body_threshold_hu},         {"body_source", s.body_threshold_source},   {"bone_hu", s.bone_threshold_hu},
+                     {"bone_source", s.bone_threshold_source}, {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
   j["steps"] = {"3-D Gaussian denoise sigma " + std::to_string(o.segment.denoise_sigma_voxels) + " voxel",
                 "body = largest 3-D component above the body threshold, holes filled",
                 "bone = body voxels above the bone threshold, marrow holes filled (3-D and per slice)",
@@ -50,8 +49,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   j["specks_removed"] = s.specks_removed;
   j["bones"] = nlohmann::json::array();
   for (const auto& b : s.bones)
-    j["bones"].push_back({{"label", b.label}, {"name", s.table.at(b.label)}, {"voxels", b.voxels}, {"volume_m3", b.volume_m3},
-                          {"centroid_m", b.centroid_m}});
+    j["bones"].push_back(
+        {{"label", b.label}, {"name", s.table.at(b.label)}, {"voxels", b.voxels}, {"volume_m3", b.volume_m3}, {"centroid_m", b.centroid_m}});
   double t_surfaces = 0;
   if (o.write_surfaces) {
     const auto t2 = Clock::now();
@@ -59,16 +58,24 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
     t_surfaces = seconds(t2);
     j["surfaces"] = nlohmann::json::array();
     for (const auto& r : surfaces)
-      j["surfaces"].push_back({{"name", r.name}, {"stl", r.stl.filename().string()}, {"ply", r.ply.filename().string()},
-                               {"vertices", r.vertices}, {"triangles", r.triangles}, {"volume_m3", r.surface_volume_m3},
-                               {"label_volume_m3", r.label_volume_m3}, {"area_m2", r.area_m2}, {"min_angle_deg", r.min_angle_deg},
-                               {"closed", r.closed}, {"manifold", r.manifold}, {"self_intersecting", r.self_intersecting}});
+      j["surfaces"].push_back({{"name", r.name},
+                               {"stl", r.stl.filename().string()},
+                               {"ply", r.ply.filename().string()},
+                               {"vertices", r.vertices},
+                               {"triangles", r.triangles},
+                               {"volume_m3", r.surface_volume_m3},
+                               {"label_volume_m3", r.label_volume_m3},
+                               {"area_m2", r.area_m2},
+                               {"min_angle_deg", r.min_angle_deg},
+                               {"closed", r.closed},
+                               {"manifold", r.manifold},
+                               {"self_intersecting", r.self_intersecting}});
   }
   j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
   std::ofstream(out / "segment.json") << j.dump(2) << '\n';
   staged.commit();
-  log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU ("
-              << s.body_threshold_source << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
+  log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU (" << s.body_threshold_source
+              << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
               << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << out.string();
   return j;
 }

@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <iomanip>
+#include <numeric>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/volume_filters.hpp"
@@ -52,9 +53,8 @@ Volume<std::uint8_t> erode(const Volume<std::uint8_t>& m, int n) {
       for (int y = 0; y < d[1]; ++y)
         for (int x = 0; x < d[0]; ++x) {
           if (!cur.at(x, y, z)) continue;
-          const bool keep = x > 0 && y > 0 && z > 0 && x < d[0] - 1 && y < d[1] - 1 && z < d[2] - 1 && cur.at(x - 1, y, z) &&
-                            cur.at(x + 1, y, z) && cur.at(x, y - 1, z) && cur.at(x, y + 1, z) && cur.at(x, y, z - 1) &&
-                            cur.at(x, y, z + 1);
+          const bool keep = x > 0 && y > 0 && z > 0 && x < d[0] - 1 && y < d[1] - 1 && z < d[2] - 1 && cur.at(x - 1, y, z) && cur.at(x + 1, y, z) &&
+                            cur.at(x, y - 1, z) && cur.at(x, y + 1, z) && cur.at(x, y, z - 1) && cur.at(x, y, z + 1);
           if (!keep) next.at(x, y, z) = 0;
         }
     cur = std::move(next);
@@ -92,12 +92,10 @@ void fill_slice_holes(Volume<std::uint8_t>& m) {
 
 }  // namespace
 
-Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
-  Segmentation s;
-  Volume<float> hu = hu_in;
-  gaussian_blur(hu, p.denoise_sigma_voxels);
+namespace {
 
-  // Body: threshold, largest component, holes filled.
+// Body: threshold (given or Otsu), the largest 3-D component, holes filled.
+Volume<std::uint8_t> find_body(const Volume<float>& hu, const SegmentParams& p, Segmentation& s) {
   s.body_threshold_source = p.body_threshold_hu ? "given" : "otsu";
   s.body_threshold_hu = p.body_threshold_hu ? *p.body_threshold_hu : otsu_threshold(hu.data, nullptr, -1100, 600);
   Volume<std::uint8_t> body = mask_like(hu);
@@ -115,13 +113,17 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
     for (std::size_t i = 0; i < body.size(); ++i) body.data[i] = comp[i] == largest;
   }
   fill_holes(body);
+  return body;
+}
 
+// The bone mask inside the body, its marrow filled; `no_contrast` when the body has none.
+Volume<std::uint8_t> find_bone(Volume<float>& hu, const Volume<std::uint8_t>& body, const SegmentParams& p, Segmentation& s, bool& no_contrast) {
   // Bone threshold: halfway between the soft-tissue level (the body's median: soft tissue is most
   // of a hand's volume) and the cortical level (the body's 99th percentile), which puts the bone
   // surface where the blurred edge crosses its midpoint. An Otsu threshold over the body (~400 HU
   // here) sits low on that edge and inflates every bone by ~0.7 sigma of the blur (bone Dice 0.90
   // instead of 0.98 on the phantom). The trabecular marrow below the midpoint is filled as holes.
-  std::vector<std::uint8_t>& in_body = body.data;
+  const std::vector<std::uint8_t>& in_body = body.data;
   std::vector<float> body_hu;
   body_hu.reserve(hu.size() / 4);
   for (std::size_t i = 0; i < hu.size(); ++i)
@@ -135,7 +137,7 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
   s.cortical_hu = percentile(0.99);
   s.bone_threshold_source = p.bone_threshold_hu ? "given" : "midpoint of soft tissue and cortical levels";
   s.bone_threshold_hu = p.bone_threshold_hu ? *p.bone_threshold_hu : 0.5 * (s.soft_tissue_hu + s.cortical_hu);
-  const bool no_contrast = !p.bone_threshold_hu && s.cortical_hu - s.soft_tissue_hu < 200.0;
+  no_contrast = !p.bone_threshold_hu && s.cortical_hu - s.soft_tissue_hu < 200.0;
   Volume<std::uint8_t> bone = mask_like(hu);
   if (!no_contrast)
     for (std::size_t i = 0; i < hu.size(); ++i) bone.data[i] = in_body[i] && hu.data[i] > s.bone_threshold_hu;
@@ -156,8 +158,8 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
           const std::size_t i = hu.index(x, y, z);
           const bool band = bone.data[i] && !inner.data[i];
           const bool outside_ring = !bone.data[i] && in_body[i] &&
-                                    (bone.at(x - 1, y, z) || bone.at(x + 1, y, z) || bone.at(x, y - 1, z) ||
-                                     bone.at(x, y + 1, z) || bone.at(x, y, z - 1) || bone.at(x, y, z + 1));
+                                    (bone.at(x - 1, y, z) || bone.at(x + 1, y, z) || bone.at(x, y - 1, z) || bone.at(x, y + 1, z) ||
+                                     bone.at(x, y, z - 1) || bone.at(x, y, z + 1));
           if (!band && !outside_ring) continue;
           const double gx = hu.at(x + 1, y, z) - hu.at(x - 1, y, z), gy = hu.at(x, y + 1, z) - hu.at(x, y - 1, z),
                        gz = hu.at(x, y, z + 1) - hu.at(x, y, z - 1);
@@ -175,16 +177,21 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
     }
   }
 
-  // Split at joints: components of the eroded mask, specks dropped, labels grown back.
-  const double voxel_mm3 = hu.voxel_volume() * 1e9;
-  const std::size_t min_voxels = static_cast<std::size_t>(std::ceil(p.min_bone_volume_mm3 / voxel_mm3));
+  return bone;
+}
+
+// Split at joints: components of the eroded mask, cores too small dropped, labels grown back
+// into the mask (each voxel joins the nearest core). Returns the core id of every voxel (0: none)
+// and the number of cores kept.
+std::vector<std::int32_t> split_bones(const Volume<float>& hu, const Volume<std::uint8_t>& bone, const SegmentParams& p, std::size_t min_voxels,
+                                      std::int32_t& kept) {
   const Volume<std::uint8_t> core = erode(bone, p.split_erosion_voxels);
   std::vector<std::size_t> sizes;
   std::vector<std::int32_t> comp = connected_components(core, sizes);
   // Keep cores whose size suggests a bone (the eroded core of the smallest bone is well above
   // min_voxels / 4); relabel kept cores 1..n.
   std::vector<std::int32_t> keep(sizes.size(), 0);
-  std::int32_t kept = 0;
+  kept = 0;
   for (std::size_t c = 1; c < sizes.size(); ++c)
     if (sizes[c] >= std::max<std::size_t>(1, min_voxels / 4)) keep[c] = ++kept;
   for (auto& c : comp) c = keep[static_cast<std::size_t>(c)];
@@ -197,14 +204,22 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
     next.clear();
     for (std::size_t v : frontier) {
       const std::size_t x = v % nx, y = (v / nx) % static_cast<std::size_t>(hu.dims[1]), z = v / nxy;
-      const std::size_t nb[6] = {x > 0 ? v - 1 : v, x + 1 < nx ? v + 1 : v, y > 0 ? v - nx : v,
-                                 y + 1 < static_cast<std::size_t>(hu.dims[1]) ? v + nx : v, z > 0 ? v - nxy : v,
-                                 z + 1 < static_cast<std::size_t>(hu.dims[2]) ? v + nxy : v};
+      const std::size_t nb[6] = {x > 0 ? v - 1 : v,   x + 1 < nx ? v + 1 : v,
+                                 y > 0 ? v - nx : v,  y + 1 < static_cast<std::size_t>(hu.dims[1]) ? v + nx : v,
+                                 z > 0 ? v - nxy : v, z + 1 < static_cast<std::size_t>(hu.dims[2]) ? v + nxy : v};
       for (std::size_t w : nb)
         if (bone.data[w] && !comp[w]) comp[w] = comp[v], next.push_back(w);
     }
     frontier.swap(next);
   }
+  return comp;
+}
+
+// Per-bone statistics, specks back to soft tissue, deterministic ids, and the label volume.
+void label_bones(const Volume<float>& hu, const Volume<std::uint8_t>& body, const std::vector<std::int32_t>& comp, std::int32_t kept,
+                 std::size_t min_voxels, bool no_contrast, const SegmentParams& p, Segmentation& s) {
+  const std::vector<std::uint8_t>& in_body = body.data;
+  const std::size_t nx = static_cast<std::size_t>(hu.dims[0]), nxy = nx * static_cast<std::size_t>(hu.dims[1]);
   // Per-bone statistics; bones below the minimum volume are specks (back to soft tissue).
   std::vector<BoneInfo> info(static_cast<std::size_t>(kept) + 1);
   for (std::size_t i = 0; i < comp.size(); ++i) {
@@ -228,10 +243,9 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
   }
   if (order.empty()) {
     std::ostringstream o;
-    o << "bone inside the body: tried body threshold " << s.body_threshold_hu << " HU (" << s.body_threshold_source
-      << ") and bone threshold " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "; soft tissue at "
-      << s.soft_tissue_hu << " HU, brightest 1 % of the body at " << s.cortical_hu << " HU"
-      << (no_contrast ? ", less than 200 HU of contrast" : "") << "), minimum bone volume " << p.min_bone_volume_mm3
+    o << "bone inside the body: tried body threshold " << s.body_threshold_hu << " HU (" << s.body_threshold_source << ") and bone threshold "
+      << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "; soft tissue at " << s.soft_tissue_hu << " HU, brightest 1 % of the body at "
+      << s.cortical_hu << " HU" << (no_contrast ? ", less than 200 HU of contrast" : "") << "), minimum bone volume " << p.min_bone_volume_mm3
       << " mm^3; set --bone-threshold (cortical bone is ~700-2000 HU) or --body-threshold";
     throw InputError("slice stack", "bones", o.str(), "no bone");
   }
@@ -242,11 +256,11 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
     const auto& B = info[static_cast<std::size_t>(b)].centroid_m;
     return A[2] != B[2] ? A[2] < B[2] : A[0] < B[0];
   });
-  std::vector<std::uint8_t> new_id(info.size(), 1);  // specks become soft tissue
-  s.table[0] = "background";
-  s.table[1] = "soft_tissue";
+  std::vector<std::uint8_t> new_id(info.size(), static_cast<std::uint8_t>(contracts::kSoftTissueLabel));  // specks become soft tissue
+  s.table[contracts::kBackgroundLabel] = "background";
+  s.table[contracts::kSoftTissueLabel] = contracts::kSoftTissueName;
   for (std::size_t k = 0; k < order.size(); ++k) {
-    const int label = static_cast<int>(k) + 2;
+    const int label = static_cast<int>(k) + contracts::kFirstBoneLabel;
     new_id[static_cast<std::size_t>(order[k])] = static_cast<std::uint8_t>(label);
     BoneInfo b = info[static_cast<std::size_t>(order[k])];
     b.label = label;
@@ -258,12 +272,28 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
   s.labels = mask_like(hu);
   for (std::size_t i = 0; i < comp.size(); ++i) {
     if (!in_body[i]) continue;
-    s.labels.data[i] = comp[i] ? new_id[static_cast<std::size_t>(comp[i])] : 1;
+    s.labels.data[i] = comp[i] ? new_id[static_cast<std::size_t>(comp[i])] : static_cast<std::uint8_t>(contracts::kSoftTissueLabel);
     ++s.body_voxels;
-    if (s.labels.data[i] > 1) ++s.bone_voxels;
+    if (s.labels.data[i] >= contracts::kFirstBoneLabel) ++s.bone_voxels;
   }
-  log::verbose() << "segment: body threshold " << s.body_threshold_hu << " HU, bone threshold " << s.bone_threshold_hu
-                 << " HU, " << s.bones.size() << " bones, " << s.specks_removed << " specks removed";
+}
+
+}  // namespace
+
+Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
+  Segmentation s;
+  Volume<float> hu = hu_in;
+  gaussian_blur(hu, p.denoise_sigma_voxels);
+  const Volume<std::uint8_t> body = find_body(hu, p, s);
+  bool no_contrast = false;
+  const Volume<std::uint8_t> bone = find_bone(hu, body, p, s, no_contrast);
+  const double voxel_mm3 = hu.voxel_volume() * 1e9;
+  const std::size_t min_voxels = static_cast<std::size_t>(std::ceil(p.min_bone_volume_mm3 / voxel_mm3));
+  std::int32_t kept = 0;
+  const std::vector<std::int32_t> comp = split_bones(hu, bone, p, min_voxels, kept);
+  label_bones(hu, body, comp, kept, min_voxels, no_contrast, p, s);
+  log::verbose() << "segment: body threshold " << s.body_threshold_hu << " HU, bone threshold " << s.bone_threshold_hu << " HU, " << s.bones.size()
+                 << " bones, " << s.specks_removed << " specks removed";
   return s;
 }
 

@@ -4,8 +4,8 @@
 #include <unistd.h>
 
 #include <charconv>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -71,9 +71,7 @@ std::uint32_t crc32(const unsigned char* p, std::size_t n, std::uint32_t crc = 0
   return ~crc;
 }
 
-std::uint32_t be32(const unsigned char* p) {
-  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
-}
+std::uint32_t be32(const unsigned char* p) { return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3]; }
 
 // The PNG container is checked before a decoder sees it: signature, every chunk's length and
 // CRC, a grey 8- or 16-bit IHDR of sane size, image data, and the end chunk.
@@ -170,11 +168,11 @@ SliceStack read_slice_stack(const fs::path& folder) {
   const auto origin = json_vec3(meta, "origin_mm", mf, false, -1e6, 1e6, "[x, y, z] in mm, finite (within 1 km)");
   // The rescale is required: without the intercept, stored values are not Hounsfield units and
   // the thresholds find the wrong tissue (seen: 1 bone found instead of 5).
-  const double slope = json_number(meta, "rescale_slope", mf, std::nullopt, -1e6, 1e6,
-                                   "a non-zero number: HU = rescale_slope * stored + rescale_intercept");
+  const double slope =
+      json_number(meta, "rescale_slope", mf, std::nullopt, -1e6, 1e6, "a non-zero number: HU = rescale_slope * stored + rescale_intercept");
   if (slope == 0) throw InputError(mf, "rescale_slope", "a non-zero number", "0");
-  const double intercept = json_number(meta, "rescale_intercept", mf, std::nullopt, -1e6, 1e6,
-                                       "a number: HU = rescale_slope * stored + rescale_intercept (e.g. -1024)");
+  const double intercept =
+      json_number(meta, "rescale_intercept", mf, std::nullopt, -1e6, 1e6, "a number: HU = rescale_slope * stored + rescale_intercept (e.g. -1024)");
   // The slice count catches a missing first or last slice, which the numbering cannot.
   const double declared = json_number(meta, "slices", mf, std::nullopt, 1, kMaxVolumeDim, "the number of slice files (an integer >= 1)");
   if (declared != std::floor(declared)) throw InputError(mf, "slices", "an integer", meta["slices"].dump());
@@ -194,53 +192,59 @@ SliceStack read_slice_stack(const fs::path& folder) {
                          std::to_string(slices.rbegin()->first) + "; a first or last slice missing?)");
   for (const auto& [k, path] : slices) {
     const std::string ext = path.extension().string();
-    if (ext == ".png" || ext == ".PNG") validate_png(path);
-    else validate_tiff(path);
+    if (ext == ".png" || ext == ".PNG")
+      validate_png(path);
+    else
+      validate_tiff(path);
   }
 
   // The image decoders (libpng, libtiff through OpenCV) run in an isolated child process; the
   // stored pixels come back and become HU here.
   const int nz = static_cast<int>(slices.size());
-  const std::string bytes = run_isolated(dir, "slice image", [&](ByteWriter& w) {
-    int nx = 0, ny = 0, depth = 0;
-    std::vector<std::uint16_t> stored;
-    Progress progress("read slices", slices.size());
-    int k = 0;
-    for (const auto& [num, path] : slices) {
-      const cv::Mat img = quietly([&] { return cv::imread(path.string(), cv::IMREAD_UNCHANGED); });
-      if (img.empty()) throw InputError(path.string(), "", "a readable 8- or 16-bit PNG/TIFF image", "unreadable");
-      if (img.channels() != 1) throw InputError(path.string(), "", "a single-channel (grey) image", std::to_string(img.channels()) + " channels");
-      if (img.depth() != CV_8U && img.depth() != CV_16U) throw InputError(path.string(), "", "8- or 16-bit unsigned pixels", "another pixel type");
-      const int d = img.depth() == CV_8U ? 8 : 16;
-      if (k == 0) {
-        nx = img.cols, ny = img.rows, depth = d;
-        validate_volume_geometry({nx, ny, nz}, {spacing[0] * 1e-3, spacing[1] * 1e-3, spacing[2] * 1e-3},
-                                 {origin[0] * 1e-3, origin[1] * 1e-3, origin[2] * 1e-3}, sizeof(float) + sizeof(std::uint16_t), dir,
-                                 "slice stack");
-        stored.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz));
-      } else if (img.cols != nx || img.rows != ny) {
-        throw InputError(path.string(), "", std::to_string(nx) + " x " + std::to_string(ny) + " pixels like the first slice",
-                         std::to_string(img.cols) + " x " + std::to_string(img.rows));
-      } else if (d != depth) {
-        throw InputError(path.string(), "", std::to_string(depth) + "-bit pixels like the first slice", std::to_string(d) + "-bit");
-      }
-      std::uint16_t* out = stored.data() + static_cast<std::size_t>(k) * static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) out[j * nx + i] = d == 8 ? img.at<std::uint8_t>(j, i) : img.at<std::uint16_t>(j, i);
-      progress.update(static_cast<std::size_t>(++k));
-    }
-    progress.finish();
-    w.put(nx), w.put(ny), w.put(depth);
-    w.put_vector(stored);
-  }, IsolationLimits{30.0 + 0.5 * static_cast<double>(slices.size()), 0});
+  const std::string bytes = run_isolated(
+      dir, "slice image",
+      [&](ByteWriter& w) {
+        int nx = 0, ny = 0, depth = 0;
+        std::vector<std::uint16_t> stored;
+        Progress progress("read slices", slices.size());
+        int k = 0;
+        for (const auto& [num, path] : slices) {
+          const cv::Mat img = quietly([&] { return cv::imread(path.string(), cv::IMREAD_UNCHANGED); });
+          if (img.empty()) throw InputError(path.string(), "", "a readable 8- or 16-bit PNG/TIFF image", "unreadable");
+          if (img.channels() != 1) throw InputError(path.string(), "", "a single-channel (grey) image", std::to_string(img.channels()) + " channels");
+          if (img.depth() != CV_8U && img.depth() != CV_16U)
+            throw InputError(path.string(), "", "8- or 16-bit unsigned pixels", "another pixel type");
+          const int d = img.depth() == CV_8U ? 8 : 16;
+          if (k == 0) {
+            nx = img.cols, ny = img.rows, depth = d;
+            validate_volume_geometry({nx, ny, nz}, {spacing[0] * 1e-3, spacing[1] * 1e-3, spacing[2] * 1e-3},
+                                     {origin[0] * 1e-3, origin[1] * 1e-3, origin[2] * 1e-3}, sizeof(float) + sizeof(std::uint16_t), dir,
+                                     "slice stack");
+            stored.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz));
+          } else if (img.cols != nx || img.rows != ny) {
+            throw InputError(path.string(), "", std::to_string(nx) + " x " + std::to_string(ny) + " pixels like the first slice",
+                             std::to_string(img.cols) + " x " + std::to_string(img.rows));
+          } else if (d != depth) {
+            throw InputError(path.string(), "", std::to_string(depth) + "-bit pixels like the first slice", std::to_string(d) + "-bit");
+          }
+          std::uint16_t* out = stored.data() + static_cast<std::size_t>(k) * static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+          for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) out[j * nx + i] = d == 8 ? img.at<std::uint8_t>(j, i) : img.at<std::uint16_t>(j, i);
+          progress.update(static_cast<std::size_t>(++k));
+        }
+        progress.finish();
+        w.put(nx), w.put(ny), w.put(depth);
+        w.put_vector(stored);
+      },
+      IsolationLimits{30.0 + 0.5 * static_cast<double>(slices.size()), 0});
   ByteReader r(bytes);
   SliceStack out;
   const int nx = r.get<int>(), ny = r.get<int>();
   out.bit_depth = r.get<int>();
   out.files = slices.size();
   const std::vector<std::uint16_t> stored = r.get_vector<std::uint16_t>();
-  out.hu = Volume<float>({nx, ny, nz}, {spacing[0] * 1e-3, spacing[1] * 1e-3, spacing[2] * 1e-3},
-                         {origin[0] * 1e-3, origin[1] * 1e-3, origin[2] * 1e-3});
+  out.hu =
+      Volume<float>({nx, ny, nz}, {spacing[0] * 1e-3, spacing[1] * 1e-3, spacing[2] * 1e-3}, {origin[0] * 1e-3, origin[1] * 1e-3, origin[2] * 1e-3});
   if (stored.size() != out.hu.size()) throw InputError(dir, "", "slices of one size", "a malformed read");
   for (std::size_t i = 0; i < stored.size(); ++i) out.hu.data[i] = static_cast<float>(slope * stored[i] + intercept);
   return out;

@@ -13,8 +13,8 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 #include <vtkCellArray.h>
-#include <vtkFlyingEdges3D.h>
 #include <vtkFloatArray.h>
+#include <vtkFlyingEdges3D.h>
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -119,8 +119,8 @@ double min_angle_deg(const Mesh& m) {
   return best;
 }
 
-SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char>& select, const std::string& name,
-                           const fs::path& folder, const SurfaceParams& p) {
+SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char>& select, const std::string& name, const fs::path& folder,
+                           const SurfaceParams& p) {
   SurfaceReport r;
   r.name = name;
   std::size_t count = 0;
@@ -167,8 +167,8 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
   r.min_angle_deg = min_angle_deg(mesh);
   if (!r.closed || !r.manifold || r.self_intersecting) {
     std::ostringstream o;
-    o << "surface '" << name << "' failed its checks (closed " << r.closed << ", 2-manifold " << r.manifold
-      << ", self-intersecting " << r.self_intersecting << "); not written";
+    o << "surface '" << name << "' failed its checks (closed " << r.closed << ", 2-manifold " << r.manifold << ", self-intersecting "
+      << r.self_intersecting << "); not written";
     throw NumericalError(o.str());
   }
   r.stl = folder / (name + ".stl");

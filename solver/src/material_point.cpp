@@ -44,8 +44,7 @@ Mat3 relax_lateral(const Material& mat, Mat3 F, const std::vector<int>& free, do
 
 }  // namespace
 
-std::string material_point_csv(const Scenario& sc, const std::string& name, const std::string& mode, double max_value,
-                              int samples) {
+std::string material_point_csv(const Scenario& sc, const std::string& name, const std::string& mode, double max_value, int samples) {
   auto it = sc.materials.find(name);
   if (it == sc.materials.end()) {
     std::string known;
@@ -79,8 +78,8 @@ std::string material_point_csv(const Scenario& sc, const std::string& name, cons
       F = relax_lateral(mat, F, {2}, scale);
     }
     const Mat3 s = cauchy_of(mat, F);
-    o << value << ',' << F(0, 0) << ',' << F(1, 1) << ',' << F(2, 2) << ',' << s(0, 0) << ',' << s(1, 1) << ',' << s(2, 2)
-      << ',' << s(0, 1) << ',' << s(1, 2) << ',' << s(0, 2) << '\n';
+    o << value << ',' << F(0, 0) << ',' << F(1, 1) << ',' << F(2, 2) << ',' << s(0, 0) << ',' << s(1, 1) << ',' << s(2, 2) << ',' << s(0, 1) << ','
+      << s(1, 2) << ',' << s(0, 2) << '\n';
   }
   return o.str();
 }

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <optional>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
@@ -99,8 +99,7 @@ void lump_mass(Model& m) {
       for (int a = 0; a < 4; ++a) m.mass[static_cast<std::size_t>(m.conn[4 * e + a])] += rho * m.volume[e] / 4.0;
   }
   for (std::size_t i = 0; i < m.num_nodes; ++i)
-    if (!(m.mass[i] > 0))
-      throw InputError("mesh", "node " + std::to_string(i + 1), "a node attached to at least one tet", "an isolated node");
+    if (!(m.mass[i] > 0)) throw InputError("mesh", "node " + std::to_string(i + 1), "a node attached to at least one tet", "an isolated node");
 }
 
 void reorder_for_locality(Model& m) {
@@ -119,8 +118,7 @@ void reorder_for_locality(Model& m) {
   std::vector<std::size_t> eorder(m.num_elements);
   std::iota(eorder.begin(), eorder.end(), 0);
   std::vector<std::int32_t> first(m.num_elements);
-  for (std::size_t e = 0; e < m.num_elements; ++e)
-    first[e] = *std::min_element(&m.conn[4 * e], &m.conn[4 * e] + 4);
+  for (std::size_t e = 0; e < m.num_elements; ++e) first[e] = *std::min_element(&m.conn[4 * e], &m.conn[4 * e] + 4);
   for (const auto& b : m.blocks)
     std::stable_sort(eorder.begin() + static_cast<std::ptrdiff_t>(b.begin), eorder.begin() + static_cast<std::ptrdiff_t>(b.end),
                      [&](std::size_t a, std::size_t c) { return first[a] < first[c]; });
@@ -161,9 +159,8 @@ std::size_t Model::memory_bytes() const {
   std::size_t block_data = 0;
   for (const auto& b : blocks) block_data += bytes(b.element_data);
   return bytes(X) + bytes(mass) + bytes(initial_velocity) + bytes(conn) + bytes(grad) + bytes(volume) + bytes(constrained) + block_data +
-         bytes(constraint_velocity) + bytes(node_of_input) + bytes(element_of_input) + bytes(input_element) +
-         bytes(input_mesh.nodes) + bytes(input_mesh.tets) + bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) +
-         bytes(input_mesh.triangle_group) + bytes(tet_body);
+         bytes(constraint_velocity) + bytes(node_of_input) + bytes(element_of_input) + bytes(input_element) + bytes(input_mesh.nodes) +
+         bytes(input_mesh.tets) + bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) + bytes(input_mesh.triangle_group) + bytes(tet_body);
 }
 
 const MaterialBlock& Model::block_of(std::size_t e) const {
@@ -214,8 +211,7 @@ std::size_t Model::body_of_node(std::size_t input_node) const {
   return 0;
 }
 
-Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name,
-                  const Vec3& initial_velocity, bool reorder) {
+Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name, const Vec3& initial_velocity, bool reorder) {
   Model m;
   m.input_mesh = mesh;
   m.bodies.push_back({"body", 0, mesh.nodes.size(), 0, mesh.tets.size(), 0, mesh.triangles.size(), 0, mesh.groups.size()});
@@ -249,8 +245,7 @@ Model build_model(const TetMesh& mesh, const Material& material, const std::stri
 }  // namespace tactus::solver
 
 namespace tactus::solver {
-std::size_t constrain_nodes(Model& m, const std::function<bool(const double*)>& select, std::array<bool, 3> components,
-                            const Vec3& velocity) {
+std::size_t constrain_nodes(Model& m, const std::function<bool(const double*)>& select, std::array<bool, 3> components, const Vec3& velocity) {
   std::size_t count = 0;
   for (std::size_t i = 0; i < m.num_nodes; ++i) {
     if (!select(&m.X[3 * i])) continue;

@@ -41,8 +41,8 @@ void check_no_duplicate_nodes(const TetMesh& mesh, const std::string& file) {
       const Vec3 &a = mesh.nodes[order[k]], &b = mesh.nodes[order[l]];
       if (std::abs(a[1] - b[1]) > tol || std::abs(a[2] - b[2]) > tol) continue;
       std::ostringstream f;
-      f << "nodes " << std::min(order[k], order[l]) + 1 << " and " << std::max(order[k], order[l]) + 1 << " at (" << a[0] << ", " << a[1]
-        << ", " << a[2] << ") both belong to tets: a crack";
+      f << "nodes " << std::min(order[k], order[l]) + 1 << " and " << std::max(order[k], order[l]) + 1 << " at (" << a[0] << ", " << a[1] << ", "
+        << a[2] << ") both belong to tets: a crack";
       throw InputError(file, "$Nodes", "a conforming mesh, each point one node (merge the duplicates, e.g. gmsh's Coherence)", f.str());
     }
 }
@@ -55,8 +55,7 @@ std::vector<std::vector<double>> read_element_fields(const std::filesystem::path
   const VtuContents vtu = read_vtu(file);
   if (vtu.mesh.nodes.size() != mesh.nodes.size() || vtu.mesh.tets.size() != mesh.tets.size())
     throw InputError(file.string(), key,
-                     "a .vtu of the body's mesh (" + std::to_string(mesh.nodes.size()) + " nodes, " + std::to_string(mesh.tets.size()) +
-                         " tets)",
+                     "a .vtu of the body's mesh (" + std::to_string(mesh.nodes.size()) + " nodes, " + std::to_string(mesh.tets.size()) + " tets)",
                      std::to_string(vtu.mesh.nodes.size()) + " nodes, " + std::to_string(vtu.mesh.tets.size()) + " tets");
   std::vector<const MeshField*> found;
   for (const auto& [name, components] : fields) {
@@ -111,8 +110,8 @@ void place_body(const Scenario& sc, std::size_t bi, const Model& m, TetMesh& mes
   for (const auto& x : mesh.nodes) lo = std::min(lo, x[a]), hi = std::max(hi, x[a]);
   const double shift = body.against_side > 0 ? other_hi + body.against_gap - lo : other_lo - body.against_gap - hi;
   for (auto& x : mesh.nodes) x[a] += shift;
-  log::verbose() << "bodies[" << bi << "] '" << body.name << "' moved by " << shift << " m along " << "xyz"[a] << " to lie "
-                 << body.against_gap << " m from '" << body.against << "'";
+  log::verbose() << "bodies[" << bi << "] '" << body.name << "' moved by " << shift << " m along "
+                 << "xyz"[a] << " to lie " << body.against_gap << " m from '" << body.against << "'";
 }
 
 // What the blocks need to know about every input tet.
@@ -134,9 +133,8 @@ void append_body(const Scenario& sc, std::size_t bi, Model& m, TetAssignment& te
   place_body(sc, bi, m, mesh);
   TetMesh& all = m.input_mesh;
   const std::size_t node0 = all.nodes.size();
-  m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size(), all.tets.size(), all.tets.size() + mesh.tets.size(),
-                      all.triangles.size(), all.triangles.size() + mesh.triangles.size(), all.groups.size(),
-                      all.groups.size() + mesh.groups.size()});
+  m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size(), all.tets.size(), all.tets.size() + mesh.tets.size(), all.triangles.size(),
+                      all.triangles.size() + mesh.triangles.size(), all.groups.size(), all.groups.size() + mesh.groups.size()});
   all.groups.insert(all.groups.end(), mesh.groups.begin(), mesh.groups.end());
   all.nodes.insert(all.nodes.end(), mesh.nodes.begin(), mesh.nodes.end());
   for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
@@ -152,14 +150,16 @@ void append_body(const Scenario& sc, std::size_t bi, Model& m, TetAssignment& te
       std::string groups;
       for (const auto& g : mesh.groups)
         if (g.dim == 3) groups += (groups.empty() ? "" : ", ") + g.name;
-      throw InputError(sc.file.string(), key + ".materials",
-                       "a material for physical volume '" + gname + "' of " + body.mesh.string() + " (its volume groups: " + groups +
-                           "; or a \"*\" entry)",
-                       "none");
+      throw InputError(
+          sc.file.string(), key + ".materials",
+          "a material for physical volume '" + gname + "' of " + body.mesh.string() + " (its volume groups: " + groups + "; or a \"*\" entry)",
+          "none");
     }
     tets.material.push_back(it->second);
-    if (field_values.empty()) tets.data.emplace_back();
-    else tets.data.emplace_back(std::move(field_values[e]));
+    if (field_values.empty())
+      tets.data.emplace_back();
+    else
+      tets.data.emplace_back(std::move(field_values[e]));
   }
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     std::array<int, 3> tri = mesh.triangles[t];
@@ -190,7 +190,8 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
     const std::size_t n = type.element_data_size;
     bool from_files = false;
     for (std::size_t k = b.begin; k < b.end && n > 0; ++k) {
-      if (tets.data[order[k]]) from_files = true;
+      if (tets.data[order[k]])
+        from_files = true;
       else if (b.material.needs_element_data()) {
         std::string keys;
         for (const ValueSpec& s : type.parameters.keys)
@@ -207,8 +208,8 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
         double* out = &b.element_data[n * (k - b.begin)];
         const std::size_t body = static_cast<std::size_t>(m.tet_body[order[k]]);
         if (const auto& d = tets.data[order[k]])
-          type.element_data_from_fields(d->data(), out, sc.bodies[body].fibres.string() + ": tet " +
-                                                              std::to_string(order[k] - m.bodies[body].tet_begin + 1));
+          type.element_data_from_fields(d->data(), out,
+                                        sc.bodies[body].fibres.string() + ": tet " + std::to_string(order[k] - m.bodies[body].tet_begin + 1));
         else
           std::copy(b.material.constant_element_data().begin(), b.material.constant_element_data().end(), out);
       }

@@ -34,8 +34,7 @@ const ValueSpec* SectionSpec::find(const std::string& key) const {
   return nullptr;
 }
 
-ValueSpec number(std::string key, std::string unit, std::string doc, double min, bool min_exclusive, double max,
-                 bool max_exclusive) {
+ValueSpec number(std::string key, std::string unit, std::string doc, double min, bool min_exclusive, double max, bool max_exclusive) {
   ValueSpec s;
   s.key = std::move(key);
   s.unit = std::move(unit);

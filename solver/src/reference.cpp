@@ -35,8 +35,7 @@ double energy_scale(const json& run) {
 
 std::vector<std::pair<std::string, double>> reference_figures(const json& run) {
   std::vector<std::pair<std::string, double>> f;
-  for (const char* k : {"kinetic", "internal", "external_work", "damping_work", "contact_work_normal", "contact_work_friction",
-                        "balance_error"})
+  for (const char* k : {"kinetic", "internal", "external_work", "damping_work", "contact_work_normal", "contact_work_friction", "balance_error"})
     f.emplace_back(std::string("energy.") + k, number_at(run, {"energy", k}));
   if (run.contains("contact")) {
     f.emplace_back("contact.peak_force", number_at(run, {"contact", "peak_force", "value"}));
@@ -101,8 +100,8 @@ std::string format_checks(const std::vector<FigureCheck>& checks) {
   std::snprintf(line, sizeof line, "%-34s %16s %16s %12s %12s  %s\n", "figure", "reference", "this run", "difference", "allowed", "");
   s += line;
   for (const auto& c : checks) {
-    std::snprintf(line, sizeof line, "%-34s %16.9g %16.9g %12.3g %12.3g  %s\n", c.name.c_str(), c.reference, c.value,
-                  c.value - c.reference, c.allowed, c.ok ? "ok" : (c.present ? "FAIL" : "FAIL (missing)"));
+    std::snprintf(line, sizeof line, "%-34s %16.9g %16.9g %12.3g %12.3g  %s\n", c.name.c_str(), c.reference, c.value, c.value - c.reference,
+                  c.allowed, c.ok ? "ok" : (c.present ? "FAIL" : "FAIL (missing)"));
     s += line;
   }
   return s;

@@ -36,18 +36,15 @@ std::string results_reference_markdown() {
        "`results.pvd`), `history.csv` and `run.json`.\n\n"
     << "## State fields (`results/*.vtu`)\n\n| field | on | components | unit | meaning |\n|---|---|---|---|---|\n";
   for (const auto& f : result_fields())
-    o << "| `" << f.name << "` | " << f.where << " | " << f.components << " | " << (f.unit.empty() ? "-" : f.unit) << " | " << f.doc
-      << " |\n";
+    o << "| `" << f.name << "` | " << f.where << " | " << f.components << " | " << (f.unit.empty() ? "-" : f.unit) << " | " << f.doc << " |\n";
   o << "\n## `history.csv` columns\n\n| column | unit | meaning |\n|---|---|---|\n";
-  for (const auto* c : contracts::history::all)
-    o << "| `" << c->name << "` | " << (*c->unit ? c->unit : "-") << " | " << c->doc << " |\n";
+  for (const auto* c : contracts::history::all) o << "| `" << c->name << "` | " << (*c->unit ? c->unit : "-") << " | " << c->doc << " |\n";
   o << "\n## `run.json` keys read by other stages\n\n";
   for (const char* k : contracts::run_json::all) o << "`" << k << "` ";
   o << "\n\nLabel ids of `labels.h5`: " << contracts::kBackgroundLabel << " background, " << contracts::kSoftTissueLabel << " "
-    << contracts::kSoftTissueName << ", " << contracts::kFirstBoneLabel << ".. one per bone. Mesh surface groups: `"
-    << contracts::kSkinGroup << "` (" << contracts::kSkinTag << "), `" << contracts::kBoneInterfaceGroup << "` ("
-    << contracts::kBoneInterfaceTag << "), objects' `" << contracts::kObjectSurfaceGroup << "` (" << contracts::kObjectSurfaceTag
-    << ").\n";
+    << contracts::kSoftTissueName << ", " << contracts::kFirstBoneLabel << ".. one per bone. Mesh surface groups: `" << contracts::kSkinGroup << "` ("
+    << contracts::kSkinTag << "), `" << contracts::kBoneInterfaceGroup << "` (" << contracts::kBoneInterfaceTag << "), objects' `"
+    << contracts::kObjectSurfaceGroup << "` (" << contracts::kObjectSurfaceTag << ").\n";
   return o.str();
 }
 
@@ -60,10 +57,10 @@ nlohmann::json results_reference_json() {
   j["history_columns"] = nlohmann::json::array();
   for (const auto* c : contracts::history::all) j["history_columns"].push_back(c->name);
   j["run_json_keys"] = contracts::run_json::all;
-  j["labels"] = {{"background", contracts::kBackgroundLabel}, {"soft_tissue", contracts::kSoftTissueLabel},
-                 {"first_bone", contracts::kFirstBoneLabel}};
-  j["surface_groups"] = {{"skin", contracts::kSkinGroup}, {"bone_interface", contracts::kBoneInterfaceGroup},
-                         {"object", contracts::kObjectSurfaceGroup}};
+  j["labels"] = {
+      {"background", contracts::kBackgroundLabel}, {"soft_tissue", contracts::kSoftTissueLabel}, {"first_bone", contracts::kFirstBoneLabel}};
+  j["surface_groups"] = {
+      {"skin", contracts::kSkinGroup}, {"bone_interface", contracts::kBoneInterfaceGroup}, {"object", contracts::kObjectSurfaceGroup}};
   return j;
 }
 

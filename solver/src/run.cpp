@@ -44,15 +44,14 @@ double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolve
     std::ostringstream f;
     f << "about " << est_steps << " steps (end time " << sc.run.end_time << " s at " << solver.time_step() << " s per step, "
       << solver.describe_step_limit() << ")";
-    throw InputError(sc.file.string(), "run.end_time",
-                     "a run of at most run.max_steps = " + std::to_string(static_cast<long long>(sc.run.max_steps)) +
-                         " steps (raise run.max_steps to allow it)",
-                     f.str());
+    throw InputError(
+        sc.file.string(), "run.end_time",
+        "a run of at most run.max_steps = " + std::to_string(static_cast<long long>(sc.run.max_steps)) + " steps (raise run.max_steps to allow it)",
+        f.str());
   }
   const double state_bytes = 8.0 * (15.0 * static_cast<double>(model.num_nodes) + 16.0 * static_cast<double>(model.num_elements));
   const auto states = solver.schedule().size();
-  out.require_space(static_cast<std::uintmax_t>(state_bytes * static_cast<double>(states) + 2e5 * 200),
-                    std::to_string(states) + " result states");
+  out.require_space(static_cast<std::uintmax_t>(state_bytes * static_cast<double>(states) + 2e5 * 200), std::to_string(states) + " result states");
   return est_steps;
 }
 
@@ -60,7 +59,11 @@ double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolve
 class RunLoop {
  public:
   RunLoop(const Scenario& sc, const Model& model, ExplicitSolver& solver, const fs::path& folder, double est_steps)
-      : sc_(sc), model_(model), solver_(solver), folder_(folder), history_(folder / "history.csv"),
+      : sc_(sc),
+        model_(model),
+        solver_(solver),
+        folder_(folder),
+        history_(folder / "history.csv"),
         history_every_(sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
                                                 : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000))),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1) {
@@ -92,8 +95,7 @@ class RunLoop {
     } catch (const NumericalError& e) {
       summary_.status = "failed";
       // The last good state: u^{n-1} (before the failing update), with the half-step velocity.
-      write("last_good_state.vtu", solver_.previous_displacement(), solver_.half_step_velocity(),
-            solver_.time() - 0.5 * solver_.time_step());
+      write("last_good_state.vtu", solver_.previous_displacement(), solver_.half_step_velocity(), solver_.time() - 0.5 * solver_.time_step());
       return e.what();
     }
   }
@@ -133,8 +135,8 @@ class RunLoop {
     if (!cr.converged) {
       if (peaks_.unconverged_steps == 0) {
         std::ostringstream w;
-        w << "contact: Uzawa iterations stopped at contact_solver.max_iterations = " << sc_.contact_solver.max_iterations
-          << " with residual " << cr.residual << " at step " << solver_.step_index() << " (reported once; count in run.json)";
+        w << "contact: Uzawa iterations stopped at contact_solver.max_iterations = " << sc_.contact_solver.max_iterations << " with residual "
+          << cr.residual << " at step " << solver_.step_index() << " (reported once; count in run.json)";
         log::warn(w.str());
       }
       ++peaks_.unconverged_steps;
@@ -175,11 +177,11 @@ class RunLoop {
 RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   const auto wall_start = std::chrono::steady_clock::now();
   const Model model = build_model(sc);
-  log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size()
-              << " materials, " << sc.bodies.size() << " bodies";
+  log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size() << " materials, "
+              << sc.bodies.size() << " bodies";
   ExplicitSolver solver(model, sc.run, sc.damping);
-  log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; "
-              << solver.describe_step_limit() << "), " << solver.threads() << " threads";
+  log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; " << solver.describe_step_limit() << "), "
+              << solver.threads() << " threads";
   const double est_steps = check_runaway(sc, model, solver, staged);
 
   fs::create_directories(staged.path() / "results");
@@ -192,11 +194,10 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   staged.commit();
   const Energies& en = solver.energies();
   log::info() << summary.status << ": " << summary.steps << " steps to t = " << summary.end_time << " s in " << summary.wall_seconds
-              << " s; energy balance error " << std::abs(en.balance_error()) / en.scale() * 100 << " % of the largest energy; "
-              << summary.outputs << " states; results in " << staged.final_path().string();
+              << " s; energy balance error " << std::abs(en.balance_error()) / en.scale() * 100 << " % of the largest energy; " << summary.outputs
+              << " states; results in " << staged.final_path().string();
   if (summary.status == "failed")
-    throw NumericalError(failure.get<std::string>() + " (last good state and history written to " + staged.final_path().string() +
-                         ")");
+    throw NumericalError(failure.get<std::string>() + " (last good state and history written to " + staged.final_path().string() + ")");
   return summary;
 }
 

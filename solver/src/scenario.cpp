@@ -2,10 +2,10 @@
 // the key reference (`tactus-solve keys`), so the docs cannot drift from what is accepted.
 #include "tactus/solver/scenario.hpp"
 
+#include <toml++/toml.h>
 #include <cmath>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "tactus/core/error.hpp"
 #include "tactus/solver/material.hpp"
@@ -23,8 +23,7 @@ ValueSpec opt(ValueSpec s, std::string default_text) {
   s.default_text = std::move(default_text);
   return s;
 }
-ValueSpec typed(std::string key, ValueType type, std::string unit, std::string doc, bool required,
-                std::string default_text = {}) {
+ValueSpec typed(std::string key, ValueType type, std::string unit, std::string doc, bool required, std::string default_text = {}) {
   ValueSpec s;
   s.key = std::move(key);
   s.type = type;
@@ -41,22 +40,18 @@ const SectionSpec& run_section() {
       "Time integration (explicit central differences, paper eq. 35) and output.",
       {number("end_time", "s", "simulated end time", 0, true),
        opt(number("time_step_safety", "", "fraction of the critical step actually used", 0, true, 1, false), "0.9"),
-       opt(number("time_step", "s", "fixed user step; refused above the stable limit unless force_time_step", 0, false),
-           "0 (automatic)"),
+       opt(number("time_step", "s", "fixed user step; refused above the stable limit unless force_time_step", 0, false), "0 (automatic)"),
        typed("force_time_step", ValueType::boolean, "", "accept a user time_step above the stable limit", false, "false"),
-       typed("output_times", ValueType::number_list, "s",
-             "times at which results are written, exactly (the state at end_time is always written too)", false, "[]"),
+       typed("output_times", ValueType::number_list, "s", "times at which results are written, exactly (the state at end_time is always written too)",
+             false, "[]"),
        opt(number("output_interval", "s", "also write results at every k * interval", 0, false), "0"),
-       opt(number("energy_tolerance", "", "energy-balance error, relative to the largest energy, that stops the run as unstable", 0, true),
-           "0.25"),
+       opt(number("energy_tolerance", "", "energy-balance error, relative to the largest energy, that stops the run as unstable", 0, true), "0.25"),
        typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
        opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
        opt(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false), "0"),
        opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0"),
-       opt(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false),
-           "10000"),
-       opt(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false),
-           "1e7")}};
+       opt(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false), "10000"),
+       opt(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false), "1e7")}};
   return s;
 }
 
@@ -81,15 +76,13 @@ const SectionSpec& body_section() {
              "place this body next to an earlier body: after translate, it is moved along against_axis only, "
              "so that against_gap separates the two bounding boxes along that axis",
              false),
-       typed("against_axis", ValueType::string, "", "side of the other body this one lies on: +x, -x, +y, -y, +z or -z", false,
-             "\"+x\""),
+       typed("against_axis", ValueType::string, "", "side of the other body this one lies on: +x, -x, +y, -y, +z or -z", false, "\"+x\""),
        opt(number("against_gap", "m", "gap between the two bodies along against_axis", 0, false), "0"),
        typed("fibres", ValueType::string, "",
              "per-element hgo fibre directions: a .vtu of this mesh's tets with cell data fibre_1, fibre_2 "
              "(overrides the materials' constant fibres)",
              false),
-       typed("materials", ValueType::table, "",
-             "physical volume group name -> material name (key \"*\" for every other group)", true)}};
+       typed("materials", ValueType::table, "", "physical volume group name -> material name (key \"*\" for every other group)", true)}};
   return s;
 }
 
@@ -122,8 +115,7 @@ const SectionSpec& contact_section() {
        typed("slave_surface", ValueType::string, "", "physical surface group of slave_body (e.g. skin)", true),
        typed("master_body", ValueType::string, "", "body owning the master surface (omit with plane)", false),
        typed("master_surface", ValueType::string, "", "physical surface group of master_body", false),
-       typed("plane", ValueType::vec3_list, "m", "rigid plane master: [[point], [outward normal]] (instead of master_body)",
-             false),
+       typed("plane", ValueType::vec3_list, "m", "rigid plane master: [[point], [outward normal]] (instead of master_body)", false),
        opt(number("friction", "", "Coulomb friction coefficient mu", 0, false), "0"),
        typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false")}};
   return s;
@@ -135,8 +127,7 @@ const SectionSpec& contact_solver_section() {
       "Uzawa iterations of the bi-potential contact solver (Gauss-Seidel over the contact nodes).",
       {opt(number("tolerance", "", "stop when max |dr| <= tolerance * max |r| over the contact nodes", 0, true, 1, true), "1e-6"),
        opt(number("max_iterations", "", "iteration limit per step (reached: a warning, the run goes on)", 1, false, 1e6, false), "200"),
-       opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false),
-           "0.5")}};
+       opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false), "0.5")}};
   return s;
 }
 
@@ -147,23 +138,31 @@ const SectionSpec& pipeline_section() {
       "entries; the pipeline runs tactus-mesh for them).",
       {typed("output", ValueType::string, "", "the mesh file a [[bodies]] entry names, relative to the pipeline's work folder", true),
        typed("kind", ValueType::string, "", "labels (from the segmented CT) | box | stl", true),
-       typed("args", ValueType::string, "", "tactus-mesh options (e.g. \"--size 0.04 0.08 0.16 --element-size 0.008\")", false,
-             "\"\""),
+       typed("args", ValueType::string, "", "tactus-mesh options (e.g. \"--size 0.04 0.08 0.16 --element-size 0.008\")", false, "\"\""),
        typed("file", ValueType::string, "", "kind = stl: the closed STL surface, relative to the scenario's folder", false)}};
   return s;
 }
 
 const char* type_name(ValueType t) {
   switch (t) {
-    case ValueType::number: return "a number";
-    case ValueType::integer: return "an integer";
-    case ValueType::boolean: return "true or false";
-    case ValueType::string: return "a string";
-    case ValueType::vec3: return "an array of 3 numbers";
-    case ValueType::number_list: return "an array of numbers";
-    case ValueType::vec3_list: return "an array of [x, y, z] arrays";
-    case ValueType::table: return "a table";
-    case ValueType::table_list: return "an array of tables";
+    case ValueType::number:
+      return "a number";
+    case ValueType::integer:
+      return "an integer";
+    case ValueType::boolean:
+      return "true or false";
+    case ValueType::string:
+      return "a string";
+    case ValueType::vec3:
+      return "an array of 3 numbers";
+    case ValueType::number_list:
+      return "an array of numbers";
+    case ValueType::vec3_list:
+      return "an array of [x, y, z] arrays";
+    case ValueType::table:
+      return "a table";
+    case ValueType::table_list:
+      return "an array of tables";
   }
   return "";
 }
@@ -177,8 +176,7 @@ class Reader {
   }
 
   // Unknown keys and missing required keys of one table.
-  void check_keys(const toml::table& t, const SectionSpec& spec, const std::string& path,
-                  const std::set<std::string>& extra = {}) const {
+  void check_keys(const toml::table& t, const SectionSpec& spec, const std::string& path, const std::set<std::string>& extra = {}) const {
     for (const auto& [k, node] : t) {
       const std::string key(k.str());
       if (!spec.find(key) && !extra.count(key)) {
@@ -314,39 +312,17 @@ std::string scenario_reference_markdown() {
     o << "\n## " << s.name << "\n\n" << s.doc << "\n\n| key | type | unit | valid | default | meaning |\n|---|---|---|---|---|---|\n";
     for (const auto& k : s.keys) {
       o << "| `" << k.key << "` | " << type_name(k.type) << " | " << (k.unit.empty() ? "-" : k.unit) << " | "
-        << (k.range_text().empty() ? "-" : k.range_text()) << " | "
-        << (k.required ? "**required**" : (k.default_text.empty() ? "-" : k.default_text)) << " | " << k.doc << " |\n";
+        << (k.range_text().empty() ? "-" : k.range_text()) << " | " << (k.required ? "**required**" : (k.default_text.empty() ? "-" : k.default_text))
+        << " | " << k.doc << " |\n";
     }
   }
   return o.str();
 }
 
-Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
-  const std::string fname = file.string();
-  if (!fs::exists(file)) throw InputError(fname, "", "an existing scenario file", "no such file");
-  toml::table root;
-  try {
-    root = toml::parse_file(fname);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream where;
-    where << "line " << e.source().begin.line << ", column " << e.source().begin.column;
-    throw InputError(fname, where.str(), "valid TOML", std::string(e.description()));
-  }
-  Reader r(fname);
-  Scenario sc;
-  sc.file = fs::absolute(file);
-  const fs::path base = mesh_dir.empty() ? sc.file.parent_path() : fs::absolute(mesh_dir);
+namespace {
 
-  SectionSpec top{"", "", {typed("run", ValueType::table, "", "a [run] section", true),
-                           typed("damping", ValueType::table, "", "a [damping] section", false),
-                           typed("bodies", ValueType::table_list, "", "one or more [[bodies]] sections", true),
-                           typed("materials", ValueType::table, "", "[materials.<name>] sections", true),
-                           typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false),
-                           typed("contact", ValueType::table_list, "", "[[contact]] sections", false),
-                           typed("contact_solver", ValueType::table, "", "a [contact_solver] section", false),
-                           typed("pipeline", ValueType::table, "", "a [pipeline] section with [[pipeline.meshes]] entries", false)}};
-  r.check_keys(root, top, "");
-
+// The sections of scenario.toml, one reader each (called in this order by read_scenario).
+void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
   {  // [run]
     const auto& spec = run_section();
     const toml::table& t = r.table(*root.get("run"), "run");
@@ -373,14 +349,18 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       if (count + static_cast<double>(run.output_times.size()) > run.max_outputs) {
         std::ostringstream f;
         f << count << " states (every " << run.output_interval << " s to " << run.end_time << " s)";
-        r.fail("run.output_interval", "at most run.max_outputs = " + std::to_string(static_cast<long long>(run.max_outputs)) +
-                                          " output states (raise run.max_outputs to allow more)",
+        r.fail("run.output_interval",
+               "at most run.max_outputs = " + std::to_string(static_cast<long long>(run.max_outputs)) +
+                   " output states (raise run.max_outputs to allow more)",
                f.str());
       }
     }
     if (static_cast<double>(run.output_times.size()) > run.max_outputs)
       r.fail("run.output_times", "at most run.max_outputs output states", std::to_string(run.output_times.size()));
   }
+}
+
+void read_damping(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("damping")) {
     const auto& spec = damping_section();
     const toml::table& t = r.table(*n, "damping");
@@ -388,6 +368,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
     sc.damping.alpha = r.number(t, *spec.find("alpha"), "damping", 0);
     sc.damping.beta = r.number(t, *spec.find("beta"), "damping", 0);
   }
+}
+
+void read_materials(const Reader& r, const toml::table& root, Scenario& sc, const std::string& fname) {
   {  // [materials.<name>]: validated against the law's own declarations (material.hpp)
     const toml::table& mats = r.table(*root.get("materials"), "materials");
     if (mats.empty()) r.fail("materials", "at least one [materials.<name>] table", "none");
@@ -414,6 +397,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       sc.materials[name] = m;
     }
   }
+}
+
+void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const fs::path& base) {
   {  // [[bodies]]
     const auto& spec = body_section();
     const toml::array* arr = root.get("bodies")->as_array();
@@ -459,11 +445,16 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       sc.bodies.push_back(b);
     }
   }
-  auto require_body = [&](const std::string& name, const std::string& key) {
-    for (const auto& b : sc.bodies)
-      if (b.name == name) return;
-    r.fail(key, "the name of a [[bodies]] entry", "\"" + name + "\"");
-  };
+}
+
+// A [[bodies]] name, or an InputError naming the key.
+void require_body(const Reader& r, const Scenario& sc, const std::string& name, const std::string& key) {
+  for (const auto& b : sc.bodies)
+    if (b.name == name) return;
+  r.fail(key, "the name of a [[bodies]] entry", "\"" + name + "\"");
+}
+
+void read_boundaries(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("boundary")) {  // [[boundary]]
     const auto& spec = boundary_section();
     const toml::array* arr = n->as_array();
@@ -474,7 +465,7 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       r.check_keys(t, spec, path);
       BoundarySpec bc;
       bc.body = r.string(t, *spec.find("body"), path);
-      require_body(bc.body, path + ".body");
+      require_body(r, sc, bc.body, path + ".body");
       bc.group = r.string(t, *spec.find("group"), path);
       const auto box = r.vec3_list(t, *spec.find("box"), path);
       if (t.contains("box")) {
@@ -495,6 +486,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       sc.boundaries.push_back(bc);
     }
   }
+}
+
+void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("contact")) {  // [[contact]]
     const auto& spec = contact_section();
     const toml::array* arr = n->as_array();
@@ -505,7 +499,7 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       r.check_keys(t, spec, path);
       ContactSpec c;
       c.slave_body = r.string(t, *spec.find("slave_body"), path);
-      require_body(c.slave_body, path + ".slave_body");
+      require_body(r, sc, c.slave_body, path + ".slave_body");
       c.slave_surface = r.string(t, *spec.find("slave_surface"), path);
       c.master_body = r.string(t, *spec.find("master_body"), path);
       c.master_surface = r.string(t, *spec.find("master_surface"), path);
@@ -515,12 +509,10 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
         if (!(std::sqrt(plane[1][0] * plane[1][0] + plane[1][1] * plane[1][1] + plane[1][2] * plane[1][2]) > 0))
           r.fail(path + ".plane", "a non-zero normal", "zero vector");
         c.plane = std::array<Vec3, 2>{plane[0], plane[1]};
-        if (t.contains("master_body") || t.contains("master_surface"))
-          r.fail(path, "either `plane` or `master_body` + `master_surface`", "both");
+        if (t.contains("master_body") || t.contains("master_surface")) r.fail(path, "either `plane` or `master_body` + `master_surface`", "both");
       } else {
-        if (c.master_body.empty() || c.master_surface.empty())
-          r.fail(path, "`master_body` and `master_surface` (or a rigid `plane`)", "missing");
-        require_body(c.master_body, path + ".master_body");
+        if (c.master_body.empty() || c.master_surface.empty()) r.fail(path, "`master_body` and `master_surface` (or a rigid `plane`)", "missing");
+        require_body(r, sc, c.master_body, path + ".master_body");
       }
       if (!c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface)
         r.fail(path, "a master surface other than the slave surface (self-contact of one surface is not supported yet)",
@@ -531,10 +523,12 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       sc.contacts.push_back(c);
     }
   }
+}
+
+void read_pipeline(const Reader& r, const toml::table& root) {
   if (const toml::node* n = root.get("pipeline")) {  // checked here, used by tactus-pipeline
     const toml::table& t = r.table(*n, "pipeline");
-    r.check_keys(t, SectionSpec{"pipeline", "", {typed("meshes", ValueType::table_list, "", "[[pipeline.meshes]] entries", false)}},
-                 "pipeline");
+    r.check_keys(t, SectionSpec{"pipeline", "", {typed("meshes", ValueType::table_list, "", "[[pipeline.meshes]] entries", false)}}, "pipeline");
     if (const toml::node* m = t.get("meshes")) {
       const toml::array* arr = m->as_array();
       if (!arr) r.fail("pipeline.meshes", "[[pipeline.meshes]] tables");
@@ -552,6 +546,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
       }
     }
   }
+}
+
+void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("contact_solver")) {
     const auto& spec = contact_solver_section();
     const toml::table& t = r.table(*n, "contact_solver");
@@ -560,6 +557,45 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
     sc.contact_solver.max_iterations = static_cast<int>(r.number(t, *spec.find("max_iterations"), "contact_solver", 200));
     sc.contact_solver.search_factor = r.number(t, *spec.find("search_factor"), "contact_solver", 0.5);
   }
+}
+
+}  // namespace
+
+Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
+  const std::string fname = file.string();
+  if (!fs::exists(file)) throw InputError(fname, "", "an existing scenario file", "no such file");
+  toml::table root;
+  try {
+    root = toml::parse_file(fname);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream where;
+    where << "line " << e.source().begin.line << ", column " << e.source().begin.column;
+    throw InputError(fname, where.str(), "valid TOML", std::string(e.description()));
+  }
+  Reader r(fname);
+  Scenario sc;
+  sc.file = fs::absolute(file);
+  const fs::path base = mesh_dir.empty() ? sc.file.parent_path() : fs::absolute(mesh_dir);
+
+  SectionSpec top{"",
+                  "",
+                  {typed("run", ValueType::table, "", "a [run] section", true), typed("damping", ValueType::table, "", "a [damping] section", false),
+                   typed("bodies", ValueType::table_list, "", "one or more [[bodies]] sections", true),
+                   typed("materials", ValueType::table, "", "[materials.<name>] sections", true),
+                   typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false),
+                   typed("contact", ValueType::table_list, "", "[[contact]] sections", false),
+                   typed("contact_solver", ValueType::table, "", "a [contact_solver] section", false),
+                   typed("pipeline", ValueType::table, "", "a [pipeline] section with [[pipeline.meshes]] entries", false)}};
+  r.check_keys(root, top, "");
+
+  read_run(r, root, sc);
+  read_damping(r, root, sc);
+  read_materials(r, root, sc, fname);
+  read_bodies(r, root, sc, base);
+  read_boundaries(r, root, sc);
+  read_contacts(r, root, sc);
+  read_pipeline(r, root);
+  read_contact_solver(r, root, sc);
   return sc;
 }
 

@@ -5,15 +5,15 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "tactus/data_samples/box_mesh.hpp"
+#include "expect_error.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/mesh.hpp"
-#include "expect_error.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
-using tactus::testkit::TempDir;
 using tactus::testkit::expect_input_error;
+using tactus::testkit::TempDir;
 
 namespace {
 
@@ -36,8 +36,7 @@ void expect_same_mesh(const TetMesh& a, const TetMesh& b, bool with_triangles, d
   ASSERT_EQ(a.nodes.size(), b.nodes.size());
   for (std::size_t i = 0; i < a.nodes.size(); ++i)
     for (int c = 0; c < 3; ++c)
-      EXPECT_LE(std::abs(a.nodes[i][c] - b.nodes[i][c]),
-                ulp_tolerance * std::numeric_limits<double>::epsilon() * std::abs(a.nodes[i][c]))
+      EXPECT_LE(std::abs(a.nodes[i][c] - b.nodes[i][c]), ulp_tolerance * std::numeric_limits<double>::epsilon() * std::abs(a.nodes[i][c]))
           << "node " << i;
   // Elements may come back grouped by physical group: compare as multisets of (group, nodes).
   auto tets = [](const TetMesh& m) {
@@ -60,7 +59,6 @@ void expect_same_mesh(const TetMesh& a, const TetMesh& b, bool with_triangles, d
     EXPECT_EQ(h->tag, g.tag);
   }
 }
-
 
 }  // namespace
 
@@ -229,7 +227,9 @@ TEST(MeshMsh, OwnReaderAgreesWithGmshOnEveryEncoding) {
     EXPECT_TRUE(by_coordinates(ours) == by_coordinates(theirs));
     ASSERT_EQ(ours.groups.size(), theirs.groups.size());
     for (const auto& g : theirs.groups) EXPECT_NE(ours.find_group(g.dim, g.name), nullptr) << g.name;
-    if (std::string(name).find("41") != std::string::npos) EXPECT_EQ(ours.tets, theirs.tets);  // same numbering and order
+    if (std::string(name).find("41") != std::string::npos) {
+      EXPECT_EQ(ours.tets, theirs.tets);  // same numbering and order
+    }
     std::printf("%s: %zu nodes, %zu tets, %zu triangles: identical to libgmsh's reading\n", name, ours.nodes.size(), ours.tets.size(),
                 ours.triangles.size());
   }
@@ -290,8 +290,9 @@ TEST(MeshErrors, CorruptMshIsRefusedWhereLibgmshCrashed) {
 // A tet referring to a node that does not exist, and a coordinate of 1e30 (a step of 3e-38 s).
 TEST(MeshErrors, MshReferencesAndCoordinatesAreChecked) {
   TempDir dir;
-  const std::string head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"v\"\n$EndPhysicalNames\n"
-                           "$Entities\n0 0 0 1\n1 0 0 0 1 1 1 1 1 0\n$EndEntities\n";
+  const std::string head =
+      "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n3 1 \"v\"\n$EndPhysicalNames\n"
+      "$Entities\n0 0 0 1\n1 0 0 0 1 1 1 1 1 0\n$EndEntities\n";
   std::ofstream(dir / "r.msh") << head << "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n"
                                << "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 9\n$EndElements\n";
   expect_input_error([&] { read_msh(dir / "r.msh"); }, {"r.msh", "node tags defined in $Nodes", "tag 9"});

@@ -176,8 +176,8 @@ TEST(OutputFolder, RemovesStaleStagingOfDeadRunsOnly) {
   waitpid(child, nullptr, 0);
   const fs::path stale = dir / ("results.partial-" + std::to_string(child));
   write(stale / "run.json", "half");
-  write(stale / tactus::kFolderMarker, R"({"tool": "tactus-solve", "state": "writing", "pid": )" + std::to_string(child) +
-                                          R"(, "process_start": 1, "boot_id": "x"})");
+  write(stale / tactus::kFolderMarker,
+        R"({"tool": "tactus-solve", "state": "writing", "pid": )" + std::to_string(child) + R"(, "process_start": 1, "boot_id": "x"})");
   // One of a run still going (this process) and one of another tool: both kept.
   const fs::path other = dir / "results.partial-1";
   write(other / tactus::kFolderMarker, R"({"tool": "tactus-post", "state": "writing", "pid": 1, "process_start": 1, "boot_id": "x"})");

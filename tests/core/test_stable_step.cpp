@@ -12,8 +12,7 @@ using namespace tactus;
 TEST(StableStep, RegularTetLengthIsEdgeOverSqrt6) {
   // Regular tet of edge a: every height h = a sqrt(2/3), so sum = 4/h^2 and L = h/2 = a/sqrt(6).
   const double a = 2e-3;
-  const Vec3 x0{0, 0, 0}, x1{a, 0, 0}, x2{a / 2, a * std::sqrt(3.0) / 2, 0},
-      x3{a / 2, a * std::sqrt(3.0) / 6, a * std::sqrt(2.0 / 3.0)};
+  const Vec3 x0{0, 0, 0}, x1{a, 0, 0}, x2{a / 2, a * std::sqrt(3.0) / 2, 0}, x3{a / 2, a * std::sqrt(3.0) / 6, a * std::sqrt(2.0 / 3.0)};
   EXPECT_NEAR(characteristic_length(x0, x1, x2, x3), a / std::sqrt(6.0), 1e-15);
 }
 

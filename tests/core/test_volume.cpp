@@ -1,19 +1,19 @@
 // core/volume: HDF5 and .vti round trips are exact; bad files give InputError naming the problem.
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <random>
 
+#include "expect_error.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/volume.hpp"
-#include "expect_error.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
-using tactus::testkit::TempDir;
 using tactus::testkit::expect_input_error;
+using tactus::testkit::TempDir;
 
 namespace {
 
@@ -160,8 +160,8 @@ namespace {
 // tactus' spacing/origin attributes, and optionally a string attribute of the given kind.
 enum class StringKind { none, fixed_nullterm, fixed_nullpad, fixed_spacepad, variable };
 
-std::string write_foreign_labels(const std::filesystem::path& file, hid_t type, const std::vector<long long>& values,
-                                 const hsize_t shape[3], StringKind kind = StringKind::none, const std::string& text = {}) {
+std::string write_foreign_labels(const std::filesystem::path& file, hid_t type, const std::vector<long long>& values, const hsize_t shape[3],
+                                 StringKind kind = StringKind::none, const std::string& text = {}) {
   hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   hid_t space = H5Screate_simple(3, shape, nullptr);
   hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
@@ -197,7 +197,7 @@ std::string write_foreign_labels(const std::filesystem::path& file, hid_t type, 
       if (kind == StringKind::fixed_spacepad) stored += "   ";
       if (kind == StringKind::fixed_nullpad) stored += std::string(3, '\0');
       H5Tset_size(st, stored.size());
-      H5Tset_strpad(st, kind == StringKind::fixed_spacepad ? H5T_STR_SPACEPAD
+      H5Tset_strpad(st, kind == StringKind::fixed_spacepad  ? H5T_STR_SPACEPAD
                         : kind == StringKind::fixed_nullpad ? H5T_STR_NULLPAD
                                                             : H5T_STR_NULLTERM);
       hid_t a = H5Acreate2(ds, "label_table", st, scalar, H5P_DEFAULT, H5P_DEFAULT);
@@ -234,10 +234,16 @@ TEST(VolumeStrings, EveryStringAttributeKindReadsWhole) {
 TEST(VolumeErrors, LabelsOutsideTheVolumeTypeAreRefused) {
   TempDir dir;
   const hsize_t shape[3] = {1, 1, 3};
-  expect_input_error([&] { read_h5<std::uint8_t>(write_foreign_labels(dir / "a.h5", H5T_STD_I8LE, {1, -1, 2}, shape), "/labels"); },
-                     {"a.h5", "-1 at voxel (x 1, y 0, z 0)", "[0, 255]"});
-  expect_input_error([&] { read_h5<std::uint8_t>(write_foreign_labels(dir / "b.h5", H5T_STD_I64LE, {1, 2, 300}, shape), "/labels"); },
-                     {"b.h5", "300 at voxel (x 2"});
+  expect_input_error(
+      [&] {
+        read_h5<std::uint8_t>(write_foreign_labels(dir / "a.h5", H5T_STD_I8LE, {1, -1, 2}, shape), "/labels");
+      },
+      {"a.h5", "-1 at voxel (x 1, y 0, z 0)", "[0, 255]"});
+  expect_input_error(
+      [&] {
+        read_h5<std::uint8_t>(write_foreign_labels(dir / "b.h5", H5T_STD_I64LE, {1, 2, 300}, shape), "/labels");
+      },
+      {"b.h5", "300 at voxel (x 2"});
   // Values that fit are read whatever the stored type.
   const auto v = read_h5<std::uint8_t>(write_foreign_labels(dir / "c.h5", H5T_STD_I64LE, {0, 7, 255}, shape), "/labels");
   EXPECT_EQ(v.data, (std::vector<std::uint8_t>{0, 7, 255}));

@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <fstream>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "tactus/data_samples/phantom.hpp"
 #include "temp_dir.hpp"
@@ -44,9 +44,12 @@ TEST(Phantom, PaperDimensionsAndBoneCount) {
   int carpals = 0, metacarpals = 0, phalanges = 0;
   for (const auto& [id, name] : p.labels) {
     if (id < 2) continue;
-    if (name.find("metacarpal") != std::string::npos) ++metacarpals;
-    else if (name.find("phalanx") != std::string::npos) ++phalanges;
-    else ++carpals;
+    if (name.find("metacarpal") != std::string::npos)
+      ++metacarpals;
+    else if (name.find("phalanx") != std::string::npos)
+      ++phalanges;
+    else
+      ++carpals;
   }
   EXPECT_EQ(carpals, 8);
   EXPECT_EQ(metacarpals, 5);

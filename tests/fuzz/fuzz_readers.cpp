@@ -51,9 +51,9 @@ void write_file(const fs::path& p, const std::string& s) { std::ofstream(p, std:
 // call that reads it.
 struct Target {
   std::string name;
-  fs::path file;                // mutated in place (the seed restored before each mutation)
-  bool text = false;            // text mutations (numbers, lines) in addition to bytes
-  std::function<void()> read;   // throws tactus errors on bad input
+  fs::path file;               // mutated in place (the seed restored before each mutation)
+  bool text = false;           // text mutations (numbers, lines) in addition to bytes
+  std::function<void()> read;  // throws tactus errors on bad input
   // Applied after mutating: lets mutations through a format's checksums to the decoder behind them.
   std::function<std::string(std::string)> fixup = [](std::string s) { return s; };
 };
@@ -206,8 +206,9 @@ density = 1000
 
 // --------------------------------------------------------------------------------------------
 // Mutations.
-const std::vector<std::string> kNumbers = {"0",    "-1",         "1e308",       "-1e308",       "nan",         "inf",  "-inf", "1e-308",
-                                           "1e30", "99999999999", "-2147483649", "4294967296", "18446744073709551616", "-0", "2.5"};
+const std::vector<std::string> kNumbers = {
+    "0",  "-1", "1e308", "-1e308", "nan", "inf", "-inf", "1e-308", "1e30", "99999999999", "-2147483649", "4294967296", "18446744073709551616",
+    "-0", "2.5"};
 
 std::string mutate(std::string s, bool text, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -245,7 +246,8 @@ std::string mutate(std::string s, bool text, std::uint64_t seed) {
       case 5:  // truncate
         s.resize(pick(n + 1));
         break;
-      case 6: case 7: {  // replace a number with an interesting one
+      case 6:
+      case 7: {  // replace a number with an interesting one
         std::vector<std::pair<std::size_t, std::size_t>> numbers;
         for (std::size_t i = 0; i < n;) {
           if (std::isdigit(static_cast<unsigned char>(s[i]))) {
@@ -262,17 +264,22 @@ std::string mutate(std::string s, bool text, std::uint64_t seed) {
         s.replace(at, len, kNumbers[pick(kNumbers.size())]);
         break;
       }
-      case 8: case 9: {  // duplicate or drop a line
+      case 8:
+      case 9: {  // duplicate or drop a line
         std::vector<std::size_t> starts{0};
         for (std::size_t i = 0; i < n; ++i)
           if (s[i] == '\n' && i + 1 < n) starts.push_back(i + 1);
         const std::size_t k = pick(starts.size());
         const std::size_t begin = starts[k], end = k + 1 < starts.size() ? starts[k + 1] : n;
         const std::string line = s.substr(begin, end - begin);
-        if (op == 8) s.insert(begin, line); else s.erase(begin, end - begin);
+        if (op == 8)
+          s.insert(begin, line);
+        else
+          s.erase(begin, end - begin);
         break;
       }
-      default: break;
+      default:
+        break;
     }
   }
   return s;
@@ -282,11 +289,16 @@ std::string mutate(std::string s, bool text, std::uint64_t seed) {
 enum class Outcome { accepted, refused, crash, hang, internal };
 const char* outcome_name(Outcome o) {
   switch (o) {
-    case Outcome::accepted: return "accepted";
-    case Outcome::refused: return "refused";
-    case Outcome::crash: return "CRASH";
-    case Outcome::hang: return "HANG";
-    case Outcome::internal: return "INTERNAL ERROR";
+    case Outcome::accepted:
+      return "accepted";
+    case Outcome::refused:
+      return "refused";
+    case Outcome::crash:
+      return "CRASH";
+    case Outcome::hang:
+      return "HANG";
+    case Outcome::internal:
+      return "INTERNAL ERROR";
   }
   return "";
 }
@@ -335,9 +347,12 @@ Outcome read_in_child(const Target& t, const Limits& lim, std::string& detail) {
     return WTERMSIG(status) == SIGALRM ? Outcome::hang : Outcome::crash;
   }
   switch (WEXITSTATUS(status)) {
-    case 0: return Outcome::accepted;
-    case 10: return Outcome::refused;
-    default: return Outcome::internal;
+    case 0:
+      return Outcome::accepted;
+    case 10:
+      return Outcome::refused;
+    default:
+      return Outcome::internal;
   }
 }
 
@@ -366,10 +381,14 @@ int main(int argc, char** argv) {
       }
       return args[++i];
     };
-    if (args[i] == "--readers") readers = next();
-    else if (args[i] == "--mutations") mutations = std::stol(next());
-    else if (args[i] == "--seed") seed = std::stoull(next());
-    else if (args[i] == "--save") save = next();
+    if (args[i] == "--readers")
+      readers = next();
+    else if (args[i] == "--mutations")
+      mutations = std::stol(next());
+    else if (args[i] == "--seed")
+      seed = std::stoull(next());
+    else if (args[i] == "--save")
+      save = next();
     else if (args[i] == "--replay") {
       replay_reader = next();
       while (i + 1 < args.size()) replay_files.push_back(args[++i]);

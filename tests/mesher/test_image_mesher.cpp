@@ -10,11 +10,11 @@
 #include <map>
 #include <set>
 
+#include "expect_error.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/quality.hpp"
-#include "expect_error.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
@@ -109,8 +109,8 @@ TEST(ImageMesher, VolumesMatchLabels) {
   }
   EXPECT_NEAR(mesh_volume[1] / label_volume[1], 1.0, 0.03);
   EXPECT_NEAR(bone_mesh / bone_label, 1.0, 0.03);
-  std::printf("volume ratio soft tissue %.4f, all bone %.4f, worst single bone %.3f\n", mesh_volume[1] / label_volume[1],
-              bone_mesh / bone_label, worst);
+  std::printf("volume ratio soft tissue %.4f, all bone %.4f, worst single bone %.3f\n", mesh_volume[1] / label_volume[1], bone_mesh / bone_label,
+              worst);
 }
 
 TEST(ImageMesher, SkinClosedAndManifold) {
@@ -133,7 +133,8 @@ TEST(ImageMesher, EachBoneConnectedInsideSoftTissue) {
   for (std::size_t e = 0; e < m.tets.size(); ++e) by_group[m.tet_group[e]].push_back(static_cast<int>(e));
   std::vector<std::vector<int>> adj(m.tets.size());
   for (const auto& [f, owners] : faces)
-    if (owners.size() == 2) adj[static_cast<std::size_t>(owners[0])].push_back(owners[1]), adj[static_cast<std::size_t>(owners[1])].push_back(owners[0]);
+    if (owners.size() == 2)
+      adj[static_cast<std::size_t>(owners[0])].push_back(owners[1]), adj[static_cast<std::size_t>(owners[1])].push_back(owners[0]);
   EXPECT_EQ(by_group.size(), 28u);  // soft tissue + 27 bones
   for (const auto& [g, tets] : by_group) {
     if (g < 2) continue;

@@ -52,7 +52,8 @@ TEST(Objects, BoxVolumeAndGroups) {
     if (m.triangle_group[t] != tag) continue;
     const auto& f = m.triangles[t];
     for (int v : f) EXPECT_NEAR(m.nodes[static_cast<std::size_t>(v)][0], 0.11, 1e-12);
-    const auto& a = m.nodes[static_cast<std::size_t>(f[0])], &b = m.nodes[static_cast<std::size_t>(f[1])], &c = m.nodes[static_cast<std::size_t>(f[2])];
+    const auto &a = m.nodes[static_cast<std::size_t>(f[0])], &b = m.nodes[static_cast<std::size_t>(f[1])],
+               &c = m.nodes[static_cast<std::size_t>(f[2])];
     area += 0.5 * std::abs((b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]));
   }
   EXPECT_NEAR(area, 0.06 * 0.04, 1e-12);
@@ -144,11 +145,11 @@ TEST(Objects, SmoothClosedStlMeshes) {
   testkit::TempDir dir;
   // An icosphere of radius 10 mm, 3 subdivisions (1280 facets), ASCII.
   const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  std::vector<std::array<double, 3>> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                                        {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                                       {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+                                       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   auto unit = [](std::array<double, 3> p) {
     const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     return std::array<double, 3>{p[0] / n, p[1] / n, p[2] / n};

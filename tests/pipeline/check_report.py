@@ -17,6 +17,9 @@ import xml.etree.ElementTree as ET
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from tactus_contracts import cell_field, history_column, point_field, run_key  # noqa: E402
+
 
 def fail(msg):
     print("check_report: FAIL: " + msg)
@@ -33,10 +36,10 @@ solve, report = sys.argv[1], sys.argv[2]
 expect = sys.argv[3] if len(sys.argv) > 3 else ""
 summary = json.load(open(os.path.join(report, "summary.json")))
 run = json.load(open(os.path.join(solve, "run.json")))
-if run["status"] != "completed":
+if run[run_key("status")] != "completed":
     fail("run status " + run["status"] + ": " + str(run.get("message")))
 
-materials = run["materials"]
+materials = run[run_key("materials")]
 vm_peak = {m: 0.0 for m in materials}
 p_peak = 0.0
 for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet"):
@@ -44,12 +47,12 @@ for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet")
     r.SetFileName(os.path.join(solve, ds.get("file")))
     r.Update()
     g = r.GetOutput()
-    vm = vtk_to_numpy(g.GetCellData().GetArray("von_mises"))
-    mat = vtk_to_numpy(g.GetCellData().GetArray("material")).astype(int)
+    vm = vtk_to_numpy(g.GetCellData().GetArray(cell_field("von_mises")))
+    mat = vtk_to_numpy(g.GetCellData().GetArray(cell_field("material"))).astype(int)
     for k, m in enumerate(materials):
         if (mat == k).any():
             vm_peak[m] = max(vm_peak[m], float(vm[mat == k].max()))
-    arr = g.GetPointData().GetArray("contact_pressure")
+    arr = g.GetPointData().GetArray(point_field("contact_pressure"))
     if arr is not None:
         p_peak = max(p_peak, float(vtk_to_numpy(arr).max()))
 
@@ -57,8 +60,8 @@ for m in materials:
     close(summary["peak_von_mises"][m]["value"], vm_peak[m], what=f"peak von Mises of {m}")
 
 rows = list(csv.DictReader(open(os.path.join(solve, "history.csv"))))
-k0 = float(rows[0]["kinetic_energy"])
-err = abs(run["energy"]["balance_error"]) / k0
+k0 = float(rows[0][history_column("kinetic_energy")])
+err = abs(run[run_key("energy")]["balance_error"]) / k0
 print(f"  energy balance error {100 * err:.4f} % of the initial kinetic energy")
 if err > 0.02:
     fail(f"energy balance error {err:.4f} of the initial kinetic energy (limit 0.02)")
@@ -76,10 +79,10 @@ elif expect == "--expect-contact":
     if not contact["occurred"]:
         fail("no contact reported")
     close(contact["peak_pressure_at_outputs"]["value"], p_peak, what="peak contact pressure at the outputs")
-    force = max(float(r["contact_force"]) for r in rows)
+    force = max(float(r[history_column("contact_force")]) for r in rows)
     if contact["peak_force"]["value"] < force * (1 - 1e-9):
         fail(f"peak force {contact['peak_force']['value']} below the history's {force}")
-    close(contact["peak_force"]["value"], run["contact"]["peak_force"]["value"], what="peak contact force (every step)")
+    close(contact["peak_force"]["value"], run[run_key("contact")]["peak_force"]["value"], what="peak contact force (every step)")
     close(contact["largest_area"]["value"], run["contact"]["peak_area"]["value"], what="largest contact area")
 for pic in summary["pictures"]:
     path = os.path.join(report, pic)

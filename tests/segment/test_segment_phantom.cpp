@@ -6,8 +6,8 @@
 #include <cstring>
 #include <fstream>
 #include <map>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/segment/run.hpp"
@@ -79,7 +79,8 @@ StlCheck check_stl(const std::filesystem::path& file) {
     }
     for (int v = 0; v < 3; ++v) directed[{ids[v], ids[(v + 1) % 3]}]++;
     c.volume += (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
-                 p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6.0;
+                 p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) /
+                6.0;
   }
   for (const auto& [e, count] : directed) {
     if (count != 1) ++c.inconsistent;

@@ -93,8 +93,10 @@ namespace {
 void edit_stack_json(const std::filesystem::path& file, const std::string& key, const std::string& value) {
   std::ifstream in(file);
   auto j = nlohmann::json::parse(in);
-  if (value.empty()) j.erase(key);
-  else j[key] = nlohmann::json::parse(value);
+  if (value.empty())
+    j.erase(key);
+  else
+    j[key] = nlohmann::json::parse(value);
   std::ofstream(file) << j.dump();
 }
 }  // namespace
@@ -168,7 +170,6 @@ TEST_F(StackErrors, NoBoneFound) {
     FAIL() << "expected an InputError";
   } catch (const InputError& e) {
     const std::string msg = e.what();
-    for (const char* f : {"body threshold", "bone threshold", "--bone-threshold", "no bone"})
-      EXPECT_NE(msg.find(f), std::string::npos) << msg;
+    for (const char* f : {"body threshold", "bone threshold", "--bone-threshold", "no bone"}) EXPECT_NE(msg.find(f), std::string::npos) << msg;
   }
 }

@@ -36,15 +36,14 @@ inline Eigen::MatrixXd linear_stiffness(const solver::Model& m, double E, double
     }
     const Eigen::Matrix<double, 12, 12> Ke = g.volume * B.transpose() * D * B;
     for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
-        K.block<3, 3>(3 * m.conn[4 * e + a], 3 * m.conn[4 * e + b]) += Ke.block<3, 3>(3 * a, 3 * b);
+      for (int b = 0; b < 4; ++b) K.block<3, 3>(3 * m.conn[4 * e + a], 3 * m.conn[4 * e + b]) += Ke.block<3, 3>(3 * a, 3 * b);
   }
   return K;
 }
 
 struct Modes {
-  Eigen::VectorXd omega2;     // ascending
-  Eigen::MatrixXd shapes;     // columns, full dof vectors (zero on constrained dofs)
+  Eigen::VectorXd omega2;  // ascending
+  Eigen::MatrixXd shapes;  // columns, full dof vectors (zero on constrained dofs)
 };
 
 // K phi = w^2 M phi on the free dofs, via the symmetric form M^{-1/2} K M^{-1/2}.

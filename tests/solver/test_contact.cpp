@@ -11,12 +11,12 @@
 
 #include <gmsh.h>
 
+#include "material_kit.hpp"
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
-#include "material_kit.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
@@ -138,8 +138,8 @@ TEST(Contact, LocalSolverMatchesExactLawInAllRegimes) {
       const V3 n = random_unit(rng), t = tangent_of(n, rng);
       const double mu = trial % 10 == 0 && regime != 1 ? 0.0 : 0.05 + 1.2 * U(rng), w = std::pow(10.0, -6 + 6 * U(rng));
       double rn_star = 0.1 + U(rng), rt_star = 0;
-      if (regime == 0) rn_star = -rn_star, rt_star = 3 * U(rng);   // separating
-      if (regime == 1) rt_star = mu * rn_star * 0.999 * U(rng);  // sticking
+      if (regime == 0) rn_star = -rn_star, rt_star = 3 * U(rng);       // separating
+      if (regime == 1) rt_star = mu * rn_star * 0.999 * U(rng);        // sticking
       if (regime == 2) rt_star = mu * rn_star * (1.001 + 3 * U(rng));  // sliding
       const V3 r_star = axpy(rt_star, t, V3{rn_star * n[0], rn_star * n[1], rn_star * n[2]});
       const V3 u_free{-w * r_star[0], -w * r_star[1], -w * r_star[2]};
@@ -206,10 +206,11 @@ void two_bars_impact(bool two_pass) {
   const Energies& en = solver.energies();
   const double duration = t_last - t_first, plateau = plateau_sum / plateau_n, F_ref = rho * c * a * a * v0;
   const double loss = 1 - (en.kinetic + en.internal) / E0;
-  std::printf("bars (%s): contact %.4e s (2L/c %.4e), force %.5f N (rho c A v %.5f), momentum %.2e, energy loss %.3f %%, "
-              "balance error %.2e, iterations %d\n",
-              two_pass ? "two-pass" : "one-pass", duration, 2 * L / c, plateau, F_ref, worst_momentum, 100 * loss, std::abs(en.balance_error()) / E0,
-              solver.contact_report().iterations);
+  std::printf(
+      "bars (%s): contact %.4e s (2L/c %.4e), force %.5f N (rho c A v %.5f), momentum %.2e, energy loss %.3f %%, "
+      "balance error %.2e, iterations %d\n",
+      two_pass ? "two-pass" : "one-pass", duration, 2 * L / c, plateau, F_ref, worst_momentum, 100 * loss, std::abs(en.balance_error()) / E0,
+      solver.contact_report().iterations);
   EXPECT_NEAR(duration / (2 * L / c), 1.0, 0.05);
   EXPECT_NEAR(plateau / F_ref, 1.0, 0.10);
   EXPECT_LE(worst_momentum, 1e-10);
@@ -378,10 +379,11 @@ TEST(Contact, HertzSphereOnRigidPlane) {
     if (solver.time() >= 1.6 * T_ref * (1 - 1e-12)) break;
     solver.advance_position();
   }
-  std::printf("hertz: %zu tets, %zu steps; duration %.4e s (Hertz %.4e), peak force %.4f N (Hertz %.4f), "
-              "balance error %.2e of E0\n",
-              model.num_elements, solver.step_index(), t_last - t_first, T_ref, F_peak, F_ref,
-              std::abs(solver.energies().balance_error()) / solver.energies().initial);
+  std::printf(
+      "hertz: %zu tets, %zu steps; duration %.4e s (Hertz %.4e), peak force %.4f N (Hertz %.4f), "
+      "balance error %.2e of E0\n",
+      model.num_elements, solver.step_index(), t_last - t_first, T_ref, F_peak, F_ref,
+      std::abs(solver.energies().balance_error()) / solver.energies().initial);
   EXPECT_NEAR((t_last - t_first) / T_ref, 1.0, 0.10);
   EXPECT_NEAR(F_peak / F_ref, 1.0, 0.10);
   EXPECT_LE(sig.adhesive, 1e-12);

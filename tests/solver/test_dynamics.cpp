@@ -5,11 +5,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include "tactus/data_samples/box_mesh.hpp"
 #include "linear_reference.hpp"
+#include "material_kit.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
-#include "material_kit.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
@@ -54,8 +54,7 @@ TEST(Dynamics, BarWaveSpeed) {
   ASSERT_GT(crossing[0], 0);
   ASSERT_GT(crossing[1], crossing[0]);
   const double measured = 0.25 / (crossing[1] - crossing[0]);
-  std::printf("wave speed %.4f m/s (front between stations), %.4f m/s (from the end), sqrt(E/rho) %.4f m/s\n", measured,
-              0.5 / crossing[0], c);
+  std::printf("wave speed %.4f m/s (front between stations), %.4f m/s (from the end), sqrt(E/rho) %.4f m/s\n", measured, 0.5 / crossing[0], c);
   EXPECT_NEAR(measured / c, 1.0, 0.02) << "measured " << measured << " m/s, expected " << c;
   EXPECT_NEAR(0.5 / crossing[0] / c, 1.0, 0.02);
 }
@@ -111,8 +110,7 @@ TEST(Dynamics, CantileverFirstFrequencyMatchesEigenvalue) {
     solver.advance_velocity();
     const double u = solver.displacement()[static_cast<std::size_t>(probe)];
     // The displacement starts at 0 (velocity mode): record sign changes after the start.
-    if (solver.step_index() > 1 && ((prev_u < 0) != (u < 0)))
-      zeros.push_back(prev_t + (solver.time() - prev_t) * prev_u / (prev_u - u));
+    if (solver.step_index() > 1 && ((prev_u < 0) != (u < 0))) zeros.push_back(prev_t + (solver.time() - prev_t) * prev_u / (prev_u - u));
     prev_u = u, prev_t = solver.time();
     solver.advance_position();
   }

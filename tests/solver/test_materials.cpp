@@ -74,8 +74,11 @@ Material paper_hgo(double k = 1.0e8, double k1 = 1.7, double k2 = 882.847) {
 }
 
 std::vector<Material> materials_under_test() {
-  return {neo_hookean(3000.0, 50000.0, 1000.0), law("linear_elastic", {{"E", 10e9}, {"nu", 0.22}, {"density", 2150}}),
-          paper_hgo(2.0e5), paper_hgo(), paper_hgo(2.0e5, 2.0e4, 5.0) /* fibres that dominate */,
+  return {neo_hookean(3000.0, 50000.0, 1000.0),
+          law("linear_elastic", {{"E", 10e9}, {"nu", 0.22}, {"density", 2150}}),
+          paper_hgo(2.0e5),
+          paper_hgo(),
+          paper_hgo(2.0e5, 2.0e4, 5.0) /* fibres that dominate */,
           law("mooney_rivlin", {{"c10", 2000.0}, {"c01", 800.0}, {"bulk", 50000.0}, {"density", 1000}}),
           law("mooney_rivlin", {{"c10", 0.0}, {"c01", 1500.0}, {"bulk", 2.0e5}, {"density", 1000}})};
 }
@@ -92,8 +95,7 @@ TEST(Materials, SecondPiolaIsTwiceDerivativeOfEnergy) {
       const Mat3 C = F.transpose() * F;
       const Mat3 S = F.inverse() * first_piola(m, F);
       const Mat3 S_fd = fd_second_piola(m, C, 1e-4);
-      EXPECT_LE((S - S_fd).norm(), 1e-6 * S.norm()) << m.type_name() << " trial " << trial << "\nS=\n"
-                                                     << S << "\nS_fd=\n" << S_fd;
+      EXPECT_LE((S - S_fd).norm(), 1e-6 * S.norm()) << m.type_name() << " trial " << trial << "\nS=\n" << S << "\nS_fd=\n" << S_fd;
       EXPECT_LE((S - S.transpose()).norm(), 1e-12 * S.norm()) << "S must be symmetric";
     }
   }

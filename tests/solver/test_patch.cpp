@@ -4,10 +4,10 @@
 // (divergence theorem), zero at interior nodes: every node is checked against that.
 #include <gtest/gtest.h>
 
+#include "material_kit.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
-#include "material_kit.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
@@ -18,14 +18,13 @@ namespace {
 void patch_test(const Material& material) {
   TetMesh mesh = samples::make_box_mesh(4, 3, 5, 0.04, 0.03, 0.05);
   samples::perturb_interior_nodes(mesh, 0.01, 0.3, 2024);  // irregular: up to 30 % of a cell
-  samples::shuffle_numbering(mesh, 7);                      // and numbered without order
+  samples::shuffle_numbering(mesh, 7);                     // and numbered without order
   const Model model = build_model(mesh, material);
   Mat3 A;  // a general (non-symmetric) displacement gradient
   A << 0.02, -0.01, 0.015, 0.005, -0.03, 0.01, -0.012, 0.008, 0.025;
   std::vector<double> u(3 * model.num_nodes), v(3 * model.num_nodes, 0.0), f(3 * model.num_nodes);
   for (std::size_t i = 0; i < model.num_nodes; ++i)
-    for (int r = 0; r < 3; ++r)
-      u[3 * i + r] = A(r, 0) * model.X[3 * i] + A(r, 1) * model.X[3 * i + 1] + A(r, 2) * model.X[3 * i + 2] + 1e-3;
+    for (int r = 0; r < 3; ++r) u[3 * i + r] = A(r, 0) * model.X[3 * i] + A(r, 1) * model.X[3 * i + 1] + A(r, 2) * model.X[3 * i + 2] + 1e-3;
   InternalForces forces(model, 0.0, 2);
   const StressPassResult pass = forces.compute(u.data(), v.data(), f.data());
 
@@ -55,6 +54,4 @@ void patch_test(const Material& material) {
 
 TEST(Patch, ConstantStressNeoHookean) { patch_test(neo_hookean(3000.0, 50000.0, 1000.0)); }
 TEST(Patch, ConstantStressLinearElastic) { patch_test(linear_elastic(1e9, 0.3, 2000)); }
-TEST(Patch, ConstantStressHgo) {
-  patch_test(paper_hgo());
-}
+TEST(Patch, ConstantStressHgo) { patch_test(paper_hgo()); }

@@ -5,11 +5,12 @@
 #include <fstream>
 #include <sstream>
 
-#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
 #include "temp_dir.hpp"
 
@@ -86,7 +87,7 @@ TEST_F(ScenarioFile, ValidScenarioReads) {
   EXPECT_EQ(sc.bodies[0].initial_velocity[0], 2.0);
   const Model m = build_model(sc);
   const auto& fib = m.blocks[0].material.constant_element_data();  // hgo's a_1, a_2
-  EXPECT_NEAR(fib[0], std::sqrt(0.5), 1e-15);                       // normalised
+  EXPECT_NEAR(fib[0], std::sqrt(0.5), 1e-15);                      // normalised
   EXPECT_EQ(m.num_elements, 48u);
   std::size_t fixed = 0;
   for (auto c : m.constrained) fixed += c;
@@ -105,9 +106,8 @@ TEST_F(ScenarioFile, PerElementFibresFromFile) {
   }
   write_vtu(dir / "fibres.vtu", mesh, {}, {f1, f2});
   Scenario constant = read_scenario(write(kValid));
-  Scenario per_element = read_scenario(write(replace(
-      replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", "fibres = [[1, -1, 0], [1, 1, 0]]"),
-      "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nfibres = \"fibres.vtu\"")));
+  Scenario per_element = read_scenario(write(replace(replace(kValid, "fibres = [[1, 1, 0], [1, -1, 0]]", "fibres = [[1, -1, 0], [1, 1, 0]]"),
+                                                     "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nfibres = \"fibres.vtu\"")));
   const Model a = build_model(constant), b = build_model(per_element);
   ASSERT_FALSE(a.blocks[0].per_element_data());
   ASSERT_TRUE(b.blocks[0].per_element_data());
@@ -129,18 +129,12 @@ TEST_F(ScenarioFile, PerElementFibresFromFile) {
 }
 
 TEST_F(ScenarioFile, UnknownKey) { expect_error(replace(kValid, "end_time", "end_tme"), {"run.end_tme", "unknown key"}); }
-TEST_F(ScenarioFile, MissingRequiredKey) {
-  expect_error(replace(kValid, "k2 = 882.847\n", ""), {"materials.skin.k2", "missing"});
-}
+TEST_F(ScenarioFile, MissingRequiredKey) { expect_error(replace(kValid, "k2 = 882.847\n", ""), {"materials.skin.k2", "missing"}); }
 TEST_F(ScenarioFile, NegativeDensity) {
   expect_error(replace(kValid, "density = 2150", "density = -2150"), {"materials.bone.density", "> 0", "-2150"});
 }
-TEST_F(ScenarioFile, IncompressiblePoissonRatio) {
-  expect_error(replace(kValid, "nu = 0.22", "nu = 0.5"), {"materials.bone.nu", "(-1, 0.5)"});
-}
-TEST_F(ScenarioFile, NonPositiveBulkModulus) {
-  expect_error(replace(kValid, "k = 1.0e8", "k = 0"), {"materials.skin.k", "> 0"});
-}
+TEST_F(ScenarioFile, IncompressiblePoissonRatio) { expect_error(replace(kValid, "nu = 0.22", "nu = 0.5"), {"materials.bone.nu", "(-1, 0.5)"}); }
+TEST_F(ScenarioFile, NonPositiveBulkModulus) { expect_error(replace(kValid, "k = 1.0e8", "k = 0"), {"materials.skin.k", "> 0"}); }
 TEST_F(ScenarioFile, UnknownMaterialType) {
   expect_error(replace(kValid, "\"linear_elastic\"", "\"mooney\""), {"materials.bone.type", "hgo", "mooney"});
 }
@@ -154,8 +148,7 @@ TEST_F(ScenarioFile, GroupWithoutMaterial) {
   expect_error(replace(kValid, "body = \"skin\"", "tissue = \"skin\""), {"bodies[0].materials", "'body'", "found none"}, true);
 }
 TEST_F(ScenarioFile, MaterialForMissingGroup) {
-  expect_error(replace(kValid, "body = \"skin\"", "\"*\" = \"skin\", tissue = \"bone\""),
-               {"bodies[0].materials.tissue", "no such group"}, true);
+  expect_error(replace(kValid, "body = \"skin\"", "\"*\" = \"skin\", tissue = \"bone\""), {"bodies[0].materials.tissue", "no such group"}, true);
 }
 TEST_F(ScenarioFile, BoundaryGroupNotInMesh) {
   expect_error(replace(kValid, "group = \"xmin\"", "group = \"palm\""), {"boundary[0].group", "palm", "xmin"}, true);
@@ -163,15 +156,9 @@ TEST_F(ScenarioFile, BoundaryGroupNotInMesh) {
 TEST_F(ScenarioFile, BoundaryWithGroupAndBox) {
   expect_error(replace(kValid, "type = \"fixed\"", "type = \"fixed\"\nbox = [[0,0,0],[1,1,1]]"), {"boundary[0]", "exactly one"});
 }
-TEST_F(ScenarioFile, MissingMeshFile) {
-  expect_error(replace(kValid, "pad.msh", "nowhere.msh"), {"nowhere.msh", "no such file"}, true);
-}
-TEST_F(ScenarioFile, TomlSyntaxErrorGivesLine) {
-  expect_error(replace(kValid, "end_time = 1e-3", "end_time = = 1e-3"), {"line 3", "valid TOML"});
-}
-TEST_F(ScenarioFile, OutputTimeAfterEnd) {
-  expect_error(replace(kValid, "[5e-4, 1e-3]", "[5e-4, 2e-3]"), {"run.output_times", "run.end_time"});
-}
+TEST_F(ScenarioFile, MissingMeshFile) { expect_error(replace(kValid, "pad.msh", "nowhere.msh"), {"nowhere.msh", "no such file"}, true); }
+TEST_F(ScenarioFile, TomlSyntaxErrorGivesLine) { expect_error(replace(kValid, "end_time = 1e-3", "end_time = = 1e-3"), {"line 3", "valid TOML"}); }
+TEST_F(ScenarioFile, OutputTimeAfterEnd) { expect_error(replace(kValid, "[5e-4, 1e-3]", "[5e-4, 2e-3]"), {"run.output_times", "run.end_time"}); }
 
 // The committed reference must be what the declarations generate (regenerate with
 // `tactus-solve keys > docs/scenario-reference.md`).
@@ -192,13 +179,15 @@ std::string contact_scenario(double tool_z, const std::string& contact_keys) {
 name = "tool"
 mesh = "pad.msh"
 materials = { "*" = "bone" }
-translate = [0, 0, )" << tool_z << R"(]
+translate = [0, 0, )"
+    << tool_z << R"(]
 
 [[contact]]
 slave_body = "pad"
 slave_surface = "zmax"
 master_body = "tool"
-)" << contact_keys << "\n";
+)" << contact_keys
+    << "\n";
   return o.str();
 }
 }  // namespace
@@ -216,13 +205,13 @@ TEST_F(ScenarioFile, ContactPairReads) {
   EXPECT_NEAR(area, 1e-4, 1e-15);  // the 1 cm x 1 cm face
   // Master normals point out of the tool (its zmin face: -z).
   const auto& t = m.contact_pairs[0].master->triangles();
-  const double* a = &m.X[3 * t[0]], *b = &m.X[3 * t[1]], *c = &m.X[3 * t[2]];
+  const double *a = &m.X[3 * t[0]], *b = &m.X[3 * t[1]], *c = &m.X[3 * t[2]];
   const double nz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
   EXPECT_LT(nz, 0.0);
 }
 TEST_F(ScenarioFile, ContactMissingSurface) {
-  expect_error(contact_scenario(0.0105, "master_surface = \"top\""),
-               {"contact[0].master_surface", "surface group of body 'tool'", "zmin", "\"top\""}, true);
+  expect_error(contact_scenario(0.0105, "master_surface = \"top\""), {"contact[0].master_surface", "surface group of body 'tool'", "zmin", "\"top\""},
+               true);
 }
 TEST_F(ScenarioFile, ContactNegativeFriction) {
   expect_error(contact_scenario(0.0105, "master_surface = \"zmin\"\nfriction = -0.1"), {"contact[0].friction", ">= 0", "-0.1"});
@@ -268,4 +257,17 @@ TEST_F(ScenarioFile, RunawayOutputScheduleIsRefused) {
   expect_error(replace(replace(kValid, "end_time = 1e-3", "end_time = 1000"), "output_times = [5e-4, 1e-3]", "output_interval = 1e-9"),
                {"run.output_interval", "run.max_outputs", "1e+12 states"});
   expect_error(replace(kValid, "output_times = [5e-4, 1e-3]", "output_interval = 1e-300"), {"run.output_interval", "run.max_outputs"});
+}
+
+// The committed results reference must be what the file contracts generate (regenerate with
+// `tactus-solve results-reference > docs/results-reference.md` and `... --json >
+// docs/results-reference.json`; the Python scripts read the JSON).
+TEST(ResultsReference, DocsMatchContracts) {
+  const std::string docs = std::string(TACTUS_SOURCE_DIR) + "/docs/";
+  std::ifstream md(docs + "results-reference.md"), js(docs + "results-reference.json");
+  ASSERT_TRUE(md.good() && js.good());
+  std::stringstream text;
+  text << md.rdbuf();
+  EXPECT_EQ(text.str(), results_reference_markdown());
+  EXPECT_EQ(nlohmann::json::parse(js), results_reference_json());
 }

@@ -9,11 +9,11 @@
 #include <regex>
 #include <sstream>
 
+#include "expect_error.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/reference.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/schedule.hpp"
-#include "expect_error.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;

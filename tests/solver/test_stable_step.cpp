@@ -7,13 +7,13 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "tactus/data_samples/box_mesh.hpp"
 #include "linear_reference.hpp"
-#include "tactus/core/stable_step.hpp"
+#include "material_kit.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/stable_step.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/run.hpp"
-#include "material_kit.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;

@@ -47,7 +47,8 @@ void relocate_short_tets(TetMesh& mesh, double max_surface_move, const PostPassP
     for (auto& x : normal[k]) x /= len;
     // Only unsigned agreement matters: a node on two touching surfaces has opposite normals.
     for (const auto& fnrm : face_normals[k])
-      if (std::abs(fnrm[0] * normal[k][0] + fnrm[1] * normal[k][1] + fnrm[2] * normal[k][2]) < std::cos(p.crease_angle_deg * M_PI / 180)) crease[k] = 1;
+      if (std::abs(fnrm[0] * normal[k][0] + fnrm[1] * normal[k][1] + fnrm[2] * normal[k][2]) < std::cos(p.crease_angle_deg * M_PI / 180))
+        crease[k] = 1;
   }
   auto length = [&](std::size_t e) {
     const auto& t = mesh.tets[e];
@@ -75,7 +76,8 @@ void relocate_short_tets(TetMesh& mesh, double max_surface_move, const PostPassP
     for (std::size_t e : tets_of[k]) {
       const auto& t = mesh.tets[e];
       a = std::min(a, tet_quality(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
-                                           mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]).min_dihedral_deg);
+                                  mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])])
+                          .min_dihedral_deg);
     }
     return a;
   };
@@ -104,15 +106,17 @@ void relocate_short_tets(TetMesh& mesh, double max_surface_move, const PostPassP
               for (int i = 0; i < 3; ++i) d[static_cast<std::size_t>(i)] -= dn * normal[k][static_cast<std::size_t>(i)];
             }
             const Vec3 trial_total{moved[0] + d[0], moved[1] + d[1], moved[2] + d[2]};
-            if (on_surface[k] && std::sqrt(trial_total[0] * trial_total[0] + trial_total[1] * trial_total[1] + trial_total[2] * trial_total[2]) >
-                                     max_surface_move)
+            if (on_surface[k] &&
+                std::sqrt(trial_total[0] * trial_total[0] + trial_total[1] * trial_total[1] + trial_total[2] * trial_total[2]) > max_surface_move)
               continue;
-            for (int i = 0; i < 3; ++i) mesh.nodes[k][static_cast<std::size_t>(i)] = start[static_cast<std::size_t>(i)] + trial_total[static_cast<std::size_t>(i)];
+            for (int i = 0; i < 3; ++i)
+              mesh.nodes[k][static_cast<std::size_t>(i)] = start[static_cast<std::size_t>(i)] + trial_total[static_cast<std::size_t>(i)];
             const double q = worst_around(k);
             if (q > best * (1 + 1e-9) && min_dihedral_around(k) >= angle_floor) {
               best = q, moved = trial_total, improved = true;
             } else {
-              for (int i = 0; i < 3; ++i) mesh.nodes[k][static_cast<std::size_t>(i)] = start[static_cast<std::size_t>(i)] + moved[static_cast<std::size_t>(i)];
+              for (int i = 0; i < 3; ++i)
+                mesh.nodes[k][static_cast<std::size_t>(i)] = start[static_cast<std::size_t>(i)] + moved[static_cast<std::size_t>(i)];
             }
           }
         if (!improved) step *= 0.5;

@@ -17,8 +17,7 @@ namespace tactus::mesher {
 // (every bone's interface, and the skin for the whole body) with one offset along the vertex
 // normals, delta = (V_label - V_mesh) / area, a fraction of a millimetre; halve it for a surface
 // whose move would invert a tet.
-void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const std::vector<int>& triangle_inner,
-                     const PostPassParams& p) {
+void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const std::vector<int>& triangle_inner, const PostPassParams& p) {
   std::map<int, double> target;  // 0: whole body
   for (auto v : labels.data)
     if (v) target[v] += labels.voxel_volume(), target[0] += labels.voxel_volume();
@@ -55,7 +54,9 @@ void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const st
     }
     for (int attempt = 0; attempt < p.volume_restore_attempts; ++attempt, delta *= 0.5) {
       for (const auto& [v, x] : original)
-        for (int k = 0; k < 3; ++k) mesh.nodes[static_cast<std::size_t>(v)][static_cast<std::size_t>(k)] = x[static_cast<std::size_t>(k)] + delta * normal[v][static_cast<std::size_t>(k)];
+        for (int k = 0; k < 3; ++k)
+          mesh.nodes[static_cast<std::size_t>(v)][static_cast<std::size_t>(k)] =
+              x[static_cast<std::size_t>(k)] + delta * normal[v][static_cast<std::size_t>(k)];
       bool valid = true;
       for (const auto& [v, x] : original)
         for (std::size_t e : tets_of[static_cast<std::size_t>(v)]) valid = valid && tet_vol(e) > 0;

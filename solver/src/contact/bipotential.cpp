@@ -40,15 +40,14 @@ Vec3 coulomb_cone_projection(const Vec3& tau, const Vec3& n, double mu) {
   const double tn = dot(tau, n);
   const Vec3 tt{tau[0] - tn * n[0], tau[1] - tn * n[1], tau[2] - tn * n[2]};
   const double tt_norm = norm(tt);
-  if (tn >= 0 && tt_norm <= mu * tn) return tau;  // inside the cone: stick (tn >= 0 also for mu = 0)
+  if (tn >= 0 && tt_norm <= mu * tn) return tau;    // inside the cone: stick (tn >= 0 also for mu = 0)
   if (mu * tt_norm <= -tn) return {0.0, 0.0, 0.0};  // polar cone: separation
   const double rn = (tn + mu * tt_norm) / (1.0 + mu * mu);
   const double s = tt_norm > 0 ? mu * rn / tt_norm : 0.0;
   return {rn * n[0] + s * tt[0], rn * n[1] + s * tt[1], rn * n[2] + s * tt[2]};
 }
 
-LocalContactResult bipotential_local_solve(const Vec3& u_free, const Vec3& n, double w, double mu, double tolerance,
-                                           int max_iterations) {
+LocalContactResult bipotential_local_solve(const Vec3& u_free, const Vec3& n, double w, double mu, double tolerance, int max_iterations) {
   LocalContactResult out;
   const double rho = 1.0 / w;
   Vec3& r = out.reaction;

@@ -11,9 +11,9 @@ namespace tactus::solver {
 struct RowSolveInput {
   const std::vector<ContactPair>* pairs;
   const ContactSettings* settings;
-  const double* v_old;       // v^{n-1/2}
-  const double* inv_mass;    // per dof, 0 on prescribed dofs
-  double velocity_per_force; // dtbar / (1 + alpha dtbar / 2)
+  const double* v_old;        // v^{n-1/2}
+  const double* inv_mass;     // per dof, 0 on prescribed dofs
+  double velocity_per_force;  // dtbar / (1 + alpha dtbar / 2)
   double dt, dt_prev;
 };
 

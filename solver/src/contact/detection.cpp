@@ -20,8 +20,7 @@ class RigidPlane final : public ContactMaster {
     static const std::vector<std::int32_t> none;
     return none;
   }
-  void detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch&, ContactRows& rows,
-              int) const override {
+  void detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch&, ContactRows& rows, int) const override {
     for (std::size_t k = 0; k < p.slave_nodes.size(); ++k) {
       const std::int32_t s = p.slave_nodes[k];
       const double h = dot(sub(x + 3 * s, point_.data()), normal_);
@@ -56,8 +55,7 @@ void DeformableSurface::build_grid(const ContactPair& p, const double* x, double
   // Cells about one master edge wide, at most ~8 per triangle (a flat surface in a large box).
   double cell = std::max(p.search_scale, 2 * margin);
   const double budget = 8.0 * static_cast<double>(T) + 64;
-  while ((std::ceil((hi[0] - lo[0]) / cell) * std::ceil((hi[1] - lo[1]) / cell) * std::ceil((hi[2] - lo[2]) / cell)) > budget)
-    cell *= 1.26;
+  while ((std::ceil((hi[0] - lo[0]) / cell) * std::ceil((hi[1] - lo[1]) / cell) * std::ceil((hi[2] - lo[2]) / cell)) > budget) cell *= 1.26;
   g.cell = cell;
   for (int c = 0; c < 3; ++c) g.lo[c] = lo[c], g.n[c] = std::max(1, static_cast<int>(std::ceil((hi[c] - lo[c]) / cell)));
   const std::size_t cells = static_cast<std::size_t>(g.n[0]) * g.n[1] * g.n[2];
@@ -98,8 +96,8 @@ void DeformableSurface::build_grid(const ContactPair& p, const double* x, double
   // start[] was advanced to each cell's end: cell c spans [count[c], start[c]).
 }
 
-void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch,
-                               ContactRows& rows, int threads) const {
+void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
+                               int threads) const {
   DetectionScratch::Grid& g = scratch.grid;
   build_grid(p, x, band, g);
   const std::size_t S = p.slave_nodes.size();

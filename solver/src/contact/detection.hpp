@@ -14,7 +14,7 @@ struct DetectionScratch {
     int n[3]{1, 1, 1};
     std::vector<std::int32_t> start, items, count;
     std::vector<std::array<int, 6>> box;  // cell range of each triangle
-    std::vector<double> normal;            // 4 per triangle: unit outward normal, 1 / (2 area); 0 if degenerate
+    std::vector<double> normal;           // 4 per triangle: unit outward normal, 1 / (2 area); 0 if degenerate
   } grid;
   // Per slave node of the pair being searched: closest triangle (-1 none), weights, normal, gap.
   std::vector<std::int32_t> slot_triangle;

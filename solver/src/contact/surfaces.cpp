@@ -30,8 +30,8 @@ double mean_edge(const Model& m, const std::vector<std::array<int, 3>>& tris) {
 }
 
 // Triangles of a body's physical surface group, in internal numbering.
-std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body, const std::string& group,
-                                                const std::string& file, const std::string& key) {
+std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body, const std::string& group, const std::string& file,
+                                                const std::string& key) {
   const PhysicalGroup* g = m.body_group(body, 2, group);
   if (!g) {
     std::string names;
@@ -78,8 +78,7 @@ void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std:
   if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);  // a rigid plane: the slave's own size
 }
 
-void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles,
-                        const std::string& where) {
+void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where) {
   std::unordered_map<std::uint64_t, std::size_t> index;
   index.reserve(2 * triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) index.emplace(face_key(triangles[t][0], triangles[t][1], triangles[t][2]), t);

@@ -24,17 +24,17 @@ struct ThreadAccumulator {
 
 // One thread's share of one material block.
 struct StressKernelArgs {
-  const std::int32_t* conn;   // 4 per tet (model numbering)
-  const double* grad;         // 9 per tet
+  const std::int32_t* conn;  // 4 per tet (model numbering)
+  const double* grad;        // 9 per tet
   const double* volume;
   const void* law;
-  const double* element_data;    // the block's data of its first element
-  std::size_t data_stride;       // doubles per element; 0: every element shares the law's constants
-  std::size_t block_begin;       // element index of element_data
-  std::size_t begin, end;        // the elements of this call
+  const double* element_data;  // the block's data of its first element
+  std::size_t data_stride;     // doubles per element; 0: every element shares the law's constants
+  std::size_t block_begin;     // element index of element_data
+  std::size_t begin, end;      // the elements of this call
   const double* u;
-  const double* v;               // for the viscous part (beta > 0)
-  double* f;                     // this thread's force buffer
+  const double* v;  // for the viscous part (beta > 0)
+  double* f;        // this thread's force buffer
   double beta;
 };
 

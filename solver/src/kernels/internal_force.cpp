@@ -57,8 +57,9 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       const std::size_t n = b.end - b.begin;
       const std::size_t lo = b.begin + n * static_cast<std::size_t>(tid) / static_cast<std::size_t>(nth);
       const std::size_t hi = b.begin + n * static_cast<std::size_t>(tid + 1) / static_cast<std::size_t>(nth);
-      const StressKernelArgs args{model_.conn.data(), model_.grad.data(), model_.volume.data(), b.material.law(), b.data(),
-                                  b.data_stride(), b.begin, lo, hi, u, v, f, viscous ? beta_ : 0.0};
+      const StressKernelArgs args{
+          model_.conn.data(),   model_.grad.data(), model_.volume.data(), b.material.law(), b.data(), b.data_stride(), b.begin, lo, hi, u, v, f,
+          viscous ? beta_ : 0.0};
       b.material.type().stress_pass(args, acc);
     }
 #pragma omp barrier

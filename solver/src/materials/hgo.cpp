@@ -31,21 +31,21 @@ struct Hgo {
     ValueSpec fibres;
     fibres.key = "fibres";
     fibres.type = ValueType::vec3_list;
-    fibres.doc = "the two fibre directions a_1, a_2 in the reference frame (normalised); required unless every body "
-                 "using the material gives per-element fibres";
-    return {"",
-            "Holzapfel-Gasser-Ogden with two fibre families (paper eqs. 20-26); fibres carry load only in tension.",
-            {number("c1", "Pa", "matrix shear parameter (shear modulus = 2 c1)", 0, true),
-             number("k1", "Pa", "fibre stiffness", 0, false), number("k2", "", "fibre exponential stiffening", 0, true),
-             number("k", "Pa", "bulk (volumetric penalty) modulus in k/2 (J-1)^2", 0, true),
-             number("density", "kg/m^3", "mass density in the reference configuration", 0, true), fibres}};
+    fibres.doc =
+        "the two fibre directions a_1, a_2 in the reference frame (normalised); required unless every body "
+        "using the material gives per-element fibres";
+    return {
+        "",
+        "Holzapfel-Gasser-Ogden with two fibre families (paper eqs. 20-26); fibres carry load only in tension.",
+        {number("c1", "Pa", "matrix shear parameter (shear modulus = 2 c1)", 0, true), number("k1", "Pa", "fibre stiffness", 0, false),
+         number("k2", "", "fibre exponential stiffening", 0, true), number("k", "Pa", "bulk (volumetric penalty) modulus in k/2 (J-1)^2", 0, true),
+         number("density", "kg/m^3", "mass density in the reference configuration", 0, true), fibres}};
   }
   static Hgo create(const MaterialValues& v, const std::string& where, std::vector<double>& constants) {
     if (auto it = v.vectors.find("fibres"); it != v.vectors.end()) {
       const auto& f = it->second;
       if (f.size() != 2)
-        throw InputError(v.source, where + ".fibres",
-                         "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
+        throw InputError(v.source, where + ".fibres", "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
                          std::to_string(f.size()) + " directions");
       constants.resize(6);
       for (int i = 0; i < 2; ++i) unit(f[i].data(), constants.data() + 3 * i, v.source, where + ".fibres[" + std::to_string(i) + "]");
@@ -57,9 +57,7 @@ struct Hgo {
     unit(fields, data, where, "fibre_1");
     unit(fields + 3, data + 3, where, "fibre_2");
   }
-  static std::vector<ResultFieldSpec> result_fields() {
-    return {{"fibre_stretch", 2, "stretch |F a| of the two fibre families (hgo; 0 elsewhere)"}};
-  }
+  static std::vector<ResultFieldSpec> result_fields() { return {{"fibre_stretch", 2, "stretch |F a| of the two fibre families (hgo; 0 elsewhere)"}}; }
   void result_values(const Mat3& F, const double* data, double* out) const {
     out[0] = (F * Vec3d(data)).norm();
     out[1] = (F * Vec3d(data + 3)).norm();

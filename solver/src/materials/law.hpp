@@ -62,9 +62,8 @@ inline double parameter(const MaterialValues& values, const std::string& key) { 
 }  // namespace tactus::solver
 
 // Defines the law's registration function, listed once in registry.cpp.
-#define TACTUS_MATERIAL(Law)                                              \
-  const tactus::solver::MaterialType& tactus_material_##Law() {           \
-    static const tactus::solver::MaterialType type =                      \
-        tactus::solver::make_material_type<tactus::solver::Law>();        \
-    return type;                                                          \
+#define TACTUS_MATERIAL(Law)                                                                                    \
+  const tactus::solver::MaterialType& tactus_material_##Law() {                                                 \
+    static const tactus::solver::MaterialType type = tactus::solver::make_material_type<tactus::solver::Law>(); \
+    return type;                                                                                                \
   }

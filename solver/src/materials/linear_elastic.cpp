@@ -12,7 +12,8 @@ struct LinearElastic {
   double lambda = 0, mu = 0;
 
   static SectionSpec parameters() {
-    return {"", "St Venant-Kirchhoff (linear S(E) in the total-Lagrangian frame); bone, the block.",
+    return {"",
+            "St Venant-Kirchhoff (linear S(E) in the total-Lagrangian frame); bone, the block.",
             {number("E", "Pa", "Young's modulus", 0, true), number("nu", "", "Poisson's ratio", -1, true, 0.5, true),
              number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
   }

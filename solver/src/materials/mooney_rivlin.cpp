@@ -15,10 +15,10 @@ struct MooneyRivlin {
   double c10 = 0, c01 = 0, bulk = 0, density = 0;
 
   static SectionSpec parameters() {
-    return {"", "Compressible Mooney-Rivlin: W = c10 (I1bar - 3) + c01 (I2bar - 3) + bulk/2 (J - 1)^2.",
+    return {"",
+            "Compressible Mooney-Rivlin: W = c10 (I1bar - 3) + c01 (I2bar - 3) + bulk/2 (J - 1)^2.",
             {number("c10", "Pa", "first-invariant coefficient", 0, false), number("c01", "Pa", "second-invariant coefficient", 0, false),
-             number("bulk", "Pa", "bulk modulus", 0, true),
-             number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
+             number("bulk", "Pa", "bulk modulus", 0, true), number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
   }
   static MooneyRivlin create(const MaterialValues& v, const std::string& where, std::vector<double>&) {
     MooneyRivlin m{parameter(v, "c10"), parameter(v, "c01"), parameter(v, "bulk"), parameter(v, "density")};

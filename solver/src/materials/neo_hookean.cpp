@@ -10,7 +10,8 @@ struct NeoHookean {
   double mu = 0, bulk = 0, density = 0;
 
   static SectionSpec parameters() {
-    return {"", "Compressible neo-Hookean: W = mu/2 (I1bar - 3) + bulk/2 (J - 1)^2.",
+    return {"",
+            "Compressible neo-Hookean: W = mu/2 (I1bar - 3) + bulk/2 (J - 1)^2.",
             {number("mu", "Pa", "shear modulus", 0, true), number("bulk", "Pa", "bulk modulus", 0, true),
              number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
   }

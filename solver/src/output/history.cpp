@@ -21,8 +21,8 @@ struct Column {
   double (*value)(const HistoryRow&);
 };
 
-// In the order of contracts::history::all (a test keeps them equal).
-const std::array<Column, h::all.size()> kColumns{{
+// In the order of contracts::history::all (checked at compile time below).
+constexpr std::array<Column, h::all.size()> kColumns{{
     {&h::step, [](const HistoryRow& r) { return static_cast<double>(r.step); }},
     {&h::time, [](const HistoryRow& r) { return r.time; }},
     {&h::dt, [](const HistoryRow& r) { return r.dt; }},
@@ -49,6 +49,13 @@ const std::array<Column, h::all.size()> kColumns{{
     {&h::slip_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->slipping); }},
     {&h::uzawa_iterations, [](const HistoryRow& r) { return static_cast<double>(r.contact->iterations); }},
 }};
+
+constexpr bool columns_follow_the_contract() {
+  for (std::size_t k = 0; k < kColumns.size(); ++k)
+    if (kColumns[k].spec != h::all[k]) return false;
+  return true;
+}
+static_assert(columns_follow_the_contract(), "history.csv columns must follow contracts::history::all");
 
 }  // namespace
 

@@ -19,8 +19,8 @@
 namespace tactus::solver {
 
 // The state at one time as a .vtu (input numbering). Returns each block's largest von Mises.
-std::vector<double> write_state(const Model& m, const std::filesystem::path& file, const std::vector<double>& u,
-                                const std::vector<double>& v, const ContactSolver* contact);
+std::vector<double> write_state(const Model& m, const std::filesystem::path& file, const std::vector<double>& u, const std::vector<double>& v,
+                                const ContactSolver* contact);
 void write_pvd(const std::filesystem::path& file, const std::vector<std::pair<double, std::string>>& entries);
 
 // One history row's inputs.
@@ -60,6 +60,6 @@ struct RunPeaks {
 namespace tactus::solver {
 struct RunSummary;
 // run.json (keys from core/contracts.hpp run_json).
-nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary,
-                        const RunPeaks& peaks, const nlohmann::json& failure);
+nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
+                        const nlohmann::json& failure);
 }  // namespace tactus::solver

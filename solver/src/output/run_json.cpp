@@ -15,21 +15,24 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
   for (const auto& p : model.contact_pairs)
     pairs.push_back({{"name", p.name}, {"friction", p.friction}, {"slave_nodes", p.slave_nodes.size()}, {"master", p.master->describe()}});
   const std::size_t peak_input_node = model.input_node(peaks.pressure_node);
-  return {{"pairs", pairs},
-          {"steps_in_contact", peaks.contact_steps},
-          {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},
-          {"peak_area", {{"value", peaks.area}, {"time", peaks.area_time}}},
-          {"peak_pressure",
-           {{"value", peaks.pressure}, {"time", peaks.pressure_time}, {"position", peaks.pressure_at},
-            {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
-          {"uzawa", {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations},
-                     {"unconverged_steps", peaks.unconverged_steps}}}};
+  return {
+      {"pairs", pairs},
+      {"steps_in_contact", peaks.contact_steps},
+      {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},
+      {"peak_area", {{"value", peaks.area}, {"time", peaks.area_time}}},
+      {"peak_pressure",
+       {{"value", peaks.pressure},
+        {"time", peaks.pressure_time},
+        {"position", peaks.pressure_at},
+        {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
+      {"uzawa",
+       {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations}, {"unconverged_steps", peaks.unconverged_steps}}}};
 }
 
 }  // namespace
 
-nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary,
-                        const RunPeaks& peaks, const nlohmann::json& failure) {
+nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
+                        const nlohmann::json& failure) {
   namespace k = contracts::run_json;
   const Energies& en = solver.energies();
   nlohmann::json j;

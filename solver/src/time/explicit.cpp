@@ -10,9 +10,7 @@
 
 namespace tactus::solver {
 
-double Energies::scale() const {
-  return std::max({std::abs(initial), peak, std::abs(external_work), std::abs(damping_work), 1e-300});
-}
+double Energies::scale() const { return std::max({std::abs(initial), peak, std::abs(external_work), std::abs(damping_work), 1e-300}); }
 
 ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping)
     : model_(model), run_(run), damping_(damping), forces_(model, damping.beta, run.threads), contact_(model) {
@@ -78,9 +76,8 @@ void ExplicitSolver::stress_pass() {
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!(pass_.min_jacobian > 0)) {
     std::ostringstream o;
-    o << "inverted element at step " << step_ << ", t = " << time_ << " s: "
-      << model_.describe_element(pass_.min_jacobian_element) << " has J = " << pass_.min_jacobian
-      << " (the time step may be too large, or the loading too severe for this mesh)";
+    o << "inverted element at step " << step_ << ", t = " << time_ << " s: " << model_.describe_element(pass_.min_jacobian_element)
+      << " has J = " << pass_.min_jacobian << " (the time step may be too large, or the loading too severe for this mesh)";
     throw NumericalError(o.str());
   }
   if (!std::isfinite(pass_.strain_energy)) {
@@ -130,12 +127,9 @@ void ExplicitSolver::advance_velocity() {
   double* __restrict v_new_of = v_half_.data();
   const int threads = forces_.threads();
   // Free (contact-less) prediction v^{n+1/2} of one dof, from v^{n-1/2} and the forces at t^n.
-  auto free_velocity = [&](std::size_t i, double fext) {
-    return (c_minus * v_old_of[i] + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus;
-  };
+  auto free_velocity = [&](std::size_t i, double fext) { return (c_minus * v_old_of[i] + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus; };
 #pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::size_t i = 0; i < ndof; ++i)
-    v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : free_velocity(i, external_force(i));
+  for (std::size_t i = 0; i < ndof; ++i) v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : free_velocity(i, external_force(i));
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -194,10 +188,9 @@ void ExplicitSolver::check_energy() const {
   // the work terms is of the same size, so their ratio says nothing (it stopped such runs at step
   // 1). An unstable step grows the energy by a factor per step and is still caught a few steps on.
   if (step_ >= 10 && std::abs(err) > run_.energy_tolerance * energy_.scale()) {
-    o << "energy blow-up at step " << step_ << ", t = " << time_ << " s: energy balance error " << err << " J is "
-      << std::abs(err) / energy_.scale() << " of the largest energy (tolerance run.energy_tolerance = "
-      << run_.energy_tolerance << "); time step " << dt_next_ << " s vs " << describe_step_limit()
-      << " - the step is above the stable limit or the model is unstable";
+    o << "energy blow-up at step " << step_ << ", t = " << time_ << " s: energy balance error " << err << " J is " << std::abs(err) / energy_.scale()
+      << " of the largest energy (tolerance run.energy_tolerance = " << run_.energy_tolerance << "); time step " << dt_next_ << " s vs "
+      << describe_step_limit() << " - the step is above the stable limit or the model is unstable";
     throw NumericalError(o.str());
   }
 }
@@ -228,8 +221,8 @@ void ExplicitSolver::advance_position() {
 }
 
 std::size_t ExplicitSolver::memory_bytes() const {
-  std::size_t doubles = u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + inv_mass_.capacity() +
-                        gravity_force_.capacity();
+  std::size_t doubles =
+      u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + inv_mass_.capacity() + gravity_force_.capacity();
   return doubles * sizeof(double) + forces_.memory_bytes();
 }
 

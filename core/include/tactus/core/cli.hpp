@@ -29,8 +29,7 @@ struct CommonOptions {
 // Adds --version, -v, -q, and (when output_help is non-empty) -o/--output and --force to `app`.
 // With `required_output` (e.g. "an output folder"), `run` stops with an input error when -o is
 // missing.
-void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help,
-                        const std::string& required_output = {});
+void add_common_options(CLI::App& app, CommonOptions& options, const std::string& output_help, const std::string& required_output = {});
 
 // Installs the interrupt handling, parses, applies the log level, runs `body` and turns every
 // tactus error into one message and exit code.

@@ -37,8 +37,7 @@ inline constexpr FieldSpec contact_pressure{"contact_pressure", 1, "Pa", "normal
 inline constexpr FieldSpec contact_traction{"contact_traction", 3, "Pa", "tangential (friction) reaction over the tributary area"};
 inline constexpr FieldSpec contact_status{"contact_status", 1, "", "-1 far from any master, 0 open, 1 stick, 2 slip"};
 inline constexpr FieldSpec contact_gap{"contact_gap", 1, "m", "gap h to the master (NaN when far)"};
-inline constexpr std::array<const FieldSpec*, 6> all{&displacement, &velocity, &contact_pressure, &contact_traction, &contact_status,
-                                                      &contact_gap};
+inline constexpr std::array<const FieldSpec*, 6> all{&displacement, &velocity, &contact_pressure, &contact_traction, &contact_status, &contact_gap};
 }  // namespace point
 
 namespace cell {
@@ -85,32 +84,52 @@ inline constexpr ColumnSpec contact_nodes{"contact_nodes", "", "slave nodes pres
 inline constexpr ColumnSpec stick_nodes{"stick_nodes", "", "of which sticking"};
 inline constexpr ColumnSpec slip_nodes{"slip_nodes", "", "of which slipping"};
 inline constexpr ColumnSpec uzawa_iterations{"uzawa_iterations", "", "Uzawa sweeps this step"};
-inline constexpr std::array<const ColumnSpec*, 25> all{
-    &step,          &time,           &dt,           &kinetic_energy,  &internal_energy, &damping_work,        &external_work,
-    &contact_work_normal, &contact_work_friction, &energy_balance_error, &critical_step, &contact_force, &contact_force_x,
-    &contact_force_y, &contact_force_z, &contact_normal_force, &contact_area, &peak_pressure, &peak_pressure_x, &peak_pressure_y,
-    &peak_pressure_z, &contact_nodes, &stick_nodes, &slip_nodes, &uzawa_iterations};
+inline constexpr std::array<const ColumnSpec*, 25> all{&step,
+                                                       &time,
+                                                       &dt,
+                                                       &kinetic_energy,
+                                                       &internal_energy,
+                                                       &damping_work,
+                                                       &external_work,
+                                                       &contact_work_normal,
+                                                       &contact_work_friction,
+                                                       &energy_balance_error,
+                                                       &critical_step,
+                                                       &contact_force,
+                                                       &contact_force_x,
+                                                       &contact_force_y,
+                                                       &contact_force_z,
+                                                       &contact_normal_force,
+                                                       &contact_area,
+                                                       &peak_pressure,
+                                                       &peak_pressure_x,
+                                                       &peak_pressure_y,
+                                                       &peak_pressure_z,
+                                                       &contact_nodes,
+                                                       &stick_nodes,
+                                                       &slip_nodes,
+                                                       &uzawa_iterations};
 }  // namespace history
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------
 namespace run_json {
-inline constexpr const char* status = "status";            // "completed" | "failed"
-inline constexpr const char* message = "message";          // why it failed, or null
-inline constexpr const char* materials = "materials";      // names behind the cell field "material"
-inline constexpr const char* bodies = "bodies";            // names behind the cell field "body"
+inline constexpr const char* status = "status";        // "completed" | "failed"
+inline constexpr const char* message = "message";      // why it failed, or null
+inline constexpr const char* materials = "materials";  // names behind the cell field "material"
+inline constexpr const char* bodies = "bodies";        // names behind the cell field "body"
 inline constexpr const char* steps = "steps";
 inline constexpr const char* nodes = "nodes";
 inline constexpr const char* tets = "tets";
-inline constexpr const char* end_time = "end_time";        // s, exactly the end time reached
+inline constexpr const char* end_time = "end_time";  // s, exactly the end time reached
 inline constexpr const char* output_times = "output_times";
 inline constexpr const char* outputs = "outputs";
 inline constexpr const char* wall_time = "wall_time_s";
-inline constexpr const char* time_step = "time_step";      // {min, max, safety, min_ratio_to_nominal, critical_initial, ...}
-inline constexpr const char* timing = "timing_s";          // {stress_passes, contact, rest}
-inline constexpr const char* energy = "energy";            // {initial, kinetic, internal, ..., balance_error}
+inline constexpr const char* time_step = "time_step";  // {min, max, safety, min_ratio_to_nominal, critical_initial, ...}
+inline constexpr const char* timing = "timing_s";      // {stress_passes, contact, rest}
+inline constexpr const char* energy = "energy";        // {initial, kinetic, internal, ..., balance_error}
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
-inline constexpr const char* contact = "contact";          // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
-inline constexpr std::array<const char*, 16> all{status,   message, materials, bodies, steps,  nodes,  tets,           end_time,
+inline constexpr const char* contact = "contact";  // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
+inline constexpr std::array<const char*, 16> all{status,       message, materials, bodies,    steps,  nodes,  tets,           end_time,
                                                  output_times, outputs, wall_time, time_step, timing, energy, peak_von_mises, contact};
 }  // namespace run_json
 

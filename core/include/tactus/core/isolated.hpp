@@ -89,7 +89,6 @@ IsolationLimits limits_for_file(const std::string& file, double base = 10, doubl
 // Runs `work` in a child process and returns what it wrote. InputErrors thrown by `work` come
 // back as the same message; other exceptions, crashes, hangs and memory exhaustion become an
 // InputError naming `file` and saying that this `kind` of file (e.g. "HDF5 file") is corrupt.
-std::string run_isolated(const std::string& file, const std::string& kind, const std::function<void(ByteWriter&)>& work,
-                         IsolationLimits limits = {});
+std::string run_isolated(const std::string& file, const std::string& kind, const std::function<void(ByteWriter&)>& work, IsolationLimits limits = {});
 
 }  // namespace tactus

@@ -23,9 +23,9 @@ struct PhysicalGroup {
 struct TetMesh {
   std::vector<Vec3> nodes;
   std::vector<std::array<int, 4>> tets;
-  std::vector<int> tet_group;                  // physical volume tag of each tet
-  std::vector<std::array<int, 3>> triangles;   // tagged boundary/interface triangles
-  std::vector<int> triangle_group;             // physical surface tag of each triangle
+  std::vector<int> tet_group;                 // physical volume tag of each tet
+  std::vector<std::array<int, 3>> triangles;  // tagged boundary/interface triangles
+  std::vector<int> triangle_group;            // physical surface tag of each triangle
   std::vector<PhysicalGroup> groups;
 
   const PhysicalGroup* find_group(int dim, std::string_view name) const;
@@ -54,10 +54,8 @@ struct MeshField {
 // VTK XML unstructured grid (.vtu) of the tets, with cell data "group" (the physical tag) plus
 // the given point and cell fields. Optional `current_nodes` writes the deformed positions
 // (the reference geometry is then recoverable from the "displacement" field, if given).
-void write_vtu(const std::filesystem::path& file, const TetMesh& mesh,
-               const std::vector<MeshField>& point_fields = {},
-               const std::vector<MeshField>& cell_fields = {},
-               const std::vector<Vec3>* current_nodes = nullptr);
+void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields = {},
+               const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr);
 
 struct VtuContents {
   TetMesh mesh;  // nodes, tets, tet_group (no triangles: a .vtu holds the volume cells)

@@ -13,23 +13,22 @@ namespace tactus {
 
 template <class T>
 struct Volume {
-  std::array<int, 3> dims{0, 0, 0};           // nx, ny, nz
-  std::array<double, 3> spacing{1, 1, 1};     // m
-  std::array<double, 3> origin{0, 0, 0};      // m, centre of voxel (0,0,0)
-  std::vector<T> data;                        // nx*ny*nz values
+  std::array<int, 3> dims{0, 0, 0};        // nx, ny, nz
+  std::array<double, 3> spacing{1, 1, 1};  // m
+  std::array<double, 3> origin{0, 0, 0};   // m, centre of voxel (0,0,0)
+  std::vector<T> data;                     // nx*ny*nz values
 
   Volume() = default;
   Volume(std::array<int, 3> d, std::array<double, 3> h, std::array<double, 3> o, T fill = T{})
-      : dims(d), spacing(h), origin(o),
-        data(static_cast<std::size_t>(d[0]) * static_cast<std::size_t>(d[1]) *
-                 static_cast<std::size_t>(d[2]),
-             fill) {}
+      : dims(d),
+        spacing(h),
+        origin(o),
+        data(static_cast<std::size_t>(d[0]) * static_cast<std::size_t>(d[1]) * static_cast<std::size_t>(d[2]), fill) {}
 
   std::size_t size() const noexcept { return data.size(); }
   std::size_t index(int x, int y, int z) const noexcept {
     return static_cast<std::size_t>(x) +
-           static_cast<std::size_t>(dims[0]) *
-               (static_cast<std::size_t>(y) + static_cast<std::size_t>(dims[1]) * static_cast<std::size_t>(z));
+           static_cast<std::size_t>(dims[0]) * (static_cast<std::size_t>(y) + static_cast<std::size_t>(dims[1]) * static_cast<std::size_t>(z));
   }
   T& at(int x, int y, int z) noexcept { return data[index(x, y, z)]; }
   const T& at(int x, int y, int z) const noexcept { return data[index(x, y, z)]; }
@@ -47,9 +46,8 @@ inline constexpr double kMinSpacing = 1e-7, kMaxSpacing = 1.0, kMaxOrigin = 1e3;
 // Throws InputError (naming `file` and `field`) unless the dims are 1..kMaxVolumeDim, the
 // spacings finite within [kMinSpacing, kMaxSpacing], the origin finite within kMaxOrigin, and the
 // voxels (of `bytes_per_voxel`) fit in half this machine's memory.
-void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing,
-                              const std::array<double, 3>& origin, std::size_t bytes_per_voxel, const std::string& file,
-                              const std::string& field);
+void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing, const std::array<double, 3>& origin,
+                              std::size_t bytes_per_voxel, const std::string& file, const std::string& field);
 
 // The label table stored with label volumes: a JSON object {"id": "name"} with ids 0..65535.
 LabelTable parse_label_table(const std::string& json_text, const std::string& file, const std::string& field);
@@ -60,11 +58,9 @@ LabelTable parse_label_table(const std::string& json_text, const std::string& fi
 // value that does not is an error, never clamped). The HDF5 and VTK readers run in an isolated
 // child process (isolated.hpp): a corrupt file is an InputError, never a crash.
 template <class T>
-void write_h5(const std::filesystem::path& file, const std::string& dataset, const Volume<T>& volume,
-              const LabelTable* labels = nullptr);
+void write_h5(const std::filesystem::path& file, const std::string& dataset, const Volume<T>& volume, const LabelTable* labels = nullptr);
 template <class T>
-Volume<T> read_h5(const std::filesystem::path& file, const std::string& dataset,
-                  LabelTable* labels = nullptr);
+Volume<T> read_h5(const std::filesystem::path& file, const std::string& dataset, LabelTable* labels = nullptr);
 
 // VTK XML image data (.vti) for ParaView: one point-data array named `array_name`.
 template <class T>

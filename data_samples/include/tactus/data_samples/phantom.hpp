@@ -14,12 +14,12 @@
 namespace tactus::samples {
 
 struct PhantomParams {
-  double voxel_mm = 0.7;        // in-plane pixel size (x, y)
-  double slice_mm = 0.7;        // slice spacing (z, the hand's long axis)
-  double noise_hu = 25.0;       // standard deviation of the additive noise
-  double blur_voxels = 0.6;     // partial-volume blur, Gaussian sigma in voxels
-  double flexion_deg = 12.0;    // flexion of each finger joint towards the palm
-  double margin_mm = 6.0;       // air around the hand
+  double voxel_mm = 0.7;      // in-plane pixel size (x, y)
+  double slice_mm = 0.7;      // slice spacing (z, the hand's long axis)
+  double noise_hu = 25.0;     // standard deviation of the additive noise
+  double blur_voxels = 0.6;   // partial-volume blur, Gaussian sigma in voxels
+  double flexion_deg = 12.0;  // flexion of each finger joint towards the palm
+  double margin_mm = 6.0;     // air around the hand
   std::uint64_t seed = 1;
 };
 
@@ -29,9 +29,9 @@ struct PhantomHu {
 };
 
 struct Phantom {
-  Volume<std::int16_t> ct;        // HU
-  Volume<std::uint8_t> truth;     // 0 air, 1 soft tissue (incl. skin), 2..28 bones
-  LabelTable labels;              // id -> bone name
+  Volume<std::int16_t> ct;     // HU
+  Volume<std::uint8_t> truth;  // 0 air, 1 soft tissue (incl. skin), 2..28 bones
+  LabelTable labels;           // id -> bone name
 };
 
 Phantom make_hand_phantom(const PhantomParams& params);

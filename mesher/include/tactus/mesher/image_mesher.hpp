@@ -23,12 +23,12 @@ struct ImageMeshParams {
   bool perturb = true, exude = true;
   double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this
   double optimiser_time_limit_s = 30;
-  int relocate_passes = 6;          // node relocation of the tets that set the stable step (0: off)
-  PostPassParams post;              // the post-passes' thresholds (post_passes.hpp)
-  bool restore_volumes = true;      // offset surfaces to the label volumes (see image_mesher.cpp)
-  bool peel_skin_slivers = true;    // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
+  int relocate_passes = 6;        // node relocation of the tets that set the stable step (0: off)
+  PostPassParams post;            // the post-passes' thresholds (post_passes.hpp)
+  bool restore_volumes = true;    // offset surfaces to the label volumes (see image_mesher.cpp)
+  bool peel_skin_slivers = true;  // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
   unsigned seed = 0;
-  double max_elements = 1e7;        // refused above this many expected tets (a runaway guard; raise it knowingly)
+  double max_elements = 1e7;  // refused above this many expected tets (a runaway guard; raise it knowingly)
 };
 
 // The number of tets CGAL's cell-size criterion is expected to give for these labels, from each

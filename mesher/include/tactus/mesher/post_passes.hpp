@@ -13,14 +13,14 @@
 namespace tactus::mesher {
 
 struct PostPassParams {
-  int volume_restore_attempts = 4;   // halvings of an offset that would invert a tet
-  double relocate_ratio_goal = 0.35; // relocate nodes of tets with L_e below this fraction of their subdomain's median
+  int volume_restore_attempts = 4;    // halvings of an offset that would invert a tet
+  double relocate_ratio_goal = 0.35;  // relocate nodes of tets with L_e below this fraction of their subdomain's median
   int relocate_passes = 6;
-  int relocate_iterations = 24;      // pattern-search iterations per node
-  double crease_angle_deg = 50;      // surface nodes whose face normals differ more are not moved
-  double dihedral_floor_deg = 10;    // a move never takes an incident tet's dihedral angle below this
-  double peel_ratio_goal = 0.3;      // skin slivers below this fraction of the soft-tissue median are peeled
-  double peel_pair_factor = 1.5;     // a neighbour peeled with one is short too: below this x peel_ratio_goal
+  int relocate_iterations = 24;    // pattern-search iterations per node
+  double crease_angle_deg = 50;    // surface nodes whose face normals differ more are not moved
+  double dihedral_floor_deg = 10;  // a move never takes an incident tet's dihedral angle below this
+  double peel_ratio_goal = 0.3;    // skin slivers below this fraction of the soft-tissue median are peeled
+  double peel_pair_factor = 1.5;   // a neighbour peeled with one is short too: below this x peel_ratio_goal
   int peel_sweeps = 8;
 };
 
@@ -32,8 +32,7 @@ std::array<double, 3> area_normal(const TetMesh& mesh, const std::array<int, 3>&
 // Restores the volume of every closed surface (each bone's interface, the skin for the whole
 // body) to its label volume by one normal offset. triangle_inner[t]: the label inside triangle t
 // (0 for the outer skin).
-void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const std::vector<int>& triangle_inner,
-                     const PostPassParams& p = {});
+void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const std::vector<int>& triangle_inner, const PostPassParams& p = {});
 // Moves the nodes of the tets whose L_e is below p.relocate_ratio_goal of their subdomain's median.
 void relocate_short_tets(TetMesh& mesh, double max_surface_move, const PostPassParams& p = {});
 // One sweep of peeling; returns the number of tets removed (the boundary triangles are rebuilt).

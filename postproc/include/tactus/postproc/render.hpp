@@ -20,9 +20,9 @@ namespace tactus::postproc {
 struct RenderOptions {
   std::vector<double> times;  // states to draw (nearest output); empty: every output state
   int width = 1200, height = 900;
-  std::string pressure_body;          // body the pressure map shows (default: the one with the highest pressure)
-  std::optional<Vec3> view;           // direction from the model to the camera of the stress pictures
-  std::optional<Vec3> section_normal; // normal of the section plane
+  std::string pressure_body;           // body the pressure map shows (default: the one with the highest pressure)
+  std::optional<Vec3> view;            // direction from the model to the camera of the stress pictures
+  std::optional<Vec3> section_normal;  // normal of the section plane
 };
 
 // Writes into `report`: von_mises_t<ms>.png per chosen time (deformed bodies, one fixed colour

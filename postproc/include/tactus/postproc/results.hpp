@@ -28,7 +28,7 @@ struct Results {
   std::filesystem::path folder;
   std::vector<Frame> frames;  // in time order
   History history;
-  std::string run_json;  // text of run.json (parsed where needed)
+  std::string run_json;                        // text of run.json (parsed where needed)
   std::vector<std::string> materials, bodies;  // names behind the "material" / "body" cell fields
 };
 

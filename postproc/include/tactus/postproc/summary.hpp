@@ -15,6 +15,7 @@ struct PeakAt {
   double value = 0, time = 0;
   std::array<double, 3> position{0, 0, 0};  // current (deformed) position, m
   long index = -1;                          // 1-based node or element of the state files, -1 if none
+  std::string body;                         // the body it lies on (run.json bodies), when known
 };
 
 struct MaterialPeak {

@@ -18,8 +18,8 @@ struct SegmentParams {
   std::optional<double> body_threshold_hu;  // default: Otsu on the whole volume (air vs tissue)
   std::optional<double> bone_threshold_hu;  // default: midpoint of the soft-tissue and cortical levels
   double denoise_sigma_voxels = 0.8;
-  double min_bone_volume_mm3 = 30.0;        // smaller bone components are specks
-  int split_erosion_voxels = 1;             // erosion that separates bones touching at a joint
+  double min_bone_volume_mm3 = 30.0;  // smaller bone components are specks
+  int split_erosion_voxels = 1;       // erosion that separates bones touching at a joint
 };
 
 struct BoneInfo {
@@ -34,7 +34,7 @@ struct Segmentation {
   LabelTable table;
   std::vector<BoneInfo> bones;
   double body_threshold_hu = 0, bone_threshold_hu = 0;
-  double soft_tissue_hu = 0, cortical_hu = 0;  // levels the automatic bone threshold is the midpoint of
+  double soft_tissue_hu = 0, cortical_hu = 0;                // levels the automatic bone threshold is the midpoint of
   std::string body_threshold_source, bone_threshold_source;  // "given" or "otsu"
   std::size_t body_voxels = 0, bone_voxels = 0, specks_removed = 0;
 };

@@ -30,7 +30,7 @@ struct SurfaceReport {
 
 // Extracts "skin" (every label >= 1) and one surface per bone label (>= 2) into `folder`
 // (skin.stl/.ply, bone_NN.stl/.ply). Throws NumericalError if a surface fails its checks.
-std::vector<SurfaceReport> extract_surfaces(const Volume<std::uint8_t>& labels, const LabelTable& table,
-                                            const std::filesystem::path& folder, const SurfaceParams& params);
+std::vector<SurfaceReport> extract_surfaces(const Volume<std::uint8_t>& labels, const LabelTable& table, const std::filesystem::path& folder,
+                                            const SurfaceParams& params);
 
 }  // namespace tactus::segment

@@ -65,8 +65,8 @@ struct ContactRows {
   std::size_t size() const { return pair.size(); }
   std::int32_t slave(std::size_t k) const { return nodes[static_cast<std::size_t>(start[k])]; }
   // Appends a row: the slave node, the master nodes with their weights, normal, gap, area.
-  void add(std::int32_t pair_index, std::int32_t slave_index, std::int32_t slave_node, const std::int32_t* master_nodes,
-           const double* master_weights, int masters, const Vec3& n, double h, double a);
+  void add(std::int32_t pair_index, std::int32_t slave_index, std::int32_t slave_node, const std::int32_t* master_nodes, const double* master_weights,
+           int masters, const Vec3& n, double h, double a);
 };
 
 // A master kind: turns the slave nodes of a pair near it into constraint rows (one virtual call
@@ -79,8 +79,8 @@ class ContactMaster {
   virtual const std::vector<std::int32_t>& triangles() const = 0;
   // Rows for the slave nodes of `pair` (index pair_index) within `band` of this master, at the
   // current positions x (3 per node).
-  virtual void detect(const ContactPair& pair, std::int32_t pair_index, const double* x, double band, DetectionScratch& scratch,
-                      ContactRows& rows, int threads) const = 0;
+  virtual void detect(const ContactPair& pair, std::int32_t pair_index, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
+                      int threads) const = 0;
 };
 
 // Master kinds.
@@ -95,8 +95,7 @@ void set_slave_surface(ContactPair& pair, const Model& model, const std::vector<
 // Orients every triangle outward from the tets of `model` that own it and makes it the pair's
 // deformable master; its mean edge becomes the search scale. InputError naming `where` when a
 // triangle is not a face of any tet.
-void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles,
-                        const std::string& where);
+void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles, const std::string& where);
 void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_normal);
 // The triangles of physical surface `tag` of body `body` (default the first) of the model's
 // input mesh, in internal numbering.
@@ -125,12 +124,12 @@ struct ContactStepReport {
   std::size_t candidates = 0, active = 0, sticking = 0, slipping = 0;
   int iterations = 0;
   bool converged = true;
-  double residual = 0;                   // last max |dr| / max |r|
-  Vec3 force{0, 0, 0};                   // sum of r over slave nodes, N
-  double normal_force = 0;               // sum of r_n, N
-  double area = 0;                       // tributary area of nodes with r_n > 0, m^2
-  double peak_pressure = 0;              // Pa
-  std::int32_t peak_node = -1;           // internal node of the peak pressure
+  double residual = 0;          // last max |dr| / max |r|
+  Vec3 force{0, 0, 0};          // sum of r over slave nodes, N
+  double normal_force = 0;      // sum of r_n, N
+  double area = 0;              // tributary area of nodes with r_n > 0, m^2
+  double peak_pressure = 0;     // Pa
+  std::int32_t peak_node = -1;  // internal node of the peak pressure
   // Work of the reactions over du^{n-1/2} and du^{n+1/2} (trapezoid halves), relative motion:
   double normal_work_back = 0, normal_work_forward = 0, friction_work_back = 0, friction_work_forward = 0;
   // Work of the supports that take the reaction shares landing on prescribed dofs (halves).
@@ -152,16 +151,15 @@ class ContactSolver {
   // One contact step. v (in/out): free half-step velocities v^{n+1/2}, corrected in place.
   // v_old: v^{n-1/2}. velocity_per_force: dv = velocity_per_force * inv_mass * r (dtbar / (1 + alpha dtbar/2)).
   // dt: the position step that follows; dt_prev: the one before (for the work halves).
-  ContactStepReport correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass,
-                                       double velocity_per_force, double dt, double dt_prev);
+  ContactStepReport correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass, double velocity_per_force, double dt,
+                                       double dt_prev);
 
   const ContactRows& rows() const { return rows_; }
   const std::vector<ContactPair>& pairs() const { return pairs_; }
 
   // Point fields in the internal numbering: pressure (r_n / area), traction (r_t / area, 3),
   // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near).
-  void node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status,
-                   std::vector<double>& gap) const;
+  void node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status, std::vector<double>& gap) const;
 
  private:
   void detect(const double* u, double search_factor);

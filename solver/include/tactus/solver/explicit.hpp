@@ -26,9 +26,7 @@ struct Energies {
   double peak = 0;  // largest kinetic + internal seen, for relative errors
   double contact_work() const { return contact_normal_work + contact_friction_work; }
   // kinetic + internal + damping work + contact work - external work - initial: zero for an exact integrator.
-  double balance_error() const {
-    return kinetic + internal + damping_work + contact_work() - external_work - initial;
-  }
+  double balance_error() const { return kinetic + internal + damping_work + contact_work() - external_work - initial; }
   double scale() const;
 };
 
@@ -44,8 +42,8 @@ class ExplicitSolver {
 
   double time() const { return time_; }
   std::size_t step_index() const { return step_; }
-  double time_step() const { return dt_next_; }          // dt^{n+1/2}
-  double last_step() const { return dt_prev_; }          // dt^{n-1/2}: the step that reached t^n
+  double time_step() const { return dt_next_; }  // dt^{n+1/2}
+  double last_step() const { return dt_prev_; }  // dt^{n-1/2}: the step that reached t^n
   // The output times the run lands on exactly (schedule.hpp), ending with end_time.
   const std::vector<double>& schedule() const { return schedule_; }
   // True when t^n is exactly the end time.
@@ -58,7 +56,7 @@ class ExplicitSolver {
   const StressPassResult& stress_pass() const { return pass_; }
   const Energies& energies() const { return energy_; }
   const std::vector<double>& displacement() const { return u_; }
-  std::vector<double> velocity_at_step() const;          // v^n (after advance_velocity)
+  std::vector<double> velocity_at_step() const;  // v^n (after advance_velocity)
   const std::vector<double>& half_step_velocity() const { return v_half_; }
   // u^{n-1} = u^n - dt^{n-1/2} v^{n-1/2}: the last good state when step n fails.
   std::vector<double> previous_displacement() const;

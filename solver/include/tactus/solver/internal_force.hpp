@@ -13,8 +13,7 @@ namespace tactus::solver {
 // Gradient of a nodal vector field over a one-point tet: sum_a w_a (x) grad N_a, written with the
 // differences to node 0 (grad N_0 = -sum of the others). conn: the tet's 4 nodes; grad: its 9
 // stored reference gradients. Gives F - I from displacements and Fdot from velocities.
-[[gnu::always_inline]] inline Mat3 nodal_gradient(const double* __restrict field, const std::int32_t* conn,
-                                                  const double* __restrict grad) {
+[[gnu::always_inline]] inline Mat3 nodal_gradient(const double* __restrict field, const std::int32_t* conn, const double* __restrict grad) {
   const double* w0 = field + 3 * static_cast<std::size_t>(conn[0]);
   const double* w1 = field + 3 * static_cast<std::size_t>(conn[1]);
   const double* w2 = field + 3 * static_cast<std::size_t>(conn[2]);
@@ -28,9 +27,9 @@ namespace tactus::solver {
 }
 
 struct StressPassResult {
-  double strain_energy = 0;    // sum_e V_e W(F_e)
-  double viscous_power = 0;    // sum_e V_e P_visc : Fdot (>= 0), Rayleigh beta part
-  double critical_step = 0;    // min_e dt_e (no safety factor)
+  double strain_energy = 0;  // sum_e V_e W(F_e)
+  double viscous_power = 0;  // sum_e V_e P_visc : Fdot (>= 0), Rayleigh beta part
+  double critical_step = 0;  // min_e dt_e (no safety factor)
   std::size_t limiting_element = 0;
   double min_jacobian = 0;
   std::size_t min_jacobian_element = 0;

@@ -106,7 +106,7 @@ struct MaterialType {
   StressPoint (*evaluate)(const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) = nullptr;
   void (*result_values)(const void* law, const Mat3& F, const double* data, double* out) = nullptr;  // result_fields, in order
   double (*density)(const void* law) = nullptr;
-  double (*small_strain_bulk)(const void* law) = nullptr;   // for Rayleigh beta and the initial step
+  double (*small_strain_bulk)(const void* law) = nullptr;  // for Rayleigh beta and the initial step
   double (*small_strain_shear)(const void* law) = nullptr;
   void (*stress_pass)(const StressKernelArgs& args, ThreadAccumulator& acc) = nullptr;
 };

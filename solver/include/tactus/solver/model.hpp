@@ -20,7 +20,7 @@ namespace tactus::solver {
 struct MaterialBlock {
   std::string name;  // material name in the scenario
   Material material;
-  std::size_t begin = 0, end = 0;   // element range
+  std::size_t begin = 0, end = 0;    // element range
   std::vector<double> element_data;  // material.type().element_data_size per element, or empty
 
   bool per_element_data() const { return !element_data.empty(); }
@@ -63,13 +63,13 @@ struct Model {
   std::vector<std::int32_t> input_element;     // input index of internal tet
   TetMesh input_mesh;                          // all bodies, input numbering, placed coordinates, file tags
   std::vector<BodyRange> bodies;
-  std::vector<std::int32_t> tet_body;          // body of each input tet
+  std::vector<std::int32_t> tet_body;  // body of each input tet
 
   // Contact (internal numbering): directed slave -> master pairs and the iteration settings.
   std::vector<ContactPair> contact_pairs;
   ContactSettings contact_settings;
 
-  std::size_t memory_bytes() const;  // everything held, including the input mesh copy
+  std::size_t memory_bytes() const;                          // everything held, including the input mesh copy
   std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"
   const MaterialBlock& block_of(std::size_t internal) const;
   // Input-numbering index of an internal node (a search: for messages and reports, not loops).
@@ -99,6 +99,6 @@ void reorder_for_locality(Model& model);
 namespace tactus::solver {
 // Constrains the chosen components of every node whose reference position satisfies `select`
 // to the given velocity (0 = fixed). Returns how many nodes were selected. For tests/benchmarks.
-std::size_t constrain_nodes(Model& model, const std::function<bool(const double* X)>& select,
-                            std::array<bool, 3> components, const Vec3& velocity = {0, 0, 0});
+std::size_t constrain_nodes(Model& model, const std::function<bool(const double* X)>& select, std::array<bool, 3> components,
+                            const Vec3& velocity = {0, 0, 0});
 }  // namespace tactus::solver

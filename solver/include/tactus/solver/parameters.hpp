@@ -35,7 +35,6 @@ struct SectionSpec {
 
 // Convenience builders for the declaration tables.
 ValueSpec number(std::string key, std::string unit, std::string doc, double min = -std::numeric_limits<double>::infinity(),
-                 bool min_exclusive = false, double max = std::numeric_limits<double>::infinity(),
-                 bool max_exclusive = false);
+                 bool min_exclusive = false, double max = std::numeric_limits<double>::infinity(), bool max_exclusive = false);
 
 }  // namespace tactus::solver

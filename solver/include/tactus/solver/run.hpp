@@ -27,8 +27,8 @@ struct RunSummary {
   std::string status;  // "completed" or "failed"
   std::size_t steps = 0;
   double end_time = 0, dt_min = 0, dt_max = 0, wall_seconds = 0;
-  double energy_balance_error = 0;           // final, J
-  double max_relative_balance_error = 0;     // max over steps of |error| / scale
+  double energy_balance_error = 0;        // final, J
+  double max_relative_balance_error = 0;  // max over steps of |error| / scale
   std::size_t outputs = 0;
   std::vector<double> von_mises_peak;  // per material block, over the output states
   nlohmann::json run_json;             // what run.json holds
@@ -47,7 +47,6 @@ nlohmann::json results_reference_json();
 
 // The material-point driver (tactus-solve material-point): Cauchy stress against stretch as CSV.
 // mode: "uniaxial" (lateral stresses solved to zero), "equibiaxial" (sigma_zz = 0), "shear" (F = I + gamma e_x (x) e_y).
-std::string material_point_csv(const Scenario& scenario, const std::string& material, const std::string& mode,
-                              double max_value, int samples);
+std::string material_point_csv(const Scenario& scenario, const std::string& material, const std::string& mode, double max_value, int samples);
 
 }  // namespace tactus::solver

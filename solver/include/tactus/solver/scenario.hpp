@@ -25,8 +25,8 @@ struct RunSpec {
   double energy_tolerance = 0.25;  // relative energy-balance error that stops a run as unstable
   Vec3 gravity{0, 0, 0};
   double gravity_ramp_time = 0;
-  int threads = 0;  // 0: all cores
-  int history_every = 0;  // 0: automatic (about 2000 rows)
+  int threads = 0;             // 0: all cores
+  int history_every = 0;       // 0: automatic (about 2000 rows)
   double max_outputs = 10000;  // runaway guards: refused above these
   double max_steps = 1e7;
 };
@@ -58,9 +58,9 @@ struct BodySpec {
 
 struct BoundarySpec {
   std::string body;
-  std::string group;  // physical surface or volume group name, or empty when a box is given
+  std::string group;                       // physical surface or volume group name, or empty when a box is given
   std::optional<std::array<Vec3, 2>> box;  // [min, max] in placed coordinates
-  std::string type;   // "fixed" or "velocity"
+  std::string type;                        // "fixed" or "velocity"
   Vec3 velocity{0, 0, 0};
   std::array<bool, 3> components{true, true, true};
 };
@@ -69,13 +69,13 @@ struct BoundarySpec {
 struct ContactSpec {
   std::string slave_body, slave_surface, master_body, master_surface;
   std::optional<std::array<Vec3, 2>> plane;  // point, outward normal (rigid plane master)
-  double friction = 0;                        // Coulomb coefficient mu
-  bool two_pass = false;                      // also the master's nodes against the slave surface
+  double friction = 0;                       // Coulomb coefficient mu
+  bool two_pass = false;                     // also the master's nodes against the slave surface
 };
 
 // [contact_solver]: the Uzawa iterations and the search.
 struct ContactSettings {
-  double tolerance = 1e-6;     // stop when max |dr| <= tolerance * max |r| over the contact nodes
+  double tolerance = 1e-6;  // stop when max |dr| <= tolerance * max |r| over the contact nodes
   int max_iterations = 200;
   double search_factor = 0.5;  // search distance and penetration band, in mean master edges
 };

@@ -1,0 +1,328 @@
+// tactus-post on a tiny hand-made results folder: a 40 x 20 x 5 mm plate ("soft") pressed by a
+// 10 mm cube ("bone"), two output states, a three-row history and a run.json. Every number the
+// summary reports is set here by hand, so the oracles are the values written; the pictures are
+// read back as pixels (VTK's PNG reader) and checked for what they must show.
+#include <gtest/gtest.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "expect_error.hpp"
+#include "tactus/core/contracts.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
+#include "tactus/postproc/results.hpp"
+#include "tactus/postproc/summary.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+using tactus::testkit::expect_input_error;
+using tactus::testkit::TempDir;
+namespace fs = std::filesystem;
+namespace c = tactus::contracts;
+
+namespace {
+
+constexpr double kPeakPressure = 2e6;    // Pa at the plate's top node (10, 10, 5) mm, state 1
+constexpr double kSidePressure = 0.5e6;  // Pa at its four neighbours
+constexpr double kPunchStress = 5e6;     // Pa, every cube cell, state 1
+constexpr std::size_t kPlateCells = 4 * 2 * 1 * 6;
+
+struct Folder {
+  TetMesh mesh;
+  std::size_t plate_nodes = 0;
+  std::size_t peak_node = 0;  // 0-based
+  std::size_t soft_peak = 0;  // 0-based element of the plate's peak von Mises
+
+  // von Mises of plate cell e in state k: grows with e, and with the state.
+  static double plate_stress(std::size_t e, int k) { return (1 + k) * 1e3 * static_cast<double>(e + 1); }
+};
+
+Folder write_results(const fs::path& dir, bool contact = true) {
+  Folder f;
+  f.mesh = samples::make_box_mesh(4, 2, 1, 0.04, 0.02, 0.005);
+  f.plate_nodes = f.mesh.nodes.size();
+  samples::append_mesh(f.mesh, samples::make_box_mesh(1, 1, 1, 0.01, 0.01, 0.01, {0.015, 0.005, 0.0055}), 100, "_punch");
+  const std::size_t cells = f.mesh.tets.size();
+  fs::create_directories(dir / "results");
+  std::ofstream pvd(dir / "results.pvd");
+  pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (int k = 0; k < 2; ++k) {
+    MeshField vm{c::cell::von_mises.name, 1, {}}, mat{c::cell::material.name, 1, {}}, body{c::cell::body.name, 1, {}};
+    for (std::size_t e = 0; e < cells; ++e) {
+      const bool plate = e < kPlateCells;
+      vm.values.push_back(plate ? Folder::plate_stress(e, k) : k * kPunchStress);
+      mat.values.push_back(plate ? 0 : 1);
+      body.values.push_back(plate ? 0 : 1);
+    }
+    MeshField p{c::point::contact_pressure.name, 1, std::vector<double>(f.mesh.nodes.size(), 0.0)};
+    for (std::size_t i = 0; i < f.plate_nodes && k == 1 && contact; ++i) {
+      const auto& x = f.mesh.nodes[i];
+      if (std::abs(x[2] - 0.005) > 1e-12) continue;
+      const double d = std::hypot(x[0] - 0.01, x[1] - 0.01);
+      if (d < 1e-9)
+        p.values[i] = kPeakPressure, f.peak_node = i;
+      else if (std::abs(d - 0.01) < 1e-9)
+        p.values[i] = kSidePressure;
+    }
+    const std::string name = "results/state_000" + std::to_string(k) + ".vtu";
+    write_vtu(dir / name, f.mesh, {p}, {vm, mat, body});
+    pvd << "<DataSet timestep=\"" << k * 1e-3 << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
+  }
+  pvd << "</Collection>\n</VTKFile>\n";
+  f.soft_peak = kPlateCells - 1;
+
+  std::ofstream h(dir / "history.csv");
+  for (std::size_t k = 0; k < c::history::all.size(); ++k) h << (k ? "," : "") << c::history::all[k]->name;
+  h << "\n";
+  const double time[3] = {0, 0.5e-3, 1e-3}, force[3] = {0, 50, 120}, kinetic[3] = {2.0, 1.5, 1.0};
+  for (int r = 0; r < 3; ++r) {
+    for (std::size_t k = 0; k < c::history::all.size(); ++k) {
+      const std::string col = c::history::all[k]->name;
+      double v = 0;
+      if (col == c::history::step.name) v = r * 10;
+      if (col == c::history::time.name) v = time[r];
+      if (col == c::history::kinetic_energy.name) v = kinetic[r];
+      if (col == c::history::internal_energy.name) v = 2.0 - kinetic[r];
+      if (col == c::history::contact_force.name) v = contact ? force[r] : 0;
+      if (col == c::history::contact_area.name) v = contact ? r * 1e-4 : 0;
+      if (col == c::history::peak_pressure.name) v = contact ? r * 1e6 : 0;
+      h << (k ? "," : "") << v;
+    }
+    h << "\n";
+  }
+  nlohmann::json run = {
+      {c::run_json::status, "completed"},
+      {c::run_json::message, nullptr},
+      {c::run_json::materials, {"soft", "bone"}},
+      {c::run_json::bodies, {"plate", "punch"}},
+      {c::run_json::steps, 20},
+      {c::run_json::nodes, f.mesh.nodes.size()},
+      {c::run_json::tets, cells},
+      {c::run_json::end_time, 1e-3},
+      {c::run_json::wall_time, 0.25},
+      {c::run_json::time_step, {{"min", 4e-5}, {"max", 5e-5}}},
+      {c::run_json::energy, {{"initial", 2.0}, {"balance_error", -0.01}, {"contact_work_normal", 0.3}, {"contact_work_friction", 0.1}}},
+      {c::run_json::contact,
+       {{"steps_in_contact", contact ? 7 : 0},
+        {"peak_force", {{"value", 130.0}, {"time", 0.9e-3}}},
+        {"peak_area", {{"value", 2.5e-4}, {"time", 0.95e-3}}},
+        {"peak_pressure", {{"value", 3e6}, {"time", 0.8e-3}, {"position", {0.01, 0.01, 0.005}}, {"node", f.peak_node + 1}}}}}};
+  std::ofstream(dir / "run.json") << run.dump(2);
+  return f;
+}
+
+std::array<double, 3> centroid(const TetMesh& m, std::size_t e) {
+  std::array<double, 3> x{0, 0, 0};
+  for (int v : m.tets[e])
+    for (std::size_t d = 0; d < 3; ++d) x[d] += 0.25 * m.nodes[static_cast<std::size_t>(v)][d];
+  return x;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
+  TempDir tmp;
+  const Folder f = write_results(tmp.path() / "solve");
+  const auto results = postproc::read_results(tmp.path() / "solve");
+  const auto s = postproc::summarize(results);
+  ASSERT_EQ(s.von_mises.size(), 2u);
+  EXPECT_EQ(s.von_mises[0].material, "soft");
+  EXPECT_DOUBLE_EQ(s.von_mises[0].von_mises.value, Folder::plate_stress(f.soft_peak, 1));
+  EXPECT_DOUBLE_EQ(s.von_mises[0].von_mises.time, 1e-3);
+  EXPECT_EQ(s.von_mises[0].von_mises.index, static_cast<long>(f.soft_peak) + 1);
+  const auto at = centroid(f.mesh, f.soft_peak);
+  for (std::size_t d = 0; d < 3; ++d) EXPECT_NEAR(s.von_mises[0].von_mises.position[d], at[d], 1e-15);
+  EXPECT_DOUBLE_EQ(s.von_mises[1].von_mises.value, kPunchStress);
+
+  EXPECT_TRUE(s.contact_occurred);
+  EXPECT_DOUBLE_EQ(s.peak_pressure_outputs.value, kPeakPressure);
+  EXPECT_EQ(s.peak_pressure_outputs.index, static_cast<long>(f.peak_node) + 1);
+  EXPECT_NEAR(s.peak_pressure_outputs.position[0], 0.01, 1e-15);
+  EXPECT_NEAR(s.peak_pressure_outputs.position[1], 0.01, 1e-15);
+  EXPECT_EQ(s.peak_pressure_outputs.body, "plate");    // the body of the cells around the peak node
+  EXPECT_DOUBLE_EQ(s.peak_pressure_steps.value, 3e6);  // run.json: every step
+  EXPECT_DOUBLE_EQ(s.peak_force.value, 130.0);
+  EXPECT_DOUBLE_EQ(s.largest_area.value, 2.5e-4);
+
+  ASSERT_EQ(s.frames.size(), 2u);
+  EXPECT_EQ(s.frames[0].contact_nodes, 0u);
+  EXPECT_EQ(s.frames[1].contact_nodes, 5u);          // the peak node and its four neighbours
+  EXPECT_DOUBLE_EQ(s.frames[1].contact_force, 120);  // the history row at 1 ms
+  EXPECT_DOUBLE_EQ(s.frames[0].contact_force, 0);
+  EXPECT_DOUBLE_EQ(s.frames[1].von_mises_max[1], kPunchStress);
+  EXPECT_DOUBLE_EQ(s.initial_kinetic, 2.0);
+
+  const auto j = nlohmann::json::parse(postproc::summary_json(s));
+  std::cout << "summary: soft peak " << j["peak_von_mises"]["soft"]["value"] << " Pa, pressure at outputs "
+            << j["contact"]["peak_pressure_at_outputs"]["value"] << " Pa, balance " << j["energy"]["balance_error_of_initial_kinetic"] << "\n";
+  EXPECT_DOUBLE_EQ(j["energy"]["balance_error_of_initial_kinetic"].get<double>(), 0.01 / 2.0);
+  EXPECT_DOUBLE_EQ(j["contact"]["peak_pressure_at_outputs"]["value"].get<double>(), kPeakPressure);
+  const std::string md = postproc::summary_markdown(s);
+  EXPECT_NE(md.find("| soft | 0.096 | 1 | element 48, "), std::string::npos) << md;  // 96 kPa at 1 ms
+  EXPECT_NE(md.find("| peak contact force | 130 N |"), std::string::npos) << md;
+}
+
+TEST(Summary, NoContactIsSaid) {
+  TempDir tmp;
+  write_results(tmp.path() / "solve", false);
+  const auto s = postproc::summarize(postproc::read_results(tmp.path() / "solve"));
+  EXPECT_FALSE(s.contact_occurred);
+  EXPECT_EQ(s.peak_pressure_outputs.value, 0);
+  EXPECT_NE(postproc::summary_markdown(s).find("No contact occurred"), std::string::npos);
+  EXPECT_FALSE(nlohmann::json::parse(postproc::summary_json(s))["contact"].contains("peak_force"));
+}
+
+TEST(Summary, BrokenFoldersAreNamed) {
+  TempDir tmp;
+  const fs::path d = tmp.path() / "solve";
+  write_results(d);
+  // A truncated history row: the file and the line.
+  {
+    std::string h = slurp(d / "history.csv");
+    h = h.substr(0, h.rfind(',', h.size() - 2)) + "\n";
+    std::ofstream(d / "history.csv") << h;
+    expect_input_error([&] { postproc::read_results(d); }, {"history.csv", "line 4", "truncated"});
+  }
+  write_results(d);
+  // A wrong type in run.json: the key.
+  {
+    auto j = nlohmann::json::parse(slurp(d / "run.json"));
+    j[c::run_json::steps] = "many";
+    std::ofstream(d / "run.json") << j.dump();
+    expect_input_error([&] { postproc::read_results(d); }, {"run.json", "steps", "count"});
+  }
+  write_results(d);
+  // A material index beyond run.json's list: the state file.
+  {
+    auto j = nlohmann::json::parse(slurp(d / "run.json"));
+    j[c::run_json::materials] = {"soft"};
+    std::ofstream(d / "run.json") << j.dump();
+    expect_input_error([&] { postproc::summarize(postproc::read_results(d)); }, {"state_0000.vtu", "material", "indices below 1"});
+  }
+}
+
+// ---- pictures: tactus-post itself (it starts its own Xvfb), the PNGs read back --------------------
+
+namespace {
+
+struct Picture {
+  int width = 0, height = 0;
+  std::vector<std::array<int, 3>> rgb;  // row 0 at the bottom (VTK's order)
+  const std::array<int, 3>& at(int x, int y) const { return rgb[static_cast<std::size_t>(y * width + x)]; }
+};
+
+Picture read_png(const fs::path& file) {
+  vtkNew<vtkPNGReader> r;
+  r->SetFileName(file.string().c_str());
+  r->Update();
+  vtkImageData* img = r->GetOutput();
+  Picture p;
+  int dims[3];
+  img->GetDimensions(dims);
+  p.width = dims[0], p.height = dims[1];
+  const int n = img->GetNumberOfScalarComponents();
+  const auto* data = static_cast<const unsigned char*>(img->GetScalarPointer());
+  for (int i = 0; i < p.width * p.height; ++i) p.rgb.push_back({data[i * n], data[i * n + 1], data[i * n + 2]});
+  return p;
+}
+
+// The model's part of a picture: left of the colour bar (88 % of the width), between the caption
+// rows at the top and the legend at the bottom.
+template <typename Pred>
+std::vector<std::array<int, 2>> pixels(const Picture& p, Pred pred) {
+  std::vector<std::array<int, 2>> out;
+  for (int y = 60; y < p.height - 60; ++y)
+    for (int x = 0; x < static_cast<int>(0.86 * p.width); ++x)
+      if (pred(p.at(x, y))) out.push_back({x, y});
+  return out;
+}
+
+bool coloured(const std::array<int, 3>& c) { return std::max({c[0], c[1], c[2]}) - std::min({c[0], c[1], c[2]}) > 60; }
+bool red(const std::array<int, 3>& c) { return c[0] > 200 && c[1] < 70 && c[2] < 70; }
+bool black(const std::array<int, 3>& c) { return c[0] < 30 && c[1] < 30 && c[2] < 30; }
+bool light_grey(const std::array<int, 3>& c) { return std::abs(c[0] - c[1]) < 6 && std::abs(c[1] - c[2]) < 6 && c[0] > 150 && c[0] < 235; }
+
+std::array<double, 2> mean(const std::vector<std::array<int, 2>>& px) {
+  std::array<double, 2> m{0, 0};
+  for (const auto& q : px) m[0] += q[0], m[1] += q[1];
+  for (double& v : m) v /= static_cast<double>(std::max<std::size_t>(px.size(), 1));
+  return m;
+}
+
+int run_post(const fs::path& results, const fs::path& report, const std::string& options) {
+  const std::string cmd = "env -u DISPLAY '" + std::string(TACTUS_POST_EXE) + "' '" + results.string() + "' -o '" + report.string() + "' -q " +
+                          options + " > '" + report.string() + ".log' 2>&1";
+  return std::system(cmd.c_str());
+}
+
+}  // namespace
+
+TEST(Pictures, ShowWhatTheDataSays) {
+  TempDir tmp;
+  const fs::path d = tmp.path() / "solve";
+  write_results(d);
+  ASSERT_EQ(run_post(d, tmp.path() / "report", ""), 0) << slurp(tmp.path() / "report.log");
+  ASSERT_EQ(run_post(d, tmp.path() / "edge_on", "--view 1 0 0"), 0) << slurp(tmp.path() / "edge_on.log");
+  const auto summary = nlohmann::json::parse(slurp(tmp.path() / "report" / "summary.json"));
+  std::vector<std::string> expected{"von_mises_t0.00ms.png", "von_mises_t1.00ms.png",  "section.png",      "pressure.png", "plot_contact_force.png",
+                                    "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png"};
+  EXPECT_EQ(summary["pictures"].get<std::vector<std::string>>(), expected);
+
+  // The stress picture looks along the plate's thinnest axis (z), so the plate shows its 40 x 20
+  // mm face; seen edge-on along x (--view 1 0 0) it shows 20 x 5 mm plus the cube's 10 x 10 mm:
+  // a quarter of the area at the same camera distance, less the perspective's enlargement of the
+  // near end (the camera is about 4 plate half-lengths away: the end face grows by ~1.6).
+  const Picture top = read_png(tmp.path() / "report" / "von_mises_t1.00ms.png");
+  const Picture side = read_png(tmp.path() / "edge_on" / "von_mises_t1.00ms.png");
+  EXPECT_EQ(top.width, 1200);
+  EXPECT_EQ(top.height, 900);
+  const double a_top = static_cast<double>(pixels(top, coloured).size()), a_side = static_cast<double>(pixels(side, coloured).size());
+  std::cout << "coloured pixels: default view " << a_top << ", edge-on " << a_side << " (ratio " << a_top / a_side << ", areas 800 : 200 mm^2)\n";
+  EXPECT_GT(a_top, 2.0 * a_side);
+  EXPECT_LT(a_top, 5.0 * a_side);
+
+  // The pressure map shows the plate from its pressed (+z) side: red at the peak node (a quarter of
+  // the plate's length from its end, so away from the picture's centre), the black dot on it,
+  // unpressed grey around.
+  const Picture pressure = read_png(tmp.path() / "report" / "pressure.png");
+  const auto reds = pixels(pressure, red), dots = pixels(pressure, black), greys = pixels(pressure, light_grey);
+  const auto r = mean(reds), b = mean(dots);
+  std::cout << "pressure picture: " << reds.size() << " red pixels around (" << r[0] << ", " << r[1] << "), black dot at (" << b[0] << ", " << b[1]
+            << "), " << greys.size() << " grey\n";
+  ASSERT_FALSE(reds.empty());
+  ASSERT_FALSE(dots.empty());
+  EXPECT_GT(greys.size(), reds.size());
+  EXPECT_LT(std::hypot(r[0] - b[0], r[1] - b[1]), 0.03 * pressure.width);
+  EXPECT_GT(std::hypot(r[0] - 0.5 * pressure.width, r[1] - 0.5 * pressure.height), 0.1 * pressure.width);
+
+  // The force plot draws its one line in the first plot colour.
+  const Picture plot = read_png(tmp.path() / "report" / "plot_contact_force.png");
+  EXPECT_EQ(plot.width, 900);
+  const auto line = pixels(plot, [](const std::array<int, 3>& c) { return std::abs(c[0] - 31) < 30 && std::abs(c[1] - 119) < 30 && c[2] > 150; });
+  std::cout << "force plot: " << line.size() << " line pixels\n";
+  EXPECT_GT(line.size(), 200u);
+}
+
+TEST(Pictures, UnknownPressureBodyIsRefused) {
+  TempDir tmp;
+  write_results(tmp.path() / "solve");
+  EXPECT_NE(run_post(tmp.path() / "solve", tmp.path() / "report", "--pressure-body hand"), 0);
+  const std::string log = slurp(tmp.path() / "report.log");
+  EXPECT_NE(log.find("--pressure-body"), std::string::npos) << log;
+  EXPECT_NE(log.find("plate, punch"), std::string::npos) << log;
+  EXPECT_FALSE(fs::exists(tmp.path() / "report"));
+}
