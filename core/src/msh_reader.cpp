@@ -7,6 +7,7 @@
 // tags) and entity blocks in $Nodes / $Elements; binary files store ints as 4 bytes and size_t as
 // the header's data size (8); 2.2 puts the physical tag first in each element's tag list.
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -27,50 +28,13 @@ namespace {
 constexpr int kTriangle = 2, kTet = 4;
 constexpr double kMaxCoordinate = 1e9;  // |x| beyond this is not a mesh of anything tactus simulates
 
-// Nodes per element type (gmsh's numbering), for skipping the types tactus does not use.
+// Nodes per element type (gmsh's numbering 1..19), for skipping the types tactus does not use:
+// line, triangle, quadrangle, tetrahedron, hexahedron, prism, pyramid, then the second-order
+// line, triangle, quadrangle, tetrahedron, hexahedron, prism, pyramid, the point, and the
+// serendipity quadrangle, hexahedron, prism, pyramid.
+constexpr std::array<int, 20> kNodesPerElementType{0, 2, 3, 4, 4, 8, 6, 5, 3, 6, 9, 10, 27, 18, 14, 1, 8, 20, 15, 13};
 int nodes_per_element(int type) {
-  switch (type) {
-    case 1:
-      return 2;  // line
-    case 2:
-      return 3;  // triangle
-    case 3:
-      return 4;  // quadrangle
-    case 4:
-      return 4;  // tetrahedron
-    case 5:
-      return 8;  // hexahedron
-    case 6:
-      return 6;  // prism
-    case 7:
-      return 5;  // pyramid
-    case 8:
-      return 3;  // 3-node line
-    case 9:
-      return 6;  // 6-node triangle
-    case 10:
-      return 9;  // 9-node quadrangle
-    case 11:
-      return 10;  // 10-node tetrahedron
-    case 12:
-      return 27;  // 27-node hexahedron
-    case 13:
-      return 18;  // 18-node prism
-    case 14:
-      return 14;  // 14-node pyramid
-    case 15:
-      return 1;  // point
-    case 16:
-      return 8;  // 8-node quadrangle
-    case 17:
-      return 20;  // 20-node hexahedron
-    case 18:
-      return 15;  // 15-node prism
-    case 19:
-      return 13;  // 13-node pyramid
-    default:
-      return 0;
-  }
+  return type > 0 && type < static_cast<int>(kNodesPerElementType.size()) ? kNodesPerElementType[static_cast<std::size_t>(type)] : 0;
 }
 
 // A cursor over the file's bytes that reads ASCII tokens or binary values, with bounds checks.
@@ -259,7 +223,6 @@ void read_nodes_41(Cursor& c, Number& num, RawMesh& raw) {
     const std::uint64_t n = num.size(where + " node count");
     if (raw.node_tags.size() + n > total) c.fail(where, "blocks adding up to the declared " + std::to_string(total) + " nodes", "more");
     c.check_count(n, num.min_size() + 3 * num.min_real(), where);
-    const std::size_t first = raw.node_tags.size();
     for (std::uint64_t i = 0; i < n; ++i) raw.node_tags.push_back(num.size(where + " node tag"));
     const int params = parametric ? dim : 0;
     for (std::uint64_t i = 0; i < n; ++i) {
@@ -267,7 +230,6 @@ void read_nodes_41(Cursor& c, Number& num, RawMesh& raw) {
       for (int k = 0; k < params; ++k) num.real(where + " parametric coordinate");
       raw.coords.push_back(x);
     }
-    (void)first;
   }
   if (raw.node_tags.size() != total) c.fail("$Nodes", std::to_string(total) + " nodes as declared", std::to_string(raw.node_tags.size()));
   c.expect("$EndNodes", "$Nodes");

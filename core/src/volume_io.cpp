@@ -309,6 +309,17 @@ Volume<T> read_h5_direct(const fs::path& file, const std::string& dataset, Label
   return v;
 }
 
+// The volume an isolated reader sent back: dims, spacing, origin, then the voxels.
+template <class T>
+Volume<T> get_volume(ByteReader& r) {
+  Volume<T> v;
+  v.dims = r.get<std::array<int, 3>>();
+  v.spacing = r.get<std::array<double, 3>>();
+  v.origin = r.get<std::array<double, 3>>();
+  v.data = r.get_vector<T>();
+  return v;
+}
+
 }  // namespace
 
 template <class T>
@@ -330,11 +341,7 @@ Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* 
       },
       limits_for_file(fname, 20, 2));
   ByteReader r(bytes);
-  Volume<T> v;
-  v.dims = r.get<std::array<int, 3>>();
-  v.spacing = r.get<std::array<double, 3>>();
-  v.origin = r.get<std::array<double, 3>>();
-  v.data = r.get_vector<T>();
+  Volume<T> v = get_volume<T>(r);
   const auto n = r.get<std::uint64_t>();
   if (labels) labels->clear();
   for (std::uint64_t i = 0; i < n; ++i) {
@@ -405,12 +412,7 @@ Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
       },
       limits_for_file(fname, 20, 2));
   ByteReader r(bytes);
-  Volume<T> v;
-  v.dims = r.get<std::array<int, 3>>();
-  v.spacing = r.get<std::array<double, 3>>();
-  v.origin = r.get<std::array<double, 3>>();
-  v.data = r.get_vector<T>();
-  return v;
+  return get_volume<T>(r);
 }
 
 #define TACTUS_VOLUME_IO(T)                                                                            \

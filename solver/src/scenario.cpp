@@ -268,6 +268,20 @@ class Reader {
     return *t;
   }
 
+  // Each table of an array of tables ([[key]]), its keys checked against spec, handed to
+  // visit(table, path) with path "key[i]" for the messages.
+  template <class Visit>
+  void each_table(const toml::node& n, const std::string& key, const SectionSpec& spec, Visit&& visit) const {
+    const toml::array* arr = n.as_array();
+    if (!arr) fail(key, "[[" + key + "]] tables", describe(n));
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string path = key + "[" + std::to_string(i) + "]";
+      const toml::table& t = table((*arr)[i], path);
+      check_keys(t, spec, path);
+      visit(t, path);
+    }
+  }
+
   static std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
   static std::string unit_suffix(const ValueSpec& s) { return s.unit.empty() ? "" : " in " + s.unit; }
   static std::string describe(const toml::node& n) {
@@ -403,12 +417,9 @@ void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const f
   {  // [[bodies]]
     const auto& spec = body_section();
     const toml::array* arr = root.get("bodies")->as_array();
-    if (!arr || arr->empty()) r.fail("bodies", "one or more [[bodies]] tables", "none");
+    if (arr && arr->empty()) r.fail("bodies", "one or more [[bodies]] tables", "none");
     std::set<std::string> names;
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const std::string path = "bodies[" + std::to_string(i) + "]";
-      const toml::table& t = r.table((*arr)[i], path);
-      r.check_keys(t, spec, path);
+    r.each_table(*root.get("bodies"), "bodies", spec, [&](const toml::table& t, const std::string& path) {
       BodySpec b;
       b.name = r.string(t, *spec.find("name"), path);
       if (!names.insert(b.name).second) r.fail(path + ".name", "a unique body name", "\"" + b.name + "\" twice");
@@ -443,7 +454,7 @@ void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const f
         b.materials[group] = mat;
       }
       sc.bodies.push_back(b);
-    }
+    });
   }
 }
 
@@ -457,12 +468,7 @@ void require_body(const Reader& r, const Scenario& sc, const std::string& name, 
 void read_boundaries(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("boundary")) {  // [[boundary]]
     const auto& spec = boundary_section();
-    const toml::array* arr = n->as_array();
-    if (!arr) r.fail("boundary", "[[boundary]] tables");
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const std::string path = "boundary[" + std::to_string(i) + "]";
-      const toml::table& t = r.table((*arr)[i], path);
-      r.check_keys(t, spec, path);
+    r.each_table(*n, "boundary", spec, [&](const toml::table& t, const std::string& path) {
       BoundarySpec bc;
       bc.body = r.string(t, *spec.find("body"), path);
       require_body(r, sc, bc.body, path + ".body");
@@ -484,19 +490,14 @@ void read_boundaries(const Reader& r, const toml::table& root, Scenario& sc) {
         bc.components[c - 'x'] = true;
       }
       sc.boundaries.push_back(bc);
-    }
+    });
   }
 }
 
 void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("contact")) {  // [[contact]]
     const auto& spec = contact_section();
-    const toml::array* arr = n->as_array();
-    if (!arr) r.fail("contact", "[[contact]] tables");
-    for (std::size_t i = 0; i < arr->size(); ++i) {
-      const std::string path = "contact[" + std::to_string(i) + "]";
-      const toml::table& t = r.table((*arr)[i], path);
-      r.check_keys(t, spec, path);
+    r.each_table(*n, "contact", spec, [&](const toml::table& t, const std::string& path) {
       ContactSpec c;
       c.slave_body = r.string(t, *spec.find("slave_body"), path);
       require_body(r, sc, c.slave_body, path + ".slave_body");
@@ -521,7 +522,7 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
       if (c.two_pass && c.plane) r.fail(path + ".two_pass", "false for a rigid plane", "true");
       sc.contacts.push_back(c);
-    }
+    });
   }
 }
 
@@ -530,20 +531,15 @@ void read_pipeline(const Reader& r, const toml::table& root) {
     const toml::table& t = r.table(*n, "pipeline");
     r.check_keys(t, SectionSpec{"pipeline", "", {typed("meshes", ValueType::table_list, "", "[[pipeline.meshes]] entries", false)}}, "pipeline");
     if (const toml::node* m = t.get("meshes")) {
-      const toml::array* arr = m->as_array();
-      if (!arr) r.fail("pipeline.meshes", "[[pipeline.meshes]] tables");
       const auto& spec = pipeline_section();
-      for (std::size_t i = 0; i < arr->size(); ++i) {
-        const std::string path = "pipeline.meshes[" + std::to_string(i) + "]";
-        const toml::table& e = r.table((*arr)[i], path);
-        r.check_keys(e, spec, path);
+      r.each_table(*m, "pipeline.meshes", spec, [&](const toml::table& e, const std::string& path) {
         const std::string kind = r.string(e, *spec.find("kind"), path);
         if (kind != "labels" && kind != "box" && kind != "stl") r.fail(path + ".kind", "labels, box or stl", "\"" + kind + "\"");
         r.string(e, *spec.find("output"), path);
         r.string(e, *spec.find("args"), path);
         if (kind == "stl" && !e.contains("file")) r.fail(path + ".file", "the STL file of kind = stl", "missing");
         r.string(e, *spec.find("file"), path);
-      }
+      });
     }
   }
 }
