@@ -113,16 +113,17 @@ Summary summarize(const Results& r) {
       }
     }
     if (const MeshField* p = v.point_field(cp::contact_pressure.name)) {
-      const long previous_peak = s.peak_pressure_outputs.index;
+      bool new_peak = false;  // in this state (possibly at the same node as before: its body is looked up again)
       for (std::size_t i = 0; i < p->values.size(); ++i) {
         const double pi = p->values[i];
         if (pi > 0) ++fs.contact_nodes;
         if (pi > fs.contact_pressure_max) fs.contact_pressure_max = pi;
-        if (pi > s.peak_pressure_outputs.value)
+        if (pi > s.peak_pressure_outputs.value) {
           s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1, ""};
+          new_peak = true;
+        }
       }
-      if (s.peak_pressure_outputs.index != previous_peak)
-        s.peak_pressure_outputs.body = body_of_node(v, static_cast<std::size_t>(s.peak_pressure_outputs.index - 1), r.bodies, file);
+      if (new_peak) s.peak_pressure_outputs.body = body_of_node(v, static_cast<std::size_t>(s.peak_pressure_outputs.index - 1), r.bodies, file);
     }
     if (h.has(hc::contact_force.name) && h.rows() > 0) {  // nearest history row
       const auto& t = h.column(hc::time.name);
