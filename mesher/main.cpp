@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-elements", p.max_elements, "refuse meshes expected to have more tets than this")->capture_default_str();
   app.add_option("--wave-speed", speed_args,
                  "GROUP=SPEED: P-wave speed (m/s) of a physical volume for the step report "
-                 "(repeatable; GROUP \"*\" for the rest; e.g. soft_tissue=9760 \"*\"=2540)");
+                 "(repeatable; GROUP \"*\" for the rest; e.g. soft_tissue=309 \"*\"=2304, the paper's tissue and bone)");
 
   app.fallthrough();  // -o, -v given after a subcommand belong to the main command
   auto* box = app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh");

@@ -15,6 +15,7 @@
 #include <random>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/staged_output.hpp"
 #include "tactus/core/volume_filters.hpp"
@@ -181,9 +182,9 @@ Phantom make_hand_phantom(const PhantomParams& p) {
   validate_volume_geometry(dims, spacing_m, origin_m, 11, "phantom parameters", "--voxel-mm/--slice-mm");
   out.truth = Volume<std::uint8_t>(dims, spacing_m, origin_m, 0);
   out.ct = Volume<std::int16_t>(dims, spacing_m, origin_m, 0);
-  out.labels[0] = "background";
-  out.labels[1] = "soft_tissue";
-  for (std::size_t b = 0; b < h.bones.size(); ++b) out.labels[static_cast<int>(b) + 2] = h.bones[b].name;
+  out.labels[contracts::kBackgroundLabel] = "background";
+  out.labels[contracts::kSoftTissueLabel] = contracts::kSoftTissueName;
+  for (std::size_t b = 0; b < h.bones.size(); ++b) out.labels[static_cast<int>(b) + contracts::kFirstBoneLabel] = h.bones[b].name;
 
   Volume<float> hu_volume(dims, spacing_m, origin_m, 0.0f);
   std::vector<float>& hu = hu_volume.data;

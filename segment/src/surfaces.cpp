@@ -26,6 +26,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/progress.hpp"
@@ -202,7 +203,7 @@ std::vector<SurfaceReport> extract_surfaces(const Volume<std::uint8_t>& labels, 
   {
     std::vector<char> select(256, 0);
     for (int v = 1; v < 256; ++v) select[static_cast<std::size_t>(v)] = 1;
-    out.push_back(make_surface(labels, select, "skin", folder, p));
+    out.push_back(make_surface(labels, select, contracts::kSkinGroup, folder, p));
     for (const auto& [id, name] : table)
       if (id >= 1) out.back().labels.push_back(id);
   }
