@@ -4,7 +4,8 @@ history.csv, and run.json's figures (not its timings). Prints one line per case.
     compare.py A B [--allow NAME ...]
 An array present on one side only passes when all its values are 0 (a field that became optional).
 --allow names a deliberate change of a file contract that is reported but not failed: an array
-("cell:group") or a run.json key ("contact.pairs").
+("cell:group"), a run.json key ("contact.pairs") or a prefix of history columns added on one side
+("history:reaction_").
 Bit-identity assumes builds with -ffp-contract=off (cmake -DTACTUS_EXACT_FP=ON): GCC's default
 contraction into FMA depends on inlining, so an unchanged formula may round differently after a
 refactor; with contraction off the arithmetic is exactly what the source says."""
@@ -47,6 +48,25 @@ def figures(path):
     return j
 
 
+def compare_history(pa, pb):
+    """Every column both files have, as text (bit for bit); a column on one side only must be
+    allowed by prefix (--allow history:reaction_ admits the reaction columns a change added)."""
+    def columns(path):
+        lines = open(path).read().splitlines()
+        names = lines[0].split(",")
+        rows = [line.split(",") for line in lines[1:]]
+        return {n: [r[k] for r in rows] for k, n in enumerate(names)}
+    A, B = columns(pa), columns(pb)
+    out = []
+    for name in sorted(set(A) | set(B)):
+        if name in A and name in B:
+            if A[name] != B[name]:
+                out.append(f"history.csv: {name} differs")
+        elif not any(x.startswith("history:") and name.startswith(x[len("history:"):]) for x in ALLOW):
+            out.append(f"history.csv: {name} only in one")
+    return out
+
+
 def compare(a, b):
     diffs = []
     for root, _, files in os.walk(a):
@@ -66,8 +86,7 @@ def compare(a, b):
                         d = np.nanmax(np.abs(A[k].astype(float) - B[k].astype(float))) if A[k].shape == B[k].shape else "shape"
                         diffs.append(f"{f}: {k} differs (max {d})")
             elif f == "history.csv":
-                if open(pa).read() != open(pb).read():
-                    diffs.append("history.csv differs")
+                diffs += compare_history(pa, pb)
             elif f == "run.json":
                 if figures(pa) != figures(pb):
                     diffs.append("run.json figures differ")

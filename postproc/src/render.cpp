@@ -461,7 +461,27 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
         {hc::contact_work_friction.name, 1.0},
         {hc::energy_balance_error.name, 1.0}},
        pw, ph);
-  for (const char* f : {"plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png"})
+  // |R| of every support, from its reaction_<name>_x, _y, _z columns.
+  History reactions;
+  std::vector<std::pair<std::string, double>> series;
+  const std::string prefix = contracts::history::reaction.prefix;
+  for (const std::string& name : h.names)
+    if (name.rfind(prefix, 0) == 0 && name.size() > prefix.size() + 2 && name.compare(name.size() - 2, 2, "_x") == 0) {
+      const std::string base = name.substr(0, name.size() - 2), label = "|R| " + base.substr(prefix.size());
+      if (!h.has(base + "_y") || !h.has(base + "_z")) continue;
+      const auto &x = h.column(base + "_x"), &y = h.column(base + "_y"), &z = h.column(base + "_z");
+      std::vector<double> mag(x.size());
+      for (std::size_t i = 0; i < x.size(); ++i) mag[i] = std::sqrt(x[i] * x[i] + y[i] * y[i] + z[i] * z[i]);
+      reactions.columns[label] = std::move(mag);
+      reactions.names.push_back(label);
+      series.push_back({label, 1.0});
+    }
+  if (!series.empty()) {
+    reactions.columns[hc::time.name] = h.column(hc::time.name);
+    reactions.names.insert(reactions.names.begin(), hc::time.name);
+    plot(reactions, report / "plot_reactions.png", "support reactions", "N", series, pw, ph);
+  }
+  for (const char* f : {"plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png", "plot_reactions.png"})
     if (fs::exists(report / f)) written.push_back(f);
   return written;
 }

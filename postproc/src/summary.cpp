@@ -92,6 +92,22 @@ Summary summarize(const Results& r) {
     s.contact_occurred = c.value("steps_in_contact", std::size_t{0}) > 0;
   }
 
+  if (j.contains(rk::reactions) && j[rk::reactions].is_array())
+    for (const auto& e : j[rk::reactions]) {
+      ReactionSummary rs;
+      rs.name = e.value("name", "");
+      auto vec3 = [](const nlohmann::json& v) {
+        return v.is_array() && v.size() == 3 ? v.get<std::array<double, 3>>() : std::array<double, 3>{0, 0, 0};
+      };
+      if (e.contains("final_force")) rs.final_force = vec3(e["final_force"]);
+      if (e.contains("final_moment")) rs.final_moment = vec3(e["final_moment"]);
+      if (e.contains("peak_force")) {
+        rs.peak = num(e["peak_force"], "value"), rs.peak_time = num(e["peak_force"], "time");
+        if (e["peak_force"].contains("vector")) rs.peak_force = vec3(e["peak_force"]["vector"]);
+      }
+      s.reactions.push_back(rs);
+    }
+
   const std::size_t M = std::max<std::size_t>(r.materials.size(), 1);
   s.von_mises.resize(M);
   for (std::size_t m = 0; m < M; ++m) s.von_mises[m].material = m < r.materials.size() ? r.materials[m] : "material " + std::to_string(m);
@@ -164,6 +180,15 @@ std::string summary_json(const Summary& s) {
     j["contact"]["largest_area"] = {{"value", s.largest_area.value}, {"unit", "m^2"}, {"time_s", s.largest_area.time}};
     j["contact"]["peak_force"] = {{"value", s.peak_force.value}, {"unit", "N"}, {"time_s", s.peak_force.time}};
   }
+  nlohmann::json reactions = nlohmann::json::array();
+  for (const auto& rs : s.reactions)
+    reactions.push_back({{"name", rs.name},
+                         {"peak_N", rs.peak},
+                         {"peak_time_s", rs.peak_time},
+                         {"peak_force_N", rs.peak_force},
+                         {"final_force_N", rs.final_force},
+                         {"final_moment_N_m", rs.final_moment}});
+  j["reactions"] = reactions;
   nlohmann::json frames = nlohmann::json::array();
   for (const auto& f : s.frames) {
     nlohmann::json fv = nlohmann::json::object();
@@ -214,6 +239,19 @@ std::string summary_markdown(const Summary& s) {
     o << "| peak contact force | " << s.peak_force.value << " N | " << s.peak_force.time * 1e3 << " | |\n";
     o << "\nThe any-step peak includes the first-touch impulse of each node (velocity-level impact over one step); "
          "the output-state peak is what the pressure picture shows.\n";
+  }
+  if (!s.reactions.empty()) {
+    o << "\n## Support reactions\n\n| boundary | peak abs(R) (N) | at (ms) | R then (N) | R at the end (N) | moment at the end (N m) "
+         "|\n|---|---|---|---|---|---|\n";
+    auto v3 = [](const std::array<double, 3>& v) {
+      std::ostringstream t;
+      t << "(" << v[0] << ", " << v[1] << ", " << v[2] << ")";
+      return t.str();
+    };
+    for (const auto& rs : s.reactions)
+      o << "| " << rs.name << " | " << rs.peak << " | " << rs.peak_time * 1e3 << " | " << v3(rs.peak_force) << " | " << v3(rs.final_force) << " | "
+        << v3(rs.final_moment) << " |\n";
+    o << "\nThe force each support applies to the body (history.csv has it at every row, with its moment).\n";
   }
   o << "\n## Output states\n\n| t (ms) | file |";
   for (const auto& m : s.von_mises) o << " max von Mises " << m.material << " (MPa) |";

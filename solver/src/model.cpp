@@ -8,6 +8,7 @@
 #include <numeric>
 #include <optional>
 #include <sstream>
+#include <type_traits>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
@@ -46,9 +47,9 @@ struct MortonFrame {
 
 // Applies node permutation `new_of_old` to every node array and to the connectivity.
 void permute_nodes(Model& m, const std::vector<std::int32_t>& new_of_old) {
-  auto permute3 = [&](std::vector<double>& v) {
+  auto permute3 = [&](auto& v) {
     if (v.empty()) return;
-    std::vector<double> out(v.size());
+    std::remove_reference_t<decltype(v)> out(v.size());
     for (std::size_t i = 0; i < m.num_nodes; ++i)
       for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(new_of_old[i]) + c] = v[3 * i + c];
     v.swap(out);
@@ -56,17 +57,14 @@ void permute_nodes(Model& m, const std::vector<std::int32_t>& new_of_old) {
   permute3(m.X);
   permute3(m.initial_velocity);
   permute3(m.constraint_velocity);
+  permute3(m.constraint_curve);
+  permute3(m.constraint_boundary);
   if (!m.mass.empty()) {
     std::vector<double> out(m.num_nodes);
     for (std::size_t i = 0; i < m.num_nodes; ++i) out[static_cast<std::size_t>(new_of_old[i])] = m.mass[i];
     m.mass.swap(out);
   }
-  if (!m.constrained.empty()) {
-    std::vector<std::uint8_t> out(m.constrained.size());
-    for (std::size_t i = 0; i < m.num_nodes; ++i)
-      for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(new_of_old[i]) + c] = m.constrained[3 * i + c];
-    m.constrained.swap(out);
-  }
+  permute3(m.constrained);
   for (auto& v : m.conn) v = new_of_old[static_cast<std::size_t>(v)];
   for (auto& v : m.node_of_input) v = new_of_old[static_cast<std::size_t>(v)];
 }

@@ -95,11 +95,21 @@ std::vector<std::pair<std::string, int>> all_element_fields(const Scenario& sc, 
   return fields;
 }
 
-// Scale, translate, then `against`: moved along one axis to leave the gap to an earlier body.
+// x -> R (x - about) + about, R given by its rows.
+Vec3 rotate(const BodySpec& body, const Vec3& x) {
+  Vec3 d{x[0] - body.rotate_about[0], x[1] - body.rotate_about[1], x[2] - body.rotate_about[2]}, out{};
+  for (int i = 0; i < 3; ++i) out[i] = body.rotation[i][0] * d[0] + body.rotation[i][1] * d[1] + body.rotation[i][2] * d[2] + body.rotate_about[i];
+  return out;
+}
+
+// Scale, rotate, translate, then `against`: moved along one axis to leave the gap to an earlier body.
 void place_body(const Scenario& sc, std::size_t bi, const Model& m, TetMesh& mesh) {
   const BodySpec& body = sc.bodies[bi];
-  for (auto& x : mesh.nodes)
-    for (int c = 0; c < 3; ++c) x[c] = x[c] * body.scale + body.translate[c];
+  for (auto& x : mesh.nodes) {
+    for (int c = 0; c < 3; ++c) x[c] *= body.scale;
+    if (body.rotated) x = rotate(body, x);
+    for (int c = 0; c < 3; ++c) x[c] += body.translate[c];
+  }
   if (body.against.empty()) return;
   const int a = body.against_axis;
   std::size_t other = 0;
@@ -173,6 +183,18 @@ void append_body(const Scenario& sc, std::size_t bi, Model& m, TetAssignment& te
                        "no such group");
 }
 
+// The law's element data of a tet in a rotated body, rotated with it: every 3-component element
+// field (hgo's fibre directions) is a direction in the reference frame.
+void rotate_element_data(const MaterialType& type, const BodySpec& body, double* data, const std::string& key) {
+  if (!type.element_data_is_directions)
+    throw InputError("scenario", key + ".rotate_axis", "a body whose materials' element data can rotate (" + type.name + "'s cannot)", "a rotation");
+  for (std::size_t k = 0; k + 2 < type.element_data_size; k += 3) {
+    const Vec3 a{data[k], data[k + 1], data[k + 2]};
+    for (int i = 0; i < 3; ++i)
+      data[k + static_cast<std::size_t>(i)] = body.rotation[i][0] * a[0] + body.rotation[i][1] * a[1] + body.rotation[i][2] * a[2];
+  }
+}
+
 // One block per material (in the scenario's order), its elements in input order; a law's element
 // data from the bodies' files where given, else the material's constants.
 std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssignment& tets) {
@@ -190,7 +212,7 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
     const std::size_t n = type.element_data_size;
     bool from_files = false;
     for (std::size_t k = b.begin; k < b.end && n > 0; ++k) {
-      if (tets.data[order[k]])
+      if (tets.data[order[k]] || sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].rotated)
         from_files = true;
       else if (b.material.needs_element_data()) {
         std::string keys;
@@ -212,6 +234,7 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
                                         sc.bodies[body].fibres.string() + ": tet " + std::to_string(order[k] - m.bodies[body].tet_begin + 1));
         else
           std::copy(b.material.constant_element_data().begin(), b.material.constant_element_data().end(), out);
+        if (sc.bodies[body].rotated) rotate_element_data(type, sc.bodies[body], out, "bodies[" + std::to_string(body) + "]");
       }
     }
     m.blocks.push_back(std::move(b));
@@ -258,25 +281,97 @@ std::vector<char> boundary_selection(const Scenario& sc, const Model& m, std::si
   return selected;
 }
 
+// The index of a [curves] name in m.curves (-1 for none).
+std::int32_t curve_index(const Model& m, const std::string& name) {
+  for (std::size_t k = 0; k < m.curves.size(); ++k)
+    if (m.curves[k].name == name) return static_cast<std::int32_t>(k);
+  return -1;
+}
+
 void apply_boundaries(const Scenario& sc, Model& m) {
   m.constrained.assign(3 * m.num_nodes, 0);
   m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
+  m.constraint_curve.assign(3 * m.num_nodes, -1);
+  m.constraint_boundary.assign(3 * m.num_nodes, -1);
   for (std::size_t k = 0; k < sc.boundaries.size(); ++k) {
     const BoundarySpec& bc = sc.boundaries[k];
     const std::vector<char> selected = boundary_selection(sc, m, k);
+    m.boundaries.push_back({bc.name.empty() ? "boundary" + std::to_string(k) : bc.name, bc.moment_about});
+    const std::int32_t curve = curve_index(m, bc.curve);
     std::size_t count = 0;
     for (std::size_t i = 0; i < m.num_nodes; ++i) {
       if (!selected[i]) continue;
       ++count;
       for (int c = 0; c < 3; ++c)
         if (bc.components[c]) {
-          m.constrained[3 * i + c] = 1;
-          m.constraint_velocity[3 * i + c] = bc.type == "velocity" ? bc.velocity[c] : 0.0;
+          m.constrained[3 * i + c] = bc.type == "displacement" ? 2 : 1;
+          m.constraint_velocity[3 * i + c] = bc.type == "velocity" ? bc.velocity[c] : bc.type == "displacement" ? bc.displacement[c] : 0.0;
+          m.constraint_curve[3 * i + c] = bc.type == "fixed" ? -1 : curve;
+          m.constraint_boundary[3 * i + c] = static_cast<std::int32_t>(k);
         }
     }
     const std::string key = "boundary[" + std::to_string(k) + "]";
     if (count == 0) throw InputError(sc.file.string(), key, "a selection containing nodes of body '" + bc.body + "'", "no node");
     log::verbose() << key << ": " << count << " nodes " << bc.type;
+  }
+}
+
+// [[load]] pressures: the group's triangles, oriented out of the body (away from the fourth node
+// of the tet they bound), in internal numbering.
+void add_pressure_loads(const Scenario& sc, Model& m) {
+  for (std::size_t k = 0; k < sc.loads.size(); ++k) {
+    const LoadSpec& spec = sc.loads[k];
+    const std::string key = "load[" + std::to_string(k) + "]";
+    std::size_t bi = 0;
+    while (sc.bodies[bi].name != spec.body) ++bi;
+    const BodyRange& range = m.bodies[bi];
+    const PhysicalGroup* g = m.body_group(bi, 2, spec.group);
+    if (!g) {
+      std::string groups;
+      for (const PhysicalGroup* pg : m.body_groups(bi))
+        if (pg->dim == 2) groups += (groups.empty() ? "" : ", ") + pg->name;
+      throw InputError(sc.file.string(), key + ".group", "a physical surface group of body '" + spec.body + "' (" + groups + ")",
+                       "\"" + spec.group + "\"");
+    }
+    std::map<std::array<int, 3>, std::array<int, 3>> wanted;  // sorted nodes -> the triangle
+    for (std::size_t t = range.triangle_begin; t < range.triangle_end; ++t)
+      if (m.input_mesh.triangle_group[t] == g->tag) {
+        auto key3 = m.input_mesh.triangles[t];
+        std::sort(key3.begin(), key3.end());
+        wanted[key3] = m.input_mesh.triangles[t];
+      }
+    PressureLoad load;
+    load.name = key + " " + spec.body + "/" + spec.group;
+    load.pressure = spec.pressure;
+    load.curve = curve_index(m, spec.curve);
+    static constexpr int kFace[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};  // face nodes, then the opposite one
+    std::map<std::array<int, 3>, int> faces_of;                                                   // tets each wanted triangle bounds
+    for (std::size_t e = range.tet_begin; e < range.tet_end; ++e) {
+      const auto& tet = m.input_mesh.tets[e];
+      for (const auto& f : kFace) {
+        std::array<int, 3> key3{tet[f[0]], tet[f[1]], tet[f[2]]};
+        std::sort(key3.begin(), key3.end());
+        if (!wanted.count(key3)) continue;
+        std::array<int, 3> tri = key3;
+        const auto x = [&](int v) { return m.input_mesh.nodes[static_cast<std::size_t>(v)]; };
+        // Outward: the opposite node lies behind the triangle's normal.
+        const Vec3 a = x(tri[0]), b = x(tri[1]), c = x(tri[2]), o = x(tet[f[3]]);
+        const double n[3] = {(b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]),
+                             (b[2] - a[2]) * (c[0] - a[0]) - (b[0] - a[0]) * (c[2] - a[2]),
+                             (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])};
+        if (n[0] * (o[0] - a[0]) + n[1] * (o[1] - a[1]) + n[2] * (o[2] - a[2]) > 0) std::swap(tri[1], tri[2]);
+        for (int v : tri) load.triangles.push_back(m.node_of_input[static_cast<std::size_t>(v)]);
+        ++faces_of[key3];
+      }
+    }
+    std::size_t bad = 0;
+    for (const auto& [k3, tri] : wanted) bad += faces_of.count(k3) == 0 || faces_of[k3] != 1;
+    if (bad > 0)
+      throw InputError(sc.file.string(), key + ".group",
+                       "a surface on the boundary of body '" + spec.body + "' (each triangle the face of exactly one tet)",
+                       std::to_string(bad) + " of its " + std::to_string(wanted.size()) + " triangles are not");
+    log::verbose() << key << ": pressure on " << wanted.size() << " triangles of " << spec.body << "/" << spec.group;
+    m.pressure_loads.push_back(std::move(load));
   }
 }
 
@@ -309,11 +404,14 @@ Model build_model(const Scenario& sc) {
   m.node_of_input.resize(m.num_nodes);
   std::iota(m.node_of_input.begin(), m.node_of_input.end(), 0);
 
+  for (const auto& [name, curve] : sc.curves) m.curves.push_back(curve);
+  m.gravity_curve = curve_index(m, sc.run.gravity_curve);
   apply_boundaries(sc, m);  // on input numbering, before reordering
   compute_element_geometry(m);
   lump_mass(m);
   reorder_for_locality(m);
   add_scenario_contacts(m, sc);
+  add_pressure_loads(sc, m);
   m.contact_settings = sc.contact_solver;
   return m;
 }

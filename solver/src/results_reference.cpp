@@ -39,6 +39,8 @@ std::string results_reference_markdown() {
     o << "| `" << f.name << "` | " << f.where << " | " << f.components << " | " << (f.unit.empty() ? "-" : f.unit) << " | " << f.doc << " |\n";
   o << "\n## `history.csv` columns\n\n| column | unit | meaning |\n|---|---|---|\n";
   for (const auto* c : contracts::history::all) o << "| `" << c->name << "` | " << (*c->unit ? c->unit : "-") << " | " << c->doc << " |\n";
+  for (const auto* c : contracts::history::per_boundary)
+    o << "| `" << c->prefix << "<name>_x`, `_y`, `_z` | " << c->unit << " | per `[[boundary]]` entry (its `name`): " << c->doc << " |\n";
   o << "\n## `run.json` keys read by other stages\n\n";
   for (const char* k : contracts::run_json::all) o << "`" << k << "` ";
   o << "\n\nLabel ids of `labels.h5`: " << contracts::kBackgroundLabel << " background, " << contracts::kSoftTissueLabel << " "
@@ -56,6 +58,8 @@ nlohmann::json results_reference_json() {
     j[f.where == "point" ? "point_fields" : "cell_fields"].push_back({{"name", f.name}, {"components", f.components}, {"unit", f.unit}});
   j["history_columns"] = nlohmann::json::array();
   for (const auto* c : contracts::history::all) j["history_columns"].push_back(c->name);
+  j["history_boundary_column_prefixes"] = nlohmann::json::array();
+  for (const auto* c : contracts::history::per_boundary) j["history_boundary_column_prefixes"].push_back(c->prefix);
   j["run_json_keys"] = contracts::run_json::all;
   j["labels"] = {
       {"background", contracts::kBackgroundLabel}, {"soft_tissue", contracts::kSoftTissueLabel}, {"first_bone", contracts::kFirstBoneLabel}};

@@ -63,7 +63,7 @@ class RunLoop {
         model_(model),
         solver_(solver),
         folder_(folder),
-        history_(folder / "history.csv"),
+        history_(folder / "history.csv", model.boundaries),
         history_every_(sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
                                                 : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000))),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1) {
@@ -132,6 +132,7 @@ class RunLoop {
     if (cr.peak_node >= 0)
       for (int c = 0; c < 3; ++c) peak_at[c] = model_.X[3 * cr.peak_node + c] + solver_.displacement()[3 * cr.peak_node + c];
     peaks_.add_contact_step(cr, t, peak_at);
+    peaks_.add_reactions(solver_.reactions(), t);
     if (!cr.converged) {
       if (peaks_.unconverged_steps == 0) {
         std::ostringstream w;
@@ -142,7 +143,7 @@ class RunLoop {
       ++peaks_.unconverged_steps;
     }
     if (solver_.step_index() % history_every_ == 0 || scheduled() || solver_.finished())
-      history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at});
+      history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at, &solver_.reactions()});
   }
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly

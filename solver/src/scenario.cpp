@@ -3,6 +3,7 @@
 #include "tactus/solver/scenario.hpp"
 
 #include <toml++/toml.h>
+#include <cctype>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -48,6 +49,7 @@ const SectionSpec& run_section() {
        opt(number("energy_tolerance", "", "energy-balance error, relative to the largest energy, that stops the run as unstable", 0, true), "0.25"),
        typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
        opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
+       typed("gravity_curve", ValueType::string, "", "a [curves] name scaling gravity (instead of gravity_ramp_time)", false),
        opt(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false), "0"),
        opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0"),
        opt(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false), "10000"),
@@ -70,6 +72,10 @@ const SectionSpec& body_section() {
       {typed("name", ValueType::string, "", "unique body name", true),
        typed("mesh", ValueType::string, "", "gmsh .msh file (relative to the scenario file)", true),
        opt(number("scale", "", "factor applied to mesh coordinates (1e-3 for a mesh in mm)", 0, true), "1"),
+       typed("rotate_axis", ValueType::vec3, "", "rotation axis (with rotate_angle; applied after scale, before translate and against)", false),
+       opt(number("rotate_angle", "deg", "rotation angle about rotate_axis, right-handed", -360, false, 360, false), "0"),
+       typed("rotate_matrix", ValueType::vec3_list, "", "rotation as a matrix, three rows (instead of rotate_axis and rotate_angle)", false),
+       typed("rotate_about", ValueType::vec3, "m", "the point the rotation keeps fixed (scaled mesh coordinates)", false, "[0, 0, 0]"),
        typed("translate", ValueType::vec3, "m", "translation applied after scaling", false, "[0, 0, 0]"),
        typed("initial_velocity", ValueType::vec3, "m/s", "uniform initial velocity", false, "[0, 0, 0]"),
        typed("against", ValueType::string, "",
@@ -96,13 +102,41 @@ const SectionSpec& material_common_section() {
 const SectionSpec& boundary_section() {
   static const SectionSpec s{
       "boundary",
-      "[[boundary]]: fixed or prescribed-velocity nodes of a body, by physical group or by box.",
+      "[[boundary]]: fixed, prescribed-velocity or prescribed-displacement nodes of a body, by physical group or by box; "
+      "its reaction force and moment are written in history.csv and run.json.",
       {typed("body", ValueType::string, "", "body name", true),
        typed("group", ValueType::string, "", "physical surface or volume group whose nodes are constrained", false),
        typed("box", ValueType::vec3_list, "m", "[[xmin,ymin,zmin],[xmax,ymax,zmax]]: nodes inside (placed coordinates)", false),
-       typed("type", ValueType::string, "", "fixed | velocity", true),
-       typed("velocity", ValueType::vec3, "m/s", "prescribed velocity (type = velocity)", false, "[0, 0, 0]"),
-       typed("components", ValueType::string, "", "constrained components, any of \"xyz\"", false, "\"xyz\"")}};
+       typed("type", ValueType::string, "", "fixed | velocity | displacement", true),
+       typed("velocity", ValueType::vec3, "m/s", "prescribed velocity (type = velocity), times curve(t)", false, "[0, 0, 0]"),
+       typed("displacement", ValueType::vec3, "m", "prescribed displacement (type = displacement), times curve(t), exact at every step", false,
+             "[0, 0, 0]"),
+       typed("curve", ValueType::string, "", "a [curves] name scaling velocity or displacement (default: constant 1)", false),
+       typed("components", ValueType::string, "", "constrained components, any of \"xyz\"", false, "\"xyz\""),
+       typed("name", ValueType::string, "", "name of the reaction columns reaction_<name>_x.. (letters, digits, _)", false, "boundary<k>"),
+       typed("moment_about", ValueType::vec3, "m", "point the reaction moment is taken about", false, "[0, 0, 0]")}};
+  return s;
+}
+
+const SectionSpec& load_section() {
+  static const SectionSpec s{
+      "load",
+      "[[load]]: a follower pressure on a physical surface group of a body: normal to the current surface, on the current "
+      "area, positive pushing into the body.",
+      {typed("body", ValueType::string, "", "body name", true), typed("group", ValueType::string, "", "physical surface group", true),
+       typed("type", ValueType::string, "", "pressure", true), number("pressure", "Pa", "pressure (times curve(t))"),
+       typed("curve", ValueType::string, "", "a [curves] name scaling the pressure (default: constant 1)", false)}};
+  return s;
+}
+
+const SectionSpec& curve_section() {
+  static const SectionSpec s{
+      "curves.<name>",
+      "A named dimensionless factor of time for boundaries, loads and gravity: piecewise linear through (times, values), "
+      "constant beyond the ends, or a smooth step from 0 to 1.",
+      {typed("times", ValueType::number_list, "s", "increasing times of the table", false),
+       typed("values", ValueType::number_list, "", "the factor at each of times", false),
+       typed("smooth_step", ValueType::number_list, "s", "[t0, t1]: 0 before t0, 1 after t1, 3s^2 - 2s^3 between (instead of a table)", false)}};
   return s;
 }
 
@@ -256,7 +290,8 @@ class Reader {
     if (!a) fail(join(path, s.key), "an array of numbers", describe(*n));
     for (std::size_t i = 0; i < a->size(); ++i) {
       auto x = (*a)[i].value<double>();
-      if (!x || !std::isfinite(*x) || *x < 0) fail(join(path, s.key) + "[" + std::to_string(i) + "]", "a time >= 0 in s", describe((*a)[i]));
+      if (!x || (*a)[i].is_boolean() || !std::isfinite(*x) || (s.unit == "s" && *x < 0))
+        fail(join(path, s.key) + "[" + std::to_string(i) + "]", s.unit == "s" ? "a time >= 0 in s" : "a finite number", describe((*a)[i]));
       out.push_back(*x);
     }
     return out;
@@ -310,8 +345,8 @@ class Reader {
 }  // namespace
 
 std::vector<SectionSpec> scenario_reference() {
-  std::vector<SectionSpec> out{run_section(),      damping_section(), body_section(),           material_common_section(),
-                               boundary_section(), contact_section(), contact_solver_section(), pipeline_section()};
+  std::vector<SectionSpec> out{run_section(),      damping_section(), body_section(),    material_common_section(), curve_section(),
+                               boundary_section(), load_section(),    contact_section(), contact_solver_section(),  pipeline_section()};
   for (const MaterialType* m : material_types()) out.push_back(m->parameters);
   return out;
 }
@@ -351,6 +386,8 @@ void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
     run.energy_tolerance = r.number(t, *spec.find("energy_tolerance"), "run", 0.25);
     run.gravity = r.vec3(t, *spec.find("gravity"), "run", {0, 0, 0});
     run.gravity_ramp_time = r.number(t, *spec.find("gravity_ramp_time"), "run", 0);
+    run.gravity_curve = r.string(t, *spec.find("gravity_curve"), "run");
+    if (!run.gravity_curve.empty() && run.gravity_ramp_time > 0) r.fail("run", "either gravity_ramp_time or gravity_curve", "both");
     run.threads = static_cast<int>(r.number(t, *spec.find("threads"), "run", 0));
     run.history_every = static_cast<int>(r.number(t, *spec.find("history_every"), "run", 0));
     run.max_outputs = r.number(t, *spec.find("max_outputs"), "run", 10000);
@@ -413,6 +450,43 @@ void read_materials(const Reader& r, const toml::table& root, Scenario& sc, cons
   }
 }
 
+// rotate_axis + rotate_angle (Rodrigues' formula) or rotate_matrix (checked orthonormal, det +1).
+void read_rotation(const Reader& r, const toml::table& t, const SectionSpec& spec, const std::string& path, BodySpec& b) {
+  const bool by_axis = t.contains("rotate_axis") || t.contains("rotate_angle"), by_matrix = t.contains("rotate_matrix");
+  if (by_axis && by_matrix) r.fail(path + ".rotate_matrix", "either rotate_matrix or rotate_axis + rotate_angle", "both");
+  b.rotate_about = r.vec3(t, *spec.find("rotate_about"), path, {0, 0, 0});
+  if (by_axis) {
+    if (!t.contains("rotate_axis") || !t.contains("rotate_angle"))
+      r.fail(path + ".rotate_axis", "rotate_axis and rotate_angle together", "one of them");
+    const Vec3 a = r.vec3(t, *spec.find("rotate_axis"), path, {0, 0, 1});
+    const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    if (!(n > 0)) r.fail(path + ".rotate_axis", "a non-zero axis", "[0, 0, 0]");
+    const double th = r.number(t, *spec.find("rotate_angle"), path, 0) * M_PI / 180.0;
+    const double x = a[0] / n, y = a[1] / n, z = a[2] / n, c = std::cos(th), s = std::sin(th), C = 1 - c;
+    b.rotation = {Vec3{c + x * x * C, x * y * C - z * s, x * z * C + y * s}, Vec3{y * x * C + z * s, c + y * y * C, y * z * C - x * s},
+                  Vec3{z * x * C - y * s, z * y * C + x * s, c + z * z * C}};
+    b.rotated = true;
+  } else if (by_matrix) {
+    const auto rows = r.vec3_list(t, *spec.find("rotate_matrix"), path);
+    if (rows.size() != 3)
+      r.fail(path + ".rotate_matrix", "three rows [[r11, r12, r13], [r21, r22, r23], [r31, r32, r33]]", std::to_string(rows.size()) + " rows");
+    double worst = 0;  // |R R^T - I|
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        worst = std::max(worst, std::abs(rows[i][0] * rows[j][0] + rows[i][1] * rows[j][1] + rows[i][2] * rows[j][2] - (i == j ? 1.0 : 0.0)));
+    const double det = rows[0][0] * (rows[1][1] * rows[2][2] - rows[1][2] * rows[2][1]) -
+                       rows[0][1] * (rows[1][0] * rows[2][2] - rows[1][2] * rows[2][0]) +
+                       rows[0][2] * (rows[1][0] * rows[2][1] - rows[1][1] * rows[2][0]);
+    if (worst > 1e-9 || det < 0) {
+      std::ostringstream f;
+      f << "|R R^T - I| = " << worst << ", det " << det;
+      r.fail(path + ".rotate_matrix", "a rotation: orthonormal rows (to 1e-9) and determinant +1", f.str());
+    }
+    b.rotation = {rows[0], rows[1], rows[2]};
+    b.rotated = true;
+  }
+}
+
 void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const fs::path& base) {
   {  // [[bodies]]
     const auto& spec = body_section();
@@ -425,6 +499,7 @@ void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const f
       if (!names.insert(b.name).second) r.fail(path + ".name", "a unique body name", "\"" + b.name + "\" twice");
       b.mesh = base / r.string(t, *spec.find("mesh"), path);
       b.scale = r.number(t, *spec.find("scale"), path, 1.0);
+      read_rotation(r, t, spec, path, b);
       b.translate = r.vec3(t, *spec.find("translate"), path, {0, 0, 0});
       b.initial_velocity = r.vec3(t, *spec.find("initial_velocity"), path, {0, 0, 0});
       if (t.contains("fibres")) b.fibres = base / r.string(t, *spec.find("fibres"), path);
@@ -465,6 +540,72 @@ void require_body(const Reader& r, const Scenario& sc, const std::string& name, 
   r.fail(key, "the name of a [[bodies]] entry", "\"" + name + "\"");
 }
 
+// A [curves] name (empty: none), or an InputError listing the curves.
+void require_curve(const Reader& r, const Scenario& sc, const std::string& name, const std::string& key) {
+  if (name.empty() || sc.curves.count(name)) return;
+  std::string known;
+  for (const auto& [n, c] : sc.curves) known += (known.empty() ? "" : ", ") + n;
+  r.fail(key, "the name of a [curves.<name>] table" + (known.empty() ? std::string(" (there is none)") : " (" + known + ")"), "\"" + name + "\"");
+}
+
+// A boundary name for the history columns: letters, digits and _, unique.
+void require_column_name(const Reader& r, const Scenario& sc, const std::string& name, const std::string& key) {
+  bool ok = !name.empty();
+  for (char c : name) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+  if (!ok) r.fail(key, "letters, digits and _ only (it names history columns)", "\"" + name + "\"");
+  for (const auto& b : sc.boundaries)
+    if (b.name == name) r.fail(key, "a name no other [[boundary]] has", "\"" + name + "\" twice");
+}
+
+void read_curves(const Reader& r, const toml::table& root, Scenario& sc) {
+  if (const toml::node* n = root.get("curves")) {  // [curves.<name>]
+    const auto& spec = curve_section();
+    for (const auto& [k, node] : r.table(*n, "curves")) {
+      const std::string name(k.str()), path = "curves." + name;
+      const toml::table& t = r.table(node, path);
+      r.check_keys(t, spec, path);
+      CurveSpec c;
+      c.name = name;
+      if (t.contains("smooth_step")) {
+        if (t.contains("times") || t.contains("values")) r.fail(path, "either times + values or smooth_step", "both");
+        const auto ts = r.number_list(t, *spec.find("smooth_step"), path);
+        if (ts.size() != 2 || !(ts[1] > ts[0]))
+          r.fail(path + ".smooth_step", "[t0, t1] with t1 > t0 >= 0", "an array of " + std::to_string(ts.size()));
+        c.smooth_step = true, c.t0 = ts[0], c.t1 = ts[1];
+      } else {
+        c.times = r.number_list(t, *spec.find("times"), path);
+        c.values = r.number_list(t, *spec.find("values"), path);
+        if (c.times.empty() || c.times.size() != c.values.size())
+          r.fail(path, "times and values of the same length (or smooth_step)",
+                 std::to_string(c.times.size()) + " times, " + std::to_string(c.values.size()) + " values");
+        for (std::size_t i = 1; i < c.times.size(); ++i)
+          if (!(c.times[i] > c.times[i - 1])) r.fail(path + ".times", "strictly increasing times", "not increasing at index " + std::to_string(i));
+      }
+      sc.curves[name] = c;
+    }
+  }
+  require_curve(r, sc, sc.run.gravity_curve, "run.gravity_curve");
+}
+
+void read_loads(const Reader& r, const toml::table& root, Scenario& sc) {
+  if (const toml::node* n = root.get("load")) {  // [[load]]
+    const auto& spec = load_section();
+    r.each_table(*n, "load", spec, [&](const toml::table& t, const std::string& path) {
+      LoadSpec l;
+      l.body = r.string(t, *spec.find("body"), path);
+      require_body(r, sc, l.body, path + ".body");
+      l.group = r.string(t, *spec.find("group"), path);
+      if (const std::string type = r.string(t, *spec.find("type"), path); type != "pressure")
+        r.fail(path + ".type", "\"pressure\"", "\"" + type + "\"");
+      l.pressure = r.number(t, *spec.find("pressure"), path, 0);
+      if (!std::isfinite(l.pressure)) r.fail(path + ".pressure", "a finite pressure in Pa", "not finite");
+      l.curve = r.string(t, *spec.find("curve"), path);
+      require_curve(r, sc, l.curve, path + ".curve");
+      sc.loads.push_back(l);
+    });
+  }
+}
+
 void read_boundaries(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("boundary")) {  // [[boundary]]
     const auto& spec = boundary_section();
@@ -480,8 +621,20 @@ void read_boundaries(const Reader& r, const toml::table& root, Scenario& sc) {
       }
       if (bc.group.empty() == !bc.box.has_value()) r.fail(path, "exactly one of `group` or `box`");
       bc.type = r.string(t, *spec.find("type"), path);
-      if (bc.type != "fixed" && bc.type != "velocity") r.fail(path + ".type", "\"fixed\" or \"velocity\"", "\"" + bc.type + "\"");
+      if (bc.type != "fixed" && bc.type != "velocity" && bc.type != "displacement")
+        r.fail(path + ".type", "\"fixed\", \"velocity\" or \"displacement\"", "\"" + bc.type + "\"");
       bc.velocity = r.vec3(t, *spec.find("velocity"), path, {0, 0, 0});
+      bc.displacement = r.vec3(t, *spec.find("displacement"), path, {0, 0, 0});
+      if (t.contains("velocity") && bc.type != "velocity")
+        r.fail(path + ".velocity", "type = \"velocity\" with a velocity", "type \"" + bc.type + "\"");
+      if (t.contains("displacement") && bc.type != "displacement")
+        r.fail(path + ".displacement", "type = \"displacement\" with a displacement", "type \"" + bc.type + "\"");
+      bc.curve = r.string(t, *spec.find("curve"), path);
+      if (!bc.curve.empty() && bc.type == "fixed") r.fail(path + ".curve", "a curve only for type velocity or displacement", "type \"fixed\"");
+      require_curve(r, sc, bc.curve, path + ".curve");
+      bc.name = r.string(t, *spec.find("name"), path, "boundary" + std::to_string(sc.boundaries.size()));
+      require_column_name(r, sc, bc.name, path + ".name");
+      bc.moment_about = r.vec3(t, *spec.find("moment_about"), path, {0, 0, 0});
       const std::string comps = r.string(t, *spec.find("components"), path, "xyz");
       bc.components = {false, false, false};
       if (comps.empty()) r.fail(path + ".components", "one or more of x, y, z", "\"\"");
@@ -573,22 +726,26 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
   sc.file = fs::absolute(file);
   const fs::path base = mesh_dir.empty() ? sc.file.parent_path() : fs::absolute(mesh_dir);
 
-  SectionSpec top{"",
-                  "",
-                  {typed("run", ValueType::table, "", "a [run] section", true), typed("damping", ValueType::table, "", "a [damping] section", false),
-                   typed("bodies", ValueType::table_list, "", "one or more [[bodies]] sections", true),
-                   typed("materials", ValueType::table, "", "[materials.<name>] sections", true),
-                   typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false),
-                   typed("contact", ValueType::table_list, "", "[[contact]] sections", false),
-                   typed("contact_solver", ValueType::table, "", "a [contact_solver] section", false),
-                   typed("pipeline", ValueType::table, "", "a [pipeline] section with [[pipeline.meshes]] entries", false)}};
+  SectionSpec top{
+      "",
+      "",
+      {typed("run", ValueType::table, "", "a [run] section", true), typed("damping", ValueType::table, "", "a [damping] section", false),
+       typed("bodies", ValueType::table_list, "", "one or more [[bodies]] sections", true),
+       typed("materials", ValueType::table, "", "[materials.<name>] sections", true),
+       typed("boundary", ValueType::table_list, "", "[[boundary]] sections", false),
+       typed("load", ValueType::table_list, "", "[[load]] sections", false), typed("curves", ValueType::table, "", "[curves.<name>] sections", false),
+       typed("contact", ValueType::table_list, "", "[[contact]] sections", false),
+       typed("contact_solver", ValueType::table, "", "a [contact_solver] section", false),
+       typed("pipeline", ValueType::table, "", "a [pipeline] section with [[pipeline.meshes]] entries", false)}};
   r.check_keys(root, top, "");
 
   read_run(r, root, sc);
   read_damping(r, root, sc);
   read_materials(r, root, sc, fname);
   read_bodies(r, root, sc, base);
+  read_curves(r, root, sc);
   read_boundaries(r, root, sc);
+  read_loads(r, root, sc);
   read_contacts(r, root, sc);
   read_pipeline(r, root);
   read_contact_solver(r, root, sc);

@@ -82,6 +82,7 @@ Folder write_results(const fs::path& dir, bool contact = true) {
 
   std::ofstream h(dir / "history.csv");
   for (std::size_t k = 0; k < c::history::all.size(); ++k) h << (k ? "," : "") << c::history::all[k]->name;
+  for (const char* axis : {"_x", "_y", "_z"}) h << "," << c::history::reaction.prefix << "base" << axis;  // one [[boundary]] named base
   h << "\n";
   const double time[3] = {0, 0.5e-3, 1e-3}, force[3] = {0, 50, 120}, kinetic[3] = {2.0, 1.5, 1.0};
   for (int r = 0; r < 3; ++r) {
@@ -97,6 +98,7 @@ Folder write_results(const fs::path& dir, bool contact = true) {
       if (col == c::history::peak_pressure.name) v = contact ? r * 1e6 : 0;
       h << (k ? "," : "") << v;
     }
+    h << "," << 0.0 << "," << 0.0 << "," << -force[r];  // the base holds the punch's push
     h << "\n";
   }
   nlohmann::json run = {
@@ -115,7 +117,13 @@ Folder write_results(const fs::path& dir, bool contact = true) {
        {{"steps_in_contact", contact ? 7 : 0},
         {"peak_force", {{"value", 130.0}, {"time", 0.9e-3}}},
         {"peak_area", {{"value", 2.5e-4}, {"time", 0.95e-3}}},
-        {"peak_pressure", {{"value", 3e6}, {"time", 0.8e-3}, {"position", {0.01, 0.01, 0.005}}, {"node", f.peak_node + 1}}}}}};
+        {"peak_pressure", {{"value", 3e6}, {"time", 0.8e-3}, {"position", {0.01, 0.01, 0.005}}, {"node", f.peak_node + 1}}}}},
+      {c::run_json::reactions,
+       {{{"name", "base"},
+         {"moment_about", {0, 0, 0}},
+         {"final_force", {0, 0, -120}},
+         {"final_moment", {1.2, -0.6, 0}},
+         {"peak_force", {{"value", 120.0}, {"time", 1e-3}, {"vector", {0, 0, -120}}}}}}}};
   std::ofstream(dir / "run.json") << run.dump(2);
   return f;
 }
@@ -167,6 +175,11 @@ TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
   EXPECT_DOUBLE_EQ(s.frames[0].contact_force, 0);
   EXPECT_DOUBLE_EQ(s.frames[1].von_mises_max[1], kPunchStress);
   EXPECT_DOUBLE_EQ(s.initial_kinetic, 2.0);
+  ASSERT_EQ(s.reactions.size(), 1u);  // run.json reactions
+  EXPECT_EQ(s.reactions[0].name, "base");
+  EXPECT_DOUBLE_EQ(s.reactions[0].peak, 120.0);
+  EXPECT_DOUBLE_EQ(s.reactions[0].final_force[2], -120.0);
+  EXPECT_DOUBLE_EQ(s.reactions[0].final_moment[0], 1.2);
 
   const auto j = nlohmann::json::parse(postproc::summary_json(s));
   std::cout << "summary: soft peak " << j["peak_von_mises"]["soft"]["value"] << " Pa, pressure at outputs "
@@ -280,8 +293,9 @@ TEST(Pictures, ShowWhatTheDataSays) {
   ASSERT_EQ(run_post(d, tmp.path() / "report", ""), 0) << slurp(tmp.path() / "report.log");
   ASSERT_EQ(run_post(d, tmp.path() / "edge_on", "--view 1 0 0"), 0) << slurp(tmp.path() / "edge_on.log");
   const auto summary = nlohmann::json::parse(slurp(tmp.path() / "report" / "summary.json"));
-  std::vector<std::string> expected{"von_mises_t0.00ms.png", "von_mises_t1.00ms.png",  "section.png",      "pressure.png", "plot_contact_force.png",
-                                    "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png"};
+  std::vector<std::string> expected{"von_mises_t0.00ms.png",  "von_mises_t1.00ms.png",  "section.png",
+                                    "pressure.png",           "plot_contact_force.png", "plot_contact_area.png",
+                                    "plot_peak_pressure.png", "plot_energies.png",      "plot_reactions.png"};
   EXPECT_EQ(summary["pictures"].get<std::vector<std::string>>(), expected);
 
   // The stress picture looks along the plate's thinnest axis (z), so the plate shows its 40 x 20

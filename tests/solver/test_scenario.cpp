@@ -156,6 +156,39 @@ TEST_F(ScenarioFile, BoundaryGroupNotInMesh) {
 TEST_F(ScenarioFile, BoundaryWithGroupAndBox) {
   expect_error(replace(kValid, "type = \"fixed\"", "type = \"fixed\"\nbox = [[0,0,0],[1,1,1]]"), {"boundary[0]", "exactly one"});
 }
+// Loading keys (curves, displacement boundaries, pressure loads, rotation): each mistake is named.
+TEST_F(ScenarioFile, CurveThatDoesNotExist) {
+  expect_error(replace(kValid, "type = \"fixed\"", "type = \"velocity\"\nvelocity = [0, 0, 1]\ncurve = \"ramp\""),
+               {"boundary[0].curve", "[curves.<name>]", "there is none", "ramp"});
+}
+TEST_F(ScenarioFile, CurveOnAFixedBoundary) {
+  EXPECT_NO_THROW(read_scenario(write(std::string(kValid) + "[curves.ramp]\nsmooth_step = [0, 1e-3]\n")));  // valid so far
+  expect_error(replace(kValid, "type = \"fixed\"", "type = \"fixed\"\ncurve = \"ramp\"") + "[curves.ramp]\nsmooth_step = [0, 1e-3]\n",
+               {"boundary[0].curve", "velocity or displacement"});
+}
+TEST_F(ScenarioFile, CurveTimesMustIncrease) {
+  expect_error(std::string(kValid) + "[curves.c]\ntimes = [0, 2e-3, 1e-3]\nvalues = [0, 1, 1]\n", {"curves.c.times", "strictly increasing"});
+  expect_error(std::string(kValid) + "[curves.c]\ntimes = [0, 1e-3]\nvalues = [0]\n", {"curves.c", "same length", "2 times, 1 values"});
+  expect_error(std::string(kValid) + "[curves.c]\nsmooth_step = [2e-3, 1e-3]\n", {"curves.c.smooth_step", "t1 > t0"});
+}
+TEST_F(ScenarioFile, DisplacementOnlyWithItsType) {
+  expect_error(replace(kValid, "type = \"fixed\"", "type = \"fixed\"\ndisplacement = [0, 0, 1e-3]"),
+               {"boundary[0].displacement", "type = \"displacement\""});
+}
+TEST_F(ScenarioFile, BoundaryNamesNameColumns) {
+  expect_error(replace(kValid, "type = \"fixed\"", "type = \"fixed\"\nname = \"top face\""), {"boundary[0].name", "letters, digits", "top face"});
+}
+TEST_F(ScenarioFile, PressureOnAGroupThatIsNotThere) {
+  expect_error(std::string(kValid) + "[[load]]\nbody = \"pad\"\ngroup = \"inner\"\ntype = \"pressure\"\npressure = 1e3\n",
+               {"load[0].group", "physical surface group", "xmin", "inner"}, true);
+}
+TEST_F(ScenarioFile, RotationByMatrixMustBeARotation) {
+  expect_error(
+      replace(kValid, "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nrotate_matrix = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]"),
+      {"bodies[0].rotate_matrix", "determinant +1", "det -1"});
+  expect_error(replace(kValid, "initial_velocity = [2.0, 0, 0]", "initial_velocity = [2.0, 0, 0]\nrotate_axis = [0, 0, 1]"),
+               {"bodies[0].rotate_axis", "together"});
+}
 TEST_F(ScenarioFile, MissingMeshFile) { expect_error(replace(kValid, "pad.msh", "nowhere.msh"), {"nowhere.msh", "no such file"}, true); }
 TEST_F(ScenarioFile, TomlSyntaxErrorGivesLine) { expect_error(replace(kValid, "end_time = 1e-3", "end_time = = 1e-3"), {"line 3", "valid TOML"}); }
 TEST_F(ScenarioFile, OutputTimeAfterEnd) { expect_error(replace(kValid, "[5e-4, 1e-3]", "[5e-4, 2e-3]"), {"run.output_times", "run.end_time"}); }

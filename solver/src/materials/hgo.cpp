@@ -25,6 +25,7 @@ void unit(const double* a, double* out, const std::string& file, const std::stri
 struct Hgo {
   static constexpr const char* kName = "hgo";
   static constexpr std::size_t kElementData = 6;  // a_1, a_2
+  static constexpr bool kElementDataAreDirections = true;
   double c1 = 0, k1 = 0, k2 = 0, k = 0, density = 0;
 
   static SectionSpec parameters() {

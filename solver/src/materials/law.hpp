@@ -11,6 +11,7 @@
 //   static constexpr std::size_t kElementData;                doubles per element
 //   static std::vector<std::pair<std::string, int>> element_fields();   cell fields of bodies.fibres
 //   static void element_data_from_fields(const double* fields, double* data, const std::string& where);
+//   static constexpr bool kElementDataAreDirections;          when they are 3-vectors that rotate with a body
 // and, when it adds result fields:
 //   static std::vector<ResultFieldSpec> result_fields();
 //   void result_values(const Mat3& F, const double* data, double* out) const;
@@ -31,6 +32,7 @@ MaterialType make_material_type() {
     t.element_data_size = Law::kElementData;
     t.element_fields = Law::element_fields();
     t.element_data_from_fields = &Law::element_data_from_fields;
+    if constexpr (requires { Law::kElementDataAreDirections; }) t.element_data_is_directions = Law::kElementDataAreDirections;
   }
   if constexpr (requires { Law::result_fields(); }) {
     t.result_fields = Law::result_fields();

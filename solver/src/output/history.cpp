@@ -59,8 +59,12 @@ static_assert(columns_follow_the_contract(), "history.csv columns must follow co
 
 }  // namespace
 
-HistoryWriter::HistoryWriter(const std::filesystem::path& file) : out_(file), file_(file) {
+HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries)
+    : out_(file), file_(file), boundaries_(boundaries.size()) {
   for (std::size_t k = 0; k < kColumns.size(); ++k) out_ << (k ? "," : "") << kColumns[k].spec->name;
+  for (const auto& b : boundaries)
+    for (const auto* family : h::per_boundary)
+      for (const char* axis : {"_x", "_y", "_z"}) out_ << ',' << family->prefix << b.name << axis;
   out_ << '\n' << std::setprecision(17);
 }
 
@@ -68,6 +72,10 @@ void HistoryWriter::write(const HistoryRow& row) {
   for (std::size_t k = 0; k < kColumns.size(); ++k) {
     if (k) out_ << ',';
     out_ << kColumns[k].value(row);  // (counts print as integers: 17 digits of 3.0 is "3")
+  }
+  for (std::size_t b = 0; b < boundaries_; ++b) {  // in the order of h::per_boundary: reaction, moment
+    for (int c = 0; c < 3; ++c) out_ << ',' << (row.reactions ? row.reactions->force[3 * b + static_cast<std::size_t>(c)] : 0.0);
+    for (int c = 0; c < 3; ++c) out_ << ',' << (row.reactions ? row.reactions->moment[3 * b + static_cast<std::size_t>(c)] : 0.0);
   }
   out_ << '\n';
 }

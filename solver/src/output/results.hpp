@@ -30,18 +30,21 @@ struct HistoryRow {
   const Energies* energy = nullptr;
   const ContactStepReport* contact = nullptr;
   Vec3 peak_at{0, 0, 0};
+  const Reactions* reactions = nullptr;  // one force and moment per boundary (model.boundaries)
 };
 
 // history.csv: its header and rows both come from the one column table (history.cpp).
 class HistoryWriter {
  public:
-  explicit HistoryWriter(const std::filesystem::path& file);
+  // `boundaries`: the model's, for the reaction columns after the fixed ones.
+  HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries);
   void write(const HistoryRow& row);
   void close();
 
  private:
   std::ofstream out_;
   std::filesystem::path file_;
+  std::size_t boundaries_ = 0;
 };
 
 // The peaks over a run that run.json reports (contact over every step, von Mises at the outputs).
@@ -52,7 +55,10 @@ struct RunPeaks {
   int max_iterations = 0;
   std::size_t unconverged_steps = 0, contact_steps = 0;
   std::vector<double> von_mises;  // per block
+  // Per boundary: the largest |reaction force|, when, and the force then.
+  std::vector<double> reaction_peak, reaction_peak_time, reaction_peak_force;  // 1, 1, 3 per boundary
   void add_contact_step(const ContactStepReport& c, double t, const Vec3& peak_at);
+  void add_reactions(const Reactions& r, double t);
 };
 
 }  // namespace tactus::solver

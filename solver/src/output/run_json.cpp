@@ -31,6 +31,42 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
 
 }  // namespace
 
+void RunPeaks::add_reactions(const Reactions& r, double t) {
+  const std::size_t n = r.force.size() / 3;
+  if (reaction_peak.size() != n) reaction_peak.assign(n, 0.0), reaction_peak_time.assign(n, 0.0), reaction_peak_force.assign(3 * n, 0.0);
+  for (std::size_t b = 0; b < n; ++b) {
+    const double* f = &r.force[3 * b];
+    const double mag = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    if (mag > reaction_peak[b]) {
+      reaction_peak[b] = mag, reaction_peak_time[b] = t;
+      std::copy(f, f + 3, &reaction_peak_force[3 * b]);
+    }
+  }
+}
+
+namespace {
+
+// One entry per [[boundary]]: its reaction at the end and its peak (history.csv has every row).
+nlohmann::json reactions_json(const Model& model, const ExplicitSolver& solver, const RunPeaks& peaks) {
+  nlohmann::json out = nlohmann::json::array();
+  const Reactions& r = solver.reactions();
+  for (std::size_t b = 0; b < model.boundaries.size(); ++b) {
+    auto vec = [](const std::vector<double>& v, std::size_t b3) {
+      return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(b3), v.begin() + static_cast<std::ptrdiff_t>(b3 + 3));
+    };
+    nlohmann::json e = {{"name", model.boundaries[b].name},
+                        {"moment_about", model.boundaries[b].moment_about},
+                        {"final_force", vec(r.force, 3 * b)},
+                        {"final_moment", vec(r.moment, 3 * b)}};
+    if (b < peaks.reaction_peak.size())
+      e["peak_force"] = {{"value", peaks.reaction_peak[b]}, {"time", peaks.reaction_peak_time[b]}, {"vector", vec(peaks.reaction_peak_force, 3 * b)}};
+    out.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
                         const nlohmann::json& failure) {
   namespace k = contracts::run_json;
@@ -78,6 +114,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   for (std::size_t b = 0; b < model.blocks.size(); ++b) vm[model.blocks[b].name] = summary.von_mises_peak[b];
   j[k::peak_von_mises] = vm;
   if (!model.contact_pairs.empty()) j[k::contact] = contact_json(sc, model, peaks);
+  j[k::reactions] = reactions_json(model, solver, peaks);
   return j;
 }
 

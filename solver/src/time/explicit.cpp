@@ -18,8 +18,9 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   u_.assign(ndof, 0.0);
   f_.assign(ndof, 0.0);
   v_half_ = model.initial_velocity;
+  init_loading();
   for (std::size_t i = 0; i < ndof; ++i)
-    if (model.constrained[i]) v_half_[i] = model.constraint_velocity[i];
+    if (model.constrained[i]) v_half_[i] = prescribed_v_[i];
   v_prev_half_ = v_half_;
   inv_mass_.resize(ndof);
   gravity_force_.resize(ndof);
@@ -109,12 +110,6 @@ std::string ExplicitSolver::describe_step_limit() const {
   return o.str();
 }
 
-double ExplicitSolver::external_force(std::size_t dof) const {
-  double ramp = 1.0;
-  if (run_.gravity_ramp_time > 0) ramp = std::min(1.0, time_ / run_.gravity_ramp_time);
-  return ramp * gravity_force_[dof];
-}
-
 void ExplicitSolver::advance_velocity() {
   const std::size_t ndof = 3 * model_.num_nodes;
   const double dt = dt_next_;
@@ -122,6 +117,7 @@ void ExplicitSolver::advance_velocity() {
   const double alpha = damping_.alpha;
   const double c_minus = 1.0 - 0.5 * alpha * dtbar, c_plus = 1.0 / (1.0 + 0.5 * alpha * dtbar);
   const bool first = step_ == 0;
+  apply_loading(next_lands_ ? schedule_[next_target_] : time_ + dt, dt);
   v_prev_half_.swap(v_half_);
   const double* __restrict v_old_of = v_prev_half_.data();
   double* __restrict v_new_of = v_half_.data();
@@ -129,13 +125,20 @@ void ExplicitSolver::advance_velocity() {
   // Free (contact-less) prediction v^{n+1/2} of one dof, from v^{n-1/2} and the forces at t^n.
   auto free_velocity = [&](std::size_t i, double fext) { return (c_minus * v_old_of[i] + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus; };
 #pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::size_t i = 0; i < ndof; ++i) v_new_of[i] = model_.constrained[i] ? model_.constraint_velocity[i] : free_velocity(i, external_force(i));
+  for (std::size_t i = 0; i < ndof; ++i) v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : free_velocity(i, external_force(i));
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
     contact_report_ = contact_.correct_velocities(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
     contact_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+
+  // The supports' forces: R = m (v_new - v_free) / (dtbar c_plus), exactly what the update added.
+  for (std::size_t k = 0; k < constrained_dofs_.size(); ++k) {
+    const auto i = static_cast<std::size_t>(constrained_dofs_[k]);
+    support_force_[k] = model_.mass[i / 3] * (v_new_of[i] - free_velocity(i, external_force(i))) / (dtbar * c_plus);
+  }
+  accumulate_reactions();
 
   double kinetic = 0, ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
   const double* __restrict mass_of = model_.mass.data();

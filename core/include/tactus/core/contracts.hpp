@@ -109,6 +109,16 @@ inline constexpr std::array<const ColumnSpec*, 25> all{&step,
                                                        &stick_nodes,
                                                        &slip_nodes,
                                                        &uzawa_iterations};
+// After those, per [[boundary]] entry in scenario order, named by its `name` (<name> below):
+// x, y, z of each (history_column_prefix + name + "_x").
+struct ColumnFamily {
+  const char* prefix;
+  const char* unit;
+  const char* doc;
+};
+inline constexpr ColumnFamily reaction{"reaction_", "N", "force the support applies to the body (x, y, z columns)"};
+inline constexpr ColumnFamily moment{"moment_", "N m", "moment of that force about the boundary's moment_about (x, y, z columns)"};
+inline constexpr std::array<const ColumnFamily*, 2> per_boundary{&reaction, &moment};
 }  // namespace history
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------
@@ -128,9 +138,10 @@ inline constexpr const char* time_step = "time_step";  // {min, max, safety, min
 inline constexpr const char* timing = "timing_s";      // {stress_passes, contact, rest}
 inline constexpr const char* energy = "energy";        // {initial, kinetic, internal, ..., balance_error}
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
-inline constexpr const char* contact = "contact";  // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
-inline constexpr std::array<const char*, 16> all{status,       message, materials, bodies,    steps,  nodes,  tets,           end_time,
-                                                 output_times, outputs, wall_time, time_step, timing, energy, peak_von_mises, contact};
+inline constexpr const char* contact = "contact";      // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
+inline constexpr const char* reactions = "reactions";  // [{name, moment_about, final_force, final_moment, peak_force: {value, time, vector}}]
+inline constexpr std::array<const char*, 17> all{status,  message,   materials, bodies, steps,  nodes,          tets,    end_time, output_times,
+                                                 outputs, wall_time, time_step, timing, energy, peak_von_mises, contact, reactions};
 }  // namespace run_json
 
 }  // namespace tactus::contracts

@@ -23,6 +23,13 @@ struct MaterialPeak {
   PeakAt von_mises;  // Pa, at an element centroid
 };
 
+// A support's reaction (run.json reactions): its largest |R| over the run and R at the end.
+struct ReactionSummary {
+  std::string name;
+  double peak = 0, peak_time = 0;
+  std::array<double, 3> peak_force{0, 0, 0}, final_force{0, 0, 0}, final_moment{0, 0, 0};
+};
+
 struct FrameSummary {
   double time = 0;
   std::string file;
@@ -42,6 +49,7 @@ struct Summary {
   PeakAt peak_pressure_steps;    // every step (history): includes first-touch impulses
   PeakAt peak_pressure_outputs;  // at the output states (what the pictures show)
   PeakAt largest_area, peak_force;
+  std::vector<ReactionSummary> reactions;  // one per [[boundary]]
   std::vector<FrameSummary> frames;
   std::vector<std::string> pictures;  // file names in the report folder
 };

@@ -66,6 +66,8 @@ class ExplicitSolver {
   // Contact at t^n (after advance_velocity): candidates with their reactions, and the step's report.
   const ContactSolver& contact() const { return contact_; }
   const ContactStepReport& contact_report() const { return contact_report_; }
+  // The supports' reactions at t^n (after advance_velocity), one force and moment per boundary.
+  const Reactions& reactions() const { return reactions_; }
   // Wall time spent so far in the stress passes and in contact (detection + Uzawa), s.
   double stress_seconds() const { return stress_seconds_; }
   double contact_seconds() const { return contact_seconds_; }
@@ -77,7 +79,16 @@ class ExplicitSolver {
  private:
   void stress_pass();
   void choose_step();  // sets dt_next_ and whether it lands on the next scheduled time
-  double external_force(std::size_t dof) const;
+  double external_force(std::size_t dof) const {
+    return gravity_factor_ * gravity_force_[dof] + (pressure_force_.empty() ? 0.0 : pressure_force_[dof]);
+  }
+  // Loading at t^n for the step to t_next (loading.cpp): the prescribed velocities of the driven
+  // dofs, the gravity factor and the follower pressures on the current surface.
+  void init_loading();  // the lists of constrained and driven dofs, the velocities at t = 0
+  void apply_loading(double t_next, double dt);
+  double curve_at(std::int32_t curve, double t) const;
+  // Sums support_force_ per boundary into reactions_, with the moments about their points (loading.cpp).
+  void accumulate_reactions();
 
   const Model& model_;
   RunSpec run_;
@@ -86,6 +97,13 @@ class ExplicitSolver {
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_, inv_mass_;
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
+  double gravity_factor_ = 1;
+  std::vector<double> prescribed_v_;            // per dof: the velocity a constrained dof takes over the step
+  std::vector<std::int32_t> constrained_dofs_;  // every constrained dof, for the reactions
+  std::vector<std::int32_t> driven_dofs_;       // those whose velocity changes in time (curve or displacement)
+  std::vector<double> pressure_force_;          // follower pressure forces at t^n (empty without [[load]])
+  std::vector<double> support_force_;           // per constrained dof (constrained_dofs_ order), at t^n
+  Reactions reactions_;
   ContactSolver contact_;
   ContactStepReport contact_report_;
   std::vector<double> contact_inv_mass_;  // 1/m per dof, 0 on prescribed dofs (their supports take the reaction)

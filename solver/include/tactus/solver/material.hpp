@@ -96,6 +96,9 @@ struct MaterialType {
   // (bodies.fibres) it is made from (hgo: fibre_1, fibre_2).
   std::size_t element_data_size = 0;
   std::vector<std::pair<std::string, int>> element_fields;
+  // Whether the element data is 3-vectors in the reference frame that rotate with a body (hgo's
+  // fibre directions); a law with other element data cannot be used in a rotated body.
+  bool element_data_is_directions = false;
   std::vector<ResultFieldSpec> result_fields;
 
   // Builds the law from validated values; `constants` receives its element data when the section

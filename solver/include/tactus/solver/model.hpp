@@ -8,6 +8,7 @@
 
 #include "tactus/core/mesh.hpp"
 #include "tactus/solver/contact.hpp"
+#include "tactus/solver/loading.hpp"
 #include "tactus/solver/material.hpp"
 #include "tactus/solver/scenario.hpp"
 
@@ -53,9 +54,17 @@ struct Model {
   std::vector<double> volume;      // reference volume
   std::vector<MaterialBlock> blocks;
 
-  // Constraints: per dof (3 per node), 0 free, 1 prescribed velocity; value in constraint_velocity.
+  // Constraints: per dof (3 per node), 0 free, 1 prescribed velocity (0 = fixed), 2 prescribed
+  // displacement; the velocity or the displacement in constraint_velocity, scaled by
+  // curves[constraint_curve] (-1: constant); constraint_boundary: the [[boundary]] entry whose
+  // reaction the dof's support force counts in (the last one that selects it; -1 none).
   std::vector<std::uint8_t> constrained;
   std::vector<double> constraint_velocity;
+  std::vector<std::int32_t> constraint_curve, constraint_boundary;
+  std::vector<CurveSpec> curves;
+  std::vector<BoundaryReactionSpec> boundaries;  // one per [[boundary]] entry
+  std::vector<PressureLoad> pressure_loads;
+  std::int32_t gravity_curve = -1;
 
   // Mapping back to the input numbering, for output and messages.
   std::vector<std::int32_t> node_of_input;     // internal index of input node i

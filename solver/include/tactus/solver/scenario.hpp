@@ -25,6 +25,7 @@ struct RunSpec {
   double energy_tolerance = 0.25;  // relative energy-balance error that stops a run as unstable
   Vec3 gravity{0, 0, 0};
   double gravity_ramp_time = 0;
+  std::string gravity_curve;   // [curves] name scaling gravity (empty: the linear ramp above, or constant)
   int threads = 0;             // 0: all cores
   int history_every = 0;       // 0: automatic (about 2000 rows)
   double max_outputs = 10000;  // runaway guards: refused above these
@@ -41,10 +42,27 @@ struct MaterialInstance {
   MaterialValues values;  // validated against the law's declarations
 };
 
+// [curves.<name>]: a dimensionless factor of time that scales a boundary value, a load or gravity.
+struct CurveSpec {
+  std::string name;
+  std::vector<double> times, values;  // piecewise linear through (times[k], values[k]), constant beyond the ends
+  bool smooth_step = false;           // instead: 0 before t0, 1 after t1, 3s^2 - 2s^3 between (s = (t - t0)/(t1 - t0))
+  double t0 = 0, t1 = 0;
+  double at(double t) const;
+  // The integral from 0 to t (the displacement of a velocity scaled by this curve), exact.
+  double integral(double t) const;
+};
+
 struct BodySpec {
   std::string name;
   std::filesystem::path mesh;
   double scale = 1.0;  // applied to mesh coordinates before translate (e.g. 1e-3 for mm meshes)
+  // Rotation after scaling, before translate and against: x -> R (x - about) + about. Identity
+  // unless the scenario gives rotate_axis + rotate_angle or rotate_matrix. Fibre directions rotate
+  // with the body.
+  std::array<Vec3, 3> rotation{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};  // rows of R
+  Vec3 rotate_about{0, 0, 0};
+  bool rotated = false;
   Vec3 translate{0, 0, 0};
   Vec3 initial_velocity{0, 0, 0};
   std::filesystem::path fibres;  // optional .vtu with per-tet cell data fibre_1, fibre_2
@@ -60,9 +78,21 @@ struct BoundarySpec {
   std::string body;
   std::string group;                       // physical surface or volume group name, or empty when a box is given
   std::optional<std::array<Vec3, 2>> box;  // [min, max] in placed coordinates
-  std::string type;                        // "fixed" or "velocity"
+  std::string type;                        // "fixed", "velocity" or "displacement"
   Vec3 velocity{0, 0, 0};
   std::array<bool, 3> components{true, true, true};
+  Vec3 displacement{0, 0, 0};  // type = "displacement": u(t) = displacement x curve(t) (x 1 without a curve)
+  std::string curve;           // [curves] name scaling the velocity or the displacement; empty: constant
+  std::string name;            // for the reaction columns; default "boundary<k>"
+  Vec3 moment_about{0, 0, 0};  // point the reaction moment is taken about (placed coordinates)
+};
+
+// [[load]]: a follower pressure on a physical surface group (normal to the current surface, on
+// the current area), positive pushing into the body, scaled by a curve.
+struct LoadSpec {
+  std::string body, group;
+  double pressure = 0;  // Pa
+  std::string curve;    // empty: constant
 };
 
 // [[contact]]: slave nodes of one body's surface against another body's surface or a rigid plane.
@@ -87,6 +117,8 @@ struct Scenario {
   std::vector<BodySpec> bodies;
   std::map<std::string, MaterialInstance> materials;
   std::vector<BoundarySpec> boundaries;
+  std::vector<LoadSpec> loads;
+  std::map<std::string, CurveSpec> curves;
   std::vector<ContactSpec> contacts;
   ContactSettings contact_solver;
 };
