@@ -148,7 +148,7 @@ void ExplicitSolver::advance_velocity() {
     const double fext = external_force(i);
     const double v_old = v_old_of[i], v_new = v_new_of[i];
     double reaction = 0;
-    if (model_.constrained[i]) {  // the support force that holds the prescribed velocity
+    if (model_.constrained[i]) {                                           // the support force that holds the prescribed velocity
       reaction = m * (v_new - free_velocity(i, fext)) / (dtbar * c_plus);  // what the update added: dtbar c_plus R / m
     }
     const double v_n = first ? v_old : 0.5 * (v_old + v_new);

@@ -8,10 +8,11 @@
 //   the current area-weighted outward normal (a follower load; its work is counted with gravity's
 //   in the external work).
 // - The reaction of a support is the force it applies to the body to hold the prescribed motion:
-//   R = m (v^{n+1/2} - v_free^{n+1/2}) / dtbar per constrained dof, where v_free includes every
-//   other force on the node (internal, external, mass-proportional damping). So the reaction
-//   includes the alpha-damping force of the constrained nodes (the support holds it too), and not
-//   a contact reaction on a constrained node (contact sees those nodes as immovable).
+//   R = m (v^{n+1/2} - v_free^{n+1/2}) / (dtbar c_plus) per constrained dof (c_plus the alpha
+//   factor of the update), where v_free includes every other force on the node (internal,
+//   external, mass-proportional damping). So the reaction includes the alpha-damping force of the
+//   constrained nodes (the support holds it too), and not a contact reaction on a constrained
+//   node (contact sees those nodes as immovable).
 #include <array>
 #include <cstdint>
 #include <string>
