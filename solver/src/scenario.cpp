@@ -151,7 +151,11 @@ const SectionSpec& contact_section() {
        typed("master_surface", ValueType::string, "", "physical surface group of master_body", false),
        typed("plane", ValueType::vec3_list, "m", "rigid plane master: [[point], [outward normal]] (instead of master_body)", false),
        opt(number("friction", "", "Coulomb friction coefficient mu", 0, false), "0"),
-       typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false")}};
+       typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false"),
+       typed("method", ValueType::string, "",
+             "node_to_surface (each slave node on its closest master point) | mortar (segment-to-segment: each slave node's "
+             "tributary surface integrated over the master triangles it overlaps)",
+             false, "\"node_to_surface\"")}};
   return s;
 }
 
@@ -673,6 +677,11 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
                "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself");
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
+      c.method = r.string(t, *spec.find("method"), path, "node_to_surface");
+      if (c.method != "node_to_surface" && c.method != "mortar")
+        r.fail(path + ".method", "\"node_to_surface\" or \"mortar\"", "\"" + c.method + "\"");
+      if (c.method == "mortar" && c.plane)
+        r.fail(path + ".method", "node_to_surface for a rigid plane (it has no surface to integrate over)", "mortar");
       if (c.two_pass && c.plane) r.fail(path + ".two_pass", "false for a rigid plane", "true");
       sc.contacts.push_back(c);
     });

@@ -160,7 +160,7 @@ TEST(Contact, LocalSolverMatchesExactLawInAllRegimes) {
 // conserved exactly by action = reaction. Tolerances: duration 5 %, force 10 % (plateau mean),
 // momentum 1e-10 of rho A L v, energy loss 3 % (velocity-level impact).
 namespace {
-void two_bars_impact(bool two_pass) {
+void two_bars_impact(bool two_pass, bool mortar = false) {
   const double E = 1e7, rho = 1000, L = 0.1, a = 0.01, v0 = 0.1, c = std::sqrt(E / rho);
   const TetMesh left = samples::make_box_mesh(40, 1, 1, L, a, a);
   const TetMesh right = samples::make_box_mesh(40, 1, 1, L, a, a, {L + 1e-6, 0, 0});
@@ -168,8 +168,8 @@ void two_bars_impact(bool two_pass) {
   for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i] = model.X[3 * i] < L + 1e-7 ? v0 : -v0;
   ContactPair pair;
   pair.name = "bars";
-  set_master_surface(pair, model, group_faces(model, 111), "right xmin");  // right bar's xmin
-  set_slave_surface(pair, model, group_faces(model, 12));                  // left bar's xmax
+  set_master_surface(pair, model, group_faces(model, 111), "right xmin", mortar);  // right bar's xmin
+  set_slave_surface(pair, model, group_faces(model, 12));                          // left bar's xmax
   model.contact_pairs.push_back(pair);
   if (two_pass) {  // and the right bar's nodes against the left bar's face
     ContactPair back;
@@ -207,10 +207,10 @@ void two_bars_impact(bool two_pass) {
   const double duration = t_last - t_first, plateau = plateau_sum / plateau_n, F_ref = rho * c * a * a * v0;
   const double loss = 1 - (en.kinetic + en.internal) / E0;
   std::printf(
-      "bars (%s): contact %.4e s (2L/c %.4e), force %.5f N (rho c A v %.5f), momentum %.2e, energy loss %.3f %%, "
+      "bars (%s%s): contact %.4e s (2L/c %.4e), force %.5f N (rho c A v %.5f), momentum %.2e, energy loss %.3f %%, "
       "balance error %.2e, iterations %d\n",
-      two_pass ? "two-pass" : "one-pass", duration, 2 * L / c, plateau, F_ref, worst_momentum, 100 * loss, std::abs(en.balance_error()) / E0,
-      solver.contact_report().iterations);
+      two_pass ? "two-pass" : "one-pass", mortar ? ", mortar" : "", duration, 2 * L / c, plateau, F_ref, worst_momentum, 100 * loss,
+      std::abs(en.balance_error()) / E0, solver.contact_report().iterations);
   EXPECT_NEAR(duration / (2 * L / c), 1.0, 0.05);
   EXPECT_NEAR(plateau / F_ref, 1.0, 0.10);
   EXPECT_LE(worst_momentum, 1e-10);
@@ -227,6 +227,8 @@ TEST(Contact, TwoBarsImpact) { two_bars_impact(false); }
 // The same with both faces slave in turn (two-pass): the velocity-level constraints agree, so
 // the impact is the same.
 TEST(Contact, TwoBarsImpactTwoPass) { two_bars_impact(true); }
+// And with the mortar master (contact/mortar.cpp): the same impact.
+TEST(Contact, TwoBarsImpactMortar) { two_bars_impact(false, true); }
 
 namespace {
 // A 2 x 2 x 1 cm elastic block resting on the rigid plane z = 0 under gravity tilted by theta

@@ -46,6 +46,12 @@ class DeformableSurface final : public ContactMaster {
 };
 
 void DeformableSurface::build_grid(const ContactPair& p, const double* x, double margin, DetectionScratch::Grid& g) const {
+  build_triangle_grid(triangles_, p.search_scale, x, margin, g);
+}
+
+}  // namespace
+
+void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double scale, const double* x, double margin, DetectionScratch::Grid& g) {
   const std::size_t T = triangles_.size() / 3;
   double lo[3], hi[3];
   for (int c = 0; c < 3; ++c) lo[c] = std::numeric_limits<double>::infinity(), hi[c] = -lo[c];
@@ -53,7 +59,7 @@ void DeformableSurface::build_grid(const ContactPair& p, const double* x, double
     for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], x[3 * v + c]), hi[c] = std::max(hi[c], x[3 * v + c]);
   for (int c = 0; c < 3; ++c) lo[c] -= margin, hi[c] += margin;
   // Cells about one master edge wide, at most ~8 per triangle (a flat surface in a large box).
-  double cell = std::max(p.search_scale, 2 * margin);
+  double cell = std::max(scale, 2 * margin);
   const double budget = 8.0 * static_cast<double>(T) + 64;
   while ((std::ceil((hi[0] - lo[0]) / cell) * std::ceil((hi[1] - lo[1]) / cell) * std::ceil((hi[2] - lo[2]) / cell)) > budget) cell *= 1.26;
   g.cell = cell;
@@ -95,6 +101,8 @@ void DeformableSurface::build_grid(const ContactPair& p, const double* x, double
   }
   // start[] was advanced to each cell's end: cell c spans [count[c], start[c]).
 }
+
+namespace {
 
 void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
                                int threads) const {

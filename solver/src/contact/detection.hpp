@@ -21,4 +21,9 @@ struct DetectionScratch {
   std::vector<double> slot_data;  // 7 per slave: N (3), n (3), h
 };
 
+// A uniform grid over the triangles (3 node ids each, outward) at positions x, each triangle in
+// the cells its box grown by `margin` touches; cells about `scale` wide (at most ~8 per triangle).
+// Also each triangle's unit outward normal and 1 / (2 area). (detection.cpp)
+void build_triangle_grid(const std::vector<std::int32_t>& triangles, double scale, const double* x, double margin, DetectionScratch::Grid& g);
+
 }  // namespace tactus::solver

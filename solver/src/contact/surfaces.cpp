@@ -75,10 +75,12 @@ void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std:
   pair.slave_nodes.assign(order.begin(), order.end());
   pair.slave_area.clear();
   for (int v : order) pair.slave_area.push_back(area[v]);
+  pair.slave_triangles.clear();
+  for (const auto& t : triangles) pair.slave_triangles.insert(pair.slave_triangles.end(), t.begin(), t.end());
   if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);  // a rigid plane: the slave's own size
 }
 
-void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where) {
+void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where, bool mortar) {
   std::unordered_map<std::uint64_t, std::size_t> index;
   index.reserve(2 * triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) index.emplace(face_key(triangles[t][0], triangles[t][1], triangles[t][2]), t);
@@ -103,7 +105,7 @@ void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std
     if (dot(n, at(m, opposite[t]) - at(m, tri[0])) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
     for (int v : tri) oriented.push_back(v);
   }
-  pair.master = deformable_surface_master(std::move(oriented));
+  pair.master = mortar ? mortar_surface_master(std::move(oriented)) : deformable_surface_master(std::move(oriented));
   pair.search_scale = mean_edge(m, triangles);
 }
 
@@ -144,7 +146,7 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       const std::string& m_surf = swap ? cs.slave_surface : cs.master_surface;
       p.name = key + " " + s_body + "/" + s_surf + " -> " + m_body + "/" + m_surf;
       p.friction = cs.friction;
-      set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"));
+      set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"), cs.method == "mortar");
       set_slave_surface(p, m, swap ? master_tris : slave_tris);
       log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master->describe() << ", mean master edge "
                      << p.search_scale * 1e3 << " mm";

@@ -37,8 +37,9 @@ class ContactMaster;
 struct ContactPair {
   std::string name;  // "contact[0] hand/skin -> block/surface", for messages and output
   double friction = 0;
-  std::vector<std::int32_t> slave_nodes;  // internal node ids, unique, ascending
-  std::vector<double> slave_area;         // tributary area (1/3 of adjacent slave triangles), m^2
+  std::vector<std::int32_t> slave_nodes;      // internal node ids, unique, ascending
+  std::vector<double> slave_area;             // tributary area (1/3 of adjacent slave triangles), m^2
+  std::vector<std::int32_t> slave_triangles;  // 3 internal node ids each: the slave surface (mortar integrates over it)
   std::shared_ptr<const ContactMaster> master;
   double search_scale = 0;  // length the search distance and tolerances scale with (mean master edge), m
 };
@@ -87,6 +88,9 @@ class ContactMaster {
 std::shared_ptr<const ContactMaster> rigid_plane_master(const Vec3& point, const Vec3& outward_normal);
 // `triangles`: 3 internal node ids each, ordered so that (b - a) x (c - a) points out of the master body.
 std::shared_ptr<const ContactMaster> deformable_surface_master(std::vector<std::int32_t> triangles);
+// The same surface as a mortar (segment-to-segment) master (contact/mortar.cpp): each slave node's
+// row carries the master nodes its tributary surface overlaps, weighted by the mortar integrals.
+std::shared_ptr<const ContactMaster> mortar_surface_master(std::vector<std::int32_t> triangles);
 
 // Building pairs from surfaces of the model (internal numbering).
 // Fills slave_nodes and slave_area from the slave triangles; without a search scale yet, their
@@ -95,7 +99,8 @@ void set_slave_surface(ContactPair& pair, const Model& model, const std::vector<
 // Orients every triangle outward from the tets of `model` that own it and makes it the pair's
 // deformable master; its mean edge becomes the search scale. InputError naming `where` when a
 // triangle is not a face of any tet.
-void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles, const std::string& where);
+void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles, const std::string& where,
+                        bool mortar = false);
 void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_normal);
 // The triangles of physical surface `tag` of body `body` (default the first) of the model's
 // input mesh, in internal numbering.

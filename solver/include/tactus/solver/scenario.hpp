@@ -101,6 +101,7 @@ struct ContactSpec {
   std::optional<std::array<Vec3, 2>> plane;  // point, outward normal (rigid plane master)
   double friction = 0;                       // Coulomb coefficient mu
   bool two_pass = false;                     // also the master's nodes against the slave surface
+  std::string method = "node_to_surface";    // or "mortar" (segment-to-segment integrals of the slave surface)
 };
 
 // [contact_solver]: the Uzawa iterations and the search.
