@@ -65,18 +65,6 @@ std::array<double, 3> barycentric(const P2& p, const std::array<P2, 3>& t) {
   return {1.0 - l1 - l2, l1, l2};
 }
 
-class MortarSurface final : public ContactMaster {
- public:
-  explicit MortarSurface(std::vector<std::int32_t> triangles) : triangles_(std::move(triangles)) {}
-  std::string describe() const override { return "mortar surface (" + std::to_string(triangles_.size() / 3) + " triangles)"; }
-  const std::vector<std::int32_t>& triangles() const override { return triangles_; }
-  void detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
-              int threads) const override;
-
- private:
-  std::vector<std::int32_t> triangles_;  // 3 per triangle, outward
-};
-
 // What the segments of one step give each slave node.
 struct NodeIntegrals {
   double D = 0, G = 0;
@@ -92,13 +80,33 @@ struct NodeIntegrals {
   }
 };
 
+class MortarSurface final : public ContactMaster {
+ public:
+  explicit MortarSurface(std::vector<std::int32_t> triangles) : triangles_(std::move(triangles)) {}
+  std::string describe() const override { return "mortar surface (" + std::to_string(triangles_.size() / 3) + " triangles)"; }
+  const std::vector<std::int32_t>& triangles() const override { return triangles_; }
+  void detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
+              int threads) const override;
+
+ private:
+  std::vector<std::int32_t> triangles_;  // 3 per triangle, outward
+  // Per-step storage, reused (detect is called by one thread per pair and step).
+  mutable std::vector<NodeIntegrals> integrals_;
+  mutable std::vector<std::size_t> seen_;
+  mutable std::vector<std::int32_t> masters_;
+  mutable std::vector<double> weights_;
+};
+
 void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
                            int /*threads*/) const {
   DetectionScratch::Grid& g = scratch.grid;
   build_triangle_grid(triangles_, p.search_scale, x, band, g);
   const std::size_t S = p.slave_nodes.size(), T = triangles_.size() / 3;
-  std::vector<NodeIntegrals> node(S);
-  std::vector<std::size_t> seen(T, std::numeric_limits<std::size_t>::max());
+  std::vector<NodeIntegrals>& node = integrals_;  // kept between steps: no allocation once grown
+  node.resize(S);
+  for (auto& ni : node) ni.D = 0, ni.G = 0, ni.N = {0, 0, 0}, ni.M.clear();
+  std::vector<std::size_t>& seen = seen_;
+  seen.assign(T, std::numeric_limits<std::size_t>::max());
   auto slave_index = [&](std::int32_t v) {
     return static_cast<std::size_t>(std::lower_bound(p.slave_nodes.begin(), p.slave_nodes.end(), v) - p.slave_nodes.begin());
   };
@@ -136,7 +144,9 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
             const double* tn = &g.normal[4 * t];
             if (tn[3] == 0) continue;
             const Vec3 n{tn[0], tn[1], tn[2]};
-            if (std::abs(dot(ns, n)) < 0.3 * 2 * slave_area) continue;  // the surfaces must roughly face each other
+            // The surfaces must face each other (both outward): a slave triangle pairs only with
+            // master faces within 60 degrees of opposite, not with the side faces at an edge.
+            if (dot(ns, n) > -0.5 * 2 * slave_area) continue;
             const double* m0 = x + 3 * mv[0];
             double h[3];
             for (int a = 0; a < 3; ++a) h[a] = dot(sub(xs[a], m0), n);
@@ -179,8 +189,8 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
           }
         }
   }
-  std::vector<std::int32_t> masters;
-  std::vector<double> weights;
+  std::vector<std::int32_t>& masters = masters_;
+  std::vector<double>& weights = weights_;
   for (std::size_t k = 0; k < S; ++k) {
     const NodeIntegrals& ni = node[k];
     const double nn = norm(ni.N);

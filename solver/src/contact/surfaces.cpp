@@ -60,27 +60,12 @@ std::vector<std::array<int, 3>> surface_triangles(const Model& m, std::size_t bo
   return out;
 }
 
-void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles) {
-  std::unordered_map<int, double> area;
-  std::vector<int> order;
-  for (const auto& t : triangles) {
-    const double a = 0.5 * norm(cross(at(m, t[1]) - at(m, t[0]), at(m, t[2]) - at(m, t[0])));
-    for (int v : t) {
-      auto [it, inserted] = area.emplace(v, 0.0);
-      if (inserted) order.push_back(v);
-      it->second += a / 3.0;
-    }
-  }
-  std::sort(order.begin(), order.end());  // node order = memory order
-  pair.slave_nodes.assign(order.begin(), order.end());
-  pair.slave_area.clear();
-  for (int v : order) pair.slave_area.push_back(area[v]);
-  pair.slave_triangles.clear();
-  for (const auto& t : triangles) pair.slave_triangles.insert(pair.slave_triangles.end(), t.begin(), t.end());
-  if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);  // a rigid plane: the slave's own size
-}
+namespace {
 
-void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where, bool mortar) {
+// The triangles, each ordered so that (b - a) x (c - a) points out of the tet it bounds.
+// strict: a triangle that is not a tet face is an InputError; otherwise it is kept as it is.
+std::vector<std::int32_t> oriented_outward(const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where,
+                                           bool strict = true) {
   std::unordered_map<std::uint64_t, std::size_t> index;
   index.reserve(2 * triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) index.emplace(face_key(triangles[t][0], triangles[t][1], triangles[t][2]), t);
@@ -96,6 +81,10 @@ void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std
   std::vector<std::int32_t> oriented;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     std::array<int, 3> tri = triangles[t];
+    if (opposite[t] < 0 && !strict) {
+      for (int v : tri) oriented.push_back(v);
+      continue;
+    }
     if (opposite[t] < 0) {
       std::ostringstream f;
       f << "triangle " << t + 1 << " of the surface is not a face of any tet";
@@ -105,6 +94,32 @@ void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std
     if (dot(n, at(m, opposite[t]) - at(m, tri[0])) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
     for (int v : tri) oriented.push_back(v);
   }
+  return oriented;
+}
+
+}  // namespace
+
+void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles) {
+  std::unordered_map<int, double> area;
+  std::vector<int> order;
+  for (const auto& t : triangles) {
+    const double a = 0.5 * norm(cross(at(m, t[1]) - at(m, t[0]), at(m, t[2]) - at(m, t[0])));
+    for (int v : t) {
+      auto [it, inserted] = area.emplace(v, 0.0);
+      if (inserted) order.push_back(v);
+      it->second += a / 3.0;
+    }
+  }
+  std::sort(order.begin(), order.end());  // node order = memory order
+  pair.slave_nodes.assign(order.begin(), order.end());
+  pair.slave_area.clear();
+  for (int v : order) pair.slave_area.push_back(area[v]);
+  pair.slave_triangles = oriented_outward(m, triangles, "slave surface", false);  // mortar: its normals face the master's
+  if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);        // a rigid plane: the slave's own size
+}
+
+void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where, bool mortar) {
+  std::vector<std::int32_t> oriented = oriented_outward(m, triangles, where);
   pair.master = mortar ? mortar_surface_master(std::move(oriented)) : deformable_surface_master(std::move(oriented));
   pair.search_scale = mean_edge(m, triangles);
 }
