@@ -168,7 +168,7 @@ json snapshot(const fs::path& dir, std::string* odd = nullptr) {
   std::error_code ec;
   for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
     const fs::path rel = it->path().lexically_relative(dir);
-    if (rel == kFolderMarker) continue;
+    if (rel == kFolderMarker || rel == kFilesMarker) continue;  // tactus's own records
     if (it->is_symlink()) {
       if (odd && odd->empty()) *odd = rel.string() + " (a link)";
       it.disable_recursion_pending();
@@ -227,6 +227,7 @@ void remove_listed(const fs::path& dir, const json& files) {
   std::error_code ec;
   for (const auto& [name, entry] : files.items()) fs::remove(dir / name, ec);
   fs::remove(dir / kFolderMarker, ec);
+  fs::remove(dir / kFilesMarker, ec);  // a list of files tactus wrote here later (OutputFiles), all of them listed above
   std::vector<fs::path> dirs;
   for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
     if (it->is_directory() && !it->is_symlink()) dirs.push_back(it->path());
@@ -289,15 +290,39 @@ void discard_staging(fs::path& staging) {
   unregister_staging_path(staging);
 }
 
-// The files manifest of a directory (files tactus wrote there).
+// The files manifest of a directory (files tactus wrote there). A directory that is itself a
+// complete tactus output folder (an earlier version wrote `tactus-mesh -o mesh/` where the
+// pipeline now writes `-o mesh/mesh.msh`) lends its marker's top-level files, so a user's
+// previous results are recognised as tactus's after an upgrade.
 json read_files_manifest(const fs::path& dir) {
   const fs::path p = dir / kFilesMarker;
   std::error_code ec;
-  if (!fs::exists(p, ec)) return json{{"files", json::object()}};
-  json m = read_marker(p);
-  if (m.is_null() || !m.contains("files") || !m["files"].is_object())
-    throw WriteError(p.string(), "it is not a tactus output list (unreadable); move it away");
+  json m = json{{"files", json::object()}};
+  if (fs::exists(p, ec)) {
+    m = read_marker(p);
+    if (m.is_null() || !m.contains("files") || !m["files"].is_object())
+      throw WriteError(p.string(), "it is not a tactus output list (unreadable); move it away");
+  }
+  const json folder = fs::exists(dir / kFolderMarker, ec) ? read_marker(dir / kFolderMarker) : json();
+  if (!folder.is_null() && folder.value("state", "") == "complete" && folder.contains("files") && folder["files"].is_object())
+    for (const auto& [name, entry] : folder["files"].items())
+      if (name.find('/') == std::string::npos && !m["files"].contains(name) && entry.is_object()) {
+        json e = entry;
+        e["tool"] = folder.value("tool", "");
+        m["files"][name] = e;
+      }
   return m;
+}
+
+// After files were replaced in a directory that is also a tactus output folder, that folder's
+// marker lists their new sizes and times, so it stays a valid record of what tactus wrote.
+void update_folder_marker(const fs::path& dir, const std::vector<fs::path>& replaced) {
+  std::error_code ec;
+  if (!fs::exists(dir / kFolderMarker, ec)) return;
+  json folder = read_marker(dir / kFolderMarker);
+  if (folder.is_null() || !folder.contains("files") || !folder["files"].is_object()) return;
+  for (const auto& f : replaced) folder["files"][f.filename().string()] = file_entry(f);
+  write_json_atomically(dir / kFolderMarker, folder);
 }
 
 void check_file_replaceable(const fs::path& final, const OutputRules& rules, const json& manifest) {
@@ -409,6 +434,7 @@ void OutputFiles::commit() {
     manifest["files"][finals_[i].filename().string()] = entry;
   }
   write_json_atomically(dir_ / kFilesMarker, manifest);
+  update_folder_marker(dir_, finals_);
   committed_ = true;
   discard_staging(staging_);
 }

@@ -223,3 +223,28 @@ TEST(OutputFiles, NeverOverwritesAForeignOrEditedFile) {
   expect_refusal([&] { OutputFiles({dir / "b.msh"}, {"tactus-mesh", {}, false}); }, "changed since");
   EXPECT_EQ(read(dir / "b.msh"), "edited");
 }
+
+// After an upgrade: the pipeline once wrote `tactus-mesh -o mesh/` (a folder output) and now
+// writes `-o mesh/mesh.msh` (file outputs). The files of the old folder output are tactus's, so
+// the same tool replaces them; the folder's record follows, so the folder form still works too;
+// a user's file there is still never touched.
+TEST(OutputFiles, ReplaceTheFilesOfAnEarlierFolderOutput) {
+  TempDir dir;
+  make_output(dir / "mesh", "tactus-mesh", {{"mesh.msh", "old msh"}, {"mesh.vtu", "old vtu"}, {"quality.json", "{}"}});
+  write(dir / "mesh" / "notes.txt", "mine");
+  {
+    OutputFiles out({dir / "mesh" / "mesh.msh", dir / "mesh" / "mesh.vtu"}, {"tactus-mesh", {}, false});
+    write(out.staged(0), "new msh");
+    write(out.staged(1), "new vtu");
+    out.commit();
+  }
+  EXPECT_EQ(read(dir / "mesh" / "mesh.msh"), "new msh");
+  EXPECT_EQ(read(dir / "mesh" / "notes.txt"), "mine");
+  expect_refusal([&] { OutputFiles({dir / "mesh" / "notes.txt"}, {"tactus-mesh", {}, true}); }, "did not write");
+  expect_refusal([&] { OutputFiles({dir / "mesh" / "mesh.msh"}, {"tactus-solve", {}, false}); }, "--force");
+  fs::remove(dir / "mesh" / "notes.txt");
+  OutputFolder again(dir / "mesh", {"tactus-mesh", {}, false});  // the folder form: its record is current
+  write(again.path() / "mesh.msh", "folder msh");
+  again.commit();
+  EXPECT_EQ(read(dir / "mesh" / "mesh.msh"), "folder msh");
+}
