@@ -95,10 +95,17 @@ std::vector<std::pair<std::string, int>> all_element_fields(const Scenario& sc, 
   return fields;
 }
 
-// x -> R (x - about) + about, R given by its rows.
+// R a, R given by its rows (a direction: fibres).
+Vec3 rotated(const BodySpec& body, const Vec3& a) {
+  Vec3 out{};
+  for (int i = 0; i < 3; ++i) out[i] = body.rotation[i][0] * a[0] + body.rotation[i][1] * a[1] + body.rotation[i][2] * a[2];
+  return out;
+}
+
+// x -> R (x - about) + about (a point).
 Vec3 rotate(const BodySpec& body, const Vec3& x) {
-  Vec3 d{x[0] - body.rotate_about[0], x[1] - body.rotate_about[1], x[2] - body.rotate_about[2]}, out{};
-  for (int i = 0; i < 3; ++i) out[i] = body.rotation[i][0] * d[0] + body.rotation[i][1] * d[1] + body.rotation[i][2] * d[2] + body.rotate_about[i];
+  Vec3 out = rotated(body, {x[0] - body.rotate_about[0], x[1] - body.rotate_about[1], x[2] - body.rotate_about[2]});
+  for (int i = 0; i < 3; ++i) out[i] += body.rotate_about[i];
   return out;
 }
 
@@ -189,9 +196,8 @@ void rotate_element_data(const MaterialType& type, const BodySpec& body, double*
   if (!type.element_data_is_directions)
     throw InputError("scenario", key + ".rotate_axis", "a body whose materials' element data can rotate (" + type.name + "'s cannot)", "a rotation");
   for (std::size_t k = 0; k + 2 < type.element_data_size; k += 3) {
-    const Vec3 a{data[k], data[k + 1], data[k + 2]};
-    for (int i = 0; i < 3; ++i)
-      data[k + static_cast<std::size_t>(i)] = body.rotation[i][0] * a[0] + body.rotation[i][1] * a[1] + body.rotation[i][2] * a[2];
+    const Vec3 r = rotated(body, {data[k], data[k + 1], data[k + 2]});
+    std::copy(r.begin(), r.end(), data + k);
   }
 }
 
@@ -316,15 +322,14 @@ void apply_boundaries(const Scenario& sc, Model& m) {
   }
 }
 
-// [[load]] pressures: the group's triangles, oriented out of the body (away from the fourth node
-// of the tet they bound), in internal numbering.
+// [[load]] pressures: the group's triangles, oriented out of the body (outward_triangles), in
+// internal numbering.
 void add_pressure_loads(const Scenario& sc, Model& m) {
   for (std::size_t k = 0; k < sc.loads.size(); ++k) {
     const LoadSpec& spec = sc.loads[k];
     const std::string key = "load[" + std::to_string(k) + "]";
     std::size_t bi = 0;
     while (sc.bodies[bi].name != spec.body) ++bi;
-    const BodyRange& range = m.bodies[bi];
     const PhysicalGroup* g = m.body_group(bi, 2, spec.group);
     if (!g) {
       std::string groups;
@@ -333,44 +338,18 @@ void add_pressure_loads(const Scenario& sc, Model& m) {
       throw InputError(sc.file.string(), key + ".group", "a physical surface group of body '" + spec.body + "' (" + groups + ")",
                        "\"" + spec.group + "\"");
     }
-    std::map<std::array<int, 3>, std::array<int, 3>> wanted;  // sorted nodes -> the triangle
-    for (std::size_t t = range.triangle_begin; t < range.triangle_end; ++t)
-      if (m.input_mesh.triangle_group[t] == g->tag) {
-        auto key3 = m.input_mesh.triangles[t];
-        std::sort(key3.begin(), key3.end());
-        wanted[key3] = m.input_mesh.triangles[t];
-      }
+    std::vector<int> owners;
     PressureLoad load;
     load.name = key + " " + spec.body + "/" + spec.group;
     load.pressure = spec.pressure;
     load.curve = curve_index(m, spec.curve);
-    static constexpr int kFace[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};  // face nodes, then the opposite one
-    std::map<std::array<int, 3>, int> faces_of;                                                   // tets each wanted triangle bounds
-    for (std::size_t e = range.tet_begin; e < range.tet_end; ++e) {
-      const auto& tet = m.input_mesh.tets[e];
-      for (const auto& f : kFace) {
-        std::array<int, 3> key3{tet[f[0]], tet[f[1]], tet[f[2]]};
-        std::sort(key3.begin(), key3.end());
-        if (!wanted.count(key3)) continue;
-        std::array<int, 3> tri = key3;
-        const auto x = [&](int v) { return m.input_mesh.nodes[static_cast<std::size_t>(v)]; };
-        // Outward: the opposite node lies behind the triangle's normal.
-        const Vec3 a = x(tri[0]), b = x(tri[1]), c = x(tri[2]), o = x(tet[f[3]]);
-        const double n[3] = {(b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1]),
-                             (b[2] - a[2]) * (c[0] - a[0]) - (b[0] - a[0]) * (c[2] - a[2]),
-                             (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])};
-        if (n[0] * (o[0] - a[0]) + n[1] * (o[1] - a[1]) + n[2] * (o[2] - a[2]) > 0) std::swap(tri[1], tri[2]);
-        for (int v : tri) load.triangles.push_back(m.node_of_input[static_cast<std::size_t>(v)]);
-        ++faces_of[key3];
-      }
-    }
-    std::size_t bad = 0;
-    for (const auto& [k3, tri] : wanted) bad += faces_of.count(k3) == 0 || faces_of[k3] != 1;
+    load.triangles = outward_triangles(m, surface_triangles(m, bi, g->tag), owners);
+    const auto bad = static_cast<std::size_t>(std::count_if(owners.begin(), owners.end(), [](int n) { return n != 1; }));
     if (bad > 0)
       throw InputError(sc.file.string(), key + ".group",
                        "a surface on the boundary of body '" + spec.body + "' (each triangle the face of exactly one tet)",
-                       std::to_string(bad) + " of its " + std::to_string(wanted.size()) + " triangles are not");
-    log::verbose() << key << ": pressure on " << wanted.size() << " triangles of " << spec.body << "/" << spec.group;
+                       std::to_string(bad) + " of its " + std::to_string(owners.size()) + " triangles are not");
+    log::verbose() << key << ": pressure on " << owners.size() << " triangles of " << spec.body << "/" << spec.group;
     m.pressure_loads.push_back(std::move(load));
   }
 }

@@ -4,7 +4,7 @@
 # pipeline/scenarios/hand_handle.toml; tactus-pipeline meshes the phantom hand and the handle as
 # the scenario's [[pipeline.meshes]] declare, solves 0.6 ms (the 0.5 mm gap closes at 0.25 ms) and
 # reports. Checks: the report's numbers against the solver's files (check_report.py), contact
-# occurred, the pressure is mapped on the hand (the contact's slave body, not hard-coded) and the
+# occurred, the pressure is mapped on the hand (the contact's slave body, found from the data) and the
 # pictures show it (check_pictures.py); a changed STL re-meshes the handle but not the hand.
 # Usage: handle.sh <build dir>
 set -euo pipefail

@@ -68,7 +68,6 @@ void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double sca
   g.count.assign(cells + 1, 0);
   g.box.resize(T);
   g.normal.resize(4 * T);
-  auto cell_of = [&](double v, int c) { return std::clamp(static_cast<int>((v - g.lo[c]) / g.cell), 0, g.n[c] - 1); };
   for (std::size_t t = 0; t < T; ++t) {
     double a[3], b[3];
     for (int c = 0; c < 3; ++c) a[c] = std::numeric_limits<double>::infinity(), b[c] = -a[c];
@@ -77,7 +76,7 @@ void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double sca
       for (int c = 0; c < 3; ++c) a[c] = std::min(a[c], xv[c]), b[c] = std::max(b[c], xv[c]);
     }
     auto& bx = g.box[t];
-    for (int c = 0; c < 3; ++c) bx[c] = cell_of(a[c] - margin, c), bx[3 + c] = cell_of(b[c] + margin, c);
+    for (int c = 0; c < 3; ++c) bx[c] = g.cell_of(a[c] - margin, c), bx[3 + c] = g.cell_of(b[c] + margin, c);
     const std::int32_t* tri = &triangles_[3 * t];
     const double* x0 = x + 3 * tri[0];
     const Vec3 nn = cross(sub(x + 3 * tri[1], x0), sub(x + 3 * tri[2], x0));

@@ -2,6 +2,7 @@
 // Storage the master kinds reuse from step to step while they search (no allocation per step once
 // grown): a uniform grid over a deformable master's triangles, and per-slave results of the
 // parallel narrow phase.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -15,6 +16,8 @@ struct DetectionScratch {
     std::vector<std::int32_t> start, items, count;
     std::vector<std::array<int, 6>> box;  // cell range of each triangle
     std::vector<double> normal;           // 4 per triangle: unit outward normal, 1 / (2 area); 0 if degenerate
+    // The cell index along axis c of coordinate v, clamped to the grid.
+    int cell_of(double v, int c) const { return std::clamp(static_cast<int>((v - lo[c]) / cell), 0, n[c] - 1); }
   } grid;
   // Per slave node of the pair being searched: closest triangle (-1 none), weights, normal, gap.
   std::vector<std::int32_t> slot_triangle;

@@ -110,7 +110,6 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
   auto slave_index = [&](std::int32_t v) {
     return static_cast<std::size_t>(std::lower_bound(p.slave_nodes.begin(), p.slave_nodes.end(), v) - p.slave_nodes.begin());
   };
-  auto cell_of = [&](double v, int c) { return std::clamp(static_cast<int>((v - g.lo[c]) / g.cell), 0, g.n[c] - 1); };
   for (std::size_t st = 0; st * 3 < p.slave_triangles.size(); ++st) {
     const std::int32_t* sv = &p.slave_triangles[3 * st];
     const double* xs[3] = {x + 3 * sv[0], x + 3 * sv[1], x + 3 * sv[2]};
@@ -125,7 +124,7 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
       if (b < g.lo[c] || a > g.lo[c] + g.cell * g.n[c])
         lo[c] = 1, hi[c] = 0;  // outside the grid
       else
-        lo[c] = cell_of(a, c), hi[c] = cell_of(b, c);
+        lo[c] = g.cell_of(a, c), hi[c] = g.cell_of(b, c);
     }
     for (int k = lo[2]; k <= hi[2]; ++k)
       for (int j = lo[1]; j <= hi[1]; ++j)

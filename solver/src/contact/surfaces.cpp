@@ -60,40 +60,46 @@ std::vector<std::array<int, 3>> surface_triangles(const Model& m, std::size_t bo
   return out;
 }
 
-namespace {
-
-// The triangles, each ordered so that (b - a) x (c - a) points out of the tet it bounds.
-// strict: a triangle that is not a tet face is an InputError; otherwise it is kept as it is.
-std::vector<std::int32_t> oriented_outward(const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where,
-                                           bool strict = true) {
+std::vector<std::int32_t> outward_triangles(const Model& m, const std::vector<std::array<int, 3>>& triangles, std::vector<int>& owners) {
   std::unordered_map<std::uint64_t, std::size_t> index;
   index.reserve(2 * triangles.size());
   for (std::size_t t = 0; t < triangles.size(); ++t) index.emplace(face_key(triangles[t][0], triangles[t][1], triangles[t][2]), t);
   std::vector<int> opposite(triangles.size(), -1);
+  owners.assign(triangles.size(), 0);
   static constexpr int faces[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};
   for (std::size_t e = 0; e < m.num_elements; ++e) {
     const std::int32_t* c = &m.conn[4 * e];
     for (const auto& f : faces) {
       auto it = index.find(face_key(c[f[0]], c[f[1]], c[f[2]]));
-      if (it != index.end() && opposite[it->second] < 0) opposite[it->second] = c[f[3]];
+      if (it == index.end()) continue;
+      if (opposite[it->second] < 0) opposite[it->second] = c[f[3]];
+      ++owners[it->second];
     }
   }
   std::vector<std::int32_t> oriented;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     std::array<int, 3> tri = triangles[t];
-    if (opposite[t] < 0 && !strict) {
-      for (int v : tri) oriented.push_back(v);
-      continue;
+    if (opposite[t] >= 0) {
+      const Vec3 n = cross(at(m, tri[1]) - at(m, tri[0]), at(m, tri[2]) - at(m, tri[0]));
+      if (dot(n, at(m, opposite[t]) - at(m, tri[0])) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
     }
-    if (opposite[t] < 0) {
+    for (int v : tri) oriented.push_back(v);
+  }
+  return oriented;
+}
+
+namespace {
+
+// outward_triangles, with a triangle that is not a tet face an InputError naming `where`.
+std::vector<std::int32_t> outward_tet_faces(const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where) {
+  std::vector<int> owners;
+  std::vector<std::int32_t> oriented = outward_triangles(m, triangles, owners);
+  for (std::size_t t = 0; t < owners.size(); ++t)
+    if (owners[t] == 0) {
       std::ostringstream f;
       f << "triangle " << t + 1 << " of the surface is not a face of any tet";
       throw InputError("mesh", where, "a surface made of tet faces", f.str());
     }
-    const Vec3 n = cross(at(m, tri[1]) - at(m, tri[0]), at(m, tri[2]) - at(m, tri[0]));
-    if (dot(n, at(m, opposite[t]) - at(m, tri[0])) > 0) std::swap(tri[1], tri[2]);  // point out of the tet
-    for (int v : tri) oriented.push_back(v);
-  }
   return oriented;
 }
 
@@ -114,12 +120,13 @@ void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std:
   pair.slave_nodes.assign(order.begin(), order.end());
   pair.slave_area.clear();
   for (int v : order) pair.slave_area.push_back(area[v]);
-  pair.slave_triangles = oriented_outward(m, triangles, "slave surface", false);  // mortar: its normals face the master's
-  if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);        // a rigid plane: the slave's own size
+  std::vector<int> owners;
+  pair.slave_triangles = outward_triangles(m, triangles, owners);           // mortar: its normals face the master's
+  if (pair.search_scale <= 0) pair.search_scale = mean_edge(m, triangles);  // a rigid plane: the slave's own size
 }
 
 void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where, bool mortar) {
-  std::vector<std::int32_t> oriented = oriented_outward(m, triangles, where);
+  std::vector<std::int32_t> oriented = outward_tet_faces(m, triangles, where);
   pair.master = mortar ? mortar_surface_master(std::move(oriented)) : deformable_surface_master(std::move(oriented));
   pair.search_scale = mean_edge(m, triangles);
 }

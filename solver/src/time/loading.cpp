@@ -57,6 +57,8 @@ void ExplicitSolver::init_loading() {
     if (!displacement) prescribed_v_[i] = model_.constraint_velocity[i] * curve_at(curve_of(i), 0.0);
   }
   support_force_.assign(constrained_dofs_.size(), 0.0);
+  curve_at_next_.assign(model_.curves.size(), 0.0);
+  curve_increment_.assign(model_.curves.size(), 0.0);
   reactions_.force.assign(3 * model_.boundaries.size(), 0.0);
   reactions_.moment.assign(3 * model_.boundaries.size(), 0.0);
   if (!model_.pressure_loads.empty()) pressure_force_.assign(ndof, 0.0);
@@ -64,17 +66,20 @@ void ExplicitSolver::init_loading() {
 
 void ExplicitSolver::apply_loading(double t_next, double dt) {
   // Prescribed motions, exact at t_next: a displacement value x C(t), or a velocity whose
-  // integral value x I(t) is the displacement.
+  // integral value x I(t) is the displacement. Each curve is evaluated once per step, not per dof.
+  if (!driven_dofs_.empty())
+    for (std::size_t c = 0; c < model_.curves.size(); ++c) {
+      curve_at_next_[c] = model_.curves[c].at(t_next);
+      curve_increment_[c] = model_.curves[c].integral(t_next) - model_.curves[c].integral(time_);
+    }
   for (const std::int32_t d : driven_dofs_) {
     const auto i = static_cast<std::size_t>(d);
     const std::int32_t c = model_.constraint_curve.empty() ? -1 : model_.constraint_curve[i];
     const double value = model_.constraint_velocity[i];
-    if (model_.constrained[i] == 2) {
-      prescribed_v_[i] = (value * curve_at(c, t_next) - u_[i]) / dt;
-    } else {
-      const CurveSpec& curve = model_.curves[static_cast<std::size_t>(c)];
-      prescribed_v_[i] = value * (curve.integral(t_next) - curve.integral(time_)) / dt;
-    }
+    if (model_.constrained[i] == 2)
+      prescribed_v_[i] = (value * (c < 0 ? 1.0 : curve_at_next_[static_cast<std::size_t>(c)]) - u_[i]) / dt;
+    else
+      prescribed_v_[i] = value * curve_increment_[static_cast<std::size_t>(c)] / dt;
   }
   if (model_.gravity_curve >= 0)
     gravity_factor_ = curve_at(model_.gravity_curve, time_);

@@ -102,6 +102,10 @@ void set_slave_surface(ContactPair& pair, const Model& model, const std::vector<
 void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles, const std::string& where,
                         bool mortar = false);
 void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_normal);
+// The triangles (internal node ids), each ordered so that (b - a) x (c - a) points out of the tet
+// it bounds; owners[t]: how many tets have triangle t as a face (0: none, it is kept as given;
+// 2: the triangle is inside the body). Contact surfaces and pressure loads are oriented by it.
+std::vector<std::int32_t> outward_triangles(const Model& model, const std::vector<std::array<int, 3>>& triangles, std::vector<int>& owners);
 // The triangles of physical surface `tag` of body `body` (default the first) of the model's
 // input mesh, in internal numbering.
 std::vector<std::array<int, 3>> surface_triangles(const Model& model, std::size_t body, int tag);

@@ -98,11 +98,12 @@ class ExplicitSolver {
   std::vector<double> u_, v_half_, v_prev_half_, f_, inv_mass_;
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
   double gravity_factor_ = 1;
-  std::vector<double> prescribed_v_;            // per dof: the velocity a constrained dof takes over the step
-  std::vector<std::int32_t> constrained_dofs_;  // every constrained dof, for the reactions
-  std::vector<std::int32_t> driven_dofs_;       // those whose velocity changes in time (curve or displacement)
-  std::vector<double> pressure_force_;          // follower pressure forces at t^n (empty without [[load]])
-  std::vector<double> support_force_;           // per constrained dof (constrained_dofs_ order), at t^n
+  std::vector<double> prescribed_v_;                     // per dof: the velocity a constrained dof takes over the step
+  std::vector<std::int32_t> constrained_dofs_;           // every constrained dof, for the reactions
+  std::vector<std::int32_t> driven_dofs_;                // those whose velocity changes in time (curve or displacement)
+  std::vector<double> pressure_force_;                   // follower pressure forces at t^n (empty without [[load]])
+  std::vector<double> support_force_;                    // per constrained dof (constrained_dofs_ order), at t^n
+  std::vector<double> curve_at_next_, curve_increment_;  // per curve, this step: C(t^{n+1}), I(t^{n+1}) - I(t^n)
   Reactions reactions_;
   ContactSolver contact_;
   ContactStepReport contact_report_;
