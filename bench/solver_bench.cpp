@@ -1,5 +1,6 @@
 // Solver benchmarks (issue: solver core):
-//  throughput  internal-force (stress pass) tet updates per second for neo_hookean, hgo and
+//  throughput  internal-force (stress pass) tet updates per second for neo_hookean, hgo (each as
+//              standard and as average-nodal-pressure tets, the J pass included) and
 //              linear_elastic, 1 and 2 threads, at ~10k, 100k and 1M tets, on meshes whose
 //              numbering is shuffled as a mesher without locality ordering could leave it,
 //              with and without tactus' Morton reordering; plus bytes per tet of solver state.
@@ -27,8 +28,12 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-Material bench_material(const std::string& name) {
+// name: a law, or "<law>/anp" and "<law>/standard" for a formulation other than its default
+// (hgo with k = 1e8 runs as ANP by default).
+Material bench_material(const std::string& label) {
+  const std::string name = label.substr(0, label.find('/'));
   MaterialValues v;
+  if (label.find('/') != std::string::npos) v.strings["formulation"] = label.substr(label.find('/') + 1);
   if (name == "neo_hookean") v.numbers = {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}};
   if (name == "linear_elastic") v.numbers = {{"E", 1e9}, {"nu", 0.3}, {"density", 2000}};
   if (name == "hgo") {
@@ -72,8 +77,9 @@ void throughput(const std::vector<int>& sizes) {
     TetMesh mesh = samples::make_box_mesh(n, n, n, 0.1, 0.1, 0.1);
     samples::perturb_interior_nodes(mesh, 0.1 / n, 0.2, 1);
     samples::shuffle_numbering(mesh, 2);
-    for (const char* mat : {"neo_hookean", "hgo", "linear_elastic"}) {
+    for (const char* mat : {"neo_hookean", "neo_hookean/anp", "hgo/standard", "hgo/anp", "linear_elastic"}) {
       for (bool reorder : {false, true}) {
+        if (!reorder && std::string(mat).find('/') != std::string::npos) continue;  // formulations: Morton order only
         const Model m = build_model(mesh, bench_material(mat), mat, {0, 0, 0}, reorder);
         for (int threads : {1, 2}) {
           const double rate = updates_per_second(m, threads);

@@ -128,6 +128,21 @@ Summary summarize(const Results& r) {
         s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
       }
     }
+    if (const MeshField* fs2 = v.cell_field("fibre_stretch_isochoric"); fs2 && fs2->components == 2) {
+      const MeshField* stress = v.cell_field("fibre_stress");
+      for (std::size_t e = 0; 2 * e + 1 < fs2->values.size(); ++e)
+        for (int k = 0; k < 2; ++k)
+          if (fs2->values[2 * e + k] > s.fibre_stretch.value) {
+            s.fibre_stretch = {fs2->values[2 * e + k], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
+            s.fibre_family = k + 1;
+            s.fibre_stress_there = 0;
+            if (stress && stress->components == 6) {
+              const double* t = &stress->values[6 * e];
+              const double a = t[0] - t[1], b = t[1] - t[2], c = t[2] - t[0];
+              s.fibre_stress_there = std::sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * (t[3] * t[3] + t[4] * t[4] + t[5] * t[5]));
+            }
+          }
+    }
     if (const MeshField* p = v.point_field(cp::contact_pressure.name)) {
       bool new_peak = false;  // in this state (possibly at the same node as before: its body is looked up again)
       for (std::size_t i = 0; i < p->values.size(); ++i) {
@@ -173,6 +188,11 @@ std::string summary_json(const Summary& s) {
   nlohmann::json vm = nlohmann::json::object();
   for (const auto& m : s.von_mises) vm[m.material] = peak_json(m.von_mises, "Pa");
   j["peak_von_mises"] = vm;
+  if (s.fibre_stretch.value > 0) {
+    j["largest_fibre_stretch"] = peak_json(s.fibre_stretch, "");
+    j["largest_fibre_stretch"]["family"] = s.fibre_family;
+    j["largest_fibre_stretch"]["fibre_stress_von_mises_Pa"] = s.fibre_stress_there;
+  }
   j["contact"] = {{"occurred", s.contact_occurred}};
   if (s.contact_occurred) {
     j["contact"]["peak_pressure_any_step"] = peak_json(s.peak_pressure_steps, "Pa");
@@ -225,6 +245,10 @@ std::string summary_markdown(const Summary& s) {
   for (const auto& m : s.von_mises)
     o << "| " << m.material << " | " << m.von_mises.value / 1e6 << " | " << m.von_mises.time * 1e3 << " | element " << m.von_mises.index << ", "
       << mm(m.von_mises.position) << " |\n";
+  if (s.fibre_stretch.value > 0)
+    o << "\nLargest isochoric fibre stretch (sqrt(J4bar), hgo) over the output states: " << s.fibre_stretch.value << " (family " << s.fibre_family
+      << ") at t = " << s.fibre_stretch.time * 1e3 << " ms, element " << s.fibre_stretch.index << ", " << mm(s.fibre_stretch.position)
+      << "; the fibre terms' stress there: " << s.fibre_stress_there / 1e6 << " MPa von Mises.\n";
   o << "\n## Contact\n\n";
   if (!s.contact_occurred) {
     o << "No contact occurred during the run: no pressure map, zero contact force.\n";

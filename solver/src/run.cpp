@@ -180,6 +180,9 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   const Model model = build_model(sc);
   log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size() << " materials, "
               << sc.bodies.size() << " bodies";
+  for (const MaterialBlock& b : model.blocks)
+    log::info() << "  " << b.name << ": " << b.material.type_name() << ", " << (b.end - b.begin) << " tets, "
+                << (b.material.anp() ? "average-nodal-pressure (ANP) tets" : "standard tets");
   ExplicitSolver solver(model, sc.run, sc.damping);
   log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; " << solver.describe_step_limit() << "), "
               << solver.threads() << " threads";

@@ -446,6 +446,8 @@ void read_materials(const Reader& r, const toml::table& root, Scenario& sc, cons
           m.values.numbers[ps.key] = r.number(t, ps, path, 0);
         else if (ps.type == ValueType::vec3_list && t.contains(ps.key))
           m.values.vectors[ps.key] = r.vec3_list(t, ps, path);
+        else if (ps.type == ValueType::string && t.contains(ps.key))
+          m.values.strings[ps.key] = r.string(t, ps, path);
       }
       m.values.source = fname;
       Material::make(m.type, m.values, path);  // the law's own checks (hgo: two non-zero fibre directions)

@@ -33,6 +33,9 @@ constexpr double kPeakPressure = 2e6;    // Pa at the plate's top node (10, 10, 
 constexpr double kSidePressure = 0.5e6;  // Pa at its four neighbours
 constexpr double kPunchStress = 5e6;     // Pa, every cube cell, state 1
 constexpr std::size_t kPlateCells = 4 * 2 * 1 * 6;
+constexpr std::size_t kFibreCell = 5;   // 0-based plate cell of the largest fibre stretch (state 1, family 2)
+constexpr double kFibreStretch = 1.08;  // its isochoric stretch
+constexpr double kFibreStressXX = 1e6;  // its fibre stress: uniaxial, so von Mises 1 MPa
 
 struct Folder {
   TetMesh mesh;
@@ -55,6 +58,10 @@ Folder write_results(const fs::path& dir, bool contact = true) {
   pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
   for (int k = 0; k < 2; ++k) {
     MeshField vm{c::cell::von_mises.name, 1, {}}, mat{c::cell::material.name, 1, {}}, body{c::cell::body.name, 1, {}};
+    MeshField stretch{"fibre_stretch_isochoric", 2, std::vector<double>(2 * cells, 0.0)},
+        fstress{"fibre_stress", 6, std::vector<double>(6 * cells, 0.0)};
+    for (std::size_t e = 0; e < kPlateCells; ++e) stretch.values[2 * e] = 1.0 + 0.001 * static_cast<double>(e);  // family 1: below the peak
+    if (k == 1) stretch.values[2 * kFibreCell + 1] = kFibreStretch, fstress.values[6 * kFibreCell] = kFibreStressXX;
     for (std::size_t e = 0; e < cells; ++e) {
       const bool plate = e < kPlateCells;
       vm.values.push_back(plate ? Folder::plate_stress(e, k) : k * kPunchStress);
@@ -74,7 +81,7 @@ Folder write_results(const fs::path& dir, bool contact = true) {
         p.values[i] = kSidePressure;
     }
     const std::string name = "results/state_000" + std::to_string(k) + ".vtu";
-    write_vtu(dir / name, f.mesh, {p}, {vm, mat, body});
+    write_vtu(dir / name, f.mesh, {p}, {vm, mat, body, stretch, fstress});
     pvd << "<DataSet timestep=\"" << k * 1e-3 << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
   }
   pvd << "</Collection>\n</VTKFile>\n";
@@ -181,6 +188,12 @@ TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
   EXPECT_DOUBLE_EQ(s.reactions[0].final_force[2], -120.0);
   EXPECT_DOUBLE_EQ(s.reactions[0].final_moment[0], 1.2);
 
+  EXPECT_DOUBLE_EQ(s.fibre_stretch.value, kFibreStretch);
+  EXPECT_EQ(s.fibre_family, 2);
+  EXPECT_EQ(s.fibre_stretch.index, static_cast<long>(kFibreCell) + 1);
+  EXPECT_DOUBLE_EQ(s.fibre_stretch.time, 1e-3);
+  EXPECT_DOUBLE_EQ(s.fibre_stress_there, kFibreStressXX);
+
   const auto j = nlohmann::json::parse(postproc::summary_json(s));
   std::cout << "summary: soft peak " << j["peak_von_mises"]["soft"]["value"] << " Pa, pressure at outputs "
             << j["contact"]["peak_pressure_at_outputs"]["value"] << " Pa, balance " << j["energy"]["balance_error_of_initial_kinetic"] << "\n";
@@ -189,6 +202,9 @@ TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
   const std::string md = postproc::summary_markdown(s);
   EXPECT_NE(md.find("| soft | 0.096 | 1 | element 48, "), std::string::npos) << md;  // 96 kPa at 1 ms
   EXPECT_NE(md.find("| peak contact force | 130 N |"), std::string::npos) << md;
+  EXPECT_NE(md.find("Largest isochoric fibre stretch (sqrt(J4bar), hgo) over the output states: 1.08 (family 2) at t = 1 ms, element 6"),
+            std::string::npos)
+      << md;
 }
 
 TEST(Summary, NoContactIsSaid) {

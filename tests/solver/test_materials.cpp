@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <cstdio>
 #include <random>
 #include <sstream>
 
@@ -276,4 +277,32 @@ TEST(Materials, MooneyRivlinReducesToNeoHookeanAndShearsInClosedForm) {
     EXPECT_NEAR(r[7], 2 * (2000.0 + 800.0) * g, 1e-9 * 2800.0);  // which is 2 (c10 + c01) g
   }
   std::printf("mooney_rivlin: shear stress at gamma 0.6: %.6f Pa (2 (c10 + c01) gamma = %.6f)\n", rows.back()[7], 2 * 2800.0 * 0.6);
+}
+
+// Oracle: the hgo law's own stress with and without its fibres (k1 = 0): the result field
+// fibre_stress must be their difference, sigma(k1) - sigma(0), at a general deformation that
+// stretches one family (J != 1), and fibre_stretch_isochoric must be J^(-1/3) |F a|.
+TEST(Materials, HgoFibreOutputsAreTheFibreTerms) {
+  const std::vector<tactus::Vec3> fibres{{1, 0, 0}, {0, 1, 0}};
+  const Material with = law("hgo", {{"c1", 1e4}, {"k1", 2e4}, {"k2", 5.0}, {"k", 1e6}, {"density", 1000}}, fibres);
+  const Material without = law("hgo", {{"c1", 1e4}, {"k1", 0.0}, {"k2", 5.0}, {"k", 1e6}, {"density", 1000}}, fibres);
+  Mat3 F;
+  F << 1.12, 0.03, -0.02, 0.01, 0.95, 0.04, 0.02, -0.01, 0.97;
+  const Mat3 expected = cauchy_stress(F, first_piola(with, F)) - cauchy_stress(F, first_piola(without, F));
+  const MaterialType& t = with.type();
+  std::size_t n = 0;
+  for (const auto& f : t.result_fields) n += static_cast<std::size_t>(f.components);
+  ASSERT_EQ(n, 10u);  // fibre_stretch (2), fibre_stretch_isochoric (2), fibre_stress (6)
+  std::vector<double> out(n);
+  t.result_values(with.law(), F, with.constant_element_data().data(), out.data());
+  const double J = F.determinant();
+  EXPECT_NEAR(out[2], std::cbrt(1 / J) * (F * Vec3d(1, 0, 0)).norm(), 1e-14);
+  EXPECT_NEAR(out[3], std::cbrt(1 / J) * (F * Vec3d(0, 1, 0)).norm(), 1e-14);
+  const double voigt[6] = {expected(0, 0), expected(1, 1), expected(2, 2), expected(0, 1), expected(1, 2), expected(0, 2)};
+  double worst = 0;
+  for (int k = 0; k < 6; ++k) worst = std::max(worst, std::abs(out[4 + k] - voigt[k]));
+  std::printf("hgo fibre stress: sigma_f,xx %.6e Pa (sigma(k1) - sigma(0): %.6e), largest difference %.2e Pa; isochoric stretches %.6f %.6f\n",
+              out[4], voigt[0], worst, out[2], out[3]);
+  EXPECT_GT(std::abs(voigt[0]), 100.0);  // the stretched family carries load
+  EXPECT_LE(worst, 1e-9 * std::abs(voigt[0]));
 }

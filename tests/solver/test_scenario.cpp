@@ -135,6 +135,10 @@ TEST_F(ScenarioFile, NegativeDensity) {
 }
 TEST_F(ScenarioFile, IncompressiblePoissonRatio) { expect_error(replace(kValid, "nu = 0.22", "nu = 0.5"), {"materials.bone.nu", "(-1, 0.5)"}); }
 TEST_F(ScenarioFile, NonPositiveBulkModulus) { expect_error(replace(kValid, "k = 1.0e8", "k = 0"), {"materials.skin.k", "> 0"}); }
+TEST_F(ScenarioFile, MaterialFormulationMustBeKnown) {
+  expect_error(replace(kValid, "k2 = 882.847\n", "k2 = 882.847\nformulation = \"mixed\"\n"),
+               {"materials.skin.formulation", "\"anp\" or \"standard\""});
+}
 TEST_F(ScenarioFile, UnknownMaterialType) {
   expect_error(replace(kValid, "\"linear_elastic\"", "\"mooney\""), {"materials.bone.type", "hgo", "mooney"});
 }

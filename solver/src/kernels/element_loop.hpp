@@ -4,7 +4,15 @@
 // (paper eqs. 27-32), F = I + sum_a u_a (x) grad N_a, f_a = -V0 P grad N_a, with the element's
 // stable step in the same pass (Laghos' qdata.dt_est idea). No virtual call or branch on the
 // material inside the loop.
+//
+// Average nodal pressure (ANP) tets (Bonet & Burton 1998; Joldes, Wittek & Miller 2009): for a
+// law with an uncoupled volumetric part, W = W_iso(F) + U(J), the volumetric energy is
+// sum_a V_a U(J_a) over the nodes of the material's tets, with nodal volumes V_a = sum_e V_e / 4
+// and J_a = v_a / V_a (v_a the same sum of current volumes). Its derivative gives each tet the
+// pressure p_e = (1/4) sum_{a of e} U'(J_a), so P = P_iso(F) + p_e cof(F): the nodal pressures come
+// from a J pass before this loop (internal_force.cpp), the deviatoric part from the element.
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
 
@@ -36,9 +44,32 @@ struct StressKernelArgs {
   const double* v;  // for the viscous part (beta > 0)
   double* f;        // this thread's force buffer
   double beta;
+  const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
 };
 
-template <class Law, bool kViscous>
+// A law whose energy is W_iso(F) + U(J) declares evaluate_isochoric (P, W of W_iso; the modulus
+// still the whole P-wave modulus), volumetric_energy U(J) and volumetric_pressure U'(J); its
+// standard evaluation is their sum. Such a law can run as ANP tets.
+template <class Law>
+concept VolumetricSplit = requires(const Law& l, const Mat3& F, double J, const double* d) {
+  { l.evaluate_isochoric(F, F, J, d) } -> std::same_as<StressPoint>;
+  { l.volumetric_energy(J) } -> std::same_as<double>;
+  { l.volumetric_pressure(J) } -> std::same_as<double>;
+};
+
+template <class Law>
+TACTUS_KERNEL_INLINE StressPoint evaluate_law(const Law& mat, const Mat3& F, const Mat3& cof, double J, const double* data) {
+  if constexpr (VolumetricSplit<Law>) {
+    StressPoint s = mat.evaluate_isochoric(F, cof, J, data);
+    s.P += mat.volumetric_pressure(J) * cof;  // dU/dF = U'(J) cof(F)
+    s.W += mat.volumetric_energy(J);
+    return s;
+  } else {
+    return mat.evaluate(F, cof, J, data);
+  }
+}
+
+template <class Law, bool kViscous, bool kAnp = false>
 void stress_range(const StressKernelArgs& a, ThreadAccumulator& acc) {
   const Law& mat = *static_cast<const Law*>(a.law);
   const std::int32_t* __restrict conn = a.conn;
@@ -59,7 +90,15 @@ void stress_range(const StressKernelArgs& a, ThreadAccumulator& acc) {
     const double J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
     if (J < acc.min_J) acc.min_J = J, acc.min_J_element = e;
     if (!(J > 0)) continue;  // reported by the caller; the step is abandoned
-    StressPoint sp = mat.evaluate(F, cof, J, a.element_data + a.data_stride * (e - a.block_begin));
+    const double* data = a.element_data + a.data_stride * (e - a.block_begin);
+    StressPoint sp;
+    if constexpr (kAnp) {
+      sp = mat.evaluate_isochoric(F, cof, J, data);
+      const double* p = a.nodal_pressure;
+      sp.P += (0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]])) * cof;  // its energy is the nodes' (J pass)
+    } else {
+      sp = evaluate_law(mat, F, cof, J, data);
+    }
     const double V0 = vol[e];
     acc.energy += V0 * sp.W;
 

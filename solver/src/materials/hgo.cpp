@@ -58,22 +58,43 @@ struct Hgo {
     unit(fields, data, where, "fibre_1");
     unit(fields + 3, data + 3, where, "fibre_2");
   }
-  static std::vector<ResultFieldSpec> result_fields() { return {{"fibre_stretch", 2, "stretch |F a| of the two fibre families (hgo; 0 elsewhere)"}}; }
+  static std::vector<ResultFieldSpec> result_fields() {
+    return {{"fibre_stretch", 2, "stretch |F a| of the two fibre families (hgo; 0 elsewhere)"},
+            {"fibre_stretch_isochoric", 2,
+             "isochoric stretch sqrt(J4bar) = J^(-1/3) |F a| of the two families: the one the law acts on (load only above 1; hgo; 0 elsewhere)"},
+            {"fibre_stress", 6, "Cauchy stress of the fibre terms alone (xx, yy, zz, xy, yz, xz; Pa; hgo; 0 elsewhere)"}};
+  }
+  // sigma_f = sum_a 2 psi'_a J^{-5/3} (F a (x) F a - J4_a / 3 I): the fibre terms of P pushed forward.
   void result_values(const Mat3& F, const double* data, double* out) const {
-    out[0] = (F * Vec3d(data)).norm();
-    out[1] = (F * Vec3d(data + 3)).norm();
+    const double J = F.determinant(), Jm13 = inv_cbrt(J);
+    Mat3 sigma = Mat3::Zero();
+    for (int f = 0; f < 2; ++f) {
+      const Vec3d Fa = F * Vec3d(data + 3 * f);
+      const double J4 = Fa.squaredNorm(), J4bar = Jm13 * Jm13 * J4;
+      out[f] = std::sqrt(J4);
+      out[2 + f] = std::sqrt(J4bar);
+      if (J4bar <= 1.0) continue;
+      const double d = J4bar - 1.0, dpsi = k1 * d * std::exp(k2 * d * d);
+      sigma += (2.0 * dpsi * Jm13 * Jm13 / J) * (Fa * Fa.transpose() - J4 / 3.0 * Mat3::Identity());
+    }
+    const double voigt[6] = {sigma(0, 0), sigma(1, 1), sigma(2, 2), sigma(0, 1), sigma(1, 2), sigma(0, 2)};
+    for (int c = 0; c < 6; ++c) out[4 + c] = voigt[c];
   }
   double small_strain_bulk() const { return k; }
   double small_strain_shear() const { return 2.0 * c1; }
 
-  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* data) const {
+  double volumetric_energy(double J) const { return 0.5 * k * (J - 1.0) * (J - 1.0); }
+  double volumetric_pressure(double J) const { return k * (J - 1.0); }
+
+  // Everything but the volumetric term k/2 (J - 1)^2 (the fibre terms use J4bar: isochoric).
+  TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* data) const {
     const Vec3d f1(data), f2(data + 3);
     const double I1 = F.squaredNorm();
     const double Jm23 = inv_cbrt(J * J);
     StressPoint s;
-    double cof_coeff = k * (J - 1.0) - 2.0 * c1 * Jm23 * I1 / (3.0 * J);
+    double cof_coeff = -2.0 * c1 * Jm23 * I1 / (3.0 * J);
     s.P = (2.0 * c1 * Jm23) * F;
-    s.W = c1 * (Jm23 * I1 - 3.0) + 0.5 * k * (J - 1.0) * (J - 1.0);
+    s.W = c1 * (Jm23 * I1 - 3.0);
     double fibre_modulus = 0;
     const Vec3d* dirs[2] = {&f1, &f2};
     for (const Vec3d* a : dirs) {

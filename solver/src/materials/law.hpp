@@ -7,6 +7,10 @@
 //   double density;                                           kg/m^3, reference configuration
 //   double small_strain_bulk() const, small_strain_shear() const;   Pa
 //   TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* data) const;
+// or, when W = W_iso(F) + U(J) (then the law can also run as ANP tets), instead of evaluate:
+//   TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* data) const;
+//   double volumetric_energy(double J) const;     U(J)
+//   double volumetric_pressure(double J) const;   U'(J)
 // and, when it needs per-element data (fibre directions):
 //   static constexpr std::size_t kElementData;                doubles per element
 //   static std::vector<std::pair<std::string, int>> element_fields();   cell fields of bodies.fibres
@@ -44,17 +48,51 @@ MaterialType make_material_type() {
     return std::make_shared<const Law>(Law::create(values, where, constants));
   };
   t.evaluate = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
-    return static_cast<const Law*>(law)->evaluate(F, cof, J, data);
+    return evaluate_law(*static_cast<const Law*>(law), F, cof, J, data);
   };
   t.density = [](const void* law) { return static_cast<const Law*>(law)->density; };
   t.small_strain_bulk = [](const void* law) { return static_cast<const Law*>(law)->small_strain_bulk(); };
   t.small_strain_shear = [](const void* law) { return static_cast<const Law*>(law)->small_strain_shear(); };
   t.stress_pass = [](const StressKernelArgs& args, ThreadAccumulator& acc) {
+    if constexpr (VolumetricSplit<Law>) {
+      if (args.nodal_pressure) {
+        if (args.beta > 0)
+          stress_range<Law, true, true>(args, acc);
+        else
+          stress_range<Law, false, true>(args, acc);
+        return;
+      }
+    }
     if (args.beta > 0)
       stress_range<Law, true>(args, acc);
     else
       stress_range<Law, false>(args, acc);
   };
+  if constexpr (VolumetricSplit<Law>) {
+    ValueSpec formulation;
+    formulation.key = "formulation";
+    formulation.type = ValueType::string;
+    formulation.default_text = "\"anp\" when bulk / shear > 100, else \"standard\"";
+    formulation.doc =
+        "standard: one-point linear tets; anp: average nodal pressure tets (volumetric part from nodal volumes of this "
+        "material's tets), which do not lock when nearly incompressible";
+    t.parameters.keys.push_back(formulation);
+    t.evaluate_isochoric = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
+      return static_cast<const Law*>(law)->evaluate_isochoric(F, cof, J, data);
+    };
+    t.anp_nodal_pressure = [](const void* law, const double* reference_volume, double* volume, std::size_t lo, std::size_t hi) {
+      const Law& mat = *static_cast<const Law*>(law);
+      double energy = 0;
+      for (std::size_t a = lo; a < hi; ++a) {
+        const double V = reference_volume[a];
+        if (!(V > 0)) continue;
+        const double J = volume[a] / V;
+        energy += V * mat.volumetric_energy(J);
+        volume[a] = mat.volumetric_pressure(J);
+      }
+      return energy;
+    };
+  }
   return t;
 }
 

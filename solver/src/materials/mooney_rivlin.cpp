@@ -28,18 +28,20 @@ struct MooneyRivlin {
   double small_strain_bulk() const { return bulk; }
   double small_strain_shear() const { return 2.0 * (c10 + c01); }
 
-  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
+  TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
     const Mat3 C = F.transpose() * F;
     const double I1 = C.trace();
     const double I2 = 0.5 * (I1 * I1 - C.squaredNorm());
     const double Jm23 = inv_cbrt(J * J), Jm43 = Jm23 * Jm23;
     StressPoint s;
-    s.P = (2.0 * c10 * Jm23) * F + (2.0 * c01 * Jm43) * (I1 * F - F * C) +
-          (bulk * (J - 1.0) - (2.0 / 3.0) * c10 * Jm23 * I1 / J - (4.0 / 3.0) * c01 * Jm43 * I2 / J) * cof;
-    s.W = c10 * (Jm23 * I1 - 3.0) + c01 * (Jm43 * I2 - 3.0) + 0.5 * bulk * (J - 1.0) * (J - 1.0);
+    s.P = (2.0 * c10 * Jm23) * F + (2.0 * c01 * Jm43) * (I1 * F - F * C) -
+          ((2.0 / 3.0) * c10 * Jm23 * I1 / J + (4.0 / 3.0) * c01 * Jm43 * I2 / J) * cof;
+    s.W = c10 * (Jm23 * I1 - 3.0) + c01 * (Jm43 * I2 - 3.0);
     s.modulus = bulk + 4.0 * small_strain_shear() / 3.0;
     return s;
   }
+  double volumetric_energy(double J) const { return 0.5 * bulk * (J - 1.0) * (J - 1.0); }
+  double volumetric_pressure(double J) const { return bulk * (J - 1.0); }
 };
 
 }  // namespace

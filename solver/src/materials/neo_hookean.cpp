@@ -21,16 +21,18 @@ struct NeoHookean {
   double small_strain_bulk() const { return bulk; }
   double small_strain_shear() const { return mu; }
 
-  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
+  // The isochoric part: P = mu J^{-2/3} (F - I1/3 F^{-T}), F^{-T} = cof / J.
+  TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
     const double I1 = F.squaredNorm();
     const double Jm23 = inv_cbrt(J * J);
-    // P = mu J^{-2/3} (F - I1/3 F^{-T}) + K (J - 1) J F^{-T},  F^{-T} = cof / J
     StressPoint s;
-    s.P = (mu * Jm23) * F + (bulk * (J - 1.0) - mu * Jm23 * I1 / (3.0 * J)) * cof;
-    s.W = 0.5 * mu * (Jm23 * I1 - 3.0) + 0.5 * bulk * (J - 1.0) * (J - 1.0);
+    s.P = (mu * Jm23) * F - (mu * Jm23 * I1 / (3.0 * J)) * cof;
+    s.W = 0.5 * mu * (Jm23 * I1 - 3.0);
     s.modulus = bulk + 4.0 * mu / 3.0;
     return s;
   }
+  double volumetric_energy(double J) const { return 0.5 * bulk * (J - 1.0) * (J - 1.0); }
+  double volumetric_pressure(double J) const { return bulk * (J - 1.0); }
 };
 
 }  // namespace

@@ -48,12 +48,30 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
                        std::to_string(it->second));
   }
   m.law_ = m.type_->create(checked, where, m.constants_);
+  // formulation: explicit, or ANP by default where standard tets would lock (bulk / shear > 100).
+  if (auto it = values.strings.find("formulation"); it != values.strings.end()) {
+    if (!m.type_->volumetric_split())
+      throw InputError(values.source, where + ".formulation", "no formulation key (" + type + " has one formulation)", "\"" + it->second + "\"");
+    if (it->second == "anp")
+      m.formulation_ = Formulation::anp;
+    else if (it->second != "standard")
+      throw InputError(values.source, where + ".formulation", "\"anp\" or \"standard\"", "\"" + it->second + "\"");
+  } else if (m.type_->volumetric_split() && m.small_strain_bulk() > kAnpDefaultBulkToShear * m.small_strain_shear()) {
+    m.formulation_ = Formulation::anp;
+  }
   return m;
 }
 
 StressPoint Material::evaluate(const Mat3& F, const double* data) const {
   const Mat3 cof = cofactor(F);
   return type_->evaluate(law_.get(), F, cof, F.row(0).dot(cof.row(0)), data ? data : constants_.data());
+}
+
+StressPoint Material::evaluate_with_pressure(const Mat3& F, double pressure, const double* data) const {
+  const Mat3 cof = cofactor(F);
+  StressPoint s = type_->evaluate_isochoric(law_.get(), F, cof, F.row(0).dot(cof.row(0)), data ? data : constants_.data());
+  s.P += pressure * cof;
+  return s;
 }
 
 }  // namespace tactus::solver

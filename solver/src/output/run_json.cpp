@@ -80,6 +80,8 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   // Names behind the "material" and "body" cell fields of the results (their values index these).
   j[k::materials] = nlohmann::json::array();
   for (const auto& b : model.blocks) j[k::materials].push_back(b.name);
+  j[k::formulations] = nlohmann::json::object();
+  for (const auto& b : model.blocks) j[k::formulations][b.name] = b.material.anp() ? "anp" : "standard";
   j[k::bodies] = nlohmann::json::array();
   for (const auto& b : model.bodies) j[k::bodies].push_back(b.name);
   j[k::nodes] = model.num_nodes;

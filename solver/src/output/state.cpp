@@ -58,6 +58,7 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
     for (const auto& f : b.material.type().result_fields)
       if (std::none_of(law_fields.begin(), law_fields.end(), [&](const MeshField& x) { return x.name == f.name; }))
         law_fields.push_back({f.name, f.components, std::vector<double>(static_cast<std::size_t>(f.components) * E)});
+  const std::vector<Mat3> sigma = element_cauchy_stress(m, u.data());
   for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
     const MaterialBlock& b = m.blocks[bi];
     const MaterialType& type = b.material.type();
@@ -70,8 +71,7 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
     std::vector<double> values(count);
     for (std::size_t e = b.begin; e < b.end; ++e) {
       const Mat3 F = Mat3::Identity() + nodal_gradient(u.data(), &m.conn[4 * e], &m.grad[9 * e]);
-      const Mat3 P = b.material.evaluate(F, b.data_of(e)).P;
-      const Mat3 s = cauchy_stress(F, P);
+      const Mat3& s = sigma[e];
       const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
       const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
       for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];

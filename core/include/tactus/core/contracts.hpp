@@ -123,10 +123,11 @@ inline constexpr std::array<const ColumnFamily*, 2> per_boundary{&reaction, &mom
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------
 namespace run_json {
-inline constexpr const char* status = "status";        // "completed" | "failed"
-inline constexpr const char* message = "message";      // why it failed, or null
-inline constexpr const char* materials = "materials";  // names behind the cell field "material"
-inline constexpr const char* bodies = "bodies";        // names behind the cell field "body"
+inline constexpr const char* status = "status";              // "completed" | "failed"
+inline constexpr const char* message = "message";            // why it failed, or null
+inline constexpr const char* materials = "materials";        // names behind the cell field "material"
+inline constexpr const char* bodies = "bodies";              // names behind the cell field "body"
+inline constexpr const char* formulations = "formulations";  // {material name: "standard" | "anp"}
 inline constexpr const char* steps = "steps";
 inline constexpr const char* nodes = "nodes";
 inline constexpr const char* tets = "tets";
@@ -140,8 +141,8 @@ inline constexpr const char* energy = "energy";        // {initial, kinetic, int
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
 inline constexpr const char* contact = "contact";      // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
 inline constexpr const char* reactions = "reactions";  // [{name, moment_about, final_force, final_moment, peak_force: {value, time, vector}}]
-inline constexpr std::array<const char*, 17> all{status,  message,   materials, bodies, steps,  nodes,          tets,    end_time, output_times,
-                                                 outputs, wall_time, time_step, timing, energy, peak_von_mises, contact, reactions};
+inline constexpr std::array<const char*, 18> all{status,       message, materials, formulations, bodies, steps,  nodes,          tets,    end_time,
+                                                 output_times, outputs, wall_time, time_step,    timing, energy, peak_von_mises, contact, reactions};
 }  // namespace run_json
 
 }  // namespace tactus::contracts

@@ -50,6 +50,11 @@ struct Summary {
   PeakAt peak_pressure_outputs;  // at the output states (what the pictures show)
   PeakAt largest_area, peak_force;
   std::vector<ReactionSummary> reactions;  // one per [[boundary]]
+  // hgo tissue: the largest isochoric fibre stretch sqrt(J4bar) over the output states (its
+  // element centroid), the family (1 or 2) and that element's fibre stress von Mises; value 0: no fibres.
+  PeakAt fibre_stretch;
+  int fibre_family = 0;
+  double fibre_stress_there = 0;
   std::vector<FrameSummary> frames;
   std::vector<std::string> pictures;  // file names in the report folder
 };

@@ -35,6 +35,18 @@ struct StressPassResult {
   std::size_t min_jacobian_element = 0;
 };
 
+// Average nodal pressure tets (material.hpp, kernels/element_loop.hpp), for the blocks whose
+// material runs as ANP: the nodal reference volumes V_a = sum_e V_e / 4 over the block's tets
+// (0 at the other nodes), one entry per node; adding J_e V_e / 4 of tets [begin, end) at u to
+// the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial: for the outputs).
+std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
+void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume);
+std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& block, const double* u);
+
+// The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
+// volumetric part is the average of its nodes' pressures.
+std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
+
 class InternalForces {
  public:
   // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
@@ -49,6 +61,16 @@ class InternalForces {
   double beta_;
   int threads_;
   std::vector<std::vector<double>> thread_forces_;  // threads-1 extra buffers (thread 0 writes f_out)
+  // ANP blocks: their nodal reference volumes and, per step, the nodal pressures (which first
+  // hold thread 0's share of the current nodal volumes); the other threads' shares.
+  struct AnpBlock {
+    std::size_t block;
+    std::vector<double> reference_volume, pressure;
+  };
+  std::vector<AnpBlock> anp_;
+  std::vector<const double*> block_pressure_;  // per block: its AnpBlock's pressure, or nullptr
+  std::vector<std::vector<double>> thread_node_volumes_;
+  double anp_pass(const double* u, int tid, int nth);
 };
 
 }  // namespace tactus::solver

@@ -10,6 +10,9 @@
 //   W        the strain energy per reference volume,
 //   modulus  the current P-wave modulus (Pa) for the stable time step (K + 4 mu / 3, plus the
 //            fibres' current tangent stiffness for hgo).
+// A law whose energy splits as W_iso(F) + U(J) (neo_hookean, hgo, mooney_rivlin) evaluates the two
+// parts separately and can then run as average-nodal-pressure tets (`formulation = "anp"`, the
+// default when bulk / shear > 100), which do not lock volumetrically (kernels/element_loop.hpp).
 // The registry turns each law into a MaterialType: the scenario reader validates against its
 // declarations, the key reference is generated from them, and the stress pass, the output pass and
 // the material-point driver call its kernels once per block of elements (never a virtual call per
@@ -74,7 +77,8 @@ struct StressPoint {
 struct MaterialValues {
   std::map<std::string, double> numbers;
   std::map<std::string, std::vector<Vec3>> vectors;
-  std::string source = "material";  // the file they came from, for messages
+  std::map<std::string, std::string> strings{};  // `formulation`
+  std::string source = "material";               // the file they came from, for messages
 };
 
 // A cell field a law adds to the results (hgo: fibre_stretch).
@@ -112,7 +116,20 @@ struct MaterialType {
   double (*small_strain_bulk)(const void* law) = nullptr;  // for Rayleigh beta and the initial step
   double (*small_strain_shear)(const void* law) = nullptr;
   void (*stress_pass)(const StressKernelArgs& args, ThreadAccumulator& acc) = nullptr;
+
+  // Laws with W = W_iso(F) + U(J) (null otherwise): the isochoric part alone (P, W; the modulus
+  // is still the whole one), and the ANP nodal pass over nodes [lo, hi): `volume` holds each
+  // node's current volume v_a on entry and its pressure U'(v_a / V_a) on return (nodes with
+  // V_a = 0, not in the block, are left alone); returns sum_a V_a U(v_a / V_a).
+  StressPoint (*evaluate_isochoric)(const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) = nullptr;
+  double (*anp_nodal_pressure)(const void* law, const double* node_reference_volume, double* volume, std::size_t lo, std::size_t hi) = nullptr;
+  bool volumetric_split() const { return evaluate_isochoric != nullptr; }
 };
+
+// How a law's tets are integrated: one-point linear tets, or average nodal pressure tets.
+enum class Formulation { standard, anp };
+// The `formulation` key: bulk / shear above this makes ANP the default for a law that can use it.
+inline constexpr double kAnpDefaultBulkToShear = 100.0;
 
 // Every registered law, in registration order.
 const std::vector<const MaterialType*>& material_types();
@@ -137,14 +154,19 @@ class Material {
   // The law's element data from its own section (empty when every element must bring its own).
   const std::vector<double>& constant_element_data() const { return constants_; }
   bool needs_element_data() const { return type_->element_data_size > 0 && constants_.empty(); }
+  Formulation formulation() const { return formulation_; }
+  bool anp() const { return formulation_ == Formulation::anp; }
 
   // P, W and modulus at F; `data`: this element's data (default: the constants).
   StressPoint evaluate(const Mat3& F, const double* data = nullptr) const;
+  // The same for an ANP tet whose nodes' average pressure is `pressure` (W: the isochoric part).
+  StressPoint evaluate_with_pressure(const Mat3& F, double pressure, const double* data = nullptr) const;
 
  private:
   const MaterialType* type_ = nullptr;
   std::shared_ptr<const void> law_;
   std::vector<double> constants_;
+  Formulation formulation_ = Formulation::standard;
 };
 
 // Cauchy stress sigma = F S F^T / J = P F^T / J (paper eq. 18), and its von Mises value.

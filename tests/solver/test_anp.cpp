@@ -1,0 +1,304 @@
+// solver/anp: average nodal pressure tets (Bonet & Burton 1998; Joldes, Wittek & Miller 2009).
+// The static tests solve K u = f with K = -d f / d u taken by central differences of the stress
+// pass itself (the operator the explicit solver integrates), so they test the solver's ANP
+// forces, not a second implementation of them.
+#include <gmsh.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <cstdio>
+
+#include "linear_reference.hpp"
+#include "tactus/core/gmsh_session.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
+#include "tactus/solver/contact.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/model.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+
+namespace {
+
+// neo_hookean from E and nu, in the given formulation.
+Material elastic(double E, double nu, const char* formulation, double density = 1000) {
+  MaterialValues v;
+  v.numbers = {{"mu", E / (2 * (1 + nu))}, {"bulk", E / (3 * (1 - 2 * nu))}, {"density", density}};
+  v.strings["formulation"] = formulation;
+  return Material::make("neo_hookean", v);
+}
+
+// K = -d f / d u at u = 0 by central differences (step h), as a sparse matrix: one pair of stress
+// passes per dof (small meshes only).
+Eigen::SparseMatrix<double> tangent_stiffness(const Model& m, double h) {
+  InternalForces forces(m, 0.0, 1);
+  const std::size_t n = 3 * m.num_nodes;
+  std::vector<double> u(n, 0.0), v(n, 0.0), fp(n), fm(n);
+  std::vector<Eigen::Triplet<double>> entries;
+  double largest = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    u[j] = h;
+    forces.compute(u.data(), v.data(), fp.data());
+    u[j] = -h;
+    forces.compute(u.data(), v.data(), fm.data());
+    u[j] = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double k = -(fp[i] - fm[i]) / (2 * h);
+      largest = std::max(largest, std::abs(k));
+      if (k != 0) entries.emplace_back(static_cast<int>(i), static_cast<int>(j), k);
+    }
+  }
+  // Round-off of the differences (~1e-10 of the largest entry) dropped; symmetrised.
+  std::vector<Eigen::Triplet<double>> kept;
+  for (const auto& t : entries)
+    if (std::abs(t.value()) > 1e-9 * largest)
+      kept.emplace_back(t.row(), t.col(), 0.5 * t.value()), kept.emplace_back(t.col(), t.row(), 0.5 * t.value());
+  Eigen::SparseMatrix<double> K(static_cast<int>(n), static_cast<int>(n));
+  K.setFromTriplets(kept.begin(), kept.end());
+  return K;
+}
+
+// The static displacement under `load` with the model's constrained dofs held at zero.
+std::vector<double> static_solution(const Model& m, const Eigen::SparseMatrix<double>& K, const std::vector<double>& load) {
+  const int n = static_cast<int>(3 * m.num_nodes);
+  std::vector<int> index(static_cast<std::size_t>(n), -1);
+  int nf = 0;
+  for (int i = 0; i < n; ++i)
+    if (!m.constrained[static_cast<std::size_t>(i)]) index[static_cast<std::size_t>(i)] = nf++;
+  std::vector<Eigen::Triplet<double>> t;
+  for (int c = 0; c < K.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, c); it; ++it) {
+      const int r = index[static_cast<std::size_t>(it.row())], cc = index[static_cast<std::size_t>(it.col())];
+      if (r >= 0 && cc >= 0) t.emplace_back(r, cc, it.value());
+    }
+  Eigen::SparseMatrix<double> Kf(nf, nf);
+  Kf.setFromTriplets(t.begin(), t.end());
+  Eigen::VectorXd f(nf);
+  for (int i = 0; i < n; ++i)
+    if (index[static_cast<std::size_t>(i)] >= 0) f[index[static_cast<std::size_t>(i)]] = load[static_cast<std::size_t>(i)];
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(Kf);
+  EXPECT_EQ(solver.info(), Eigen::Success);
+  const Eigen::VectorXd x = solver.solve(f);
+  std::vector<double> u(static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i)
+    if (index[static_cast<std::size_t>(i)] >= 0) u[static_cast<std::size_t>(i)] = x[index[static_cast<std::size_t>(i)]];
+  return u;
+}
+
+// Tip deflection of a clamped cantilever (L = 5 t, 20 x 4 x 4 cells, 6 tets each) under its own
+// weight (load = lumped mass x g, downwards): the mean z displacement of the free end.
+double cantilever_deflection(const Material& material) {
+  const double L = 0.1, t = 0.02, g = 10;
+  Model m = build_model(samples::make_box_mesh(20, 4, 4, L, t, t), material);
+  constrain_nodes(m, [](const double* X) { return X[0] < 1e-9; }, {true, true, true});
+  std::vector<double> load(3 * m.num_nodes, 0.0);
+  for (std::size_t i = 0; i < m.num_nodes; ++i) load[3 * i + 2] = -m.mass[i] * g;
+  const std::vector<double> u = static_solution(m, tangent_stiffness(m, 1e-9), load);
+  double sum = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < m.num_nodes; ++i)
+    if (m.X[3 * i] > L - 1e-9) sum += u[3 * i + 2], ++count;
+  return -sum / count;
+}
+
+}  // namespace
+
+// Oracle: the same mesh at nu = 0.3, where neither formulation locks volumetrically (linear tets
+// also lock in shear; comparing against the same mesh cancels that). At nu = 0.4999 (k/mu = 5,000)
+// the ANP cantilever must bend within 5 % of it, while standard tets are >= 30 % stiffer. Young's
+// modulus is the same in all runs (Euler-Bernoulli deflection does not depend on nu).
+TEST(Anp, CantileverBendingDoesNotLockVolumetrically) {
+  const double E = 1e6;
+  const double ref = cantilever_deflection(elastic(E, 0.3, "standard"));
+  const double anp_03 = cantilever_deflection(elastic(E, 0.3, "anp"));
+  const double standard = cantilever_deflection(elastic(E, 0.4999, "standard"));
+  const double anp = cantilever_deflection(elastic(E, 0.4999, "anp"));
+  std::printf(
+      "cantilever tip deflection (m): nu = 0.3 standard %.5e, anp %.5e; nu = 0.4999 standard %.5e (%.2fx stiffer), anp %.5e "
+      "(%+.2f %% vs nu = 0.3 standard, %+.2f %% vs nu = 0.3 anp)\n",
+      ref, anp_03, standard, ref / standard, anp, 100 * (anp / ref - 1), 100 * (anp / anp_03 - 1));
+  EXPECT_NEAR(anp / ref, 1.0, 0.05);
+  EXPECT_GE(ref / standard, 1.3);
+}
+
+namespace {
+
+// An octant of a thick spherical shell a <= r <= b, meshed by gmsh with elements of size h; the
+// inner sphere is physical surface 20.
+TetMesh shell_octant(double a, double b, double h) {
+  GmshSession session;
+  gmsh::model::add("shell");
+  const int outer = gmsh::model::occ::addSphere(0, 0, 0, b), inner = gmsh::model::occ::addSphere(0, 0, 0, a);
+  const int box = gmsh::model::occ::addBox(0, 0, 0, 2 * b, 2 * b, 2 * b);
+  gmsh::vectorpair shell, octant;
+  std::vector<gmsh::vectorpair> map;
+  gmsh::model::occ::cut({{3, outer}}, {{3, inner}}, shell, map);
+  gmsh::model::occ::intersect(shell, {{3, box}}, octant, map);
+  gmsh::model::occ::synchronize();
+  gmsh::model::addPhysicalGroup(3, {octant[0].second}, 1);
+  gmsh::model::setPhysicalName(3, 1, "shell");
+  gmsh::vectorpair faces;
+  gmsh::model::getBoundary(octant, faces, false, false, false);
+  for (const auto& f : faces) {
+    double x0, y0, z0, x1, y1, z1;
+    gmsh::model::getBoundingBox(2, std::abs(f.second), x0, y0, z0, x1, y1, z1);
+    if (std::max({x1, y1, z1}) < 1.01 * a) {
+      gmsh::model::addPhysicalGroup(2, {std::abs(f.second)}, 20);
+      gmsh::model::setPhysicalName(2, 20, "inner");
+    }
+  }
+  gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.5 * h);
+  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+  gmsh::option::setNumber("Mesh.Optimize", 1);
+  gmsh::option::setNumber("Mesh.RandomSeed", 1);
+  gmsh::model::mesh::generate(3);
+  return tet_mesh_from_gmsh_model("shell");
+}
+
+struct ShellResult {
+  double pressure_rms = 0, inner_displacement = 0;
+};
+
+// The shell octant on rollers at its three symmetry planes under internal pressure p (loads on
+// the reference inner surface, linear): the volume-weighted RMS of each tet's pressure -tr(sigma)/3
+// against Lame's, relative to it, and the mean radial displacement of the inner surface.
+ShellResult pressurised_shell(const TetMesh& mesh, const Material& material, double p) {
+  Model m = build_model(mesh, material);
+  for (int axis = 0; axis < 3; ++axis) {
+    std::array<bool, 3> normal{false, false, false};
+    normal[static_cast<std::size_t>(axis)] = true;
+    constrain_nodes(
+        m, [axis](const double* X) { return std::abs(X[axis]) < 1e-9; }, normal);
+  }
+  std::vector<int> owners;
+  const std::vector<std::int32_t> tri = outward_triangles(m, surface_triangles(m, 20), owners);
+  std::vector<double> load(3 * m.num_nodes, 0.0);
+  for (std::size_t t = 0; 3 * t < tri.size(); ++t) {
+    const Vec3d x0(&m.X[3 * static_cast<std::size_t>(tri[3 * t])]), x1(&m.X[3 * static_cast<std::size_t>(tri[3 * t + 1])]),
+        x2(&m.X[3 * static_cast<std::size_t>(tri[3 * t + 2])]);
+    const Vec3d f = -p * 0.5 * (x1 - x0).cross(x2 - x0) / 3.0;  // the cavity's pressure pushes against the outward normal
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) load[3 * static_cast<std::size_t>(tri[3 * t + k]) + c] += f[c];
+  }
+  const std::vector<double> u = static_solution(m, tangent_stiffness(m, 1e-10), load);
+  const std::vector<Mat3> sigma = element_cauchy_stress(m, u.data());
+  double a = 1e300, b = 0;
+  for (std::size_t i = 0; i < m.num_nodes; ++i) {
+    const double r = Vec3d(&m.X[3 * i]).norm();
+    a = std::min(a, r), b = std::max(b, r);
+  }
+  const double exact = -p * a * a * a / (b * b * b - a * a * a);  // -sigma_m, uniform in the wall
+  double sum = 0, volume = 0;
+  for (std::size_t e = 0; e < m.num_elements; ++e) {
+    const double pe = -sigma[e].trace() / 3;
+    sum += m.volume[e] * (pe - exact) * (pe - exact), volume += m.volume[e];
+  }
+  ShellResult r;
+  r.pressure_rms = std::sqrt(sum / volume) / std::abs(exact);
+  double ur = 0;
+  int count = 0;
+  for (std::size_t t = 0; t < tri.size(); ++t) {
+    const std::size_t i = static_cast<std::size_t>(tri[t]);
+    const Vec3d X(&m.X[3 * i]);
+    ur += Vec3d(&u[3 * i]).dot(X) / X.norm(), ++count;
+  }
+  r.inner_displacement = ur / count;
+  return r;
+}
+
+}  // namespace
+
+// Oracle: Lame's thick sphere (a = 50 mm, b = 100 mm) under internal pressure p: the mean stress
+// sigma_m = p a^3 / (b^3 - a^3) is uniform through the wall, and the inner wall moves
+// u(a) = a ((1 - 2 nu) A + (1 + nu) B / a^3) / E, A = p a^3 / (b^3 - a^3), B = p a^3 b^3 / (2 (b^3 - a^3)).
+// At nu = 0.4999 the ANP inner wall must move within 10 % of Lame's (the faceted coarse mesh alone
+// costs a few %: printed at nu = 0.3) where standard tets lock, and its pressure field's RMS error
+// must be at least 20x below the standard tets'. The pressure is not yet a 5 % field: a nodal
+// pressure on linear tets is not inf-sup stable, so its oscillation, of the order of the
+// deviatoric stress, does not vanish as nu -> 0.5 (docs/design.md, "Average nodal pressure tets").
+// p is small (strains ~1e-8) so that the linear solution's second-order terms in J stay far below
+// its volumetric strain (~1e-12).
+TEST(Anp, ThickSphereUnderInternalPressureDoesNotLock) {
+  const double a = 0.05, b = 0.1, E = 1e6, p = 0.01;
+  const TetMesh mesh = shell_octant(a, b, 0.01);
+  auto lame = [&](double nu) {
+    const double A = p * a * a * a / (b * b * b - a * a * a), B = p * a * a * a * b * b * b / (2 * (b * b * b - a * a * a));
+    return a * ((1 - 2 * nu) * A + (1 + nu) * B / (a * a * a)) / E;
+  };
+  const ShellResult compressible = pressurised_shell(mesh, elastic(E, 0.3, "standard"), p);
+  const ShellResult anp = pressurised_shell(mesh, elastic(E, 0.4999, "anp"), p);
+  const ShellResult standard = pressurised_shell(mesh, elastic(E, 0.4999, "standard"), p);
+  std::printf(
+      "thick sphere, %zu tets: nu = 0.3 standard: pressure RMS error %.1f %%, inner wall %+.2f %% vs Lame; nu = 0.4999: anp %.1f %% and "
+      "%+.2f %%, standard %.1f %% and %+.2f %%\n",
+      mesh.tets.size(), 100 * compressible.pressure_rms, 100 * (compressible.inner_displacement / lame(0.3) - 1), 100 * anp.pressure_rms,
+      100 * (anp.inner_displacement / lame(0.4999) - 1), 100 * standard.pressure_rms, 100 * (standard.inner_displacement / lame(0.4999) - 1));
+  EXPECT_NEAR(anp.inner_displacement / lame(0.4999), 1.0, 0.10);
+  EXPECT_LE(20 * anp.pressure_rms, standard.pressure_rms);
+}
+
+// Oracle: the largest eigenfrequency of the same small mesh (dense generalized eigenproblem of
+// the finite-difference stiffness with the lumped mass). The element estimate (wave speed of
+// K + 4 mu / 3 over each tet's L_e) bounds the ANP operator too, since nodal averaging only lowers
+// the volumetric stiffness (Cauchy-Schwarz on the nodal sums): at nu = 0.4999 on a regular mesh the
+// computed step must lie between half and all of 2 / omega_max. On an irregular mesh (interior
+// nodes moved by up to 25 % of a cell) it must stay below; the ratios are printed, with standard tets'.
+TEST(Anp, StableStepIsConservativeAndNotWasteful) {
+  for (const double perturbation : {0.0, 0.25})
+    for (const char* formulation : {"anp", "standard"}) {
+      TetMesh mesh = samples::make_box_mesh(4, 4, 4, 0.04, 0.04, 0.04);
+      if (perturbation > 0) samples::perturb_interior_nodes(mesh, 0.01, perturbation, 11);
+      const Model m = build_model(mesh, elastic(1e6, 0.4999, formulation));
+      const Eigen::MatrixXd K(tangent_stiffness(m, 1e-10));
+      const double omega_max = std::sqrt(testkit::generalized_modes(m, K).omega2.maxCoeff());
+      InternalForces forces(m, 0.0, 1);
+      std::vector<double> u(3 * m.num_nodes, 0.0), f(3 * m.num_nodes);
+      const double dt = forces.compute(u.data(), u.data(), f.data()).critical_step, ratio = dt * omega_max / 2;
+      std::printf("stable step, nu = 0.4999, %s tets, nodes moved by up to %.0f %% of a cell: computed %.4e s, 2 / omega_max %.4e s, ratio %.3f\n",
+                  formulation, 100 * perturbation, dt, 2 / omega_max, ratio);
+      EXPECT_LE(ratio, 1.0);
+      if (perturbation == 0.0) EXPECT_GE(ratio, 0.5);
+    }
+}
+
+// Oracle: conservation. A free hgo block (the paper's tissue, k = 1e8 Pa: ANP by default) spinning
+// and deforming, no damping: kinetic + strain energy within 1e-4 of its initial value over 10,000
+// steps, for ANP and for standard tets.
+TEST(Anp, FreeHgoBodyConservesEnergy) {
+  for (const char* formulation : {"anp", "standard"}) {
+    MaterialValues v;
+    v.numbers = {{"c1", 10206.9}, {"k1", 1.7}, {"k2", 882.847}, {"k", 1e8}, {"density", 1050}};
+    v.vectors["fibres"] = {Vec3{0.8660254, 0.5, 0}, Vec3{0.8660254, -0.5, 0}};
+    v.strings["formulation"] = formulation;
+    TetMesh mesh = samples::make_box_mesh(4, 4, 4, 0.02, 0.02, 0.02);
+    samples::perturb_interior_nodes(mesh, 0.005, 0.25, 3);
+    Model model = build_model(mesh, Material::make("hgo", v));
+    ASSERT_EQ(model.blocks[0].material.anp(), std::string(formulation) == "anp");
+    for (std::size_t i = 0; i < model.num_nodes; ++i) {
+      const double x = model.X[3 * i] - 0.01, y = model.X[3 * i + 1] - 0.01, z = model.X[3 * i + 2] - 0.01;
+      model.initial_velocity[3 * i] = -5.0 * y + 0.2 * std::sin(157.0 * z);
+      model.initial_velocity[3 * i + 1] = 5.0 * x + 0.1 * std::cos(157.0 * x);
+      model.initial_velocity[3 * i + 2] = 0.05 * x / 0.01;
+    }
+    RunSpec run;
+    run.end_time = 1e9;
+    ExplicitSolver solver(model, run, DampingSpec{});
+    const double E0 = solver.energies().initial;
+    double worst = 0, peak_internal = 0;
+    for (int n = 0; n < 10000; ++n) {
+      solver.advance_velocity();
+      const Energies& e = solver.energies();
+      worst = std::max(worst, std::abs(e.kinetic + e.internal - E0) / E0);
+      peak_internal = std::max(peak_internal, e.internal);
+      solver.advance_position();
+    }
+    std::printf("free hgo body, %s: largest relative energy drift over 10,000 steps %.3e (strain energy up to %.2f %% of the total)\n", formulation,
+                worst, 100 * peak_internal / E0);
+    EXPECT_LE(worst, 1e-4);
+  }
+}
