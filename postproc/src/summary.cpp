@@ -75,6 +75,12 @@ Summary summarize(const Results& r) {
     s.initial_energy = num(e, "initial"), s.balance_error = num(e, "balance_error");
     s.contact_work_normal = num(e, "contact_work_normal"), s.contact_work_friction = num(e, "contact_work_friction");
   }
+  if (j.contains(rk::mass_scaling) && j[rk::mass_scaling].is_object()) {
+    const auto& ms = j[rk::mass_scaling];
+    s.minimum_time_step = num(ms, "minimum_time_step");
+    if (ms.contains("bodies") && ms["bodies"].is_object())
+      for (const auto& [body, v] : ms["bodies"].items()) s.added_mass.push_back({body, num(v, "added_mass"), num(v, "fraction")});
+  }
   const History& h = r.history;
   if (h.has(hc::kinetic_energy.name) && h.rows() > 0) s.initial_kinetic = h.column(hc::kinetic_energy.name).front();
 
@@ -193,6 +199,10 @@ std::string summary_json(const Summary& s) {
     j["largest_fibre_stretch"]["family"] = s.fibre_family;
     j["largest_fibre_stretch"]["fibre_stress_von_mises_Pa"] = s.fibre_stress_there;
   }
+  if (s.minimum_time_step > 0) {
+    j["mass_scaling"] = {{"minimum_time_step_s", s.minimum_time_step}, {"bodies", nlohmann::json::object()}};
+    for (const auto& a : s.added_mass) j["mass_scaling"]["bodies"][a.body] = {{"added_mass_kg", a.added}, {"fraction", a.fraction}};
+  }
   j["contact"] = {{"occurred", s.contact_occurred}};
   if (s.contact_occurred) {
     j["contact"]["peak_pressure_any_step"] = peak_json(s.peak_pressure_steps, "Pa");
@@ -241,6 +251,11 @@ std::string summary_markdown(const Summary& s) {
   if (s.initial_kinetic > 0)
     o << " (" << 100 * std::abs(s.balance_error) / s.initial_kinetic << " % of the initial kinetic energy " << s.initial_kinetic << " J)";
   o << "; contact work: normal " << s.contact_work_normal << " J, frictional dissipation " << s.contact_work_friction << " J.\n\n";
+  if (s.minimum_time_step > 0) {
+    o << "Mass scaling kept the step at or above " << s.minimum_time_step << " s, adding:";
+    for (const auto& a : s.added_mass) o << " " << a.body << " " << a.added << " kg (" << 100 * a.fraction << " % of its mass);";
+    o << " the added mass's kinetic energy is booked in the energy balance.\n\n";
+  }
   o << "## Peak von Mises stress (over the output states)\n\n| material | peak (MPa) | time (ms) | where (element centroid) |\n|---|---|---|---|\n";
   for (const auto& m : s.von_mises)
     o << "| " << m.material << " | " << m.von_mises.value / 1e6 << " | " << m.von_mises.time * 1e3 << " | element " << m.von_mises.index << ", "

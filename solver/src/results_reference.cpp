@@ -41,6 +41,8 @@ std::string results_reference_markdown() {
   for (const auto* c : contracts::history::all) o << "| `" << c->name << "` | " << (*c->unit ? c->unit : "-") << " | " << c->doc << " |\n";
   for (const auto* c : contracts::history::per_boundary)
     o << "| `" << c->prefix << "<name>_x`, `_y`, `_z` | " << c->unit << " | per `[[boundary]]` entry (its `name`): " << c->doc << " |\n";
+  o << "| `" << contracts::history::added_mass.prefix << "<body>` | " << contracts::history::added_mass.unit
+    << " | per body, only with mass scaling on (`run.minimum_time_step` > 0): " << contracts::history::added_mass.doc << " |\n";
   o << "\n## `run.json` keys read by other stages\n\n";
   for (const char* k : contracts::run_json::all) o << "`" << k << "` ";
   o << "\n\nLabel ids of `labels.h5`: " << contracts::kBackgroundLabel << " background, " << contracts::kSoftTissueLabel << " "
@@ -60,6 +62,7 @@ nlohmann::json results_reference_json() {
   for (const auto* c : contracts::history::all) j["history_columns"].push_back(c->name);
   j["history_boundary_column_prefixes"] = nlohmann::json::array();
   for (const auto* c : contracts::history::per_boundary) j["history_boundary_column_prefixes"].push_back(c->prefix);
+  j["history_body_column_prefixes"] = {contracts::history::added_mass.prefix};
   j["run_json_keys"] = contracts::run_json::all;
   j["labels"] = {
       {"background", contracts::kBackgroundLabel}, {"soft_tissue", contracts::kSoftTissueLabel}, {"first_bone", contracts::kFirstBoneLabel}};

@@ -55,6 +55,14 @@ double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolve
   return est_steps;
 }
 
+// The bodies' names when mass scaling is on (their added_mass_ history columns), else none.
+std::vector<std::string> mass_scaled_bodies(const Model& model, const ExplicitSolver& solver) {
+  std::vector<std::string> names;
+  if (solver.mass_scaling())
+    for (const BodyRange& b : model.bodies) names.push_back(b.name);
+  return names;
+}
+
 // The steps of one run and what they write as they go.
 class RunLoop {
  public:
@@ -63,7 +71,7 @@ class RunLoop {
         model_(model),
         solver_(solver),
         folder_(folder),
-        history_(folder / "history.csv", model.boundaries),
+        history_(folder / "history.csv", model.boundaries, mass_scaled_bodies(model, solver)),
         history_every_(sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
                                                 : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000))),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1) {
@@ -143,7 +151,8 @@ class RunLoop {
       ++peaks_.unconverged_steps;
     }
     if (solver_.step_index() % history_every_ == 0 || scheduled() || solver_.finished())
-      history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at, &solver_.reactions()});
+      history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at, &solver_.reactions(),
+                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr});
   }
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly

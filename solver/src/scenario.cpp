@@ -53,7 +53,14 @@ const SectionSpec& run_section() {
        opt(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false), "0"),
        opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0"),
        opt(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false), "10000"),
-       opt(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false), "1e7")}};
+       opt(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false), "1e7"),
+       opt(number("minimum_time_step", "s",
+                  "mass scaling: tets whose stable step (before the safety factor) falls below this get mass until it is met; the added "
+                  "mass is reported per body (0: off)",
+                  0, false),
+           "0 (off)"),
+       opt(number("added_mass_limit", "", "stop the run when mass scaling has added more than this fraction of a body's mass", 0, true, 1, false),
+           "0.01")}};
   return s;
 }
 
@@ -396,6 +403,8 @@ void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
     run.history_every = static_cast<int>(r.number(t, *spec.find("history_every"), "run", 0));
     run.max_outputs = r.number(t, *spec.find("max_outputs"), "run", 10000);
     run.max_steps = r.number(t, *spec.find("max_steps"), "run", 1e7);
+    run.minimum_time_step = r.number(t, *spec.find("minimum_time_step"), "run", 0);
+    run.added_mass_limit = r.number(t, *spec.find("added_mass_limit"), "run", 0.01);
     for (double time : run.output_times)
       if (time > run.end_time) r.fail("run.output_times", "times <= run.end_time", std::to_string(time));
     // Counted before anything is built: an interval of 1e-9 s over 1000 s is 10^12 states.

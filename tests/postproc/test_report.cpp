@@ -125,6 +125,12 @@ Folder write_results(const fs::path& dir, bool contact = true) {
         {"peak_force", {{"value", 130.0}, {"time", 0.9e-3}}},
         {"peak_area", {{"value", 2.5e-4}, {"time", 0.95e-3}}},
         {"peak_pressure", {{"value", 3e6}, {"time", 0.8e-3}, {"position", {0.01, 0.01, 0.005}}, {"node", f.peak_node + 1}}}}},
+      {c::run_json::mass_scaling,
+       {{"minimum_time_step", 4e-5},
+        {"added_mass_limit", 0.01},
+        {"bodies",
+         {{"plate", {{"mass", 4.0}, {"added_mass", 0.02}, {"fraction", 0.005}}},
+          {"punch", {{"mass", 1.0}, {"added_mass", 0.0}, {"fraction", 0.0}}}}}}},
       {c::run_json::reactions,
        {{{"name", "base"},
          {"moment_about", {0, 0, 0}},
@@ -202,6 +208,9 @@ TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
   const std::string md = postproc::summary_markdown(s);
   EXPECT_NE(md.find("| soft | 0.096 | 1 | element 48, "), std::string::npos) << md;  // 96 kPa at 1 ms
   EXPECT_NE(md.find("| peak contact force | 130 N |"), std::string::npos) << md;
+  EXPECT_NE(md.find("Mass scaling kept the step at or above 4e-05 s, adding: plate 0.02 kg (0.5 % of its mass); punch 0 kg (0 % of its mass);"),
+            std::string::npos)
+      << md;
   EXPECT_NE(md.find("Largest isochoric fibre stretch (sqrt(J4bar), hgo) over the output states: 1.08 (family 2) at t = 1 ms, element 6"),
             std::string::npos)
       << md;

@@ -262,7 +262,9 @@ TEST(Anp, StableStepIsConservativeAndNotWasteful) {
       std::printf("stable step, nu = 0.4999, %s tets, nodes moved by up to %.0f %% of a cell: computed %.4e s, 2 / omega_max %.4e s, ratio %.3f\n",
                   formulation, 100 * perturbation, dt, 2 / omega_max, ratio);
       EXPECT_LE(ratio, 1.0);
-      if (perturbation == 0.0) EXPECT_GE(ratio, 0.5);
+      if (perturbation == 0.0) {
+        EXPECT_GE(ratio, 0.5);
+      }
     }
 }
 

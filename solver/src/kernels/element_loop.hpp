@@ -45,6 +45,10 @@ struct StressKernelArgs {
   double* f;        // this thread's force buffer
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
+  // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
+  // its step is computed with, and where its unscaled squared step (no beta) is stored.
+  const double* mass_factor = nullptr;
+  double* element_dt2 = nullptr;
 };
 
 // A law whose energy is W_iso(F) + U(J) declares evaluate_isochoric (P, W of W_iso; the modulus
@@ -114,7 +118,11 @@ void stress_range(const StressKernelArgs& a, ThreadAccumulator& acc) {
     sJ2 += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
     // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J):
     // dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M).
-    const double dt2 = rho0 * J / (sJ2 * sp.modulus);
+    double dt2 = rho0 * J / (sJ2 * sp.modulus);
+    if (a.element_dt2) {  // mass scaling on: the element's added mass lengthens its step as sqrt(m)
+      a.element_dt2[e] = dt2;
+      dt2 *= a.mass_factor[e];
+    }
 
     if constexpr (kViscous) {
       // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),

@@ -92,8 +92,13 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   if (!anp_.empty()) thread_node_volumes_.assign(static_cast<std::size_t>(threads_ - 1), std::vector<double>(model.num_nodes, 0.0));
 }
 
+void InternalForces::enable_mass_scaling() {
+  mass_factor_.assign(model_.num_elements, 1.0);
+  element_dt2_.assign(model_.num_elements, 0.0);
+}
+
 std::size_t InternalForces::memory_bytes() const {
-  std::size_t b = 0;
+  std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity()) * sizeof(double);
   for (const auto& buf : thread_forces_) b += buf.capacity() * sizeof(double);
   for (const auto& buf : thread_node_volumes_) b += buf.capacity() * sizeof(double);
   for (const auto& a : anp_) b += (a.reference_volume.capacity() + a.pressure.capacity()) * sizeof(double);
@@ -141,9 +146,11 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       const MaterialBlock& b = model_.blocks[k];
       // Static contiguous split: each thread touches a compact set of nodes.
       const auto [lo, hi] = share(b.begin, b.end - b.begin, tid, nth);
-      const StressKernelArgs args{
-          model_.conn.data(),    model_.grad.data(), model_.volume.data(), b.material.law(), b.data(), b.data_stride(), b.begin, lo, hi, u, v, f,
-          viscous ? beta_ : 0.0, block_pressure_[k]};
+      StressKernelArgs args{
+          model_.conn.data(),   model_.grad.data(), model_.volume.data(), b.material.law(), b.data(), b.data_stride(), b.begin, lo, hi, u, v, f,
+          viscous ? beta_ : 0.0};
+      args.nodal_pressure = block_pressure_[k];
+      if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
       b.material.type().stress_pass(args, acc);
     }
 #pragma omp barrier

@@ -59,12 +59,14 @@ static_assert(columns_follow_the_contract(), "history.csv columns must follow co
 
 }  // namespace
 
-HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries)
-    : out_(file), file_(file), boundaries_(boundaries.size()) {
+HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
+                             const std::vector<std::string>& mass_scaled_bodies)
+    : out_(file), file_(file), boundaries_(boundaries.size()), mass_scaled_bodies_(mass_scaled_bodies.size()) {
   for (std::size_t k = 0; k < kColumns.size(); ++k) out_ << (k ? "," : "") << kColumns[k].spec->name;
   for (const auto& b : boundaries)
     for (const auto* family : h::per_boundary)
       for (const char* axis : {"_x", "_y", "_z"}) out_ << ',' << family->prefix << b.name << axis;
+  for (const auto& body : mass_scaled_bodies) out_ << ',' << h::added_mass.prefix << body;
   out_ << '\n' << std::setprecision(17);
 }
 
@@ -77,6 +79,7 @@ void HistoryWriter::write(const HistoryRow& row) {
     for (int c = 0; c < 3; ++c) out_ << ',' << (row.reactions ? row.reactions->force[3 * b + static_cast<std::size_t>(c)] : 0.0);
     for (int c = 0; c < 3; ++c) out_ << ',' << (row.reactions ? row.reactions->moment[3 * b + static_cast<std::size_t>(c)] : 0.0);
   }
+  for (std::size_t b = 0; b < mass_scaled_bodies_; ++b) out_ << ',' << (row.added_mass ? (*row.added_mass)[b] : 0.0);
   out_ << '\n';
 }
 

@@ -30,21 +30,24 @@ struct HistoryRow {
   const Energies* energy = nullptr;
   const ContactStepReport* contact = nullptr;
   Vec3 peak_at{0, 0, 0};
-  const Reactions* reactions = nullptr;  // one force and moment per boundary (model.boundaries)
+  const Reactions* reactions = nullptr;             // one force and moment per boundary (model.boundaries)
+  const std::vector<double>* added_mass = nullptr;  // mass scaling: kg per body (model.bodies), or none
 };
 
 // history.csv: its header and rows both come from the one column table (history.cpp).
 class HistoryWriter {
  public:
-  // `boundaries`: the model's, for the reaction columns after the fixed ones.
-  HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries);
+  // `boundaries`: the model's, for the reaction columns after the fixed ones; `mass_scaled_bodies`:
+  // with mass scaling on, the bodies' names, for an added_mass_<body> column each after those.
+  HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
+                const std::vector<std::string>& mass_scaled_bodies = {});
   void write(const HistoryRow& row);
   void close();
 
  private:
   std::ofstream out_;
   std::filesystem::path file_;
-  std::size_t boundaries_ = 0;
+  std::size_t boundaries_ = 0, mass_scaled_bodies_ = 0;
 };
 
 // The peaks over a run that run.json reports (contact over every step, von Mises at the outputs).

@@ -108,6 +108,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
                   {"external_work", en.external_work},
                   {"contact_work_normal", en.contact_normal_work},
                   {"contact_work_friction", en.contact_friction_work},
+                  {"added_mass_kinetic", en.added_mass_kinetic},
                   {"balance_error", en.balance_error()},
                   {"balance_error_relative", std::abs(en.balance_error()) / en.scale()},
                   {"max_balance_error_relative", summary.max_relative_balance_error}};
@@ -117,6 +118,18 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j[k::peak_von_mises] = vm;
   if (!model.contact_pairs.empty()) j[k::contact] = contact_json(sc, model, peaks);
   j[k::reactions] = reactions_json(model, solver, peaks);
+  if (solver.mass_scaling()) {
+    nlohmann::json bodies = nlohmann::json::object();
+    for (std::size_t b = 0; b < model.bodies.size(); ++b)
+      bodies[model.bodies[b].name] = {
+          {"mass", solver.body_mass()[b]}, {"added_mass", solver.added_mass()[b]}, {"fraction", solver.added_mass()[b] / solver.body_mass()[b]}};
+    const Vec3& p = solver.added_momentum();
+    j[k::mass_scaling] = {{"minimum_time_step", sc.run.minimum_time_step},
+                          {"added_mass_limit", sc.run.added_mass_limit},
+                          {"bodies", bodies},
+                          {"added_kinetic_energy", en.added_mass_kinetic},
+                          {"added_momentum", {p[0], p[1], p[2]}}};
+  }
   return j;
 }
 

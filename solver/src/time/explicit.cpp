@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
@@ -22,25 +23,43 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   for (std::size_t i = 0; i < ndof; ++i)
     if (model.constrained[i]) v_half_[i] = prescribed_v_[i];
   v_prev_half_ = v_half_;
+  mass_ = model.mass;
   inv_mass_.resize(ndof);
   gravity_force_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) {
     inv_mass_[i] = 1.0 / model.mass[i / 3];
-    gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];
+    gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];  // on the physical mass, also under mass scaling
   }
   contact_inv_mass_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) contact_inv_mass_[i] = model.constrained[i] ? 0.0 : inv_mass_[i];
+  if (mass_scaling()) {
+    forces_.enable_mass_scaling();
+    pending_added_mass_.assign(model.num_nodes, 0.0);
+    added_mass_body_.assign(model.bodies.size(), 0.0);
+    body_mass_.assign(model.bodies.size(), 0.0);
+    element_body_.resize(model.num_elements);
+    for (std::size_t e = 0; e < model.num_elements; ++e) {
+      element_body_[e] = model.tet_body[static_cast<std::size_t>(model.input_element[e])];
+      body_mass_[static_cast<std::size_t>(element_body_[e])] += model.block_of(e).material.density() * model.volume[e];
+    }
+  }
   contact_.set_threads(forces_.threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   schedule_ = output_schedule(run);
   while (next_target_ < schedule_.size() && schedule_[next_target_] <= 0) ++next_target_;
   stress_pass();
   initial_critical_ = pass_.critical_step;
-  double kinetic = 0;
-  for (std::size_t i = 0; i < ndof; ++i) kinetic += 0.5 * model.mass[i / 3] * v_half_[i] * v_half_[i];
+  double kinetic = 0, added = 0;  // the initial energy is the physical one; mass added at t = 0 is booked as added
+  for (std::size_t i = 0; i < ndof; ++i) {
+    kinetic += 0.5 * mass_[i / 3] * v_half_[i] * v_half_[i];
+    added += 0.5 * (mass_[i / 3] - model.mass[i / 3]) * v_half_[i] * v_half_[i];
+    added_momentum_[i % 3] += (mass_[i / 3] - model.mass[i / 3]) * v_half_[i];
+  }
+  if (mass_scaling()) std::fill(pending_added_mass_.begin(), pending_added_mass_.end(), 0.0);
   energy_.kinetic = kinetic;
   energy_.internal = pass_.strain_energy;
-  energy_.initial = kinetic + pass_.strain_energy;
+  energy_.added_mass_kinetic = added;
+  energy_.initial = kinetic - added + pass_.strain_energy;
   energy_.peak = energy_.initial;
 
   if (run.time_step > 0) {
@@ -86,6 +105,54 @@ void ExplicitSolver::stress_pass() {
     o << "non-finite strain energy at step " << step_ << ", t = " << time_ << " s";
     throw NumericalError(o.str());
   }
+  if (mass_scaling() && pass_.critical_step < run_.minimum_time_step) scale_mass();
+}
+
+void ExplicitSolver::scale_mass() {
+  const double floor2 = run_.minimum_time_step * run_.minimum_time_step;
+  std::vector<double>& factor = forces_.mass_factor();
+  const std::vector<double>& dt2 = forces_.element_dt2();
+  for (const MaterialBlock& b : model_.blocks) {
+    const double rho = b.material.density();
+    for (std::size_t e = b.begin; e < b.end; ++e) {
+      if (!(dt2[e] * factor[e] < floor2)) continue;
+      // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
+      const double target = floor2 / dt2[e];
+      const double added = rho * model_.volume[e] * (target - factor[e]);
+      factor[e] = target;
+      for (int k = 0; k < 4; ++k) {
+        const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
+        mass_[n] += 0.25 * added;
+        pending_added_mass_[n] += 0.25 * added;
+        for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
+          inv_mass_[d] = 1.0 / mass_[n];
+          contact_inv_mass_[d] = model_.constrained[d] ? 0.0 : inv_mass_[d];
+        }
+      }
+      added_mass_body_[static_cast<std::size_t>(element_body_[e])] += added;
+    }
+  }
+  // The step with the new masses (every scaled tet now sits at the floor), as the kernel computes it.
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t e = 0; e < model_.num_elements; ++e) {
+    double dt = std::sqrt(dt2[e] * factor[e]);
+    if (damping_.beta > 0) {
+      const double omega = 2.0 / dt, xi = 0.5 * damping_.beta * omega;
+      dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+    }
+    if (dt < best) best = dt, pass_.limiting_element = e;
+  }
+  pass_.critical_step = best;
+  for (std::size_t b = 0; b < body_mass_.size(); ++b)
+    if (added_mass_body_[b] > run_.added_mass_limit * body_mass_[b]) {
+      std::ostringstream o;
+      o << "mass scaling has added " << added_mass_body_[b] << " kg to body '" << model_.bodies[b].name << "' by step " << step_ << ", t = " << time_
+        << " s: " << 100 * added_mass_body_[b] / body_mass_[b] << " % of its " << body_mass_[b]
+        << " kg, above run.added_mass_limit = " << 100 * run_.added_mass_limit
+        << " %, to keep the step at run.minimum_time_step = " << run_.minimum_time_step << " s (" << describe_step_limit()
+        << "); lower minimum_time_step or raise added_mass_limit";
+      throw NumericalError(o.str());
+    }
 }
 
 void ExplicitSolver::choose_step() {
@@ -136,12 +203,26 @@ void ExplicitSolver::advance_velocity() {
   // The supports' forces: R = m (v_new - v_free) / (dtbar c_plus), exactly what the update added.
   for (std::size_t k = 0; k < constrained_dofs_.size(); ++k) {
     const auto i = static_cast<std::size_t>(constrained_dofs_[k]);
-    support_force_[k] = model_.mass[i / 3] * (v_new_of[i] - free_velocity(i, external_force(i))) / (dtbar * c_plus);
+    support_force_[k] = mass_[i / 3] * (v_new_of[i] - free_velocity(i, external_force(i))) / (dtbar * c_plus);
   }
   accumulate_reactions();
 
   double kinetic = 0, ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
-  const double* __restrict mass_of = model_.mass.data();
+  const double* __restrict mass_of = mass_.data();
+  if (mass_scaling()) {
+    // Mass added at t^n: its kinetic energy 1/2 dm (v^n)^2, the difference it makes to the kinetic
+    // energy below, and its momentum dm v^{n-1/2}: the update from v^{n-1/2} conserves the
+    // momentum of the new masses, so that is what the added mass brought.
+    for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+      if (pending_added_mass_[n] == 0) continue;
+      for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
+        const double v_n = first ? v_old_of[d] : 0.5 * (v_old_of[d] + v_new_of[d]);
+        energy_.added_mass_kinetic += 0.5 * pending_added_mass_[n] * v_n * v_n;
+        added_momentum_[d % 3] += pending_added_mass_[n] * v_old_of[d];
+      }
+      pending_added_mass_[n] = 0;
+    }
+  }
 #pragma omp parallel for num_threads(threads) reduction(+ : kinetic, ext_back, ext_fwd, damp_back, damp_fwd) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) {
     const double m = mass_of[i / 3];
@@ -224,8 +305,8 @@ void ExplicitSolver::advance_position() {
 }
 
 std::size_t ExplicitSolver::memory_bytes() const {
-  std::size_t doubles =
-      u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + inv_mass_.capacity() + gravity_force_.capacity();
+  std::size_t doubles = u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + inv_mass_.capacity() +
+                        gravity_force_.capacity() + mass_.capacity() + pending_added_mass_.capacity();
   return doubles * sizeof(double) + forces_.memory_bytes();
 }
 

@@ -119,6 +119,8 @@ struct ColumnFamily {
 inline constexpr ColumnFamily reaction{"reaction_", "N", "force the support applies to the body (x, y, z columns)"};
 inline constexpr ColumnFamily moment{"moment_", "N m", "moment of that force about the boundary's moment_about (x, y, z columns)"};
 inline constexpr std::array<const ColumnFamily*, 2> per_boundary{&reaction, &moment};
+// Then, only with mass scaling on (run.minimum_time_step > 0), one column per body: prefix + body name.
+inline constexpr ColumnFamily added_mass{"added_mass_", "kg", "mass added to the body by mass scaling so far (one column per body)"};
 }  // namespace history
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------
@@ -141,6 +143,9 @@ inline constexpr const char* energy = "energy";        // {initial, kinetic, int
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
 inline constexpr const char* contact = "contact";      // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
 inline constexpr const char* reactions = "reactions";  // [{name, moment_about, final_force, final_moment, peak_force: {value, time, vector}}]
+// Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},
+// added_kinetic_energy, added_momentum}
+inline constexpr const char* mass_scaling = "mass_scaling";
 inline constexpr std::array<const char*, 18> all{status,       message, materials, formulations, bodies, steps,  nodes,          tets,    end_time,
                                                  output_times, outputs, wall_time, time_step,    timing, energy, peak_von_mises, contact, reactions};
 }  // namespace run_json

@@ -55,6 +55,13 @@ struct Summary {
   PeakAt fibre_stretch;
   int fibre_family = 0;
   double fibre_stress_there = 0;
+  // Mass scaling (run.json mass_scaling), when it was on: the floor and each body's added mass.
+  double minimum_time_step = 0;
+  struct AddedMass {
+    std::string body;
+    double added = 0, fraction = 0;
+  };
+  std::vector<AddedMass> added_mass;
   std::vector<FrameSummary> frames;
   std::vector<std::string> pictures;  // file names in the report folder
 };

@@ -24,9 +24,12 @@ struct Energies {
   // (velocity-level impact losses) and frictional (Coulomb sliding) parts.
   double contact_normal_work = 0, contact_friction_work = 0;
   double peak = 0;  // largest kinetic + internal seen, for relative errors
+  // Mass scaling: the kinetic energy the added mass brought (1/2 dm v^2 when it was added).
+  double added_mass_kinetic = 0;
   double contact_work() const { return contact_normal_work + contact_friction_work; }
-  // kinetic + internal + damping work + contact work - external work - initial: zero for an exact integrator.
-  double balance_error() const { return kinetic + internal + damping_work + contact_work() - external_work - initial; }
+  // kinetic + internal + damping work + contact work - external work - initial - added mass's
+  // kinetic energy: zero for an exact integrator.
+  double balance_error() const { return kinetic + internal + damping_work + contact_work() - external_work - initial - added_mass_kinetic; }
   double scale() const;
 };
 
@@ -75,9 +78,20 @@ class ExplicitSolver {
   void check_energy() const;
   // Describes the stable-step limit: "dt = ... (element ..., L_e = ..., c = ...)".
   std::string describe_step_limit() const;
+  // Mass scaling (run.minimum_time_step > 0): mass added so far per body (model.bodies order), kg,
+  // each body's own mass, and the momentum the added mass brought (dm v when it was added).
+  bool mass_scaling() const { return run_.minimum_time_step > 0; }
+  const std::vector<double>& added_mass() const { return added_mass_body_; }
+  const std::vector<double>& body_mass() const { return body_mass_; }
+  const Vec3& added_momentum() const { return added_momentum_; }
+  const std::vector<double>& nodal_mass() const { return mass_; }  // the model's plus the added, per node
 
  private:
   void stress_pass();
+  // Mass scaling after a stress pass: raises the mass of every tet whose step is below
+  // run.minimum_time_step until it is met, updates the critical step, and stops the run (a
+  // NumericalError naming the body) when a body's added mass exceeds run.added_mass_limit.
+  void scale_mass();
   void choose_step();  // sets dt_next_ and whether it lands on the next scheduled time
   double external_force(std::size_t dof) const {
     return gravity_factor_ * gravity_force_[dof] + (pressure_force_.empty() ? 0.0 : pressure_force_[dof]);
@@ -96,6 +110,11 @@ class ExplicitSolver {
   InternalForces forces_;
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_, inv_mass_;
+  std::vector<double> mass_;                         // per node: the model's lumped mass plus any added by mass scaling
+  std::vector<double> pending_added_mass_;           // per node, added since the last kinetic energy (for its 1/2 dm v^2)
+  std::vector<double> added_mass_body_, body_mass_;  // per body, kg
+  std::vector<std::int32_t> element_body_;           // per tet (model numbering), its body
+  Vec3 added_momentum_{0, 0, 0};
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
   double gravity_factor_ = 1;
   std::vector<double> prescribed_v_;                     // per dof: the velocity a constrained dof takes over the step

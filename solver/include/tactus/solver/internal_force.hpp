@@ -55,6 +55,12 @@ class InternalForces {
   StressPassResult compute(const double* u, const double* v, double* f_out);
   int threads() const { return threads_; }
   std::size_t memory_bytes() const;
+  // Mass scaling: from now on every pass stores each tet's unscaled squared stable step (no beta)
+  // in element_dt2() and computes the step with mass_factor() (1 + added / (rho V), per tet, which
+  // the caller raises; model numbering).
+  void enable_mass_scaling();
+  const std::vector<double>& element_dt2() const { return element_dt2_; }
+  std::vector<double>& mass_factor() { return mass_factor_; }
 
  private:
   const Model& model_;
@@ -70,6 +76,7 @@ class InternalForces {
   std::vector<AnpBlock> anp_;
   std::vector<const double*> block_pressure_;  // per block: its AnpBlock's pressure, or nullptr
   std::vector<std::vector<double>> thread_node_volumes_;
+  std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   double anp_pass(const double* u, int tid, int nth);
 };
 

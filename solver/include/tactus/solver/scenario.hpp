@@ -30,6 +30,10 @@ struct RunSpec {
   int history_every = 0;       // 0: automatic (about 2000 rows)
   double max_outputs = 10000;  // runaway guards: refused above these
   double max_steps = 1e7;
+  // Mass scaling: tets whose stable step falls below minimum_time_step get mass until it is met
+  // (0: off); the run stops when a body's added mass exceeds added_mass_limit of its mass.
+  double minimum_time_step = 0;
+  double added_mass_limit = 0.01;
 };
 
 struct DampingSpec {
