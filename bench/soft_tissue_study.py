@@ -2,11 +2,13 @@
 """Soft-tissue sensitivity study of the hand-block case (docs/soft-tissue-study.md).
 
 Runs pipeline/scenarios/hand_block.toml on the stored reference meshes with the tissue's bulk
-modulus k and its formulation (standard / anp) varied, and prints one markdown table row per run:
+modulus k, its formulation (standard / anp) and its fibre field (anatomical: the hand's
+`tactus-mesh fibres` file; global: the material's constant +-30 deg to z) varied, and prints one
+markdown table row per run:
 peak contact pressure and force, peak tissue and bone von Mises at the outputs, the largest fibre
 stretch and the element J range in the tissue at the outputs, the step range and the wall time.
 
-  bench/soft_tissue_study.py [--k 1e6 1e7 1e8] [--formulations standard anp] [--work DIR]
+  bench/soft_tissue_study.py [--k 1e6 1e7 1e8] [--formulations standard anp] [--fibres anatomical global] [--work DIR]
 
 Needs a built tree (TACTUS_BUILD_DIR, default build/) and Python with numpy and vtk. About a
 minute per run on 2 cores; do not time anything else meanwhile.
@@ -36,10 +38,16 @@ def stage_meshes(work):
         os.makedirs(os.path.dirname(os.path.join(work, path)), exist_ok=True)
         with lzma.open(os.path.join(ref, stored)) as src, open(os.path.join(work, path), "wb") as dst:
             shutil.copyfileobj(src, dst)
+    fibres = os.path.join(work, "mesh", "fibres.vtu")
+    if not os.path.exists(fibres):
+        subprocess.run([os.path.join(BUILD, "mesher", "tactus-mesh"), "fibres", os.path.join(work, "mesh", "mesh.msh"), "--angle", "30",
+                        "--axis", "z", "-o", fibres, "-q"], check=True)
 
 
-def scenario_variant(k, formulation, path):
+def scenario_variant(k, formulation, fibres, path):
     text = open(os.path.join(ROOT, "pipeline", "scenarios", "hand_block.toml")).read()
+    if fibres == "global":  # the material's constant directions: drop the hand's file
+        text = re.sub(r'^fibres = "mesh/fibres.vtu".*\n', "", text, flags=re.M)
     section = re.search(r"\[materials\.soft_tissue\]\n(.*?)\n\n", text, re.S)
     body = re.sub(r"^k = .*$", f"k = {k:g}", section.group(1), flags=re.M)
     body = re.sub(r"^formulation = .*\n?", "", body, flags=re.M) + f'\nformulation = "{formulation}"'
@@ -68,34 +76,34 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--k", type=float, nargs="+", default=[1e6, 1e7, 1e8])
     ap.add_argument("--formulations", nargs="+", default=["standard", "anp"])
+    ap.add_argument("--fibres", nargs="+", default=["anatomical"], choices=["anatomical", "global"])
     ap.add_argument("--work", default=None)
     ap.add_argument("--reuse", action="store_true", help="tabulate the runs already in --work instead of running them again")
     a = ap.parse_args()
     work = a.work or tempfile.mkdtemp(prefix="tactus-study-")
     stage_meshes(work)
-    print("| k (Pa) | formulation | peak contact pressure (MPa) | peak contact force (kN) | peak tissue von Mises (MPa) | peak bone von Mises (MPa) "
+    print("| k (Pa) | formulation | fibres | peak contact pressure (MPa) | peak contact force (kN) | peak tissue von Mises (MPa) | peak bone von Mises (MPa) "
           "| largest isochoric fibre stretch | tissue element J | step (ns) | wall (s) | status |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for k in a.k:
-        for formulation in a.formulations:
-            name = f"k{k:g}_{formulation}"
-            scenario = os.path.join(work, name + ".toml")
-            out = os.path.join(work, name + ".out")
-            if not (a.reuse and os.path.exists(os.path.join(out, "run.json"))):
-                shutil.rmtree(out, ignore_errors=True)
-                scenario_variant(k, formulation, scenario)
-                proc = subprocess.run([os.path.join(BUILD, "solver", "tactus-solve"), scenario, "--meshes", work, "-o", out, "-q"],
-                                      capture_output=True, text=True)
-            if not os.path.exists(os.path.join(out, "run.json")):
-                print(f"| {k:g} | {formulation} | failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else proc.returncode} |")
-                continue
-            run = json.load(open(os.path.join(out, "run.json")))
-            wall = run["wall_time_s"]
-            peaks = run["peak_von_mises_at_outputs"]
-            stretch, j_lo, j_hi = tissue_fields(out)
-            print(f"| {k:g} | {formulation} | {run['contact']['peak_pressure']['value'] / 1e6:.1f} | {run['contact']['peak_force']['value'] / 1e3:.2f} "
-                  f"| {peaks['soft_tissue'] / 1e6:.2f} | {peaks['bone'] / 1e6:.1f} | {stretch:.3f} | {j_lo:.3f}..{j_hi:.3f} "
-                  f"| {run['time_step']['min'] * 1e9:.0f}..{run['time_step']['max'] * 1e9:.0f} | {wall:.0f} | {run['status']} |", flush=True)
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for k, formulation, fibres in [(k, f, g) for g in a.fibres for k in a.k for f in a.formulations]:
+        name = f"k{k:g}_{formulation}" + ("" if fibres == "global" else "_anatomical")
+        scenario = os.path.join(work, name + ".toml")
+        out = os.path.join(work, name + ".out")
+        if not (a.reuse and os.path.exists(os.path.join(out, "run.json"))):
+            shutil.rmtree(out, ignore_errors=True)
+            scenario_variant(k, formulation, fibres, scenario)
+            proc = subprocess.run([os.path.join(BUILD, "solver", "tactus-solve"), scenario, "--meshes", work, "-o", out, "-q"],
+                                  capture_output=True, text=True)
+        if not os.path.exists(os.path.join(out, "run.json")):
+            print(f"| {k:g} | {formulation} | {fibres} | failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else proc.returncode} |")
+            continue
+        run = json.load(open(os.path.join(out, "run.json")))
+        wall = run["wall_time_s"]
+        peaks = run["peak_von_mises_at_outputs"]
+        stretch, j_lo, j_hi = tissue_fields(out)
+        print(f"| {k:g} | {formulation} | {fibres} | {run['contact']['peak_pressure']['value'] / 1e6:.1f} | {run['contact']['peak_force']['value'] / 1e3:.2f} "
+              f"| {peaks['soft_tissue'] / 1e6:.2f} | {peaks['bone'] / 1e6:.1f} | {stretch:.3f} | {j_lo:.3f}..{j_hi:.3f} "
+              f"| {run['time_step']['min'] * 1e9:.0f}..{run['time_step']['max'] * 1e9:.0f} | {wall:.0f} | {run['status']} |", flush=True)
 
 
 if __name__ == "__main__":

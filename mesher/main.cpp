@@ -1,5 +1,6 @@
 // tactus-mesh: labels.h5 -> conforming multi-material tet mesh (CGAL Mesh_3), and object meshes
-// with gmsh (`box`, `stl`). Writes mesh.msh (gmsh 4.1), mesh.vtu and quality.json.
+// with gmsh (`box`, `stl`). Writes mesh.msh (gmsh 4.1), mesh.vtu and quality.json. `fibres`
+// writes rule-based hgo fibre directions of a mesh as the .vtu that bodies.fibres reads.
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include "tactus/core/log.hpp"
 #include "tactus/core/output.hpp"
 #include "tactus/core/stable_step.hpp"
+#include "tactus/mesher/fibres.hpp"
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/objects.hpp"
 #include "tactus/mesher/quality.hpp"
@@ -96,6 +98,28 @@ struct MeshOutput {
   }
 };
 
+// tactus-mesh fibres: the rule-based field of fibres.hpp, written next to nothing else: -o FILE.vtu
+// (or a folder: FOLDER/fibres.vtu), with the cell data fibre_1, fibre_2 the solver reads and, for
+// pictures, fibre_direction, skin_normal, skin_distance and the point potential fibre_phi.
+void write_fibres(const std::filesystem::path& mesh_file, const tactus::mesher::FibreFieldOptions& options, const std::filesystem::path& out,
+                  const tactus::OutputRules& rules) {
+  using namespace tactus;
+  const std::filesystem::path file = out.extension() == ".vtu" ? out : out / "fibres.vtu";
+  OutputFiles files({file}, rules);
+  const TetMesh mesh = read_msh(mesh_file);
+  const mesher::FibreField f = mesher::rule_based_fibres(mesh, options, mesh_file.string());
+  auto cells = [](const char* name, const std::vector<Vec3>& v) {
+    MeshField m{name, 3, {}};
+    for (const Vec3& x : v) m.values.insert(m.values.end(), x.begin(), x.end());
+    return m;
+  };
+  write_vtu(files.staged(0), mesh, {MeshField{"fibre_phi", 1, f.phi}},
+            {cells("fibre_1", f.fibre_1), cells("fibre_2", f.fibre_2), cells("fibre_direction", f.direction), cells("skin_normal", f.skin_normal),
+             MeshField{"skin_distance", 1, f.skin_distance}});
+  files.commit();
+  log::info() << "wrote " << file.string();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -137,6 +161,15 @@ int main(int argc, char** argv) {
   box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
   box->add_option("--element-size", h, "element size, m")->capture_default_str();
 
+  auto* fib = app.add_subcommand("fibres", "rule-based hgo fibre directions of a mesh, as the .vtu bodies.fibres reads");
+  std::string fib_mesh, fib_axis = "z";
+  mesher::FibreFieldOptions fo;
+  fib->add_option("mesh", fib_mesh, "the mesh (.msh) with a skin surface group")->required();
+  fib->add_option("--angle", fo.angle_deg, "each family's angle to the reference direction, deg")->capture_default_str();
+  fib->add_option("--axis", fib_axis, "x, y or z: the base (the wrist) is the mesh's low end along it")->capture_default_str();
+  fib->add_option("--base-fraction", fo.base_fraction, "nodes within this fraction of the extent from the low end form the base")
+      ->capture_default_str();
+  fib->add_option("--skin-group", fo.skin_group, "the physical surface group of the skin")->capture_default_str();
   auto* stl = app.add_subcommand("stl", "a closed STL object, meshed with gmsh");
   std::string stl_file;
   double stl_scale = 1.0;
@@ -146,6 +179,12 @@ int main(int argc, char** argv) {
 
   return cli::run(app, argc, argv, common, [&] {
     const std::filesystem::path out = common.output;
+    if (fib->parsed()) {
+      if (fib_axis != "x" && fib_axis != "y" && fib_axis != "z") throw InputError("command line", "--axis", "x, y or z", "\"" + fib_axis + "\"");
+      fo.axis = fib_axis[0] - 'x';
+      write_fibres(fib_mesh, fo, out, common.output_rules({fib_mesh}));
+      return;
+    }
     if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
       const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", p.max_elements);

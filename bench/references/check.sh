@@ -46,5 +46,6 @@ for stored, path in (("hand_block_hand.msh.xz", "mesh/mesh.msh"), ("hand_block_b
     with lzma.open(f"{ref}/{stored}") as src, open(f"{out}/{path}", "wb") as dst:
         shutil.copyfileobj(src, dst)
 PY
+  "$B/mesher/tactus-mesh" fibres "$W/hand_block/mesh/mesh.msh" --angle 30 --axis z -o "$W/hand_block/mesh/fibres.vtu" -q
   run_case hand_block "$ROOT/pipeline/scenarios/hand_block.toml" "$W/hand_block"
 fi

@@ -181,10 +181,13 @@ const SectionSpec& pipeline_section() {
       "pipeline.meshes",
       "[[pipeline.meshes]]: how tactus-pipeline makes each mesh this scenario uses (tactus-solve only checks these "
       "entries; the pipeline runs tactus-mesh for them).",
-      {typed("output", ValueType::string, "", "the mesh file a [[bodies]] entry names, relative to the pipeline's work folder", true),
-       typed("kind", ValueType::string, "", "labels (from the segmented CT) | box | stl", true),
+      {typed("output", ValueType::string, "",
+             "the mesh file (or, kind = fibres, the fibre file) a [[bodies]] entry names, relative to the pipeline's work folder", true),
+       typed("kind", ValueType::string, "",
+             "labels (from the segmented CT) | box | stl | fibres (rule-based hgo fibre directions of the mesh `file`: tactus-mesh fibres)", true),
        typed("args", ValueType::string, "", "tactus-mesh options (e.g. \"--size 0.04 0.08 0.16 --element-size 0.008\")", false, "\"\""),
-       typed("file", ValueType::string, "", "kind = stl: the closed STL surface, relative to the scenario's folder", false)}};
+       typed("file", ValueType::string, "",
+             "kind = stl: the closed STL surface, relative to the scenario's folder; kind = fibres: the mesh, relative to the work folder", false)}};
   return s;
 }
 
@@ -707,10 +710,12 @@ void read_pipeline(const Reader& r, const toml::table& root) {
       const auto& spec = pipeline_section();
       r.each_table(*m, "pipeline.meshes", spec, [&](const toml::table& e, const std::string& path) {
         const std::string kind = r.string(e, *spec.find("kind"), path);
-        if (kind != "labels" && kind != "box" && kind != "stl") r.fail(path + ".kind", "labels, box or stl", "\"" + kind + "\"");
+        if (kind != "labels" && kind != "box" && kind != "stl" && kind != "fibres")
+          r.fail(path + ".kind", "labels, box, stl or fibres", "\"" + kind + "\"");
         r.string(e, *spec.find("output"), path);
         r.string(e, *spec.find("args"), path);
         if (kind == "stl" && !e.contains("file")) r.fail(path + ".file", "the STL file of kind = stl", "missing");
+        if (kind == "fibres" && !e.contains("file")) r.fail(path + ".file", "the mesh whose fibres kind = fibres makes", "missing");
         r.string(e, *spec.find("file"), path);
       });
     }

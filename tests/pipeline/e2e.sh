@@ -34,7 +34,7 @@ run "$SRC/pipeline/scenarios/hand_block.toml" 1e-3 | tee "$T/first.log"
 
 echo "--- 2. re-run: nothing changed"
 run "$SRC/pipeline/scenarios/hand_block.toml" 1e-3 | tee "$T/second.log"
-[ "$(grep -c 'unchanged, skipped' "$T/second.log")" -eq 5 ] || fail "expected all 5 stages skipped"
+[ "$(grep -c 'unchanged, skipped' "$T/second.log")" -eq 6 ] || fail "expected all 6 stages skipped (segment, hand mesh, its fibres, block, solve, post)"
 
 echo "--- 3. ends at 0.1 ms, before the 0.5 mm gap closes (0.25 ms at 2 m/s)"
 run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 | tee "$T/third.log"
