@@ -96,6 +96,13 @@ Summary summarize(const Results& r) {
     if (c.contains("peak_area")) s.largest_area.value = num(c["peak_area"], "value"), s.largest_area.time = num(c["peak_area"], "time");
     if (c.contains("peak_force")) s.peak_force.value = num(c["peak_force"], "value"), s.peak_force.time = num(c["peak_force"], "time");
     s.contact_occurred = c.value("steps_in_contact", std::size_t{0}) > 0;
+    if (c.contains("pairs") && c["pairs"].is_array())
+      for (const auto& p : c["pairs"]) {
+        if (!p.is_object() || !p.contains("peak_force")) continue;
+        s.contact_pairs.push_back({p.value("name", ""), num(p["peak_force"], "value"), num(p["peak_force"], "time"),
+                                   p.contains("peak_area") ? num(p["peak_area"], "value") : 0.0,
+                                   p.contains("peak_pressure") ? num(p["peak_pressure"], "value") : 0.0});
+      }
   }
 
   if (j.contains(rk::reactions) && j[rk::reactions].is_array())
@@ -278,6 +285,11 @@ std::string summary_markdown(const Summary& s) {
     o << "| peak contact force | " << s.peak_force.value << " N | " << s.peak_force.time * 1e3 << " | |\n";
     o << "\nThe any-step peak includes the first-touch impulse of each node (velocity-level impact over one step); "
          "the output-state peak is what the pressure picture shows.\n";
+    if (!s.contact_pairs.empty()) {
+      o << "\n| contact pair | peak force on its slave nodes (N) | at (ms) | largest area (mm^2) | peak pressure (MPa) |\n|---|---|---|---|---|\n";
+      for (const auto& p : s.contact_pairs)
+        o << "| " << p.name << " | " << p.force << " | " << p.force_time * 1e3 << " | " << p.area * 1e6 << " | " << p.pressure / 1e6 << " |\n";
+    }
   }
   if (!s.reactions.empty()) {
     o << "\n## Support reactions\n\n| boundary | peak abs(R) (N) | at (ms) | R then (N) | R at the end (N) | moment at the end (N m) "

@@ -139,7 +139,7 @@ class RunLoop {
     Vec3 peak_at{0, 0, 0};
     if (cr.peak_node >= 0)
       for (int c = 0; c < 3; ++c) peak_at[c] = model_.X[3 * cr.peak_node + c] + solver_.displacement()[3 * cr.peak_node + c];
-    peaks_.add_contact_step(cr, t, peak_at);
+    peaks_.add_contact_step(cr, t, peak_at, solver_.contact().pair_reports());
     peaks_.add_reactions(solver_.reactions(), t);
     if (!cr.converged) {
       if (peaks_.unconverged_steps == 0) {

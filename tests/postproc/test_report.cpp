@@ -122,6 +122,11 @@ Folder write_results(const fs::path& dir, bool contact = true) {
       {c::run_json::energy, {{"initial", 2.0}, {"balance_error", -0.01}, {"contact_work_normal", 0.3}, {"contact_work_friction", 0.1}}},
       {c::run_json::contact,
        {{"steps_in_contact", contact ? 7 : 0},
+        {"pairs",
+         {{{"name", "contact[0] punch/surface -> plate/top"},
+           {"peak_force", {{"value", 125.0}, {"time", 0.9e-3}}},
+           {"peak_area", {{"value", 2.5e-4}, {"time", 0.95e-3}}},
+           {"peak_pressure", {{"value", 3e6}, {"time", 0.8e-3}}}}}},
         {"peak_force", {{"value", 130.0}, {"time", 0.9e-3}}},
         {"peak_area", {{"value", 2.5e-4}, {"time", 0.95e-3}}},
         {"peak_pressure", {{"value", 3e6}, {"time", 0.8e-3}, {"position", {0.01, 0.01, 0.005}}, {"node", f.peak_node + 1}}}}},
@@ -208,6 +213,7 @@ TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
   const std::string md = postproc::summary_markdown(s);
   EXPECT_NE(md.find("| soft | 0.096 | 1 | element 48, "), std::string::npos) << md;  // 96 kPa at 1 ms
   EXPECT_NE(md.find("| peak contact force | 130 N |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| contact[0] punch/surface -> plate/top | 125 | 0.9 | 250 | 3 |"), std::string::npos) << md;
   EXPECT_NE(md.find("Mass scaling kept the step at or above 4e-05 s, adding: plate 0.02 kg (0.5 % of its mass); punch 0 kg (0 % of its mass);"),
             std::string::npos)
       << md;

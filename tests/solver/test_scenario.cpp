@@ -240,6 +240,10 @@ TEST_F(ScenarioFile, ContactPairReads) {
   double area = 0;
   for (double a : m.contact_pairs[0].slave_area) area += a;
   EXPECT_NEAR(area, 1e-4, 1e-15);  // the 1 cm x 1 cm face
+  // The second pass's slaves are on the other body: it counts reversed; both are one entry's.
+  EXPECT_EQ(m.contact_pairs[0].report_sign, 1.0);
+  EXPECT_EQ(m.contact_pairs[1].report_sign, -1.0);
+  EXPECT_EQ(m.contact_pairs[0].entry, m.contact_pairs[1].entry);
   // Master normals point out of the tool (its zmin face: -z).
   const auto& t = m.contact_pairs[0].master->triangles();
   const double *a = &m.X[3 * t[0]], *b = &m.X[3 * t[1]], *c = &m.X[3 * t[2]];

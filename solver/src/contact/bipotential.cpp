@@ -140,6 +140,7 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
 
   // Status, resultants and the work of the reactions (trapezoid halves over du^{n-1/2}, du^{n+1/2}).
   double max_rn = 0;
+  if (in.per_pair) std::fill(in.per_pair->begin(), in.per_pair->end(), PairStepReport{});
   for (std::size_t k = 0; k < K; ++k)
     max_rn = std::max(max_rn, dot({rows.reaction[3 * k], rows.reaction[3 * k + 1], rows.reaction[3 * k + 2]}, normal(k)));
   for (std::size_t k = 0; k < K; ++k) {
@@ -151,15 +152,20 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
       continue;
     }
     const Vec3 rt{r[0] - rn * n[0], r[1] - rn * n[1], r[2] - rn * n[2]};
-    const double mu = pairs[static_cast<std::size_t>(rows.pair[k])].friction;
-    rows.status[k] = norm(rt) < mu * rn * (1 - 1e-6) ? ContactStatus::stick : ContactStatus::slip;
+    const ContactPair& pair = pairs[static_cast<std::size_t>(rows.pair[k])];
+    rows.status[k] = norm(rt) < pair.friction * rn * (1 - 1e-6) ? ContactStatus::stick : ContactStatus::slip;
     ++rep.active;
     (rows.status[k] == ContactStatus::stick ? rep.sticking : rep.slipping)++;
-    for (int d = 0; d < 3; ++d) rep.force[d] += r[d];
+    for (int d = 0; d < 3; ++d) rep.force[d] += pair.report_sign * r[d];
     rep.normal_force += rn;
-    rep.area += rows.area[k];
+    if (!in.per_pair) rep.area += rows.area[k];
     const double pressure = rn / rows.area[k];
     if (pressure > rep.peak_pressure) rep.peak_pressure = pressure, rep.peak_node = rows.slave(k);
+    if (in.per_pair) {
+      PairStepReport& p = (*in.per_pair)[static_cast<std::size_t>(rows.pair[k])];
+      for (int d = 0; d < 3; ++d) p.force[d] += r[d];
+      p.normal_force += rn, p.area += rows.area[k], p.peak_pressure = std::max(p.peak_pressure, pressure), ++p.active;
+    }
     const Vec3 u_new = relative_velocity(rows, k, v), u_old = relative_velocity(rows, k, in.v_old);
     const double un_new = dot(u_new, n), un_old = dot(u_old, n);
     rep.normal_work_forward += in.dt * rn * un_new;
@@ -174,6 +180,16 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
         rep.support_work_forward += in.dt * support * v[dof];
         rep.support_work_back += in.dt_prev * support * in.v_old[dof];
       }
+  }
+  if (in.per_pair) {  // the area per [[contact]] entry: its larger pass's (both passes see one interface)
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      bool larger = true;
+      for (std::size_t q = 0; q < pairs.size(); ++q)
+        if (q != p && pairs[q].entry == pairs[p].entry &&
+            ((*in.per_pair)[q].area > (*in.per_pair)[p].area || ((*in.per_pair)[q].area == (*in.per_pair)[p].area && q < p)))
+          larger = false;
+      if (larger) rep.area += (*in.per_pair)[p].area;
+    }
   }
   return rep;
 }

@@ -15,6 +15,7 @@ struct RowSolveInput {
   const double* inv_mass;     // per dof, 0 on prescribed dofs
   double velocity_per_force;  // dtbar / (1 + alpha dtbar / 2)
   double dt, dt_prev;
+  std::vector<PairStepReport>* per_pair = nullptr;  // one per pair, overwritten (or none)
 };
 
 // Solves for rows.reaction, correcting v (free half-step velocities) in place; `last` holds the

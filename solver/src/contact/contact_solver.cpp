@@ -17,6 +17,7 @@ ContactSolver::ContactSolver(const Model& model)
     : model_(model), pairs_(model.contact_pairs), settings_(model.contact_settings), scratch_(std::make_unique<DetectionScratch>()) {
   x_.resize(3 * model.num_nodes);
   for (const auto& p : pairs_) last_reaction_.emplace_back(3 * p.slave_nodes.size(), 0.0);
+  pair_reports_.resize(pairs_.size());
 }
 
 ContactSolver::~ContactSolver() = default;
@@ -57,7 +58,7 @@ ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, 
                                                     double velocity_per_force, double dt, double dt_prev) {
   if (pairs_.empty()) return {};
   detect(u, settings_.search_factor);
-  return solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev});
+  return solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_});
 }
 
 void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status,

@@ -152,6 +152,7 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       ContactPair p;
       p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " -> rigid plane";
       p.friction = cs.friction;
+      p.entry = static_cast<int>(k);
       set_rigid_plane(p, (*cs.plane)[0], (*cs.plane)[1]);
       set_slave_surface(p, m, slave_tris);
       m.contact_pairs.push_back(std::move(p));
@@ -168,6 +169,8 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       const std::string& m_surf = swap ? cs.slave_surface : cs.master_surface;
       p.name = key + " " + s_body + "/" + s_surf + " -> " + m_body + "/" + m_surf;
       p.friction = cs.friction;
+      p.report_sign = swap ? -1.0 : 1.0;
+      p.entry = static_cast<int>(k);
       set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"), cs.method == "mortar");
       set_slave_surface(p, m, swap ? master_tris : slave_tris);
       log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master->describe() << ", mean master edge "

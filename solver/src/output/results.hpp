@@ -60,7 +60,12 @@ struct RunPeaks {
   std::vector<double> von_mises;  // per block
   // Per boundary: the largest |reaction force|, when, and the force then.
   std::vector<double> reaction_peak, reaction_peak_time, reaction_peak_force;  // 1, 1, 3 per boundary
-  void add_contact_step(const ContactStepReport& c, double t, const Vec3& peak_at);
+  // Per directed contact pair: the largest |force| on its slave nodes, area and pressure, and when.
+  struct PairPeaks {
+    double force = 0, force_time = 0, normal_force = 0, area = 0, area_time = 0, pressure = 0, pressure_time = 0;
+  };
+  std::vector<PairPeaks> pairs;
+  void add_contact_step(const ContactStepReport& c, double t, const Vec3& peak_at, const std::vector<PairStepReport>& per_pair);
   void add_reactions(const Reactions& r, double t);
 };
 

@@ -12,8 +12,17 @@ namespace {
 
 nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPeaks& peaks) {
   nlohmann::json pairs = nlohmann::json::array();
-  for (const auto& p : model.contact_pairs)
-    pairs.push_back({{"name", p.name}, {"friction", p.friction}, {"slave_nodes", p.slave_nodes.size()}, {"master", p.master->describe()}});
+  for (std::size_t k = 0; k < model.contact_pairs.size(); ++k) {
+    const ContactPair& p = model.contact_pairs[k];
+    const RunPeaks::PairPeaks q = k < peaks.pairs.size() ? peaks.pairs[k] : RunPeaks::PairPeaks{};
+    pairs.push_back({{"name", p.name},
+                     {"friction", p.friction},
+                     {"slave_nodes", p.slave_nodes.size()},
+                     {"master", p.master->describe()},
+                     {"peak_force", {{"value", q.force}, {"time", q.force_time}, {"normal_force_then", q.normal_force}}},
+                     {"peak_area", {{"value", q.area}, {"time", q.area_time}}},
+                     {"peak_pressure", {{"value", q.pressure}, {"time", q.pressure_time}}}});
+  }
   const std::size_t peak_input_node = model.input_node(peaks.pressure_node);
   return {
       {"pairs", pairs},

@@ -103,8 +103,16 @@ void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::st
   if (!o) throw WriteError(file.string(), "the file system refused the listing");
 }
 
-void RunPeaks::add_contact_step(const ContactStepReport& cr, double t, const Vec3& peak_at) {
+void RunPeaks::add_contact_step(const ContactStepReport& cr, double t, const Vec3& peak_at, const std::vector<PairStepReport>& per_pair) {
   max_iterations = std::max(max_iterations, cr.iterations);
+  if (pairs.size() != per_pair.size()) pairs.resize(per_pair.size());
+  for (std::size_t k = 0; k < per_pair.size(); ++k) {
+    const PairStepReport& p = per_pair[k];
+    PairPeaks& q = pairs[k];
+    if (const double f = norm(p.force); f > q.force) q.force = f, q.force_time = t, q.normal_force = p.normal_force;
+    if (p.area > q.area) q.area = p.area, q.area_time = t;
+    if (p.peak_pressure > q.pressure) q.pressure = p.peak_pressure, q.pressure_time = t;
+  }
   if (cr.active == 0) return;
   ++contact_steps;
   const double f = norm(cr.force);

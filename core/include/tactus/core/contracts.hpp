@@ -141,7 +141,9 @@ inline constexpr const char* time_step = "time_step";  // {min, max, safety, min
 inline constexpr const char* timing = "timing_s";      // {stress_passes, contact, rest}
 inline constexpr const char* energy = "energy";        // {initial, kinetic, internal, ..., balance_error}
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
-inline constexpr const char* contact = "contact";      // {pairs, steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
+// {pairs: [{name, friction, slave_nodes, master, peak_force, peak_area, peak_pressure}] (one per directed pair;
+// the totals count each two_pass entry once), steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
+inline constexpr const char* contact = "contact";
 inline constexpr const char* reactions = "reactions";  // [{name, moment_about, final_force, final_moment, peak_force: {value, time, vector}}]
 // Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},
 // added_kinetic_energy, added_momentum}

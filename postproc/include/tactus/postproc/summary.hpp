@@ -55,6 +55,12 @@ struct Summary {
   PeakAt fibre_stretch;
   int fibre_family = 0;
   double fibre_stress_there = 0;
+  // Per directed contact pair (run.json contact.pairs): its peaks over the run.
+  struct PairPeak {
+    std::string name;
+    double force = 0, force_time = 0, area = 0, pressure = 0;
+  };
+  std::vector<PairPeak> contact_pairs;
   // Mass scaling (run.json mass_scaling), when it was on: the floor and each body's added mass.
   double minimum_time_step = 0;
   struct AddedMass {

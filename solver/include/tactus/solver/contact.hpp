@@ -42,6 +42,20 @@ struct ContactPair {
   std::vector<std::int32_t> slave_triangles;  // 3 internal node ids each: the slave surface (mortar integrates over it)
   std::shared_ptr<const ContactMaster> master;
   double search_scale = 0;  // length the search distance and tolerances scale with (mean master edge), m
+  // How the pair's rows count in the step's resultants, which describe the force on the first
+  // slave body of its [[contact]] entry: the second pass of a two_pass entry has its slaves on the
+  // other body (sign -1), and both passes see the same interface (the entry's area is the larger
+  // of theirs). `entry`: the pairs of one [[contact]] entry share it.
+  double report_sign = 1;
+  int entry = 0;
+};
+
+// One directed pair's share of a step: force on its slave nodes, normal force, contact area
+// (tributary area of the nodes pressing), peak pressure, pressing nodes.
+struct PairStepReport {
+  Vec3 force{0, 0, 0};
+  double normal_force = 0, area = 0, peak_pressure = 0;
+  std::size_t active = 0;
 };
 
 enum class ContactStatus : std::uint8_t { open = 0, stick = 1, slip = 2 };
@@ -134,9 +148,9 @@ struct ContactStepReport {
   int iterations = 0;
   bool converged = true;
   double residual = 0;          // last max |dr| / max |r|
-  Vec3 force{0, 0, 0};          // sum of r over slave nodes, N
-  double normal_force = 0;      // sum of r_n, N
-  double area = 0;              // tributary area of nodes with r_n > 0, m^2
+  Vec3 force{0, 0, 0};          // force on the slave bodies (sum of r, the second passes' reversed), N
+  double normal_force = 0;      // sum of r_n over every pass, N
+  double area = 0;              // tributary area of nodes with r_n > 0 (per two-pass entry the larger pass's), m^2
   double peak_pressure = 0;     // Pa
   std::int32_t peak_node = -1;  // internal node of the peak pressure
   // Work of the reactions over du^{n-1/2} and du^{n+1/2} (trapezoid halves), relative motion:
@@ -165,6 +179,8 @@ class ContactSolver {
 
   const ContactRows& rows() const { return rows_; }
   const std::vector<ContactPair>& pairs() const { return pairs_; }
+  // The last step's share of each directed pair (pairs() order).
+  const std::vector<PairStepReport>& pair_reports() const { return pair_reports_; }
 
   // Point fields in the internal numbering: pressure (r_n / area), traction (r_t / area, 3),
   // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near).
@@ -181,6 +197,7 @@ class ContactSolver {
   // Reactions of the previous step per pair and slave (3 each): the Uzawa iterations start from
   // them (projected on the new cone), so a lasting contact converges in one or two sweeps.
   std::vector<std::vector<double>> last_reaction_;
+  std::vector<PairStepReport> pair_reports_;
   int threads_ = 1;
   std::unique_ptr<DetectionScratch> scratch_;
 };
