@@ -283,8 +283,8 @@ std::string summary_markdown(const Summary& s) {
       << s.peak_pressure_steps.index << ", " << mm(s.peak_pressure_steps.position) << " |\n";
     o << "| largest contact area | " << s.largest_area.value * 1e6 << " mm^2 | " << s.largest_area.time * 1e3 << " | |\n";
     o << "| peak contact force | " << s.peak_force.value << " N | " << s.peak_force.time * 1e3 << " | |\n";
-    o << "\nThe any-step peak includes the first-touch impulse of each node (velocity-level impact over one step); "
-         "the output-state peak is what the pressure picture shows.\n";
+    o << "\nPressures are averaged over the run's pressure window (run.json contact.pressure_window), so a node's first-touch "
+         "impulse shows as impulse / window rather than impulse / step; the output-state peak is what the pressure picture shows.\n";
     if (!s.contact_pairs.empty()) {
       o << "\n| contact pair | peak force on its slave nodes (N) | at (ms) | largest area (mm^2) | peak pressure (MPa) |\n|---|---|---|---|---|\n";
       for (const auto& p : s.contact_pairs)

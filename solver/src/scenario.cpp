@@ -172,7 +172,12 @@ const SectionSpec& contact_solver_section() {
       "Uzawa iterations of the bi-potential contact solver (Gauss-Seidel over the contact nodes).",
       {opt(number("tolerance", "", "stop when max |dr| <= tolerance * max |r| over the contact nodes", 0, true, 1, true), "1e-6"),
        opt(number("max_iterations", "", "iteration limit per step (reached: a warning, the run goes on)", 1, false, 1e6, false), "200"),
-       opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false), "0.5")}};
+       opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false), "0.5"),
+       opt(number("pressure_window", "s",
+                  "the reported contact pressure is r_n / A averaged over an exponential window of max(this, 10 initial critical steps), "
+                  "so an impact's peak does not grow like 1/dt",
+                  0, true),
+           "1e-5")}};
   return s;
 }
 
@@ -730,6 +735,7 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     sc.contact_solver.tolerance = r.number(t, *spec.find("tolerance"), "contact_solver", 1e-6);
     sc.contact_solver.max_iterations = static_cast<int>(r.number(t, *spec.find("max_iterations"), "contact_solver", 200));
     sc.contact_solver.search_factor = r.number(t, *spec.find("search_factor"), "contact_solver", 0.5);
+    sc.contact_solver.pressure_window = r.number(t, *spec.find("pressure_window"), "contact_solver", 1e-5);
   }
 }
 

@@ -405,3 +405,56 @@ TEST(Contact, HertzSphereOnRigidPlane) {
   EXPECT_LE(sig.adhesive, 1e-12);
   EXPECT_LE(sig.penetration, 1e-3);
 }
+
+// Oracle: a nu = 0 elastic bar hitting a rigid wall at v presses with rho c v for 2L/c. The
+// reported (windowed) pressure must average within 5 % of it over [0.2, 0.8] of the contact,
+// and its peak must not depend on the step: with the same window (10 initial critical steps, the
+// same in both runs) it changes by <= 5 % when time_step_safety goes from 0.9 to 0.3, where the
+// one-step pressure r_n / A of the first touch grows like 1/dt (printed).
+TEST(Contact, ImpactPressureIsWindowedNotPerStep) {
+  const double E = 1e7, rho = 1000, L = 0.1, a = 0.01, v0 = 0.1, c = std::sqrt(E / rho), T = 2 * L / c;
+  struct Outcome {
+    double plateau = 0, peak = 0, step_peak = 0, window = 0, dt = 0;
+  };
+  auto impact = [&](double safety) {
+    Model model = build_model(samples::make_box_mesh(200, 1, 1, L, a, a), linear_elastic(E, 0.0, rho));
+    for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i] = -v0;
+    ContactPair wall;
+    wall.name = "wall";
+    set_rigid_plane(wall, {-1e-9, 0, 0}, {1, 0, 0});
+    set_slave_surface(wall, model, group_faces(model, 11));  // the bar's xmin face
+    model.contact_pairs.push_back(wall);
+    model.contact_settings.tolerance = 1e-12;
+    RunSpec run = run_until(1.5 * T);
+    run.time_step_safety = safety;
+    run.threads = 1;
+    ExplicitSolver s(model, run, DampingSpec{});
+    Outcome o;
+    o.window = s.contact().pressure_window(), o.dt = s.time_step();
+    double t_first = -1, sum = 0;
+    int n = 0;
+    while (true) {
+      s.advance_velocity();
+      const ContactStepReport& r = s.contact_report();
+      if (r.normal_force > 0 && t_first < 0) t_first = s.time();
+      o.peak = std::max(o.peak, r.peak_pressure), o.step_peak = std::max(o.step_peak, r.peak_step_pressure);
+      if (t_first >= 0 && s.time() > t_first + 0.2 * T && s.time() < t_first + 0.8 * T) sum += r.peak_pressure, ++n;
+      if (s.time() >= 1.5 * T * (1 - 1e-12)) break;
+      s.advance_position();
+    }
+    o.plateau = sum / n;
+    return o;
+  };
+  const Outcome coarse = impact(0.9), fine = impact(0.3);
+  const double p_ref = rho * c * v0;
+  std::printf(
+      "bar on a wall: window %.3e s (%.1f %% of 2L/c); plateau %.1f Pa at safety 0.9, %.1f Pa at 0.3 (rho c v %.1f Pa); windowed peak %.1f vs %.1f "
+      "Pa "
+      "(%+.2f %%); one-step peak %.1f vs %.1f Pa (x%.2f for dt x%.2f)\n",
+      coarse.window, 100 * coarse.window / T, coarse.plateau, fine.plateau, p_ref, coarse.peak, fine.peak, 100 * (fine.peak / coarse.peak - 1),
+      coarse.step_peak, fine.step_peak, fine.step_peak / coarse.step_peak, fine.dt / coarse.dt);
+  EXPECT_EQ(coarse.window, fine.window);
+  EXPECT_NEAR(coarse.plateau / p_ref, 1.0, 0.05);
+  EXPECT_NEAR(fine.plateau / p_ref, 1.0, 0.05);
+  EXPECT_NEAR(fine.peak / coarse.peak, 1.0, 0.05);
+}

@@ -18,6 +18,11 @@ ContactSolver::ContactSolver(const Model& model)
   x_.resize(3 * model.num_nodes);
   for (const auto& p : pairs_) last_reaction_.emplace_back(3 * p.slave_nodes.size(), 0.0);
   pair_reports_.resize(pairs_.size());
+  step_pressure_.assign(model.num_nodes, 0.0);
+  windowed_pressure_.assign(model.num_nodes, 0.0);
+  for (const ContactPair& p : pairs_) slave_union_.insert(slave_union_.end(), p.slave_nodes.begin(), p.slave_nodes.end());
+  std::sort(slave_union_.begin(), slave_union_.end());
+  slave_union_.erase(std::unique(slave_union_.begin(), slave_union_.end()), slave_union_.end());
 }
 
 ContactSolver::~ContactSolver() = default;
@@ -58,7 +63,29 @@ ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, 
                                                     double velocity_per_force, double dt, double dt_prev) {
   if (pairs_.empty()) return {};
   detect(u, settings_.search_factor);
-  return solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_});
+  ContactStepReport rep =
+      solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_});
+  update_windowed_pressure(rep, 0.5 * (dt + dt_prev));
+  return rep;
+}
+
+void ContactSolver::update_windowed_pressure(ContactStepReport& rep, double dtbar) {
+  for (std::int32_t s : slave_union_) step_pressure_[static_cast<std::size_t>(s)] = 0;
+  for (std::size_t k = 0; k < rows_.size(); ++k) {
+    if (rows_.status[k] == ContactStatus::open) continue;
+    const double* r = &rows_.reaction[3 * k];
+    const double* n = &rows_.normal[3 * k];
+    step_pressure_[static_cast<std::size_t>(rows_.slave(k))] += (r[0] * n[0] + r[1] * n[1] + r[2] * n[2]) / rows_.area[k];
+  }
+  const double w = pressure_window_ > 0 ? std::min(1.0, dtbar / pressure_window_) : 1.0;
+  rep.peak_step_pressure = rep.peak_pressure;
+  rep.peak_pressure = 0;
+  rep.peak_node = -1;
+  for (std::int32_t s : slave_union_) {
+    double& q = windowed_pressure_[static_cast<std::size_t>(s)];
+    q += w * (step_pressure_[static_cast<std::size_t>(s)] - q);
+    if (q > rep.peak_pressure) rep.peak_pressure = q, rep.peak_node = s;
+  }
 }
 
 void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status,
@@ -68,12 +95,13 @@ void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<doubl
   traction.assign(3 * N, 0.0);
   status.assign(N, -1.0);
   gap.assign(N, std::numeric_limits<double>::quiet_NaN());
+  for (std::int32_t s : slave_union_)  // the windowed pressure (set_pressure_window), which outlives a node's rows
+    pressure[static_cast<std::size_t>(s)] = windowed_pressure_[static_cast<std::size_t>(s)];
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     const std::size_t s = static_cast<std::size_t>(rows_.slave(k));
     const double* r = &rows_.reaction[3 * k];
     const double* n = &rows_.normal[3 * k];
     const double rn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
-    pressure[s] += rn / rows_.area[k];
     for (int d = 0; d < 3; ++d) traction[3 * s + d] += (r[d] - rn * n[d]) / rows_.area[k];
     status[s] = std::max(status[s], static_cast<double>(rows_.status[k]));
     if (std::isnan(gap[s]) || rows_.gap[k] < gap[s]) gap[s] = rows_.gap[k];

@@ -44,6 +44,7 @@ constexpr std::array<Column, h::all.size()> kColumns{{
     {&h::peak_pressure_x, [](const HistoryRow& r) { return r.peak_at[0]; }},
     {&h::peak_pressure_y, [](const HistoryRow& r) { return r.peak_at[1]; }},
     {&h::peak_pressure_z, [](const HistoryRow& r) { return r.peak_at[2]; }},
+    {&h::peak_step_pressure, [](const HistoryRow& r) { return r.contact->peak_step_pressure; }},
     {&h::contact_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->active); }},
     {&h::stick_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->sticking); }},
     {&h::slip_nodes, [](const HistoryRow& r) { return static_cast<double>(r.contact->slipping); }},

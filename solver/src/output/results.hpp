@@ -53,6 +53,7 @@ class HistoryWriter {
 // The peaks over a run that run.json reports (contact over every step, von Mises at the outputs).
 struct RunPeaks {
   double force = 0, force_time = 0, area = 0, area_time = 0, pressure = 0, pressure_time = 0;
+  double step_pressure = 0, step_pressure_time = 0;  // r_n / A of one step (impulses)
   Vec3 pressure_at{0, 0, 0};
   std::size_t pressure_node = 0;
   int max_iterations = 0;

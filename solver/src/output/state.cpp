@@ -118,6 +118,7 @@ void RunPeaks::add_contact_step(const ContactStepReport& cr, double t, const Vec
   const double f = norm(cr.force);
   if (f > force) force = f, force_time = t;
   if (cr.area > area) area = cr.area, area_time = t;
+  if (cr.peak_step_pressure > step_pressure) step_pressure = cr.peak_step_pressure, step_pressure_time = t;
   if (cr.peak_pressure > pressure)
     pressure = cr.peak_pressure, pressure_time = t, pressure_at = peak_at, pressure_node = static_cast<std::size_t>(cr.peak_node);
 }

@@ -49,6 +49,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   while (next_target_ < schedule_.size() && schedule_[next_target_] <= 0) ++next_target_;
   stress_pass();
   initial_critical_ = pass_.critical_step;
+  contact_.set_pressure_window(std::max(model.contact_settings.pressure_window, 10 * initial_critical_));
   double kinetic = 0, added = 0;  // the initial energy is the physical one; mass added at t = 0 is booked as added
   for (std::size_t i = 0; i < ndof; ++i) {
     kinetic += 0.5 * mass_[i / 3] * v_half_[i] * v_half_[i];

@@ -76,15 +76,18 @@ inline constexpr ColumnSpec contact_force_y{"contact_force_y", "N", "its y compo
 inline constexpr ColumnSpec contact_force_z{"contact_force_z", "N", "its z component"};
 inline constexpr ColumnSpec contact_normal_force{"contact_normal_force", "N", "sum of the normal reactions"};
 inline constexpr ColumnSpec contact_area{"contact_area", "m^2", "tributary area of the nodes pressed"};
-inline constexpr ColumnSpec peak_pressure{"peak_pressure", "Pa", "largest nodal contact pressure this step"};
+inline constexpr ColumnSpec peak_pressure{"peak_pressure", "Pa",
+                                          "largest nodal contact pressure, averaged over the pressure window (contact_solver.pressure_window)"};
 inline constexpr ColumnSpec peak_pressure_x{"peak_pressure_x", "m", "where: x"};
 inline constexpr ColumnSpec peak_pressure_y{"peak_pressure_y", "m", "where: y"};
 inline constexpr ColumnSpec peak_pressure_z{"peak_pressure_z", "m", "where: z"};
+inline constexpr ColumnSpec peak_step_pressure{"peak_step_pressure", "Pa",
+                                               "largest r_n / A of this step alone: first-touch impulses over one step, growing like 1/dt"};
 inline constexpr ColumnSpec contact_nodes{"contact_nodes", "", "slave nodes pressed"};
 inline constexpr ColumnSpec stick_nodes{"stick_nodes", "", "of which sticking"};
 inline constexpr ColumnSpec slip_nodes{"slip_nodes", "", "of which slipping"};
 inline constexpr ColumnSpec uzawa_iterations{"uzawa_iterations", "", "Uzawa sweeps this step"};
-inline constexpr std::array<const ColumnSpec*, 25> all{&step,
+inline constexpr std::array<const ColumnSpec*, 26> all{&step,
                                                        &time,
                                                        &dt,
                                                        &kinetic_energy,
@@ -105,6 +108,7 @@ inline constexpr std::array<const ColumnSpec*, 25> all{&step,
                                                        &peak_pressure_x,
                                                        &peak_pressure_y,
                                                        &peak_pressure_z,
+                                                       &peak_step_pressure,
                                                        &contact_nodes,
                                                        &stick_nodes,
                                                        &slip_nodes,
@@ -142,7 +146,8 @@ inline constexpr const char* timing = "timing_s";      // {stress_passes, contac
 inline constexpr const char* energy = "energy";        // {initial, kinetic, internal, ..., balance_error}
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
 // {pairs: [{name, friction, slave_nodes, master, peak_force, peak_area, peak_pressure}] (one per directed pair;
-// the totals count each two_pass entry once), steps_in_contact, peak_force, peak_area, peak_pressure, uzawa}
+// the totals count each two_pass entry once), steps_in_contact, peak_force, peak_area, peak_pressure (windowed),
+// peak_step_pressure (one step's r_n / A), pressure_window (s), uzawa}
 inline constexpr const char* contact = "contact";
 inline constexpr const char* reactions = "reactions";  // [{name, moment_about, final_force, final_moment, peak_force: {value, time, vector}}]
 // Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},

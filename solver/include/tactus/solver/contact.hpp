@@ -147,12 +147,13 @@ struct ContactStepReport {
   std::size_t candidates = 0, active = 0, sticking = 0, slipping = 0;
   int iterations = 0;
   bool converged = true;
-  double residual = 0;          // last max |dr| / max |r|
-  Vec3 force{0, 0, 0};          // force on the slave bodies (sum of r, the second passes' reversed), N
-  double normal_force = 0;      // sum of r_n over every pass, N
-  double area = 0;              // tributary area of nodes with r_n > 0 (per two-pass entry the larger pass's), m^2
-  double peak_pressure = 0;     // Pa
-  std::int32_t peak_node = -1;  // internal node of the peak pressure
+  double residual = 0;            // last max |dr| / max |r|
+  Vec3 force{0, 0, 0};            // force on the slave bodies (sum of r, the second passes' reversed), N
+  double normal_force = 0;        // sum of r_n over every pass, N
+  double area = 0;                // tributary area of nodes with r_n > 0 (per two-pass entry the larger pass's), m^2
+  double peak_pressure = 0;       // Pa, the largest windowed nodal pressure (ContactSolver::set_pressure_window)
+  std::int32_t peak_node = -1;    // internal node of the peak pressure
+  double peak_step_pressure = 0;  // Pa, the largest r_n / A of this step alone (first-touch impulses grow like 1/dt)
   // Work of the reactions over du^{n-1/2} and du^{n+1/2} (trapezoid halves), relative motion:
   double normal_work_back = 0, normal_work_forward = 0, friction_work_back = 0, friction_work_forward = 0;
   // Work of the supports that take the reaction shares landing on prescribed dofs (halves).
@@ -181,6 +182,11 @@ class ContactSolver {
   const std::vector<ContactPair>& pairs() const { return pairs_; }
   // The last step's share of each directed pair (pairs() order).
   const std::vector<PairStepReport>& pair_reports() const { return pair_reports_; }
+  // The reported pressure of a node is r_n / A averaged over an exponential window of time constant
+  // tau: p <- p + w (r_n / A - p), w = min(1, dtbar / tau), so a first-touch impulse I shows as
+  // about I / tau whatever the step (r_n / A of one step is I / dtbar). 0: no averaging.
+  void set_pressure_window(double tau) { pressure_window_ = tau; }
+  double pressure_window() const { return pressure_window_; }
 
   // Point fields in the internal numbering: pressure (r_n / area), traction (r_t / area, 3),
   // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near).
@@ -198,6 +204,10 @@ class ContactSolver {
   // them (projected on the new cone), so a lasting contact converges in one or two sweeps.
   std::vector<std::vector<double>> last_reaction_;
   std::vector<PairStepReport> pair_reports_;
+  double pressure_window_ = 0;
+  std::vector<double> step_pressure_, windowed_pressure_;  // per node (slave nodes only used)
+  std::vector<std::int32_t> slave_union_;                  // every pair's slave nodes, once
+  void update_windowed_pressure(ContactStepReport& report, double dtbar);
   int threads_ = 1;
   std::unique_ptr<DetectionScratch> scratch_;
 };

@@ -113,6 +113,9 @@ struct ContactSettings {
   double tolerance = 1e-6;  // stop when max |dr| <= tolerance * max |r| over the contact nodes
   int max_iterations = 200;
   double search_factor = 0.5;  // search distance and penetration band, in mean master edges
+  // The reported contact pressure is the per-step pressure r_n / A averaged over an exponential
+  // window of tau = max(pressure_window, 10 x the initial critical step), s.
+  double pressure_window = 1e-5;
 };
 
 struct Scenario {
