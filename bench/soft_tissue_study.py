@@ -44,12 +44,14 @@ def stage_meshes(work):
                         "--axis", "z", "-o", fibres, "-q"], check=True)
 
 
-def scenario_variant(k, formulation, fibres, path):
+def scenario_variant(k, formulation, fibres, path, k1=None):
     text = open(os.path.join(ROOT, "pipeline", "scenarios", "hand_block.toml")).read()
     if fibres == "global":  # the material's constant directions: drop the hand's file
         text = re.sub(r'^fibres = "mesh/fibres.vtu".*\n', "", text, flags=re.M)
     section = re.search(r"\[materials\.soft_tissue\]\n(.*?)\n\n", text, re.S)
     body = re.sub(r"^k = .*$", f"k = {k:g}", section.group(1), flags=re.M)
+    if k1 is not None:  # 0: no fibre stiffness at all
+        body = re.sub(r"^k1 = .*$", f"k1 = {k1:g}", body, flags=re.M)
     body = re.sub(r"^formulation = .*\n?", "", body, flags=re.M) + f'\nformulation = "{formulation}"'
     text = text[: section.start(1)] + body + text[section.end(1) :]
     open(path, "w").write(text)
@@ -77,21 +79,24 @@ def main():
     ap.add_argument("--k", type=float, nargs="+", default=[1e6, 1e7, 1e8])
     ap.add_argument("--formulations", nargs="+", default=["standard", "anp"])
     ap.add_argument("--fibres", nargs="+", default=["anatomical"], choices=["anatomical", "global"])
+    ap.add_argument("--k1", type=float, default=None, help="replace the fibre stiffness k1 (Pa; 0: no fibres)")
     ap.add_argument("--work", default=None)
     ap.add_argument("--reuse", action="store_true", help="tabulate the runs already in --work instead of running them again")
     a = ap.parse_args()
     work = a.work or tempfile.mkdtemp(prefix="tactus-study-")
     stage_meshes(work)
+    if a.k1 is not None:
+        print(f"k1 = {a.k1:g} Pa")
     print("| k (Pa) | formulation | fibres | peak contact pressure (MPa) | peak contact force (kN) | peak tissue von Mises (MPa) | peak bone von Mises (MPa) "
           "| largest isochoric fibre stretch | tissue element J | step (ns) | wall (s) | status |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for k, formulation, fibres in [(k, f, g) for g in a.fibres for k in a.k for f in a.formulations]:
-        name = f"k{k:g}_{formulation}" + ("" if fibres == "global" else "_anatomical")
+        name = f"k{k:g}_{formulation}" + ("" if fibres == "global" else "_anatomical") + ("" if a.k1 is None else f"_k1_{a.k1:g}")
         scenario = os.path.join(work, name + ".toml")
         out = os.path.join(work, name + ".out")
         if not (a.reuse and os.path.exists(os.path.join(out, "run.json"))):
             shutil.rmtree(out, ignore_errors=True)
-            scenario_variant(k, formulation, fibres, scenario)
+            scenario_variant(k, formulation, fibres, scenario, a.k1)
             proc = subprocess.run([os.path.join(BUILD, "solver", "tactus-solve"), scenario, "--meshes", work, "-o", out, "-q"],
                                   capture_output=True, text=True)
         if not os.path.exists(os.path.join(out, "run.json")):

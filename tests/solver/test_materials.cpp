@@ -306,3 +306,17 @@ TEST(Materials, HgoFibreOutputsAreTheFibreTerms) {
   EXPECT_GT(std::abs(voigt[0]), 100.0);  // the stretched family carries load
   EXPECT_LE(worst, 1e-9 * std::abs(voigt[0]));
 }
+
+// Oracle: hgo with k1 = 0 is the neo-Hookean law with mu = 2 c1 and bulk k at any stretch; at a
+// fibre stretch of 1.6 (exp(k2 (J4bar - 1)^2) overflows a double) its stress must stay finite and
+// equal to neo-Hookean's (it was NaN: 0 * inf).
+TEST(Materials, HgoWithoutFibreStiffnessIsNeoHookeanAtAnyStretch) {
+  const Material hgo = law("hgo", {{"c1", 1e4}, {"k1", 0.0}, {"k2", 882.847}, {"k", 1e6}, {"density", 1000}}, {{1, 0, 0}, {0, 1, 0}});
+  const Material nh = neo_hookean(2e4, 1e6, 1000);
+  Mat3 F = Mat3::Identity();
+  F(0, 0) = 1.6, F(1, 1) = 0.8, F(2, 2) = 0.8, F(0, 1) = 0.1;
+  const Mat3 P = first_piola(hgo, F), Q = first_piola(nh, F);
+  std::printf("hgo k1 = 0 at a fibre stretch of 1.6: |P - P_neo-Hookean| = %.2e of |P| = %.4e Pa\n", (P - Q).norm() / Q.norm(), Q.norm());
+  ASSERT_TRUE(P.allFinite());
+  EXPECT_LE((P - Q).norm(), 1e-12 * Q.norm());
+}

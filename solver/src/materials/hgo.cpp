@@ -73,7 +73,7 @@ struct Hgo {
       const double J4 = Fa.squaredNorm(), J4bar = Jm13 * Jm13 * J4;
       out[f] = std::sqrt(J4);
       out[2 + f] = std::sqrt(J4bar);
-      if (J4bar <= 1.0) continue;
+      if (J4bar <= 1.0 || k1 == 0.0) continue;
       const double d = J4bar - 1.0, dpsi = k1 * d * std::exp(k2 * d * d);
       sigma += (2.0 * dpsi * Jm13 * Jm13 / J) * (Fa * Fa.transpose() - J4 / 3.0 * Mat3::Identity());
     }
@@ -101,7 +101,9 @@ struct Hgo {
       const Vec3d Fa = F * (*a);
       const double J4 = Fa.squaredNorm();
       const double J4bar = Jm23 * J4;
-      if (J4bar <= 1.0) continue;  // slack in compression (switch on J4bar, as FEBio)
+      // Slack in compression (switch on J4bar, as FEBio); with k1 = 0 no fibre term at all (its
+      // exp(k2 d^2) would overflow at large stretch and 0 * inf poison the stress with NaN).
+      if (J4bar <= 1.0 || k1 == 0.0) continue;
       const double d = J4bar - 1.0;
       const double e = std::exp(k2 * d * d);
       const double dpsi = k1 * d * e;                          // dW/dJ4bar
