@@ -16,18 +16,13 @@
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/stable_step.hpp"
+#include "tactus/core/vec3.hpp"
 
 namespace tactus::mesher {
 
 namespace {
 
 using Sparse = Eigen::SparseMatrix<double>;
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot3(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross3(const Vec3& a, const Vec3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-Vec3 scaled(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double norm3(const Vec3& a) { return std::sqrt(dot3(a, a)); }
 
 struct Operators {
   Sparse K;                         // P1 stiffness sum_e V_e grad N_a . grad N_b
@@ -49,7 +44,7 @@ Operators assemble(const TetMesh& mesh) {
     const double V = std::abs(g.volume);
     for (int a = 0; a < 4; ++a) {
       op.lumped[static_cast<std::size_t>(t[a])] += 0.25 * V;
-      for (int b = 0; b < 4; ++b) entries.emplace_back(t[a], t[b], V * dot3(g.grad[a], g.grad[b]));
+      for (int b = 0; b < 4; ++b) entries.emplace_back(t[a], t[b], V * dot(g.grad[a], g.grad[b]));
     }
   }
   op.K.resize(static_cast<int>(n), static_cast<int>(n));
@@ -110,10 +105,10 @@ void nearest_skin(const TetMesh& mesh, int skin_tag, const std::vector<Vec3>& po
     const auto& tri = mesh.triangles[t];
     const Vec3 &a = mesh.nodes[static_cast<std::size_t>(tri[0])], &b = mesh.nodes[static_cast<std::size_t>(tri[1])],
                &c = mesh.nodes[static_cast<std::size_t>(tri[2])];
-    const Vec3 nrm = cross3(sub(b, a), sub(c, a));
-    if (!(norm3(nrm) > 0)) continue;  // a degenerate triangle has no normal
+    const Vec3 nrm = cross(b - a, c - a);
+    if (!(norm(nrm) > 0)) continue;  // a degenerate triangle has no normal
     triangles.emplace_back(Kernel::Point_3(a[0], a[1], a[2]), Kernel::Point_3(b[0], b[1], b[2]), Kernel::Point_3(c[0], c[1], c[2]));
-    normals.push_back(scaled(nrm, 1 / norm3(nrm)));
+    normals.push_back((1 / norm(nrm)) * nrm);
   }
   Tree tree(triangles.cbegin(), triangles.cend());
   tree.accelerate_distance_queries();
@@ -159,27 +154,27 @@ FibreField rule_based_fibres(const TetMesh& mesh, const FibreFieldOptions& o, co
   double phi_scale = 0;
   std::vector<Vec3> gphi(E), centres(E);
   for (std::size_t e = 0; e < E; ++e) {
-    gphi[e] = gradient(op.grads[e], mesh.tets[e], out.phi), phi_scale = std::max(phi_scale, norm3(gphi[e]));
+    gphi[e] = gradient(op.grads[e], mesh.tets[e], out.phi), phi_scale = std::max(phi_scale, norm(gphi[e]));
     centres[e] = {0, 0, 0};
     for (int v : mesh.tets[e])
       for (int d = 0; d < 3; ++d) centres[e][d] += 0.25 * mesh.nodes[static_cast<std::size_t>(v)][d];
   }
   nearest_skin(mesh, skin->tag, centres, out.skin_normal, out.skin_distance);
   for (std::size_t e = 0; e < E; ++e) {
-    Vec3 l = norm3(gphi[e]) > 1e-6 * phi_scale ? scaled(gphi[e], 1 / norm3(gphi[e])) : axis;
+    Vec3 l = norm(gphi[e]) > 1e-6 * phi_scale ? (1 / norm(gphi[e])) * gphi[e] : axis;
     const Vec3 nrm = out.skin_normal[e];
     // l in the plane of the nearest skin; where it is along n (a fingertip, the base), the axis, else any.
     for (const Vec3& candidate : {l, axis, Vec3{1, 0, 0}, Vec3{0, 1, 0}}) {
-      const Vec3 in_plane = sub(candidate, scaled(nrm, dot3(candidate, nrm)));
-      if (norm3(in_plane) > 1e-3) {
-        l = scaled(in_plane, 1 / norm3(in_plane));
+      const Vec3 in_plane = candidate - dot(candidate, nrm) * nrm;
+      if (norm(in_plane) > 1e-3) {
+        l = (1 / norm(in_plane)) * in_plane;
         break;
       }
     }
     // The circumferential direction: n x l, or any direction normal to l where n is undefined.
-    Vec3 circ = cross3(nrm, l);
-    if (norm3(circ) < 1e-3) circ = cross3(std::abs(l[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, l);
-    circ = scaled(circ, 1 / norm3(circ));
+    Vec3 circ = cross(nrm, l);
+    if (norm(circ) < 1e-3) circ = cross(std::abs(l[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, l);
+    circ = (1 / norm(circ)) * circ;
     out.direction[e] = l;
     for (int d = 0; d < 3; ++d) {
       out.fibre_1[e][d] = c * l[d] + s * circ[d];

@@ -11,14 +11,13 @@
 #include <map>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/vec3.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/mesher/fibres.hpp"
 
 using namespace tactus;
 
 namespace {
-
-double dot3(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // Keeps the tets `keep` selects by centroid and tags every boundary face of what is left "skin".
 TetMesh with_skin(TetMesh mesh, const std::function<bool(const Vec3&)>& keep) {
@@ -55,11 +54,11 @@ Invariants invariants(const mesher::FibreField& f, double angle_deg) {
   const double c2 = std::cos(2 * angle_deg * M_PI / 180);
   for (std::size_t e = 0; e < f.fibre_1.size(); ++e) {
     const Vec3 &a = f.fibre_1[e], &b = f.fibre_2[e], &n = f.skin_normal[e], &l = f.direction[e];
-    r.worst_unit = std::max({r.worst_unit, std::abs(dot3(a, a) - 1), std::abs(dot3(b, b) - 1)});
-    r.worst_angle = std::max(r.worst_angle, std::abs(dot3(a, b) - c2));
-    r.worst_in_plane = std::max({r.worst_in_plane, std::abs(dot3(a, n)), std::abs(dot3(b, n))});
-    const Vec3 s{a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-    r.worst_bisector = std::max(r.worst_bisector, std::abs(dot3(s, l) / std::sqrt(dot3(s, s)) - 1));
+    r.worst_unit = std::max({r.worst_unit, std::abs(dot(a, a) - 1), std::abs(dot(b, b) - 1)});
+    r.worst_angle = std::max(r.worst_angle, std::abs(dot(a, b) - c2));
+    r.worst_in_plane = std::max({r.worst_in_plane, std::abs(dot(a, n)), std::abs(dot(b, n))});
+    const Vec3 s = a + b;
+    r.worst_bisector = std::max(r.worst_bisector, std::abs(dot(s, l) / std::sqrt(dot(s, s)) - 1));
   }
   return r;
 }
