@@ -64,6 +64,17 @@ struct Hgo {
              "isochoric stretch sqrt(J4bar) = J^(-1/3) |F a| of the two families: the one the law acts on (load only above 1; hgo; 0 elsewhere)"},
             {"fibre_stress", 6, "Cauchy stress of the fibre terms alone (xx, yy, zz, xy, yz, xz; Pa; hgo; 0 elsewhere)"}};
   }
+  // A fibre's slope psi'(J4bar) = k1 d exp(k2 d^2), d = J4bar - 1, with e = exp(k2 d^2); false when
+  // it carries nothing: slack in compression (switch on J4bar, as FEBio), or k1 = 0 (its exp
+  // would overflow at large stretch and 0 * inf poison the stress with NaN).
+  TACTUS_KERNEL_INLINE bool fibre_slope(double J4bar, double& dpsi, double& e) const {
+    if (J4bar <= 1.0 || k1 == 0.0) return false;
+    const double d = J4bar - 1.0;
+    e = std::exp(k2 * d * d);
+    dpsi = k1 * d * e;
+    return true;
+  }
+
   // sigma_f = sum_a 2 psi'_a J^{-5/3} (F a (x) F a - J4_a / 3 I): the fibre terms of P pushed forward.
   void result_values(const Mat3& F, const double* data, double* out) const {
     const double J = F.determinant(), Jm13 = inv_cbrt(J);
@@ -73,8 +84,8 @@ struct Hgo {
       const double J4 = Fa.squaredNorm(), J4bar = Jm13 * Jm13 * J4;
       out[f] = std::sqrt(J4);
       out[2 + f] = std::sqrt(J4bar);
-      if (J4bar <= 1.0 || k1 == 0.0) continue;
-      const double d = J4bar - 1.0, dpsi = k1 * d * std::exp(k2 * d * d);
+      double dpsi = 0, e = 0;
+      if (!fibre_slope(J4bar, dpsi, e)) continue;
       sigma += (2.0 * dpsi * Jm13 * Jm13 / J) * (Fa * Fa.transpose() - J4 / 3.0 * Mat3::Identity());
     }
     const double voigt[6] = {sigma(0, 0), sigma(1, 1), sigma(2, 2), sigma(0, 1), sigma(1, 2), sigma(0, 2)};
@@ -101,12 +112,9 @@ struct Hgo {
       const Vec3d Fa = F * (*a);
       const double J4 = Fa.squaredNorm();
       const double J4bar = Jm23 * J4;
-      // Slack in compression (switch on J4bar, as FEBio); with k1 = 0 no fibre term at all (its
-      // exp(k2 d^2) would overflow at large stretch and 0 * inf poison the stress with NaN).
-      if (J4bar <= 1.0 || k1 == 0.0) continue;
+      double dpsi = 0, e = 0;  // dW/dJ4bar
+      if (!fibre_slope(J4bar, dpsi, e)) continue;
       const double d = J4bar - 1.0;
-      const double e = std::exp(k2 * d * d);
-      const double dpsi = k1 * d * e;                          // dW/dJ4bar
       const double d2psi = k1 * e * (1.0 + 2.0 * k2 * d * d);  // d2W/dJ4bar2
       s.P.noalias() += (2.0 * dpsi * Jm23) * Fa * a->transpose();
       cof_coeff -= 2.0 * dpsi * Jm23 * J4 / (3.0 * J);
