@@ -151,7 +151,9 @@ const SectionSpec& contact_section() {
   static const SectionSpec s{
       "contact",
       "[[contact]]: bi-potential Coulomb contact (paper §2.1), slave nodes of one body's surface against "
-      "another body's surface (master) or a rigid plane. The finer surface makes the better slave.",
+      "another body's surface (master) or a rigid plane. The finer surface makes the better slave. A master equal to the slave "
+      "(same body and surface) is self-contact: skin on skin, each node against the faces of the same surface that face it, "
+      "its own neighbourhood excluded (node_to_surface, one pass).",
       {typed("slave_body", ValueType::string, "", "body whose surface nodes are the slaves", true),
        typed("slave_surface", ValueType::string, "", "physical surface group of slave_body (e.g. skin)", true),
        typed("master_body", ValueType::string, "", "body owning the master surface (omit with plane)", false),
@@ -173,6 +175,11 @@ const SectionSpec& contact_solver_section() {
       {opt(number("tolerance", "", "stop when max |dr| <= tolerance * max |r| over the contact nodes", 0, true, 1, true), "1e-6"),
        opt(number("max_iterations", "", "iteration limit per step (reached: a warning, the run goes on)", 1, false, 1e6, false), "200"),
        opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false), "0.5"),
+       opt(number("verlet_skin", "",
+                  "node-to-surface search: candidate triangles are gathered within the band plus this skin (in mean master edge lengths) "
+                  "and kept until a node has moved half the skin (0: search every step)",
+                  0, false, 10, false),
+           "0.5"),
        opt(number("pressure_window", "s",
                   "the reported contact pressure is r_n / A averaged over an exponential window of max(this, 10 initial critical steps), "
                   "so an impact's peak does not grow like 1/dt",
@@ -691,12 +698,14 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
         if (c.master_body.empty() || c.master_surface.empty()) r.fail(path, "`master_body` and `master_surface` (or a rigid `plane`)", "missing");
         require_body(r, sc, c.master_body, path + ".master_body");
       }
-      if (!c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface)
-        r.fail(path, "a master surface other than the slave surface (self-contact of one surface is not supported yet)",
-               "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself");
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
       c.method = r.string(t, *spec.find("method"), path, "node_to_surface");
+      if (!c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface) {
+        const std::string what = "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself (self-contact)";
+        if (c.method == "mortar") r.fail(path + ".method", "node_to_surface for self-contact", what + " with mortar");
+        if (c.two_pass) r.fail(path + ".two_pass", "false for self-contact (every node of the surface is already a slave)", what + " with two_pass");
+      }
       if (c.method != "node_to_surface" && c.method != "mortar")
         r.fail(path + ".method", "\"node_to_surface\" or \"mortar\"", "\"" + c.method + "\"");
       if (c.method == "mortar" && c.plane)
@@ -736,6 +745,7 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     sc.contact_solver.max_iterations = static_cast<int>(r.number(t, *spec.find("max_iterations"), "contact_solver", 200));
     sc.contact_solver.search_factor = r.number(t, *spec.find("search_factor"), "contact_solver", 0.5);
     sc.contact_solver.pressure_window = r.number(t, *spec.find("pressure_window"), "contact_solver", 1e-5);
+    sc.contact_solver.verlet_skin = r.number(t, *spec.find("verlet_skin"), "contact_solver", 0.5);
   }
 }
 

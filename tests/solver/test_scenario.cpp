@@ -277,9 +277,13 @@ TEST_F(ScenarioFile, ContactOverlapAtStartIsReported) {
 }
 
 // Silently accepted before: a surface in contact with itself (no self-contact exists yet).
-TEST_F(ScenarioFile, ContactOfASurfaceWithItselfIsRefused) {
-  expect_error(replace(contact_scenario(0.0105, "master_surface = \"zmax\""), "master_body = \"tool\"", "master_body = \"pad\""),
-               {"contact[0]", "self-contact", "\"pad/zmax\" against itself"});
+// A surface against itself is self-contact (node to surface, one pass): mortar and two_pass are refused.
+TEST_F(ScenarioFile, SelfContactWithMortarOrTwoPassIsRefused) {
+  auto self = [&](const std::string& keys) {
+    return replace(contact_scenario(0.0105, "master_surface = \"zmax\"\n" + keys), "master_body = \"tool\"", "master_body = \"pad\"");
+  };
+  expect_error(self("method = \"mortar\""), {"contact[0].method", "self-contact", "\"pad/zmax\" against itself"});
+  expect_error(self("two_pass = true"), {"contact[0].two_pass", "self-contact"});
 }
 
 // Silently accepted before: a duplicated node used by tets (a crack in the mesh).

@@ -89,8 +89,11 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
     rows.compliance[k] = c * w;
   }
 
-  // Warm start: the previous step's reaction of the same slave node, projected on the new cone.
+  // Warm start: the previous step's reaction of the same slave node, projected on the new cone
+  // (a node with two rows, in a concave corner, keeps its first row's).
+  auto first_of_node = [&](std::size_t k) { return k == 0 || rows.pair[k - 1] != rows.pair[k] || rows.slave_index[k - 1] != rows.slave_index[k]; };
   for (std::size_t k = 0; k < K; ++k) {
+    if (!first_of_node(k)) continue;
     const std::size_t pi = static_cast<std::size_t>(rows.pair[k]);
     const double* prev = &last[pi][3 * static_cast<std::size_t>(rows.slave_index[k])];
     if (prev[0] == 0 && prev[1] == 0 && prev[2] == 0) continue;
@@ -132,6 +135,7 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
   }
   rep.iterations = std::min(it, in.settings->max_iterations);
   for (std::size_t k = 0; k < K; ++k) {
+    if (!first_of_node(k)) continue;
     double* prev = &last[static_cast<std::size_t>(rows.pair[k])][3 * static_cast<std::size_t>(rows.slave_index[k])];
     for (int d = 0; d < 3; ++d) prev[d] = rows.reaction[3 * k + d];
   }
@@ -156,15 +160,17 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
     rows.status[k] = norm(rt) < pair.friction * rn * (1 - 1e-6) ? ContactStatus::stick : ContactStatus::slip;
     ++rep.active;
     (rows.status[k] == ContactStatus::stick ? rep.sticking : rep.slipping)++;
-    for (int d = 0; d < 3; ++d) rep.force[d] += pair.report_sign * r[d];
+    if (!pair.self_contact)  // a self-contact reaction is internal to its body
+      for (int d = 0; d < 3; ++d) rep.force[d] += pair.report_sign * r[d];
     rep.normal_force += rn;
-    if (!in.per_pair) rep.area += rows.area[k];
+    if (!in.per_pair) rep.area += (pair.self_contact ? 0.5 : 1.0) * rows.area[k];  // both sides of a self-contact are slaves
     const double pressure = rn / rows.area[k];
     if (pressure > rep.peak_pressure) rep.peak_pressure = pressure, rep.peak_node = rows.slave(k);
     if (in.per_pair) {
       PairStepReport& p = (*in.per_pair)[static_cast<std::size_t>(rows.pair[k])];
       for (int d = 0; d < 3; ++d) p.force[d] += r[d];
-      p.normal_force += rn, p.area += rows.area[k], p.peak_pressure = std::max(p.peak_pressure, pressure), ++p.active;
+      p.normal_force += rn, p.area += (pair.self_contact ? 0.5 : 1.0) * rows.area[k], p.peak_pressure = std::max(p.peak_pressure, pressure),
+                                                                                      ++p.active;
     }
     const Vec3 u_new = relative_velocity(rows, k, v), u_old = relative_velocity(rows, k, in.v_old);
     const double un_new = dot(u_new, n), un_old = dot(u_old, n);

@@ -14,7 +14,8 @@
 namespace tactus::solver {
 
 ContactSolver::ContactSolver(const Model& model)
-    : model_(model), pairs_(model.contact_pairs), settings_(model.contact_settings), scratch_(std::make_unique<DetectionScratch>()) {
+    : model_(model), pairs_(model.contact_pairs), settings_(model.contact_settings), scratch_(pairs_.size()) {
+  for (std::size_t p = 0; p < pairs_.size(); ++p) scratch_[p].skin = settings_.verlet_skin * pairs_[p].search_scale;
   x_.resize(3 * model.num_nodes);
   for (const auto& p : pairs_) last_reaction_.emplace_back(3 * p.slave_nodes.size(), 0.0);
   pair_reports_.resize(pairs_.size());
@@ -34,8 +35,14 @@ void ContactSolver::detect(const double* u, double search_factor) {
   for (std::size_t i = 0; i < ndof; ++i) x_[i] = model_.X[i] + u[i];
   for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
     const ContactPair& p = pairs_[pi];
-    p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, *scratch_, rows_, threads_);
+    p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, scratch_[pi], rows_, threads_);
   }
+}
+
+ContactSolver::SearchCounts ContactSolver::search_counts() const {
+  SearchCounts c;
+  for (const DetectionScratch& s : scratch_) c.builds += s.builds, c.searches += s.searches;
+  return c;
 }
 
 void ContactSolver::check_initial_overlap(const double* u) const {

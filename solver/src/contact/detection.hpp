@@ -1,7 +1,8 @@
 #pragma once
 // Storage the master kinds reuse from step to step while they search (no allocation per step once
-// grown): a uniform grid over a deformable master's triangles, and per-slave results of the
-// parallel narrow phase.
+// grown), one per contact pair: a uniform grid over a deformable master's triangles, the Verlet
+// candidate lists of the node-to-surface search, and per-slave results of the parallel narrow
+// phase.
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -19,9 +20,23 @@ struct DetectionScratch {
     // The cell index along axis c of coordinate v, clamped to the grid.
     int cell_of(double v, int c) const { return std::clamp(static_cast<int>((v - lo[c]) / cell), 0, n[c] - 1); }
   } grid;
-  // Per slave node of the pair being searched: closest triangle (-1 none), weights, normal, gap.
-  std::vector<std::int32_t> slot_triangle;
-  std::vector<double> slot_data;  // 7 per slave: N (3), n (3), h
+  // Per slave node, two slots (the closest master face, and a second face in front of the node
+  // at a concave corner): triangle (-1 none), and N (3), n (3), h.
+  std::vector<std::int32_t> slot_triangle;  // 2 per slave
+  std::vector<double> slot_data;            // 2 x 7 per slave
+
+  // Verlet lists (Verlet 1967, as in molecular dynamics): the triangles within band + skin of each
+  // slave node when they were built stay the only candidates while no node of the pair has moved
+  // more than skin / 2 since (then no triangle can have come within band unseen).
+  double skin = 0;                                        // extra search distance, m (set by the contact solver; 0: search every step)
+  double built_band = -1;                                 // the band the lists were built for
+  std::vector<std::int32_t> involved;                     // the pair's slave and master nodes, sorted, unique
+  std::vector<double> x_built;                            // their positions at the last build, 3 each
+  std::vector<std::int32_t> candidate_start, candidates;  // per slave node, CSR
+  std::size_t builds = 0, searches = 0;                   // list builds, and steps searched
+
+  // Self-contact: each slave node's outward normal (area-weighted over its triangles), 3 each.
+  std::vector<double> slave_normal;
 };
 
 // A uniform grid over the triangles (3 node ids each, outward) at positions x, each triangle in

@@ -131,6 +131,13 @@ void set_master_surface(ContactPair& pair, const Model& m, const std::vector<std
   pair.search_scale = mean_edge(m, triangles);
 }
 
+void set_self_contact_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles, const std::string& where) {
+  pair.master = deformable_surface_master(outward_tet_faces(m, triangles, where), true);
+  pair.search_scale = mean_edge(m, triangles);
+  pair.self_contact = true;
+  set_slave_surface(pair, m, triangles);
+}
+
 void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_normal) {
   const double len = norm(outward_normal);
   pair.master = rigid_plane_master(point, {outward_normal[0] / len, outward_normal[1] / len, outward_normal[2] / len});
@@ -159,6 +166,16 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       continue;
     }
     const std::size_t mb = body_index(cs.master_body);
+    if (mb == sb && cs.master_surface == cs.slave_surface) {
+      ContactPair p;
+      p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " self-contact";
+      p.friction = cs.friction;
+      p.entry = static_cast<int>(k);
+      set_self_contact_surface(p, m, slave_tris, key + ".slave_surface");
+      log::verbose() << p.name << ": " << p.slave_nodes.size() << " nodes, " << p.master->describe();
+      m.contact_pairs.push_back(std::move(p));
+      continue;
+    }
     const auto master_tris = group_triangles(m, mb, cs.master_surface, file, key + ".master_surface");
     for (int pass = 0; pass < (cs.two_pass ? 2 : 1); ++pass) {
       ContactPair p;

@@ -48,6 +48,10 @@ struct ContactPair {
   // of theirs). `entry`: the pairs of one [[contact]] entry share it.
   double report_sign = 1;
   int entry = 0;
+  // Self-contact (slave and master the same surface): both sides of a touching fold are slaves, so
+  // the pair's area counts half of its pressing nodes' areas, and its force (internal to the
+  // body) is not added to the step's resultant.
+  bool self_contact = false;
 };
 
 // One directed pair's share of a step: force on its slave nodes, normal force, contact area
@@ -101,7 +105,10 @@ class ContactMaster {
 // Master kinds.
 std::shared_ptr<const ContactMaster> rigid_plane_master(const Vec3& point, const Vec3& outward_normal);
 // `triangles`: 3 internal node ids each, ordered so that (b - a) x (c - a) points out of the master body.
-std::shared_ptr<const ContactMaster> deformable_surface_master(std::vector<std::int32_t> triangles);
+// self_contact: the pair's slave surface is this same surface (skin on skin): a slave node's own
+// neighbourhood (the triangles touching it or its ring) is never its master, and a triangle is its
+// master only when the two face each other.
+std::shared_ptr<const ContactMaster> deformable_surface_master(std::vector<std::int32_t> triangles, bool self_contact = false);
 // The same surface as a mortar (segment-to-segment) master (contact/mortar.cpp): each slave node's
 // row carries the master nodes its tributary surface overlaps, weighted by the mortar integrals.
 std::shared_ptr<const ContactMaster> mortar_surface_master(std::vector<std::int32_t> triangles);
@@ -115,6 +122,9 @@ void set_slave_surface(ContactPair& pair, const Model& model, const std::vector<
 // triangle is not a face of any tet.
 void set_master_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles, const std::string& where,
                         bool mortar = false);
+// The slave surface of `pair` against itself (self-contact, node to surface): slave nodes and
+// areas as set_slave_surface, master as deformable_surface_master(..., true).
+void set_self_contact_surface(ContactPair& pair, const Model& model, const std::vector<std::array<int, 3>>& triangles, const std::string& where);
 void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_normal);
 // The triangles (internal node ids), each ordered so that (b - a) x (c - a) points out of the tet
 // it bounds; owners[t]: how many tets have triangle t as a face (0: none, it is kept as given;
@@ -187,6 +197,11 @@ class ContactSolver {
   // about I / tau whatever the step (r_n / A of one step is I / dtbar). 0: no averaging.
   void set_pressure_window(double tau) { pressure_window_ = tau; }
   double pressure_window() const { return pressure_window_; }
+  // Node-to-surface searches so far (pair-steps) and how many of them rebuilt the Verlet lists.
+  struct SearchCounts {
+    std::size_t searches = 0, builds = 0;
+  };
+  SearchCounts search_counts() const;
 
   // Point fields in the internal numbering: pressure (r_n / area), traction (r_t / area, 3),
   // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near).
@@ -209,7 +224,7 @@ class ContactSolver {
   std::vector<std::int32_t> slave_union_;                  // every pair's slave nodes, once
   void update_windowed_pressure(ContactStepReport& report, double dtbar);
   int threads_ = 1;
-  std::unique_ptr<DetectionScratch> scratch_;
+  std::vector<DetectionScratch> scratch_;  // one per pair (grids and Verlet lists)
 };
 
 }  // namespace tactus::solver

@@ -113,6 +113,9 @@ struct ContactSettings {
   double tolerance = 1e-6;  // stop when max |dr| <= tolerance * max |r| over the contact nodes
   int max_iterations = 200;
   double search_factor = 0.5;  // search distance and penetration band, in mean master edges
+  // Verlet skin of the node-to-surface search, in mean master edges: candidate triangles are
+  // gathered within band + skin and kept until a node has moved half the skin (0: every step).
+  double verlet_skin = 0.5;
   // The reported contact pressure is the per-step pressure r_n / A averaged over an exponential
   // window of tau = max(pressure_window, 10 x the initial critical step), s.
   double pressure_window = 1e-5;
