@@ -3,6 +3,7 @@
 // incline (stick and slide); Signorini and cone conditions checked on every step.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
@@ -457,4 +458,88 @@ TEST(Contact, ImpactPressureIsWindowedNotPerStep) {
   EXPECT_NEAR(coarse.plateau / p_ref, 1.0, 0.05);
   EXPECT_NEAR(fine.plateau / p_ref, 1.0, 0.05);
   EXPECT_NEAR(fine.peak / coarse.peak, 1.0, 0.05);
+}
+
+// Self-contact (skin on skin). Oracle: conservation laws and the Signorini conditions. A free
+// U-shaped strip (12 x 5 x 20 mm, arms and base 3 mm thick, a 6 mm slot, E = 1 MPa) whose arms are
+// swung towards each other (v_x up to 2.5 m/s at the tips) until their inner faces collide: its one
+// surface is slave and master of one pair. No interpenetration (every row's gap after the step
+// above -1e-3 of an element), momentum kept to 1e-10 of sum m|v|, energy balance within 1 % of the
+// initial energy; the arms must actually have pressed on each other.
+TEST(Contact, SelfContactOfAUShapedStrip) {
+  const double W = 0.012, D = 0.005, Hgt = 0.02, t = 0.003, E = 1e6, v = 2.5, h = 1.2e-3;
+  TetMesh mesh;
+  {
+    GmshSession session;
+    gmsh::model::add("u_strip");
+    const int outer = gmsh::model::occ::addBox(0, 0, 0, W, D, Hgt);
+    const int slot = gmsh::model::occ::addBox(t, -D, t, W - 2 * t, 3 * D, Hgt);
+    gmsh::vectorpair result;
+    std::vector<gmsh::vectorpair> map;
+    gmsh::model::occ::cut({{3, outer}}, {{3, slot}}, result, map);
+    gmsh::model::occ::synchronize();
+    gmsh::model::addPhysicalGroup(3, {result[0].second}, 1);
+    gmsh::model::setPhysicalName(3, 1, "strip");
+    gmsh::vectorpair faces;
+    gmsh::model::getBoundary(result, faces, false, false, false);
+    std::vector<int> tags;
+    for (const auto& f : faces) tags.push_back(f.second);
+    gmsh::model::addPhysicalGroup(2, tags, 20);
+    gmsh::model::setPhysicalName(2, 20, "surface");
+    gmsh::option::setNumber("Mesh.MeshSizeMin", h);
+    gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+    gmsh::option::setNumber("Mesh.RandomSeed", 1);
+    gmsh::model::mesh::generate(3);
+    mesh = tet_mesh_from_gmsh_model("u_strip");
+  }
+  Model model = build_model(mesh, linear_elastic(E, 0.3, 1000));
+  double mv = 0;  // sum m |v|
+  for (std::size_t i = 0; i < model.num_nodes; ++i) {
+    const double x = model.X[3 * i], z = model.X[3 * i + 2];
+    const double swing = std::clamp((z - t) / (Hgt - t), 0.0, 1.0) * (x < W / 2 ? 1.0 : -1.0);
+    model.initial_velocity[3 * i] = v * swing;
+    mv += model.mass[i] * std::abs(v * swing);
+  }
+  ContactPair self;
+  self.name = "strip self-contact";
+  set_self_contact_surface(self, model, group_faces(model, 20), "strip surface");
+  model.contact_pairs.push_back(self);
+  model.contact_settings.tolerance = 1e-10;
+  model.contact_settings.max_iterations = 1000;
+  RunSpec run = run_until(4e-3);
+  run.threads = 1;
+  ExplicitSolver solver(model, run, DampingSpec{});
+  const double E0 = solver.energies().initial;
+  double worst_momentum = 0, peak_force = 0, worst_balance = 0, t_first = -1;
+  Vec3 P0{0, 0, 0};
+  for (std::size_t i = 0; i < model.num_nodes; ++i)  // (the unstructured mesh is not symmetric: P0 is not exactly 0)
+    for (int d = 0; d < 3; ++d) P0[d] += model.mass[i] * model.initial_velocity[3 * i + d];
+  std::size_t most_rows = 0;
+  SignoriniCheck sig;
+  while (true) {
+    solver.advance_velocity();
+    const auto& vel = solver.half_step_velocity();
+    Vec3 P{0, 0, 0};
+    for (std::size_t i = 0; i < model.num_nodes; ++i)
+      for (int d = 0; d < 3; ++d) P[d] += model.mass[i] * vel[3 * i + d];
+    worst_momentum = std::max(worst_momentum, norm(P - P0) / mv);
+    const ContactStepReport& r = solver.contact_report();
+    if (r.normal_force > 0 && t_first < 0) t_first = solver.time();
+    peak_force = std::max(peak_force, r.normal_force);
+    most_rows = std::max(most_rows, r.active);
+    worst_balance = std::max(worst_balance, std::abs(solver.energies().balance_error()) / E0);
+    check_signorini(solver, sig, h);
+    if (solver.finished()) break;
+    solver.advance_position();
+  }
+  std::printf(
+      "self-contact U strip: %zu tets, %zu steps; first touch %.3e s, peak normal force %.3f N, most pressing nodes %zu; momentum %.2e of "
+      "sum m|v|, energy balance %.2e of E0, deepest gap after a step %.2e of an element\n",
+      model.num_elements, solver.step_index(), t_first, peak_force, most_rows, worst_momentum, worst_balance, sig.penetration);
+  EXPECT_GT(t_first, 0);
+  EXPECT_GT(most_rows, 10u);
+  EXPECT_LE(worst_momentum, 1e-10);
+  EXPECT_LE(worst_balance, 0.01);
+  EXPECT_LE(sig.adhesive, 1e-12);
+  EXPECT_LE(sig.penetration, 1e-3);
 }

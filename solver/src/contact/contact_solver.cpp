@@ -24,15 +24,24 @@ ContactSolver::ContactSolver(const Model& model)
   for (const ContactPair& p : pairs_) slave_union_.insert(slave_union_.end(), p.slave_nodes.begin(), p.slave_nodes.end());
   std::sort(slave_union_.begin(), slave_union_.end());
   slave_union_.erase(std::unique(slave_union_.begin(), slave_union_.end()), slave_union_.end());
+  contact_nodes_ = slave_union_;
+  for (const ContactPair& p : pairs_) contact_nodes_.insert(contact_nodes_.end(), p.master->triangles().begin(), p.master->triangles().end());
+  std::sort(contact_nodes_.begin(), contact_nodes_.end());
+  contact_nodes_.erase(std::unique(contact_nodes_.begin(), contact_nodes_.end()), contact_nodes_.end());
 }
 
 ContactSolver::~ContactSolver() = default;
 
 void ContactSolver::detect(const double* u, double search_factor) {
   rows_.clear();
-  const std::size_t ndof = 3 * model_.num_nodes;
-#pragma omp parallel for num_threads(threads_) schedule(static) if (ndof > 30000)
-  for (std::size_t i = 0; i < ndof; ++i) x_[i] = model_.X[i] + u[i];
+  // Current positions of the nodes the masters read (slave nodes, master triangles' vertices) only.
+  const std::size_t n = contact_nodes_.size();
+#pragma omp parallel for num_threads(threads_) schedule(static) if (n > 30000)
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t d = 0; d < 3; ++d) {
+      const std::size_t dof = 3 * static_cast<std::size_t>(contact_nodes_[i]) + d;
+      x_[dof] = model_.X[dof] + u[dof];
+    }
   for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
     const ContactPair& p = pairs_[pi];
     p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, scratch_[pi], rows_, threads_);

@@ -82,7 +82,7 @@ class DeformableSurface final : public ContactMaster {
  private:
   bool lists_valid(const double* x, double band, DetectionScratch& s, int threads) const;
   void build_lists(const ContactPair& p, const double* x, double band, DetectionScratch& s, int threads) const;
-  void update_normals(const ContactPair& p, const double* x, DetectionScratch& s, int threads) const;
+  void update_normals(const double* x, DetectionScratch& s, int threads) const;
   bool in_ring(std::size_t slave, const std::int32_t* tri) const;
 
   std::vector<std::int32_t> triangles_;  // 3 per triangle, outward
@@ -93,7 +93,8 @@ class DeformableSurface final : public ContactMaster {
   // shares a triangle with, CSR by slave index) is its own neighbourhood: a triangle touching it
   // is never its master. triangle_slaves_: each triangle's vertices as slave indices.
   bool self_ = false;
-  std::vector<std::int32_t> ring_start_, ring_, triangle_slaves_;
+  std::vector<std::int32_t> ring_start_, ring_, triangle_slaves_, node_triangle_start_, node_triangles_;
+  Vec3 node_normal(std::size_t slave, const double* triangle_normals) const;
 };
 
 // How far beyond an open edge of the master surface a slave node still counts as over it, in
@@ -107,6 +108,10 @@ constexpr double kCornerCosine = 0.866;
 // Self-contact: a triangle can be the master of a slave node only when they face each other
 // (normals more than 120 degrees apart), as the two sides of a fold or two touching fingers do.
 constexpr double kFacingCosine = -0.5;
+// Self-contact: how deep behind a facing triangle a slave node may be and still be in contact with
+// it, in search scales. A node on the back of a finger faces the front of the same finger from
+// behind, a whole thickness deep; a node really in contact is held at the surface each step.
+constexpr double kSelfContactDepth = 0.25;
 
 DeformableSurface::DeformableSurface(std::vector<std::int32_t> triangles, bool self_contact) : triangles_(std::move(triangles)), self_(self_contact) {
   const std::size_t T = triangles_.size() / 3;
@@ -142,6 +147,26 @@ DeformableSurface::DeformableSurface(std::vector<std::int32_t> triangles, bool s
   ring_start_.assign(nodes.size() + 1, 0);
   for (const auto& [k, v] : ring) ++ring_start_[static_cast<std::size_t>(k) + 1], ring_.push_back(v);
   for (std::size_t k = 0; k < nodes.size(); ++k) ring_start_[k + 1] += ring_start_[k];
+  node_triangle_start_.assign(nodes.size() + 1, 0);
+  for (std::int32_t k : triangle_slaves_) ++node_triangle_start_[static_cast<std::size_t>(k) + 1];
+  for (std::size_t k = 0; k < nodes.size(); ++k) node_triangle_start_[k + 1] += node_triangle_start_[k];
+  node_triangles_.resize(triangle_slaves_.size());
+  std::vector<std::int32_t> at(node_triangle_start_.begin(), node_triangle_start_.end() - 1);
+  for (std::size_t i = 0; i < triangle_slaves_.size(); ++i)
+    node_triangles_[static_cast<std::size_t>(at[static_cast<std::size_t>(triangle_slaves_[i])]++)] = static_cast<std::int32_t>(i / 3);
+}
+
+// A self-contact slave node's outward normal: its triangles' normals weighted by their areas,
+// from the triangle normals of this step (4 per triangle: n, 1 / (2 area)).
+Vec3 DeformableSurface::node_normal(std::size_t slave, const double* tn) const {
+  Vec3 n{0, 0, 0};
+  for (auto i = node_triangle_start_[slave]; i < node_triangle_start_[slave + 1]; ++i) {
+    const double* t = tn + 4 * static_cast<std::size_t>(node_triangles_[static_cast<std::size_t>(i)]);
+    const double twice_area = t[3] > 0 ? 1.0 / t[3] : 0.0;
+    for (int c = 0; c < 3; ++c) n[c] += twice_area * t[c];
+  }
+  const double l = norm(n);
+  return l > 0 ? Vec3{n[0] / l, n[1] / l, n[2] / l} : n;
 }
 
 bool DeformableSurface::in_ring(std::size_t slave, const std::int32_t* tri) const {
@@ -259,6 +284,14 @@ void DeformableSurface::build_lists(const ContactPair& p, const double* x, doubl
         const double a = x[3 * tri[0] + c], b = x[3 * tri[1] + c], d = x[3 * tri[2] + c];
         near = xs[c] >= std::min({a, b, d}) - reach && xs[c] <= std::max({a, b, d}) + reach;
       }
+      // Self-contact: the node's own neighbourhood never, and faces turned towards the node's
+      // side by more than 60 degrees past the facing limit not (no part turns that far while its
+      // nodes move half the skin).
+      if (near && self_) {
+        const double* tn = &g.normal[4 * static_cast<std::size_t>(t)];
+        const Vec3 sn = node_normal(k, g.normal.data());
+        near = tn[0] * sn[0] + tn[1] * sn[1] + tn[2] * sn[2] < kFacingCosine + 1.0 && !in_ring(k, tri);
+      }
       if (near) take(t);
     }
   };
@@ -273,16 +306,27 @@ void DeformableSurface::build_lists(const ContactPair& p, const double* x, doubl
     std::int32_t at = start[k];
     visit(k, [&](std::int32_t t) { out[at++] = t; });
   }
+  // The triangles whose normals later steps need: the candidates, and for self-contact the
+  // triangles around each slave node that has candidates (its own normal).
+  std::vector<std::int32_t>& active = s.active_triangles;
+  active.assign(s.candidates.begin(), s.candidates.end());
+  if (self_)
+    for (std::size_t k = 0; k < S; ++k)
+      if (start[k] < start[k + 1])
+        for (auto i = node_triangle_start_[k]; i < node_triangle_start_[k + 1]; ++i) active.push_back(node_triangles_[static_cast<std::size_t>(i)]);
+  std::sort(active.begin(), active.end());
+  active.erase(std::unique(active.begin(), active.end()), active.end());
 }
 
-// Unit outward normals of the triangles (4 per triangle: n, 1 / (2 area); 0 if degenerate) and,
-// for self-contact, of the slave nodes (area-weighted over their triangles).
-void DeformableSurface::update_normals(const ContactPair& p, const double* x, DetectionScratch& s, int threads) const {
-  const std::size_t T = triangles_.size() / 3;
-  std::vector<double>& tn = s.grid.normal;
-  tn.resize(4 * T);
-#pragma omp parallel for num_threads(threads) schedule(static) if (T > 20000)
-  for (std::size_t t = 0; t < T; ++t) {
+// Unit outward normals (4 per triangle: n, 1 / (2 area); 0 if degenerate) of the triangles the
+// lists use; the others' stay as the last build left them.
+void DeformableSurface::update_normals(const double* x, DetectionScratch& s, int threads) const {
+  double* tn = s.grid.normal.data();
+  const std::size_t A = s.active_triangles.size();
+  const std::int32_t* active = s.active_triangles.data();
+#pragma omp parallel for num_threads(threads) schedule(static) if (A > 20000)
+  for (std::size_t i = 0; i < A; ++i) {
+    const auto t = static_cast<std::size_t>(active[i]);
     const std::int32_t* tri = &triangles_[3 * t];
     const double* x0 = x + 3 * tri[0];
     const Vec3 nn = cross(sub(x + 3 * tri[1], x0), sub(x + 3 * tri[2], x0));
@@ -291,26 +335,15 @@ void DeformableSurface::update_normals(const ContactPair& p, const double* x, De
     for (int c = 0; c < 3; ++c) tn[4 * t + c] = nn[c] * inv;
     tn[4 * t + 3] = inv;
   }
-  if (!self_) return;
-  std::vector<double>& sn = s.slave_normal;
-  sn.assign(3 * p.slave_nodes.size(), 0.0);
-  for (std::size_t t = 0; t < T; ++t) {
-    const double twice_area = tn[4 * t + 3] > 0 ? 1.0 / tn[4 * t + 3] : 0.0;
-    for (std::size_t a = 0; a < 3; ++a)
-      for (std::size_t c = 0; c < 3; ++c) sn[3 * static_cast<std::size_t>(triangle_slaves_[3 * t + a]) + c] += twice_area * tn[4 * t + c];
-  }
-  for (std::size_t k = 0; k < p.slave_nodes.size(); ++k) {
-    const double l = norm({sn[3 * k], sn[3 * k + 1], sn[3 * k + 2]});
-    if (l > 0)
-      for (std::size_t c = 0; c < 3; ++c) sn[3 * k + c] /= l;
-  }
 }
 
 void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
                                int threads) const {
   ++scratch.searches;
-  if (!lists_valid(x, band, scratch, threads)) build_lists(p, x, band, scratch, threads);
-  update_normals(p, x, scratch, threads);
+  if (lists_valid(x, band, scratch, threads))
+    update_normals(x, scratch, threads);
+  else
+    build_lists(p, x, band, scratch, threads);  // (the grid computes every triangle's normal)
   const std::size_t S = p.slave_nodes.size();
   scratch.slot_triangle.assign(2 * S, -1);
   scratch.slot_data.resize(14 * S);
@@ -319,10 +352,10 @@ void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const doub
   const std::int32_t* cand_start = scratch.candidate_start.data();
   const std::int32_t* cand = scratch.candidates.data();
   const double* tnormal = scratch.grid.normal.data();
-  const double* snormal = self_ ? scratch.slave_normal.data() : nullptr;
+  const double self_depth = kSelfContactDepth * p.search_scale;
   const double open_reach = kOpenEdgeReach * p.search_scale, tie = 1e-12 * p.search_scale * p.search_scale;
   // Narrow phase per slave node (independent: parallel); rows are gathered in slave order.
-#pragma omp parallel for num_threads(threads) schedule(static) if (S > 2000)
+#pragma omp parallel for num_threads(threads) schedule(static) if (S > 20000)
   for (std::size_t k = 0; k < S; ++k) {
     const std::int32_t s = p.slave_nodes[k];
     const double* xs = x + 3 * s;
@@ -330,6 +363,8 @@ void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const doub
     // edge or corner) the face the node is most in front of.
     double best_d2 = std::numeric_limits<double>::infinity(), best_h = 0;
     double* out = slot + 14 * k;
+    if (cand_start[k] == cand_start[k + 1]) continue;
+    const Vec3 sn = self_ ? node_normal(k, tnormal) : Vec3{0, 0, 0};
     for (std::int32_t it = cand_start[k]; it < cand_start[k + 1]; ++it) {
       const std::int32_t t = cand[it];
       const std::int32_t* tri = &triangles_[3 * static_cast<std::size_t>(t)];
@@ -337,18 +372,22 @@ void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const doub
       const double* tn = tnormal + 4 * static_cast<std::size_t>(t);
       if (tn[3] == 0) continue;  // degenerate triangle
       const Vec3 n{tn[0], tn[1], tn[2]};
-      if (self_ && (dot(n, {snormal[3 * k], snormal[3 * k + 1], snormal[3 * k + 2]}) > kFacingCosine || in_ring(k, tri))) continue;
+      if (self_ && (dot(n, sn) > kFacingCosine || in_ring(k, tri))) continue;
       const double *a = x + 3 * tri[0], *b = x + 3 * tri[1], *c = x + 3 * tri[2];
       const double h = dot(sub(xs, a), n);
-      if (h > band || h < -band) continue;
+      if (h > band || h < (self_ ? -std::min(band, self_depth) : -band)) continue;
       const std::array<double, 3> w = closest_on_triangle(xs, a, b, c);
       const Vec3 d{xs[0] - (w[0] * a[0] + w[1] * b[0] + w[2] * c[0]), xs[1] - (w[0] * a[1] + w[1] * b[1] + w[2] * c[1]),
                    xs[2] - (w[0] * a[2] + w[1] * b[2] + w[2] * c[2])};
       const double d2 = dot(d, d), lateral = std::sqrt(std::max(0.0, d2 - h * h));
-      // On an open edge (its opposite vertex's weight 0) only a little reach beyond the surface.
+      // Beyond an edge or vertex of the triangle: in front of a convex edge or corner (the wedge
+      // between its faces) up to the band; beyond an open edge of the surface (its opposite vertex's
+      // weight 0), or behind the plane, only a little: a node that has sunk in lies under a face
+      // (it came through one), and one behind a ridge of a thin part is not in contact with its
+      // far side.
       const unsigned open = open_edges_[static_cast<std::size_t>(t)];
       const bool at_open_edge = ((open & 1u) && w[2] == 0) || ((open & 2u) && w[0] == 0) || ((open & 4u) && w[1] == 0);
-      if (lateral > (at_open_edge ? open_reach : band)) continue;
+      if (lateral > (at_open_edge || h < 0 ? open_reach : band)) continue;
       if (d2 > best_d2 + tie || (d2 >= best_d2 - tie && h <= best_h)) continue;
       best_d2 = d2, best_h = h;
       slot_t[2 * k] = t;
@@ -366,7 +405,7 @@ void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const doub
       if (t == slot_t[2 * k] || tn[3] == 0 || tri[0] == s || tri[1] == s || tri[2] == s) continue;
       const Vec3 n{tn[0], tn[1], tn[2]};
       if (dot(n, n0) > kCornerCosine) continue;
-      if (self_ && (dot(n, {snormal[3 * k], snormal[3 * k + 1], snormal[3 * k + 2]}) > kFacingCosine || in_ring(k, tri))) continue;
+      if (self_ && (dot(n, sn) > kFacingCosine || in_ring(k, tri))) continue;
       const double *a = x + 3 * tri[0], *b = x + 3 * tri[1], *c = x + 3 * tri[2];
       const double h = dot(sub(xs, a), n);
       if (h < 0 || h > band || h >= best2) continue;

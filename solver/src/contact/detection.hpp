@@ -33,10 +33,8 @@ struct DetectionScratch {
   std::vector<std::int32_t> involved;                     // the pair's slave and master nodes, sorted, unique
   std::vector<double> x_built;                            // their positions at the last build, 3 each
   std::vector<std::int32_t> candidate_start, candidates;  // per slave node, CSR
+  std::vector<std::int32_t> active_triangles;             // the triangles whose normals the lists need, sorted
   std::size_t builds = 0, searches = 0;                   // list builds, and steps searched
-
-  // Self-contact: each slave node's outward normal (area-weighted over its triangles), 3 each.
-  std::vector<double> slave_normal;
 };
 
 // A uniform grid over the triangles (3 node ids each, outward) at positions x, each triangle in

@@ -10,7 +10,8 @@ namespace tactus::solver {
 
 namespace {
 
-nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPeaks& peaks, double solver_window) {
+nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPeaks& peaks, double solver_window,
+                            const ContactSolver::SearchCounts& search) {
   nlohmann::json pairs = nlohmann::json::array();
   for (std::size_t k = 0; k < model.contact_pairs.size(); ++k) {
     const ContactPair& p = model.contact_pairs[k];
@@ -36,6 +37,7 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
         {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
       {"peak_step_pressure", {{"value", peaks.step_pressure}, {"time", peaks.step_pressure_time}}},
       {"pressure_window", solver_window},
+      {"search", {{"verlet_skin", sc.contact_solver.verlet_skin}, {"searches", search.searches}, {"list_builds", search.builds}}},
       {"uzawa",
        {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations}, {"unconverged_steps", peaks.unconverged_steps}}}};
 }
@@ -127,7 +129,8 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   nlohmann::json vm = nlohmann::json::object();
   for (std::size_t b = 0; b < model.blocks.size(); ++b) vm[model.blocks[b].name] = summary.von_mises_peak[b];
   j[k::peak_von_mises] = vm;
-  if (!model.contact_pairs.empty()) j[k::contact] = contact_json(sc, model, peaks, solver.contact().pressure_window());
+  if (!model.contact_pairs.empty())
+    j[k::contact] = contact_json(sc, model, peaks, solver.contact().pressure_window(), solver.contact().search_counts());
   j[k::reactions] = reactions_json(model, solver, peaks);
   if (solver.mass_scaling()) {
     nlohmann::json bodies = nlohmann::json::object();

@@ -214,7 +214,8 @@ class ContactSolver {
   std::vector<ContactPair> pairs_;
   ContactSettings settings_;
   ContactRows rows_;
-  std::vector<double> x_;  // current positions of all nodes (filled per step)
+  std::vector<double> x_;                    // current positions, filled per step at contact_nodes_ only
+  std::vector<std::int32_t> contact_nodes_;  // every pair's slave nodes and master vertices, once
   // Reactions of the previous step per pair and slave (3 each): the Uzawa iterations start from
   // them (projected on the new cone), so a lasting contact converges in one or two sweeps.
   std::vector<std::vector<double>> last_reaction_;
