@@ -18,6 +18,7 @@
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "temp_dir.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
@@ -542,4 +543,77 @@ TEST(Contact, SelfContactOfAUShapedStrip) {
   EXPECT_LE(worst_balance, 0.01);
   EXPECT_LE(sig.adhesive, 1e-12);
   EXPECT_LE(sig.penetration, 1e-3);
+}
+
+// Edges and corners. Oracle: the Signorini conditions and the energy balance. An elastic sphere
+// (R = 4 mm, 1 mm elements) pressed on a block's top by gravity (100 m/s^2) slides diagonally
+// (0.57 m/s, frictionless) off the top over the block's corner, where the top and two side faces
+// (one master surface) meet at convex edges. Two passes: the block's nodes (its corner and edges)
+// against the sphere too. No slave node's gap after a step below -1e-3 of an element (block
+// corner and edge nodes included, through the second pass), energy balance within 0.5 % of the
+// sphere's kinetic energy plus the work of gravity; the sphere must have left the top.
+TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlock) {
+  testkit::TempDir dir;
+  const double R = 0.004, h = 1e-3, B = 0.02, Hb = 0.01, E = 1e6;
+  TetMesh block = samples::make_box_mesh(10, 10, 5, B, B, Hb);
+  block.groups.push_back({2, 20, "surface"});  // the whole boundary as one master surface
+  for (std::size_t t = 0, n = block.triangles.size(); t < n; ++t) block.triangles.push_back(block.triangles[t]), block.triangle_group.push_back(20);
+  write_msh(dir.path() / "block.msh", block);
+  write_msh(dir.path() / "sphere.msh", graded_sphere(R, {0.014, 0.014, Hb + 5e-5}, h, h, 1e-3));
+  Scenario sc;
+  sc.file = dir.path() / "edge.toml";
+  sc.run.end_time = 0.03;
+  sc.run.gravity = {0, 0, -100};
+  sc.run.threads = 1;
+  sc.materials["m"] = MaterialInstance{"m", "linear_elastic", {{{"E", E}, {"nu", 0.3}, {"density", 1000}}, {}}};
+  for (const char* name : {"block", "sphere"}) {
+    BodySpec b;
+    b.name = name;
+    b.mesh = dir.path() / (std::string(name) + ".msh");
+    b.materials["*"] = "m";
+    if (b.name == "sphere") b.initial_velocity = {0.4, 0.4, 0};
+    sc.bodies.push_back(b);
+  }
+  BoundarySpec base;
+  base.body = "block", base.group = "zmin", base.type = "fixed", base.components = {true, true, true}, base.name = "base";
+  sc.boundaries.push_back(base);
+  ContactSpec c;
+  c.slave_body = "sphere", c.slave_surface = "surface", c.master_body = "block", c.master_surface = "surface", c.two_pass = true;
+  sc.contacts.push_back(c);
+  sc.contact_solver.tolerance = 1e-10;
+  sc.contact_solver.max_iterations = 1000;
+  const Model m = build_model(sc);
+  ExplicitSolver solver(m, sc.run, sc.damping);
+  SignoriniCheck sig;
+  double worst_balance = 0, scale = 0;
+  std::size_t steps_in_contact = 0;
+  while (true) {
+    solver.advance_velocity();
+    const Energies& en = solver.energies();
+    scale = std::max({scale, en.kinetic, std::abs(en.external_work)});
+    worst_balance = std::max(worst_balance, std::abs(en.balance_error()));
+    if (solver.contact_report().active > 0) ++steps_in_contact;
+    check_signorini(solver, sig, h);
+    if (solver.finished()) break;
+    solver.advance_position();
+  }
+  // The sphere's centre at the end (its nodes' mean).
+  Vec3 centre{0, 0, 0};
+  const BodyRange& sphere = m.bodies[1];
+  const std::size_t count = sphere.node_end - sphere.node_begin;
+  for (std::size_t i = sphere.node_begin; i < sphere.node_end; ++i) {
+    const std::size_t node = m.node_of_input[i];
+    for (int d = 0; d < 3; ++d) centre[d] += (m.X[3 * node + d] + solver.displacement()[3 * node + d]) / static_cast<double>(count);
+  }
+  std::printf(
+      "sphere over a block's corner: %zu tets, %zu steps, %zu in contact; centre at the end (%.2f, %.2f, %.2f) mm; deepest gap after a "
+      "step %.2e of an element; energy balance %.2e of the energy scale %.3e J\n",
+      m.num_elements, solver.step_index(), steps_in_contact, centre[0] * 1e3, centre[1] * 1e3, centre[2] * 1e3, sig.penetration,
+      worst_balance / scale, scale);
+  EXPECT_GT(steps_in_contact, 100u);
+  EXPECT_GT(centre[0], B);  // off the top, past the corner
+  EXPECT_LT(centre[2], Hb + R - 1e-3);
+  EXPECT_LE(sig.adhesive, 1e-12);
+  EXPECT_LE(sig.penetration, 1e-3);
+  EXPECT_LE(worst_balance / scale, 0.005);
 }
