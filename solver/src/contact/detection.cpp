@@ -69,6 +69,17 @@ std::array<double, 3> closest_on_triangle(const double* p, const double* a, cons
   return {1 - v - w, v, w};
 }
 
+// The unit outward normal of triangle `tri` at positions x, and 1 / (2 area) (all 0 if degenerate),
+// into out[0..4).
+void store_triangle_normal(const std::int32_t* tri, const double* x, double* out) {
+  const double* x0 = x + 3 * tri[0];
+  const Vec3 nn = cross(sub(x + 3 * tri[1], x0), sub(x + 3 * tri[2], x0));
+  const double twice_area = norm(nn);
+  const double inv = twice_area > 0 ? 1.0 / twice_area : 0.0;
+  for (int c = 0; c < 3; ++c) out[c] = nn[c] * inv;
+  out[3] = inv;
+}
+
 class DeformableSurface final : public ContactMaster {
  public:
   DeformableSurface(std::vector<std::int32_t> triangles, bool self_contact);
@@ -205,13 +216,7 @@ void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double sca
     }
     auto& bx = g.box[t];
     for (int c = 0; c < 3; ++c) bx[c] = g.cell_of(a[c] - margin, c), bx[3 + c] = g.cell_of(b[c] + margin, c);
-    const std::int32_t* tri = &triangles_[3 * t];
-    const double* x0 = x + 3 * tri[0];
-    const Vec3 nn = cross(sub(x + 3 * tri[1], x0), sub(x + 3 * tri[2], x0));
-    const double twice_area = norm(nn);
-    const double inv = twice_area > 0 ? 1.0 / twice_area : 0.0;
-    for (int c = 0; c < 3; ++c) g.normal[4 * t + c] = nn[c] * inv;
-    g.normal[4 * t + 3] = inv;
+    store_triangle_normal(&triangles_[3 * t], x, &g.normal[4 * t]);
     for (int k = bx[2]; k <= bx[5]; ++k)
       for (int j = bx[1]; j <= bx[4]; ++j)
         for (int i = bx[0]; i <= bx[3]; ++i) ++g.count[(static_cast<std::size_t>(k) * g.n[1] + j) * g.n[0] + i + 1];
@@ -268,29 +273,30 @@ void DeformableSurface::build_lists(const ContactPair& p, const double* x, doubl
   ++s.builds;
   const std::size_t S = p.slave_nodes.size();
   s.candidate_start.assign(S + 1, 0);
+  // Never a candidate: a triangle of the node itself, and for self-contact one touching its ring
+  // (both fixed by the topology) or one turned towards the node's side by more than 60 degrees past
+  // the facing limit (no part turns that far while its nodes move half the skin).
   auto visit = [&](std::size_t k, auto&& take) {
-    const double* xs = x + 3 * p.slave_nodes[k];
+    const std::int32_t node = p.slave_nodes[k];
+    const double* xs = x + 3 * node;
     std::size_t cell = 0;
     for (int c = 2; c >= 0; --c) {
       const double f = (xs[c] - g.lo[c]) / g.cell;
       if (!(f >= 0 && f < g.n[c])) return;
       cell = cell * static_cast<std::size_t>(g.n[c]) + static_cast<std::size_t>(f);
     }
+    const Vec3 sn = self_ ? node_normal(k, g.normal.data()) : Vec3{0, 0, 0};
     for (std::int32_t it = g.count[cell]; it < g.start[cell]; ++it) {
       const std::int32_t t = g.items[static_cast<std::size_t>(it)];
       const std::int32_t* tri = &triangles_[3 * static_cast<std::size_t>(t)];
-      bool near = true;
+      bool near = self_ ? !in_ring(k, tri) : tri[0] != node && tri[1] != node && tri[2] != node;
       for (int c = 0; c < 3 && near; ++c) {
         const double a = x[3 * tri[0] + c], b = x[3 * tri[1] + c], d = x[3 * tri[2] + c];
         near = xs[c] >= std::min({a, b, d}) - reach && xs[c] <= std::max({a, b, d}) + reach;
       }
-      // Self-contact: the node's own neighbourhood never, and faces turned towards the node's
-      // side by more than 60 degrees past the facing limit not (no part turns that far while its
-      // nodes move half the skin).
       if (near && self_) {
         const double* tn = &g.normal[4 * static_cast<std::size_t>(t)];
-        const Vec3 sn = node_normal(k, g.normal.data());
-        near = tn[0] * sn[0] + tn[1] * sn[1] + tn[2] * sn[2] < kFacingCosine + 1.0 && !in_ring(k, tri);
+        near = dot({tn[0], tn[1], tn[2]}, sn) < kFacingCosine + 1.0;
       }
       if (near) take(t);
     }
@@ -327,13 +333,7 @@ void DeformableSurface::update_normals(const double* x, DetectionScratch& s, int
 #pragma omp parallel for num_threads(threads) schedule(static) if (A > 20000)
   for (std::size_t i = 0; i < A; ++i) {
     const auto t = static_cast<std::size_t>(active[i]);
-    const std::int32_t* tri = &triangles_[3 * t];
-    const double* x0 = x + 3 * tri[0];
-    const Vec3 nn = cross(sub(x + 3 * tri[1], x0), sub(x + 3 * tri[2], x0));
-    const double twice_area = norm(nn);
-    const double inv = twice_area > 0 ? 1.0 / twice_area : 0.0;
-    for (int c = 0; c < 3; ++c) tn[4 * t + c] = nn[c] * inv;
-    tn[4 * t + 3] = inv;
+    store_triangle_normal(&triangles_[3 * t], x, tn + 4 * t);
   }
 }
 
@@ -368,11 +368,10 @@ void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const doub
     for (std::int32_t it = cand_start[k]; it < cand_start[k + 1]; ++it) {
       const std::int32_t t = cand[it];
       const std::int32_t* tri = &triangles_[3 * static_cast<std::size_t>(t)];
-      if (tri[0] == s || tri[1] == s || tri[2] == s) continue;
       const double* tn = tnormal + 4 * static_cast<std::size_t>(t);
       if (tn[3] == 0) continue;  // degenerate triangle
       const Vec3 n{tn[0], tn[1], tn[2]};
-      if (self_ && (dot(n, sn) > kFacingCosine || in_ring(k, tri))) continue;
+      if (self_ && dot(n, sn) > kFacingCosine) continue;
       const double *a = x + 3 * tri[0], *b = x + 3 * tri[1], *c = x + 3 * tri[2];
       const double h = dot(sub(xs, a), n);
       if (h > band || h < (self_ ? -std::min(band, self_depth) : -band)) continue;
@@ -402,10 +401,9 @@ void DeformableSurface::detect(const ContactPair& p, std::int32_t pi, const doub
       const std::int32_t t = cand[it];
       const std::int32_t* tri = &triangles_[3 * static_cast<std::size_t>(t)];
       const double* tn = tnormal + 4 * static_cast<std::size_t>(t);
-      if (t == slot_t[2 * k] || tn[3] == 0 || tri[0] == s || tri[1] == s || tri[2] == s) continue;
+      if (t == slot_t[2 * k] || tn[3] == 0) continue;
       const Vec3 n{tn[0], tn[1], tn[2]};
-      if (dot(n, n0) > kCornerCosine) continue;
-      if (self_ && (dot(n, sn) > kFacingCosine || in_ring(k, tri))) continue;
+      if (dot(n, n0) > kCornerCosine || (self_ && dot(n, sn) > kFacingCosine)) continue;
       const double *a = x + 3 * tri[0], *b = x + 3 * tri[1], *c = x + 3 * tri[2];
       const double h = dot(sub(xs, a), n);
       if (h < 0 || h > band || h >= best2) continue;
