@@ -13,6 +13,7 @@
 #include <gmsh.h>
 
 #include "material_kit.hpp"
+#include "scenario_kit.hpp"
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/contact.hpp"
@@ -558,25 +559,16 @@ TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlock) {
   TetMesh block = samples::make_box_mesh(10, 10, 5, B, B, Hb);
   block.groups.push_back({2, 20, "surface"});  // the whole boundary as one master surface
   for (std::size_t t = 0, n = block.triangles.size(); t < n; ++t) block.triangles.push_back(block.triangles[t]), block.triangle_group.push_back(20);
-  write_msh(dir.path() / "block.msh", block);
-  write_msh(dir.path() / "sphere.msh", graded_sphere(R, {0.014, 0.014, Hb + 5e-5}, h, h, 1e-3));
   Scenario sc;
   sc.file = dir.path() / "edge.toml";
   sc.run.end_time = 0.03;
   sc.run.gravity = {0, 0, -100};
   sc.run.threads = 1;
-  sc.materials["m"] = MaterialInstance{"m", "linear_elastic", {{{"E", E}, {"nu", 0.3}, {"density", 1000}}, {}}};
-  for (const char* name : {"block", "sphere"}) {
-    BodySpec b;
-    b.name = name;
-    b.mesh = dir.path() / (std::string(name) + ".msh");
-    b.materials["*"] = "m";
-    if (b.name == "sphere") b.initial_velocity = {0.4, 0.4, 0};
-    sc.bodies.push_back(b);
-  }
-  BoundarySpec base;
-  base.body = "block", base.group = "zmin", base.type = "fixed", base.components = {true, true, true}, base.name = "base";
-  sc.boundaries.push_back(base);
+  sc.materials["m"] = testkit::linear_elastic_instance("m", E, 0.3, 1000);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "sphere", graded_sphere(R, {0.014, 0.014, Hb + 5e-5}, h, h, 1e-3), "m"));
+  sc.bodies.back().initial_velocity = {0.4, 0.4, 0};
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
   ContactSpec c;
   c.slave_body = "sphere", c.slave_surface = "surface", c.master_body = "block", c.master_surface = "surface", c.two_pass = true;
   sc.contacts.push_back(c);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 
+#include "scenario_kit.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
@@ -18,32 +19,13 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-MaterialInstance elastic(const std::string& name, double E, double nu, double rho) {
-  return MaterialInstance{name, "linear_elastic", {{{"E", E}, {"nu", nu}, {"density", rho}}, {}}};
-}
-
 // A scenario of one body meshed by `mesh` (written next to the scenario), made of `material`.
 Scenario one_body(const testkit::TempDir& dir, const TetMesh& mesh, const MaterialInstance& material) {
-  write_msh(dir.path() / "body.msh", mesh);
   Scenario sc;
   sc.file = dir.path() / "case.toml";
   sc.materials[material.name] = material;
-  BodySpec b;
-  b.name = "body";
-  b.mesh = dir.path() / "body.msh";
-  b.materials["*"] = material.name;
-  sc.bodies.push_back(b);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "body", mesh, material.name));
   return sc;
-}
-
-BoundarySpec boundary(const std::string& group, const std::string& type, std::array<bool, 3> components, const std::string& name) {
-  BoundarySpec bc;
-  bc.body = "body";
-  bc.group = group;
-  bc.type = type;
-  bc.components = components;
-  bc.name = name;
-  return bc;
 }
 
 CurveSpec table(const std::string& name, std::vector<double> t, std::vector<double> v) {
@@ -94,11 +76,11 @@ TEST(Loading, CurvesAndTheirIntegrals) {
 // A displacement boundary on a curve: its nodes are exactly at value x curve(t^n) at every step.
 TEST(Loading, DisplacementBoundaryFollowsItsCurveExactly) {
   testkit::TempDir dir;
-  Scenario sc = one_body(dir, samples::make_box_mesh(3, 3, 3, 0.1, 0.1, 0.1), elastic("rubber", 1e6, 0.3, 1000));
+  Scenario sc = one_body(dir, samples::make_box_mesh(3, 3, 3, 0.1, 0.1, 0.1), testkit::linear_elastic_instance("rubber", 1e6, 0.3, 1000));
   sc.run.end_time = 0.02;
   sc.curves["press"] = table("press", {0.0, 0.005, 0.012}, {0.0, 1.0, 0.4});
-  sc.boundaries.push_back(boundary("zmin", "fixed", {true, true, true}, "base"));
-  BoundarySpec top = boundary("zmax", "displacement", {true, true, true}, "top");
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {true, true, true}, "base"));
+  BoundarySpec top = testkit::boundary("body", "zmax", "displacement", {true, true, true}, "top");
   top.displacement = {2e-4, 0, -1e-3};
   top.curve = "press";
   sc.boundaries.push_back(top);
@@ -125,14 +107,14 @@ TEST(Loading, DisplacementBoundaryFollowsItsCurveExactly) {
 TEST(Loading, QuasiStaticCompressionReactionIsEEpsA) {
   testkit::TempDir dir;
   const double L = 0.1, E = 1e6, eps = 1e-4;
-  Scenario sc = one_body(dir, samples::make_box_mesh(3, 3, 3, L, L, L), elastic("block", E, 0.3, 1000));
+  Scenario sc = one_body(dir, samples::make_box_mesh(3, 3, 3, L, L, L), testkit::linear_elastic_instance("block", E, 0.3, 1000));
   sc.run.end_time = 1.0;
   sc.damping.alpha = 600;
   sc.curves["ramp"] = smooth_step("ramp", 0.0, 0.03);
-  sc.boundaries.push_back(boundary("zmin", "fixed", {false, false, true}, "base"));
-  sc.boundaries.push_back(boundary("xmin", "fixed", {true, false, false}, "symmetry_x"));
-  sc.boundaries.push_back(boundary("ymin", "fixed", {false, true, false}, "symmetry_y"));
-  BoundarySpec top = boundary("zmax", "displacement", {false, false, true}, "top");
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {false, false, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("body", "xmin", "fixed", {true, false, false}, "symmetry_x"));
+  sc.boundaries.push_back(testkit::boundary("body", "ymin", "fixed", {false, true, false}, "symmetry_y"));
+  BoundarySpec top = testkit::boundary("body", "zmax", "displacement", {false, false, true}, "top");
   top.displacement = {0, 0, -eps * L};
   top.curve = "ramp";
   sc.boundaries.push_back(top);
@@ -151,13 +133,13 @@ TEST(Loading, QuasiStaticCompressionReactionIsEEpsA) {
 // of the strain energy: the reactions sum to minus the body load m g, to 1e-6.
 TEST(Loading, ReactionsBalanceTheBodyLoad) {
   testkit::TempDir dir;
-  Scenario sc = one_body(dir, samples::make_box_mesh(2, 2, 2, 0.1, 0.1, 0.1), elastic("block", 2e5, 0.3, 1000));
+  Scenario sc = one_body(dir, samples::make_box_mesh(2, 2, 2, 0.1, 0.1, 0.1), testkit::linear_elastic_instance("block", 2e5, 0.3, 1000));
   sc.run.end_time = 5.0;
   sc.run.gravity = {1.0, -2.0, -9.81};
   sc.run.gravity_curve = "ramp";
   sc.damping.alpha = 300;
   sc.curves["ramp"] = smooth_step("ramp", 0.0, 0.05);
-  sc.boundaries.push_back(boundary("zmin", "fixed", {true, true, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {true, true, true}, "base"));
   const Model m = build_model(sc);
   double mass = 0;
   for (double mi : m.mass) mass += mi;
@@ -184,10 +166,10 @@ struct Decay {
 Decay bar_first_mode_decay(double alpha, double beta) {
   testkit::TempDir dir;
   const double L = 1.0;
-  Scenario sc = one_body(dir, samples::make_box_mesh(24, 1, 1, L, 0.05, 0.05), elastic("bar", 1e6, 0.0, 1000));
+  Scenario sc = one_body(dir, samples::make_box_mesh(24, 1, 1, L, 0.05, 0.05), testkit::linear_elastic_instance("bar", 1e6, 0.0, 1000));
   sc.run.end_time = 0.8;  // about six periods
   sc.damping = {alpha, beta};
-  sc.boundaries.push_back(boundary("xmin", "fixed", {true, true, true}, "root"));
+  sc.boundaries.push_back(testkit::boundary("body", "xmin", "fixed", {true, true, true}, "root"));
   BoundarySpec lateral;
   lateral.body = "body", lateral.box = std::array<Vec3, 2>{Vec3{-1, -1, -1}, Vec3{2, 1, 1}}, lateral.type = "fixed";
   lateral.components = {false, true, true}, lateral.name = "lateral";
@@ -251,7 +233,7 @@ TEST(Loading, RotatedBodyUnderRotatedLoadsGivesTheRotatedSolution) {
   Scenario a = one_body(dir, samples::make_box_mesh(3, 3, 3, 0.1, 0.1, 0.1), tissue);
   a.run.end_time = 0.01;
   a.run.gravity = {10, -20, -150};
-  a.boundaries.push_back(boundary("zmin", "fixed", {true, true, true}, "base"));
+  a.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {true, true, true}, "base"));
   Scenario b = a;
   BodySpec& body = b.bodies[0];
   const double th = 40 * kPi / 180, n = std::sqrt(14.0), x = 1 / n, y = 2 / n, z = 3 / n, c = std::cos(th), s = std::sin(th), C = 1 - c;
@@ -297,14 +279,14 @@ TEST(Loading, PressurisedThickCylinderMatchesLame) {
     const double r = a + (b - a) * X[0], phi = 0.5 * kPi * X[1];
     X = {r * std::cos(phi), r * std::sin(phi), X[2]};
   }
-  Scenario sc = one_body(dir, mesh, elastic("steel", E, nu, 1000));
+  Scenario sc = one_body(dir, mesh, testkit::linear_elastic_instance("steel", E, nu, 1000));
   sc.run.end_time = 2.0;
   sc.damping.alpha = 400;
   sc.curves["ramp"] = smooth_step("ramp", 0.0, 0.05);
-  sc.boundaries.push_back(boundary("ymin", "fixed", {false, true, false}, "cut_y"));  // phi = 0: the y = 0 plane
-  sc.boundaries.push_back(boundary("ymax", "fixed", {true, false, false}, "cut_x"));  // phi = 90 deg: x = 0
-  sc.boundaries.push_back(boundary("zmin", "fixed", {false, false, true}, "plane_strain_0"));
-  sc.boundaries.push_back(boundary("zmax", "fixed", {false, false, true}, "plane_strain_1"));
+  sc.boundaries.push_back(testkit::boundary("body", "ymin", "fixed", {false, true, false}, "cut_y"));  // phi = 0: the y = 0 plane
+  sc.boundaries.push_back(testkit::boundary("body", "ymax", "fixed", {true, false, false}, "cut_x"));  // phi = 90 deg: x = 0
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {false, false, true}, "plane_strain_0"));
+  sc.boundaries.push_back(testkit::boundary("body", "zmax", "fixed", {false, false, true}, "plane_strain_1"));
   sc.loads.push_back(LoadSpec{"body", "xmin", p, "ramp"});  // the inner wall r = a
   const Model m = build_model(sc);
   ExplicitSolver s(m, sc.run, sc.damping);

@@ -15,6 +15,7 @@
 
 #include "tactus/core/gmsh_session.hpp"
 
+#include "scenario_kit.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
@@ -75,33 +76,20 @@ PatchResult patch_test(int master_cells, int slave_cells, const std::string& met
 
 PatchResult patch_test(const TetMesh& lower, const TetMesh& upper, const std::string& method, const std::string& label) {
   testkit::TempDir dir;
-  const double E = 1e6;
-  write_msh(dir.path() / "lower.msh", lower);
-  write_msh(dir.path() / "upper.msh", upper);
   Scenario sc;
   sc.file = dir.path() / "patch.toml";
   sc.run.end_time = 0.2;
   sc.damping.alpha = 3000;
-  sc.materials["m"] = MaterialInstance{"m", "linear_elastic", {{{"E", E}, {"nu", 0.3}, {"density", 1000}}, {}}};
-  for (const char* name : {"lower", "upper"}) {
-    BodySpec b;
-    b.name = name;
-    b.mesh = dir.path() / (std::string(name) + ".msh");
-    b.materials["*"] = "m";
-    sc.bodies.push_back(b);
-  }
+  sc.materials["m"] = testkit::linear_elastic_instance("m", 1e6, 0.3, 1000);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "lower", lower, "m"));
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "upper", upper, "m"));
   sc.curves["ramp"] = CurveSpec{"ramp", {}, {}, true, 0.0, 0.01};
-  auto bc = [&](const std::string& body, const std::string& group, std::array<bool, 3> comps, const std::string& name) {
-    BoundarySpec b;
-    b.body = body, b.group = group, b.type = "fixed", b.components = comps, b.name = name;
-    return b;
-  };
-  sc.boundaries.push_back(bc("lower", "zmin", {false, false, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("lower", "zmin", "fixed", {false, false, true}, "base"));
   for (const char* body : {"lower", "upper"}) {  // rollers on the two symmetry planes
-    sc.boundaries.push_back(bc(body, "xmin", {true, false, false}, std::string(body) + "_x"));
-    sc.boundaries.push_back(bc(body, "ymin", {false, true, false}, std::string(body) + "_y"));
+    sc.boundaries.push_back(testkit::boundary(body, "xmin", "fixed", {true, false, false}, std::string(body) + "_x"));
+    sc.boundaries.push_back(testkit::boundary(body, "ymin", "fixed", {false, true, false}, std::string(body) + "_y"));
   }
-  BoundarySpec top = bc("upper", "zmax", {false, false, true}, "top");
+  BoundarySpec top = testkit::boundary("upper", "zmax", "fixed", {false, false, true}, "top");
   top.type = "displacement", top.displacement = {0, 0, -2e-5}, top.curve = "ramp";  // 0.1 % strain
   sc.boundaries.push_back(top);
   ContactSpec c;

@@ -1,0 +1,34 @@
+#pragma once
+// Scenarios built in memory for the solver tests, entry by entry as a scenario file declares them.
+#include <array>
+#include <string>
+
+#include "tactus/core/mesh.hpp"
+#include "tactus/solver/scenario.hpp"
+#include "temp_dir.hpp"
+
+namespace tactus::testkit {
+
+inline solver::MaterialInstance linear_elastic_instance(const std::string& name, double E, double nu, double density) {
+  return solver::MaterialInstance{name, "linear_elastic", {{{"E", E}, {"nu", nu}, {"density", density}}, {}}};
+}
+
+// Writes `mesh` as <dir>/<name>.msh and returns a body of that name, made of `material` everywhere.
+inline solver::BodySpec body_from_mesh(const TempDir& dir, const std::string& name, const TetMesh& mesh, const std::string& material) {
+  solver::BodySpec b;
+  b.name = name;
+  b.mesh = dir.path() / (name + ".msh");
+  write_msh(b.mesh, mesh);
+  b.materials["*"] = material;
+  return b;
+}
+
+// A [[boundary]] entry: `type` ("fixed", "velocity", "displacement") on `components` of a body's group.
+inline solver::BoundarySpec boundary(const std::string& body, const std::string& group, const std::string& type, std::array<bool, 3> components,
+                                     const std::string& name) {
+  solver::BoundarySpec b;
+  b.body = body, b.group = group, b.type = type, b.components = components, b.name = name;
+  return b;
+}
+
+}  // namespace tactus::testkit
