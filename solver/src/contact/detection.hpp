@@ -34,7 +34,7 @@ struct DetectionScratch {
   std::vector<double> x_built;                            // their positions at the last build, 3 each
   std::vector<std::int32_t> candidate_start, candidates;  // per slave node, CSR
   std::vector<std::int32_t> active_triangles;             // the triangles whose normals the lists need, sorted
-  std::size_t builds = 0, searches = 0;                   // list builds, and steps searched
+  std::size_t builds = 0, searches = 0;                   // list builds (mortar: integrations), and steps searched
 };
 
 // A uniform grid over the triangles (3 node ids each, outward) at positions x, each triangle in

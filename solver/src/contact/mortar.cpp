@@ -4,22 +4,30 @@
 // Each step, every slave triangle is projected onto the plane of each master triangle near it,
 // clipped against it (Sutherland-Hodgman: the mortar segment), and the segment is integrated
 // exactly (edge-midpoint rule on a fan of sub-triangles: the integrands are quadratic). For slave
-// node j with shape function lambda_j:
-//   D_j = int lambda_j dA,   M_jk = int lambda_j mu_k dA,   g_j = int lambda_j g dA,
+// node j with shape function lambda_j and dual multiplier function psi_j:
+//   D_j = int lambda_j dA,   M_jk = int psi_j mu_k dA,   g_j = int psi_j g dA,
 // over the segments, mu_k the master shape functions and g = (x_s - x_m) . n the gap along the
 // master's outward normal. Row j is then: the slave node with weight 1, master node k with
 // -M_jk / D_j, the gap g_j / D_j, the normal int lambda_j n dA normalised, and the area D_j, so the
 // reported pressure r_n / D_j is a surface density over the area actually in contact.
 //
-// Why lumped D with standard (not dual) multiplier functions: every weight stays positive, the row
-// of node j is local (no coupling through D), and sum_k M_jk = D_j exactly, so a rigid motion of
-// both sides gives no relative velocity; the bi-potential solver and its per-node cone projection
-// (paper eqs. 11-12) are used unchanged. With segment-based integration a uniform pressure is
-// transmitted exactly across non-matching meshes (the contact patch test).
+// Why dual multipliers (Wohlmuth 2000; for explicit dynamics Cichosz & Bischoff 2011): psi_j is
+// biorthogonal to the slave shape functions (int psi_j lambda_i = delta_ij D_j), so the weighted
+// gap's rate is exactly D_j times the row's relative velocity v_j - sum_k (M_jk / D_j) v_k. Each
+// row stays local (one slave node) and the bi-potential solver with its per-node cone projection
+// (paper eqs. 11-12) is used unchanged. With standard multipliers and a lumped D the gap moves with
+// the neighbours' velocities that the row does not see: on the hand-block case that fed energy in
+// at every touch until the run blew up. psi_j is built per slave triangle on its covered part
+// (Popp, Gee & Wall 2012), so D_j stays the positive covered tributary area at the contact's
+// border; sum_k M_jk = D_j, so a rigid motion of both sides gives no relative velocity. With
+// segment-based integration a uniform pressure is transmitted exactly across non-matching meshes
+// (the contact patch test).
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
+
+#include <omp.h>
 
 #include "detection.hpp"
 #include "tactus/solver/contact.hpp"
@@ -69,7 +77,7 @@ std::array<double, 3> barycentric(const P2& p, const std::array<P2, 3>& t) {
 struct NodeIntegrals {
   double D = 0, G = 0;
   Vec3 N{0, 0, 0};
-  std::vector<std::pair<std::int32_t, double>> M;  // master node, int lambda_j mu_k
+  std::vector<std::pair<std::int32_t, double>> M;  // master node, int psi_j mu_k
   void add_master(std::int32_t node, double value) {
     for (auto& [n, v] : M)
       if (n == node) {
@@ -78,6 +86,112 @@ struct NodeIntegrals {
       }
     M.emplace_back(node, value);
   }
+};
+
+// One quadrature point of a mortar segment: the slave and master shape functions there, its
+// slave-surface weight, the gap and the master normal.
+struct QuadraturePoint {
+  std::array<double, 3> lambda, mu;
+  double dA, gap;
+  Vec3 n;
+  std::array<std::int32_t, 3> master;
+};
+
+// A slave vertex counts as over a master triangle up to this far beyond its edges (barycentric,
+// i.e. a fraction of the triangle's height; the node-to-surface search reaches as far beyond an
+// open edge): a slave node on the master's boundary edge stays held when round-off or the
+// deformation moves it just outside.
+constexpr double kOverMasterReach = 0.05;
+
+// The dual basis of one slave triangle on the part of it that is covered (Popp, Gee & Wall 2012):
+// psi_j = sum_k a_jk lambda_k with a = D_e M_e^-1, D_e = diag(int lambda_j), M_e = int lambda_j
+// lambda_k over the covered part, so that int psi_j lambda_k = delta_jk int lambda_j there. Returns
+// false when M_e is too close to singular (a sliver of coverage), where the standard basis is used.
+bool covered_dual_basis(const std::vector<QuadraturePoint>& points, std::array<std::array<double, 3>, 3>& a) {
+  double M[3][3] = {}, D[3] = {};
+  for (const QuadraturePoint& q : points)
+    for (int j = 0; j < 3; ++j) {
+      D[j] += q.lambda[static_cast<std::size_t>(j)] * q.dA;
+      for (int k = 0; k < 3; ++k) M[j][k] += q.lambda[static_cast<std::size_t>(j)] * q.lambda[static_cast<std::size_t>(k)] * q.dA;
+    }
+  const double c00 = M[1][1] * M[2][2] - M[1][2] * M[2][1], c01 = M[1][2] * M[2][0] - M[1][0] * M[2][2], c02 = M[1][0] * M[2][1] - M[1][1] * M[2][0];
+  const double det = M[0][0] * c00 + M[0][1] * c01 + M[0][2] * c02;
+  // Full coverage gives det / (M00 M11 M22) = 16/27 (M = A/12 (1 + delta)); below 1 % of that the
+  // inverse amplifies the quadrature's round-off more than the dual basis gains.
+  if (!(det > 0.01 * (16.0 / 27.0) * M[0][0] * M[1][1] * M[2][2])) return false;
+  const double inv[3][3] = {{c00 / det, (M[0][2] * M[2][1] - M[0][1] * M[2][2]) / det, (M[0][1] * M[1][2] - M[0][2] * M[1][1]) / det},
+                            {c01 / det, (M[0][0] * M[2][2] - M[0][2] * M[2][0]) / det, (M[0][2] * M[1][0] - M[0][0] * M[1][2]) / det},
+                            {c02 / det, (M[0][1] * M[2][0] - M[0][0] * M[2][1]) / det, (M[0][0] * M[1][1] - M[0][1] * M[1][0]) / det}};
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) a[static_cast<std::size_t>(j)][static_cast<std::size_t>(k)] = D[j] * inv[j][k];
+  return true;
+}
+
+// One slave triangle's share of its three nodes' integrals (filled in parallel, added in order).
+struct TriangleIntegrals {
+  std::array<std::size_t, 3> node;  // positions in the pair's slave_nodes
+  std::array<double, 3> D, G;
+  std::array<Vec3, 3> N;
+  std::array<bool, 3> over;  // the vertex itself lies over a master triangle
+  std::size_t terms_begin, terms_end;
+};
+struct MasterTerm {
+  int vertex;  // 0..2 of the slave triangle
+  std::int32_t master;
+  double value;  // int psi_j mu_k over the segments
+};
+
+// One slave triangle's segments: D_j = int lambda_j, G_j = int psi_j g, M_jk = int psi_j mu_k,
+// N_j = int lambda_j n. With the dual basis D_j v_j - sum_k M_jk v_k is the rate of G_j (the row's
+// velocity is the weighted gap's rate) and sum_k M_jk = D_j (a rigid motion of both sides is no
+// relative motion). The points come in runs of one master triangle each: M is summed per run.
+void integrate_segments(const std::vector<QuadraturePoint>& points, TriangleIntegrals& out, std::vector<MasterTerm>& terms) {
+  std::array<std::array<double, 3>, 3> a{};
+  if (!covered_dual_basis(points, a)) a = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  out.D = {0, 0, 0}, out.G = {0, 0, 0}, out.N = {Vec3{0, 0, 0}, Vec3{0, 0, 0}, Vec3{0, 0, 0}};
+  out.terms_begin = terms.size();
+  double block[3][3] = {};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const QuadraturePoint& q = points[i];
+    for (std::size_t s = 0; s < 3; ++s) {
+      const double l = q.lambda[s] * q.dA, psi = (a[s][0] * q.lambda[0] + a[s][1] * q.lambda[1] + a[s][2] * q.lambda[2]) * q.dA;
+      out.D[s] += l, out.G[s] += psi * q.gap;
+      for (std::size_t d = 0; d < 3; ++d) out.N[s][d] += l * q.n[d];
+      for (std::size_t k = 0; k < 3; ++k) block[s][k] += psi * q.mu[k];
+    }
+    if (i + 1 == points.size() || points[i + 1].master != q.master) {  // the end of this master triangle's run
+      for (int s = 0; s < 3; ++s)
+        for (int k = 0; k < 3; ++k) {
+          terms.push_back({s, q.master[static_cast<std::size_t>(k)], block[s][k]});
+          block[s][k] = 0;
+        }
+    }
+  }
+  out.terms_end = terms.size();
+}
+
+// What one chunk of slave triangles gives, reused from step to step.
+struct SegmentChunk {
+  std::vector<QuadraturePoint> points;
+  std::vector<TriangleIntegrals> triangles;
+  std::vector<MasterTerm> terms;
+};
+constexpr std::size_t kChunks = 64;
+
+// The segments are integrated again when a node of the pair has moved this far (in master edge
+// lengths) since they last were; in between each row's gap follows its own kinematics,
+// h = h_0 + n . ((x_j - x_j0) - sum_k w_k (x_k - x_k0)), which is what the row's velocity
+// constraint integrates (exact for the dual rows while the weights hold). 2 % of an element moves a
+// weight by about 2 %, far below the discretisation's own error; a contact can not start unseen in
+// between, as the band reaches 50 %.
+constexpr double kMortarRefresh = 0.02;
+
+// A row as integrated, kept until the next integration.
+struct MortarRow {
+  std::int32_t slave_index, slave_node;
+  std::size_t begin, end;  // its masters and weights
+  Vec3 n;
+  double gap, along_normal, area;  // h and n . (x_j - sum_k w_k x_k) when integrated
 };
 
 class MortarSurface final : public ContactMaster {
@@ -92,113 +206,229 @@ class MortarSurface final : public ContactMaster {
   std::vector<std::int32_t> triangles_;  // 3 per triangle, outward
   // Per-step storage, reused (detect is called by one thread per pair and step).
   mutable std::vector<NodeIntegrals> integrals_;
-  mutable std::vector<std::size_t> seen_;
+  mutable std::vector<SegmentChunk> chunks_;
+  mutable std::vector<std::vector<std::size_t>> seen_;  // per thread and master triangle: the last slave triangle that tried it
   mutable std::vector<std::int32_t> masters_;
   mutable std::vector<double> weights_;
+  mutable std::vector<MortarRow> integrated_rows_;
+  mutable std::vector<std::int32_t> tracked_;  // the pair's slave and master nodes
+  mutable std::vector<double> tracked_at_integration_;
+  mutable double integrated_band_ = -1;
+  bool integration_holds(const ContactPair& p, const double* x, double band) const;
+  void emit_rows(std::int32_t pi, const double* x, ContactRows& rows) const;
+  mutable std::vector<std::size_t> slave_local_;
+  mutable std::vector<double> master_box_;  // 6 per master triangle: its box at this step
+  mutable std::vector<char> over_;          // per slave node: its own position is over a master triangle
+  void segments_of(const ContactPair& p, std::size_t st, const double* x, double band, const DetectionScratch::Grid& g,
+                   std::vector<std::size_t>& seen, SegmentChunk& w) const;
 };
 
+// The mortar segments of slave triangle st with the master triangles near it, integrated.
+void MortarSurface::segments_of(const ContactPair& p, std::size_t st, const double* x, double band, const DetectionScratch::Grid& g,
+                                std::vector<std::size_t>& seen, SegmentChunk& w) const {
+  const std::int32_t* sv = &p.slave_triangles[3 * st];
+  const double* xs[3] = {x + 3 * sv[0], x + 3 * sv[1], x + 3 * sv[2]};
+  int lo[3], hi[3];
+  double sb[6];  // the slave triangle's box
+  bool outside = false;
+  for (int c = 0; c < 3 && !outside; ++c) {
+    sb[c] = std::min({xs[0][c], xs[1][c], xs[2][c]}), sb[3 + c] = std::max({xs[0][c], xs[1][c], xs[2][c]});
+    outside = sb[3 + c] < g.lo[c] || sb[c] > g.lo[c] + g.cell * g.n[c];
+    if (!outside) lo[c] = g.cell_of(sb[c], c), hi[c] = g.cell_of(sb[3 + c], c);
+  }
+  if (outside) return;  // far from every master triangle
+  const Vec3 ns = cross(sub(xs[1], xs[0]), sub(xs[2], xs[0]));
+  const double slave_area = 0.5 * norm(ns);
+  if (!(slave_area > 0)) return;
+  std::vector<QuadraturePoint>& points = w.points;
+  points.clear();
+  std::array<bool, 3> over{false, false, false};
+  for (int k = lo[2]; k <= hi[2]; ++k)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int i = lo[0]; i <= hi[0]; ++i) {
+        const std::size_t cell =
+            (static_cast<std::size_t>(k) * static_cast<std::size_t>(g.n[1]) + static_cast<std::size_t>(j)) * static_cast<std::size_t>(g.n[0]) +
+            static_cast<std::size_t>(i);
+        for (std::int32_t it = g.count[cell]; it < g.start[cell]; ++it) {
+          const auto t = static_cast<std::size_t>(g.items[static_cast<std::size_t>(it)]);
+          if (seen[t] == st) continue;
+          seen[t] = st;
+          const double* mb = &master_box_[6 * t];  // most candidates of a cell are beyond the band: their boxes tell
+          if (mb[0] > sb[3] + band || mb[3] < sb[0] - band || mb[1] > sb[4] + band || mb[4] < sb[1] - band || mb[2] > sb[5] + band ||
+              mb[5] < sb[2] - band)
+            continue;
+          const std::int32_t* mv = &triangles_[3 * t];
+          if (mv[0] == sv[0] || mv[0] == sv[1] || mv[0] == sv[2] || mv[1] == sv[0] || mv[1] == sv[1] || mv[1] == sv[2] || mv[2] == sv[0] ||
+              mv[2] == sv[1] || mv[2] == sv[2])
+            continue;  // a neighbour on the same surface
+          const double* tn = &g.normal[4 * t];
+          if (tn[3] == 0) continue;
+          const Vec3 n{tn[0], tn[1], tn[2]};
+          // The surfaces must face each other (both outward): a slave triangle pairs only with
+          // master faces within 60 degrees of opposite, not with the side faces at an edge.
+          if (dot(ns, n) > -0.5 * 2 * slave_area) continue;
+          const double* m0 = x + 3 * mv[0];
+          double h[3];
+          for (int a = 0; a < 3; ++a) h[a] = dot(sub(xs[a], m0), n);
+          if (std::min({h[0], h[1], h[2]}) > band || std::max({h[0], h[1], h[2]}) < -band) continue;
+          // The master plane's frame: e1 along the first edge, e2 = n x e1 (counter-clockwise about n).
+          const Vec3 e1r = sub(x + 3 * mv[1], m0);
+          const double l1 = norm(e1r);
+          const Vec3 e1{e1r[0] / l1, e1r[1] / l1, e1r[2] / l1}, e2 = cross(n, e1);
+          auto to2 = [&](const double* q) {
+            const Vec3 d = sub(q, m0);
+            return P2{dot(d, e1), dot(d, e2)};
+          };
+          const std::array<P2, 3> mt{P2{0, 0}, to2(x + 3 * mv[1]), to2(x + 3 * mv[2])};
+          const std::array<P2, 3> sq{to2(xs[0]), to2(xs[1]), to2(xs[2])};
+          // Most candidates do not overlap at all: their boxes in the plane tell before clipping.
+          bool apart = false;
+          for (int c = 0; c < 2 && !apart; ++c) {
+            auto coord = [c](const P2& q) { return c == 0 ? q.u : q.v; };
+            apart = std::max({coord(sq[0]), coord(sq[1]), coord(sq[2])}) < std::min({coord(mt[0]), coord(mt[1]), coord(mt[2])}) ||
+                    std::min({coord(sq[0]), coord(sq[1]), coord(sq[2])}) > std::max({coord(mt[0]), coord(mt[1]), coord(mt[2])});
+          }
+          if (apart) continue;
+          const double projected = 0.5 * std::abs(cross2(sq[0], sq[1], sq[2]));
+          if (!(projected > 1e-12 * slave_area)) continue;
+          std::array<P2, 12> poly;
+          const int nv = clip_by_triangle(sq.data(), 3, mt, poly);
+          if (nv < 3) continue;
+          const double to_slave = slave_area / projected;  // dA on the slave per dA in the plane
+          for (int f = 1; f + 1 < nv; ++f) {
+            const P2 &a = poly[0], &b = poly[static_cast<std::size_t>(f)], &c = poly[static_cast<std::size_t>(f + 1)];
+            const double area = 0.5 * std::abs(cross2(a, b, c));
+            if (!(area > 0)) continue;
+            const P2 qp[3] = {{0.5 * (a.u + b.u), 0.5 * (a.v + b.v)}, {0.5 * (b.u + c.u), 0.5 * (b.v + c.v)}, {0.5 * (c.u + a.u), 0.5 * (c.v + a.v)}};
+            for (const P2& q : qp) {
+              QuadraturePoint qpnt;
+              qpnt.lambda = barycentric(q, sq), qpnt.mu = barycentric(q, mt);
+              qpnt.dA = area / 3.0 * to_slave;
+              qpnt.gap = qpnt.lambda[0] * h[0] + qpnt.lambda[1] * h[1] + qpnt.lambda[2] * h[2];  // (x_s(q) - x_m(q)) . n
+              qpnt.n = n;
+              std::copy(mv, mv + 3, qpnt.master.begin());
+              points.push_back(qpnt);
+            }
+          }
+          for (int v = 0; v < 3; ++v) {  // is the slave vertex itself over this master triangle?
+            const auto b = barycentric(sq[static_cast<std::size_t>(v)], mt);
+            if (std::min({b[0], b[1], b[2]}) >= -kOverMasterReach) over[static_cast<std::size_t>(v)] = true;
+          }
+        }
+      }
+  if (points.empty()) return;
+  TriangleIntegrals ti;
+  for (std::size_t v = 0; v < 3; ++v) ti.node[v] = slave_local_[3 * st + v];
+  ti.over = over;
+  integrate_segments(points, ti, w.terms);
+  w.triangles.push_back(ti);
+}
+
+bool MortarSurface::integration_holds(const ContactPair& p, const double* x, double band) const {
+  if (tracked_.empty()) {
+    tracked_.assign(p.slave_nodes.begin(), p.slave_nodes.end());
+    tracked_.insert(tracked_.end(), triangles_.begin(), triangles_.end());
+    std::sort(tracked_.begin(), tracked_.end());
+    tracked_.erase(std::unique(tracked_.begin(), tracked_.end()), tracked_.end());
+  }
+  if (band != integrated_band_ || tracked_at_integration_.size() != 3 * tracked_.size()) return false;
+  const double limit = kMortarRefresh * p.search_scale;
+  for (std::size_t i = 0; i < tracked_.size(); ++i) {
+    const double* now = x + 3 * tracked_[i];
+    const double* then = &tracked_at_integration_[3 * i];
+    const double d0 = now[0] - then[0], d1 = now[1] - then[1], d2 = now[2] - then[2];
+    if (d0 * d0 + d1 * d1 + d2 * d2 > limit * limit) return false;
+  }
+  return true;
+}
+
+// n . (x_j - sum_k w_k x_k) of a row.
+double along_normal(const MortarRow& r, const std::vector<std::int32_t>& masters, const std::vector<double>& weights, const double* x) {
+  Vec3 d{x[3 * r.slave_node], x[3 * r.slave_node + 1], x[3 * r.slave_node + 2]};
+  for (std::size_t a = r.begin; a < r.end; ++a)
+    for (std::size_t c = 0; c < 3; ++c) d[c] += weights[a] * x[3 * masters[a] + static_cast<std::int32_t>(c)];
+  return dot(d, r.n);
+}
+
+void MortarSurface::emit_rows(std::int32_t pi, const double* x, ContactRows& rows) const {
+  for (const MortarRow& r : integrated_rows_)
+    rows.add(pi, r.slave_index, r.slave_node, masters_.data() + r.begin, weights_.data() + r.begin, static_cast<int>(r.end - r.begin), r.n,
+             r.gap + along_normal(r, masters_, weights_, x) - r.along_normal, r.area);
+}
+
 void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
-                           int /*threads*/) const {
+                           int threads) const {
+  ++scratch.searches;
+  if (integration_holds(p, x, band)) {
+    emit_rows(pi, x, rows);
+    return;
+  }
+  ++scratch.builds;  // an integration
   DetectionScratch::Grid& g = scratch.grid;
   build_triangle_grid(triangles_, p.search_scale, x, band, g);
-  const std::size_t S = p.slave_nodes.size(), T = triangles_.size() / 3;
+  const std::size_t S = p.slave_nodes.size(), T = triangles_.size() / 3, ST = p.slave_triangles.size() / 3;
+  std::vector<std::size_t>& local = slave_local_;  // each slave triangle's nodes as positions in slave_nodes, once
+  if (local.size() != p.slave_triangles.size()) {
+    local.resize(p.slave_triangles.size());
+    for (std::size_t i = 0; i < local.size(); ++i)
+      local[i] = static_cast<std::size_t>(std::lower_bound(p.slave_nodes.begin(), p.slave_nodes.end(), p.slave_triangles[i]) - p.slave_nodes.begin());
+  }
+  master_box_.resize(6 * T);
+  for (std::size_t t = 0; t < T; ++t) {
+    const double* v[3] = {x + 3 * triangles_[3 * t], x + 3 * triangles_[3 * t + 1], x + 3 * triangles_[3 * t + 2]};
+    for (int c = 0; c < 3; ++c)
+      master_box_[6 * t + c] = std::min({v[0][c], v[1][c], v[2][c]}), master_box_[6 * t + 3 + c] = std::max({v[0][c], v[1][c], v[2][c]});
+  }
+  // The segment pass in parallel: the slave triangles in kChunks contiguous chunks, taken by the
+  // threads as they come (the triangles near the master sit in a few chunks) and added in chunk
+  // order below, so the sums do not depend on the thread count.
+  const int nt = ST > 2000 ? std::max(threads, 1) : 1;
+  const std::size_t chunks = nt > 1 ? kChunks : 1;
+  chunks_.resize(chunks);
+  seen_.resize(static_cast<std::size_t>(nt));
+  for (auto& seen : seen_) seen.assign(T, std::numeric_limits<std::size_t>::max());
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
+  for (std::size_t c = 0; c < chunks; ++c) {
+    SegmentChunk& w = chunks_[c];
+    w.triangles.clear(), w.terms.clear();
+    std::vector<std::size_t>& seen = seen_[static_cast<std::size_t>(nt > 1 ? omp_get_thread_num() : 0)];
+    for (std::size_t st = ST * c / chunks; st < ST * (c + 1) / chunks; ++st) segments_of(p, st, x, band, g, seen, w);
+  }
   std::vector<NodeIntegrals>& node = integrals_;  // kept between steps: no allocation once grown
   node.resize(S);
   for (auto& ni : node) ni.D = 0, ni.G = 0, ni.N = {0, 0, 0}, ni.M.clear();
-  std::vector<std::size_t>& seen = seen_;
-  seen.assign(T, std::numeric_limits<std::size_t>::max());
-  auto slave_index = [&](std::int32_t v) {
-    return static_cast<std::size_t>(std::lower_bound(p.slave_nodes.begin(), p.slave_nodes.end(), v) - p.slave_nodes.begin());
-  };
-  for (std::size_t st = 0; st * 3 < p.slave_triangles.size(); ++st) {
-    const std::int32_t* sv = &p.slave_triangles[3 * st];
-    const double* xs[3] = {x + 3 * sv[0], x + 3 * sv[1], x + 3 * sv[2]};
-    const Vec3 ns = cross(sub(xs[1], xs[0]), sub(xs[2], xs[0]));
-    const double slave_area = 0.5 * norm(ns);
-    if (!(slave_area > 0)) continue;
-    std::size_t jn[3];
-    for (int i = 0; i < 3; ++i) jn[i] = slave_index(sv[i]);
-    int lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      const double a = std::min({xs[0][c], xs[1][c], xs[2][c]}), b = std::max({xs[0][c], xs[1][c], xs[2][c]});
-      if (b < g.lo[c] || a > g.lo[c] + g.cell * g.n[c])
-        lo[c] = 1, hi[c] = 0;  // outside the grid
-      else
-        lo[c] = g.cell_of(a, c), hi[c] = g.cell_of(b, c);
+  std::vector<char>& over = over_;
+  over.assign(S, 0);
+  for (const SegmentChunk& w : chunks_)
+    for (const TriangleIntegrals& ti : w.triangles) {
+      for (std::size_t s = 0; s < 3; ++s) {
+        NodeIntegrals& ni = node[ti.node[s]];
+        ni.D += ti.D[s], ni.G += ti.G[s];
+        for (std::size_t d = 0; d < 3; ++d) ni.N[d] += ti.N[s][d];
+        if (ti.over[s]) over[ti.node[s]] = 1;
+      }
+      for (std::size_t i = ti.terms_begin; i < ti.terms_end; ++i)
+        node[ti.node[static_cast<std::size_t>(w.terms[i].vertex)]].add_master(w.terms[i].master, w.terms[i].value);
     }
-    for (int k = lo[2]; k <= hi[2]; ++k)
-      for (int j = lo[1]; j <= hi[1]; ++j)
-        for (int i = lo[0]; i <= hi[0]; ++i) {
-          const std::size_t cell =
-              (static_cast<std::size_t>(k) * static_cast<std::size_t>(g.n[1]) + static_cast<std::size_t>(j)) * static_cast<std::size_t>(g.n[0]) +
-              static_cast<std::size_t>(i);
-          for (std::int32_t it = g.count[cell]; it < g.start[cell]; ++it) {
-            const auto t = static_cast<std::size_t>(g.items[static_cast<std::size_t>(it)]);
-            if (seen[t] == st) continue;
-            seen[t] = st;
-            const std::int32_t* mv = &triangles_[3 * t];
-            if (mv[0] == sv[0] || mv[0] == sv[1] || mv[0] == sv[2] || mv[1] == sv[0] || mv[1] == sv[1] || mv[1] == sv[2] || mv[2] == sv[0] ||
-                mv[2] == sv[1] || mv[2] == sv[2])
-              continue;  // a neighbour on the same surface
-            const double* tn = &g.normal[4 * t];
-            if (tn[3] == 0) continue;
-            const Vec3 n{tn[0], tn[1], tn[2]};
-            // The surfaces must face each other (both outward): a slave triangle pairs only with
-            // master faces within 60 degrees of opposite, not with the side faces at an edge.
-            if (dot(ns, n) > -0.5 * 2 * slave_area) continue;
-            const double* m0 = x + 3 * mv[0];
-            double h[3];
-            for (int a = 0; a < 3; ++a) h[a] = dot(sub(xs[a], m0), n);
-            if (std::min({h[0], h[1], h[2]}) > band || std::max({h[0], h[1], h[2]}) < -band) continue;
-            // The master plane's frame: e1 along the first edge, e2 = n x e1 (counter-clockwise about n).
-            const Vec3 e1r = sub(x + 3 * mv[1], m0);
-            const double l1 = norm(e1r);
-            const Vec3 e1{e1r[0] / l1, e1r[1] / l1, e1r[2] / l1}, e2 = cross(n, e1);
-            auto to2 = [&](const double* q) {
-              const Vec3 d = sub(q, m0);
-              return P2{dot(d, e1), dot(d, e2)};
-            };
-            const std::array<P2, 3> mt{P2{0, 0}, to2(x + 3 * mv[1]), to2(x + 3 * mv[2])};
-            const std::array<P2, 3> sq{to2(xs[0]), to2(xs[1]), to2(xs[2])};
-            const double projected = 0.5 * std::abs(cross2(sq[0], sq[1], sq[2]));
-            if (!(projected > 1e-12 * slave_area)) continue;
-            std::array<P2, 12> poly;
-            const int nv = clip_by_triangle(sq.data(), 3, mt, poly);
-            if (nv < 3) continue;
-            const double to_slave = slave_area / projected;  // dA on the slave per dA in the plane
-            for (int f = 1; f + 1 < nv; ++f) {
-              const P2 &a = poly[0], &b = poly[static_cast<std::size_t>(f)], &c = poly[static_cast<std::size_t>(f + 1)];
-              const double area = 0.5 * std::abs(cross2(a, b, c));
-              if (!(area > 0)) continue;
-              const P2 qp[3] = {
-                  {0.5 * (a.u + b.u), 0.5 * (a.v + b.v)}, {0.5 * (b.u + c.u), 0.5 * (b.v + c.v)}, {0.5 * (c.u + a.u), 0.5 * (c.v + a.v)}};
-              for (const P2& q : qp) {
-                const auto lam = barycentric(q, sq), mu = barycentric(q, mt);
-                const double dA = area / 3.0 * to_slave;
-                const double gap = lam[0] * h[0] + lam[1] * h[1] + lam[2] * h[2];  // (x_s(q) - x_m(q)) . n
-                for (int s = 0; s < 3; ++s) {
-                  NodeIntegrals& ni = node[jn[s]];
-                  const double w = lam[static_cast<std::size_t>(s)] * dA;
-                  ni.D += w, ni.G += w * gap;
-                  for (int d = 0; d < 3; ++d) ni.N[d] += w * n[d];
-                  for (int k2 = 0; k2 < 3; ++k2) ni.add_master(mv[k2], w * mu[static_cast<std::size_t>(k2)]);
-                }
-              }
-            }
-          }
-        }
-  }
-  std::vector<std::int32_t>& masters = masters_;
-  std::vector<double>& weights = weights_;
+  masters_.clear(), weights_.clear(), integrated_rows_.clear();
   for (std::size_t k = 0; k < S; ++k) {
     const NodeIntegrals& ni = node[k];
     const double nn = norm(ni.N);
     if (!(ni.D > 0) || !(nn > 0)) continue;
-    masters.clear(), weights.clear();
-    for (const auto& [m, v] : ni.M) masters.push_back(m), weights.push_back(-v / ni.D);
-    rows.add(pi, static_cast<std::int32_t>(k), p.slave_nodes[k], masters.data(), weights.data(), static_cast<int>(masters.size()),
-             {ni.N[0] / nn, ni.N[1] / nn, ni.N[2] / nn}, ni.G / ni.D, ni.D);
+    // A node whose own position is beyond the master's edge is held only from in front (behind the
+    // plane's extension there is no surface to push it out of).
+    if (!over[k] && ni.G < 0) continue;
+    MortarRow r{static_cast<std::int32_t>(k), p.slave_nodes[k], masters_.size(), 0, {ni.N[0] / nn, ni.N[1] / nn, ni.N[2] / nn}, ni.G / ni.D, 0, ni.D};
+    for (const auto& [m, v] : ni.M) masters_.push_back(m), weights_.push_back(-v / ni.D);
+    r.end = masters_.size();
+    r.along_normal = along_normal(r, masters_, weights_, x);
+    integrated_rows_.push_back(r);
   }
+  tracked_at_integration_.resize(3 * tracked_.size());
+  for (std::size_t i = 0; i < tracked_.size(); ++i)
+    for (std::size_t c = 0; c < 3; ++c) tracked_at_integration_[3 * i + c] = x[3 * static_cast<std::size_t>(tracked_[i]) + c];
+  integrated_band_ = band;
+  emit_rows(pi, x, rows);
 }
 
 }  // namespace
