@@ -631,3 +631,79 @@ void sphere_over_a_corner(bool mortar) {
 }  // namespace
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlock) { sphere_over_a_corner(false); }
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlockMortar) { sphere_over_a_corner(true); }
+
+// Frictional sliding, deformable on deformable, non-matching. Oracle: Coulomb's law and
+// equilibrium. A 10 x 10 x 4 mm block (1 mm cells, slave, mortar) pressed by 10 kPa on its top
+// onto a coarser slab (2.5 mm cells, master, fixed at its base) and dragged 14 mm along x by its
+// top at 0.4 m/s (started smoothly over 5 ms), mu = 0.3, mass damping 1000/s: over its last 10 mm,
+// across four of the slab's edges, the normal force must stay p A (peak-to-peak variation <= 2 %
+// of its mean), the tangential force mu times the normal within 2 %, no energy gained and no
+// slave node left behind the slab's surface. Mortar and node to surface.
+namespace {
+void sliding_over_a_coarser_slab(const std::string& method) {
+  testkit::TempDir dir;
+  const double p = 1e4, mu = 0.3, v = 0.4, E = 1e6, A = 1e-4;
+  TetMesh slab = samples::make_box_mesh(16, 8, 2, 0.04, 0.02, 0.005);
+  TetMesh block = samples::make_box_mesh(10, 10, 4, 0.01, 0.01, 0.004, {0.004, 0.005, 0.005 + 1e-6});
+  Scenario sc;
+  sc.file = dir.path() / "slide.toml";
+  sc.run.end_time = 0.008 + 0.014 / v;
+  sc.run.threads = 1;
+  sc.damping.alpha = 1000;
+  sc.materials["m"] = testkit::linear_elastic_instance("m", E, 0.3, 1000);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "slab", slab, "m"));
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
+  sc.boundaries.push_back(testkit::boundary("slab", "zmin", "fixed", {true, true, true}, "base"));
+  BoundarySpec drag = testkit::boundary("block", "zmax", "velocity", {true, true, false}, "drag");
+  drag.velocity = {v, 0, 0};
+  drag.curve = "start";
+  sc.boundaries.push_back(drag);
+  CurveSpec ramp;  // press first (2 ms), then drag
+  ramp.name = "press", ramp.smooth_step = true, ramp.t0 = 0, ramp.t1 = 0.002;
+  sc.curves["press"] = ramp;
+  CurveSpec start = ramp;
+  start.name = "start", start.t0 = 0.003, start.t1 = 0.008;
+  sc.curves["start"] = start;
+  sc.loads.push_back({"block", "zmax", p, "press"});
+  ContactSpec c;
+  c.slave_body = "block", c.slave_surface = "zmin", c.master_body = "slab", c.master_surface = "zmax", c.friction = mu, c.method = method;
+  sc.contacts.push_back(c);
+  sc.contact_solver.tolerance = 1e-10;
+  sc.contact_solver.max_iterations = 1000;
+  const Model m = build_model(sc);
+  ExplicitSolver solver(m, sc.run, sc.damping);
+  SignoriniCheck sig;
+  double n_min = 1e300, n_max = 0, n_sum = 0, t_sum = 0, worst_ratio = 0, worst_gain = 0;
+  int samples = 0;
+  while (true) {
+    solver.advance_velocity();
+    check_signorini(solver, sig, 1e-3);
+    const ContactStepReport& r = solver.contact_report();
+    const Energies& en = solver.energies();
+    worst_gain = std::max(worst_gain, en.balance_error());  // > 0: energy appeared
+    if (solver.time() > 0.008 + 0.004 / v) {                // sliding steadily: 4 mm after the start
+      const double tangential = std::hypot(r.force[0], r.force[1]);
+      n_min = std::min(n_min, r.normal_force), n_max = std::max(n_max, r.normal_force);
+      n_sum += r.normal_force, t_sum += tangential, ++samples;
+      worst_ratio = std::max(worst_ratio, std::abs(tangential / (mu * r.normal_force) - 1));
+    }
+    if (solver.finished()) break;
+    solver.advance_position();
+  }
+  const double n_mean = n_sum / samples, t_mean = t_sum / samples;
+  std::printf(
+      "sliding over a coarser slab (%s, mu %.1f): normal force %.5f N mean (p A %.5f N), %.5f .. %.5f N (peak to peak %.3f %% of the "
+      "mean); tangential %.5f N mean = %.4f mu N (worst step %.3f %% off); energy gained at most %.2e J; deepest gap after a step %.2e of "
+      "an element\n",
+      method.c_str(), mu, n_mean, p * A, n_min, n_max, 100 * (n_max - n_min) / n_mean, t_mean, t_mean / (mu * n_mean), 100 * worst_ratio, worst_gain,
+      sig.penetration);
+  EXPECT_NEAR(n_mean / (p * A), 1.0, 0.02);
+  EXPECT_LE((n_max - n_min) / n_mean, 0.02);
+  EXPECT_NEAR(t_mean / (mu * n_mean), 1.0, 0.02);
+  EXPECT_LE(worst_gain, 1e-6 * p * A * 0.012);
+  EXPECT_LE(sig.penetration, 1e-3);
+  EXPECT_LE(sig.cone, 1e-9);
+}
+}  // namespace
+TEST(Contact, FrictionalSlidingOverACoarserSlabMortar) { sliding_over_a_coarser_slab("mortar"); }
+TEST(Contact, FrictionalSlidingOverACoarserSlabNodeToSurface) { sliding_over_a_coarser_slab("node_to_surface"); }
