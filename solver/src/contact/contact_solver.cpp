@@ -1,6 +1,7 @@
 // The integrator's view of contact: detection by each pair's master kind, then the bi-potential
 // solve over the rows, as one velocity correction per step.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -122,6 +123,76 @@ void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<doubl
     status[s] = std::max(status[s], static_cast<double>(rows_.status[k]));
     if (std::isnan(gap[s]) || rows_.gap[k] < gap[s]) gap[s] = rows_.gap[k];
   }
+}
+
+ContactSolver::AveragedPressure ContactSolver::averaged_peak_pressure(const double* u, double sensor_area) const {
+  AveragedPressure best;
+  if (!(sensor_area > 0)) return best;
+  const double radius = std::sqrt(sensor_area / M_PI);
+  auto position = [&](std::int32_t node) {
+    const std::size_t i = static_cast<std::size_t>(node);
+    return Vec3{model_.X[3 * i] + u[3 * i], model_.X[3 * i + 1] + u[3 * i + 1], model_.X[3 * i + 2] + u[3 * i + 2]};
+  };
+  auto pressure = [&](std::int32_t node) { return windowed_pressure_[static_cast<std::size_t>(node)]; };
+  // The centres: the pressed nodes; the box around them that a disc can reach.
+  std::vector<std::int32_t> centres;
+  for (std::int32_t v : slave_union_)
+    if (pressure(v) > 0) centres.push_back(v);
+  if (centres.empty()) return best;
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::int32_t c : centres) {
+    const Vec3 x = position(c);
+    for (std::size_t d = 0; d < 3; ++d) lo[d] = std::min(lo[d], x[d] - radius), hi[d] = std::max(hi[d], x[d] + radius);
+  }
+  // The slave triangles there (each once: a self-contact pair shares its surface), cut into
+  // kCuts^2 sub-triangles whose centroids carry their area and the interpolated pressure.
+  constexpr int kCuts = 8;
+  std::vector<std::array<std::int32_t, 3>> triangles;
+  for (const ContactPair& p : pairs_)
+    for (std::size_t t = 0; t * 3 < p.slave_triangles.size(); ++t) {
+      std::array<std::int32_t, 3> tri{p.slave_triangles[3 * t], p.slave_triangles[3 * t + 1], p.slave_triangles[3 * t + 2]};
+      bool inside = false;
+      for (std::int32_t v : tri) {
+        const Vec3 x = position(v);
+        inside = inside || (x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2]);
+      }
+      if (!inside) continue;
+      std::sort(tri.begin(), tri.end());
+      triangles.push_back(tri);
+    }
+  std::sort(triangles.begin(), triangles.end());
+  triangles.erase(std::unique(triangles.begin(), triangles.end()), triangles.end());
+  struct Sample {
+    Vec3 x;
+    double area, force;
+  };
+  std::vector<Sample> samples;
+  samples.reserve(triangles.size() * kCuts * kCuts);
+  for (const auto& tri : triangles) {
+    const Vec3 a = position(tri[0]), b = position(tri[1]), c = position(tri[2]);
+    const double pa = pressure(tri[0]), pb = pressure(tri[1]), pc = pressure(tri[2]);
+    const double area = 0.5 * norm(cross(sub(b.data(), a.data()), sub(c.data(), a.data()))) / (kCuts * kCuts);
+    for (int i = 0; i < kCuts; ++i)
+      for (int j = 0; i + j < kCuts; ++j)
+        for (int up = 0; up < (i + j + 1 < kCuts ? 2 : 1); ++up) {  // the upright and, inside, the inverted sub-triangle
+          const double l1 = (i + (up ? 2.0 : 1.0) / 3.0) / kCuts, l2 = (j + (up ? 2.0 : 1.0) / 3.0) / kCuts, l0 = 1 - l1 - l2;
+          Vec3 x;
+          for (std::size_t d = 0; d < 3; ++d) x[d] = l0 * a[d] + l1 * b[d] + l2 * c[d];
+          samples.push_back({x, area, (l0 * pa + l1 * pb + l2 * pc) * area});
+        }
+  }
+  // The average over the surface inside each disc: force over the sampled area (the same samples
+  // in both, so the sampling of the disc's rim cancels), output times only: a direct sum.
+  for (std::int32_t c : centres) {
+    const Vec3 xc = position(c);
+    double force = 0, area = 0;
+    for (const Sample& s : samples) {
+      const Vec3 d = sub(s.x.data(), xc.data());
+      if (dot(d, d) <= radius * radius) force += s.force, area += s.area;
+    }
+    if (area > 0 && force / area > best.value) best.value = force / area, best.node = c;
+  }
+  return best;
 }
 
 }  // namespace tactus::solver

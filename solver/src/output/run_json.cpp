@@ -25,6 +25,14 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
                      {"peak_pressure", {{"value", q.pressure}, {"time", q.pressure_time}}}});
   }
   const std::size_t peak_input_node = model.input_node(peaks.pressure_node);
+  nlohmann::json at_outputs = nlohmann::json::array();
+  for (const RunPeaks::AtOutput& o : peaks.at_outputs)
+    at_outputs.push_back({{"time", o.time},
+                          {"normal_force", o.normal_force},
+                          {"area", o.area},
+                          {"peak_pressure", o.peak_pressure},
+                          {"averaged_peak_pressure", o.averaged_peak_pressure},
+                          {"averaged_at", o.averaged_at}});
   return {
       {"pairs", pairs},
       {"steps_in_contact", peaks.contact_steps},
@@ -37,6 +45,8 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
         {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
       {"peak_step_pressure", {{"value", peaks.step_pressure}, {"time", peaks.step_pressure_time}}},
       {"pressure_window", solver_window},
+      {"pressure_average_area", sc.contact_solver.pressure_average_area},
+      {"at_outputs", at_outputs},
       {"search", {{"verlet_skin", sc.contact_solver.verlet_skin}, {"searches", search.searches}, {"list_builds", search.builds}}},
       {"uzawa",
        {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations}, {"unconverged_steps", peaks.unconverged_steps}}}};

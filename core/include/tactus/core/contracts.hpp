@@ -147,8 +147,10 @@ inline constexpr const char* energy = "energy";        // {initial, kinetic, int
 inline constexpr const char* peak_von_mises = "peak_von_mises_at_outputs";
 // {pairs: [{name, friction, slave_nodes, master, peak_force, peak_area, peak_pressure}] (one per directed pair;
 // the totals count each two_pass entry once), steps_in_contact, peak_force, peak_area, peak_pressure (windowed),
-// peak_step_pressure (one step's r_n / A), pressure_window (s), search: {verlet_skin, searches (pair-steps of the
-// node-to-surface search), list_builds (of them, how many rebuilt the Verlet lists)}, uzawa}
+// peak_step_pressure (one step's r_n / A), pressure_window (s), pressure_average_area (m^2), at_outputs: [{time,
+// normal_force, area, peak_pressure, averaged_peak_pressure (the largest average of the pressure field over a disc
+// of pressure_average_area), averaged_at}], search: {verlet_skin, searches (pair-steps of the search),
+// list_builds (of them, how many rebuilt the Verlet lists or integrated the mortar segments)}, uzawa}
 inline constexpr const char* contact = "contact";
 inline constexpr const char* reactions = "reactions";  // [{name, moment_about, final_force, final_moment, peak_force: {value, time, vector}}]
 // Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},

@@ -207,6 +207,17 @@ class ContactSolver {
   // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near).
   void node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status, std::vector<double>& gap) const;
 
+  // The reported pressure field, interpolated linearly on the slave triangles at displacement u,
+  // averaged over the part of the slave surfaces within the radius of a disc of `sensor_area`
+  // around each pressed node: the largest average and its centre node (internal); value 0 when
+  // nothing presses. A node's own value grows as the mesh is refined under an edge load; this
+  // average converges.
+  struct AveragedPressure {
+    double value = 0;
+    std::int32_t node = -1;
+  };
+  AveragedPressure averaged_peak_pressure(const double* u, double sensor_area) const;
+
  private:
   void detect(const double* u, double search_factor);
 
