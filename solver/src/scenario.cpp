@@ -163,8 +163,8 @@ const SectionSpec& contact_section() {
        typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false"),
        typed("method", ValueType::string, "",
              "node_to_surface (each slave node on its closest master point) | mortar (segment-to-segment: each slave node's "
-             "tributary surface integrated over the master triangles it overlaps)",
-             false, "\"node_to_surface\"")}};
+             "tributary surface integrated over the master triangles it overlaps, dual multipliers)",
+             false, "mortar; node_to_surface for self-contact, a rigid plane or two_pass")}};
   return s;
 }
 
@@ -184,7 +184,12 @@ const SectionSpec& contact_solver_section() {
                   "the reported contact pressure is r_n / A averaged over an exponential window of max(this, 10 initial critical steps), "
                   "so an impact's peak does not grow like 1/dt",
                   0, true),
-           "1e-5")}};
+           "1e-5"),
+       opt(number("pressure_average_area", "m^2",
+                  "at each output the contact pressure field is also averaged over discs of this area on the slave surfaces, and the largest "
+                  "average is reported (run.json contact.at_outputs), a peak that converges with the mesh",
+                  0, true),
+           "25e-6")}};
   return s;
 }
 
@@ -700,17 +705,18 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
       }
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
-      c.method = r.string(t, *spec.find("method"), path, "node_to_surface");
+      c.method = r.string(t, *spec.find("method"), path, "");
       if (!c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface) {
         const std::string what = "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself (self-contact)";
         if (c.method == "mortar") r.fail(path + ".method", "node_to_surface for self-contact", what + " with mortar");
         if (c.two_pass) r.fail(path + ".two_pass", "false for self-contact (every node of the surface is already a slave)", what + " with two_pass");
       }
-      if (c.method != "node_to_surface" && c.method != "mortar")
+      if (!c.method.empty() && c.method != "node_to_surface" && c.method != "mortar")
         r.fail(path + ".method", "\"node_to_surface\" or \"mortar\"", "\"" + c.method + "\"");
       if (c.method == "mortar" && c.plane)
         r.fail(path + ".method", "node_to_surface for a rigid plane (it has no surface to integrate over)", "mortar");
       if (c.two_pass && c.plane) r.fail(path + ".two_pass", "false for a rigid plane", "true");
+      if (c.two_pass && c.method == "mortar") r.fail(path + ".two_pass", "false with mortar (its rows already weigh the master's nodes)", "true");
       sc.contacts.push_back(c);
     });
   }
@@ -746,6 +752,7 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     sc.contact_solver.search_factor = r.number(t, *spec.find("search_factor"), "contact_solver", 0.5);
     sc.contact_solver.pressure_window = r.number(t, *spec.find("pressure_window"), "contact_solver", 1e-5);
     sc.contact_solver.verlet_skin = r.number(t, *spec.find("verlet_skin"), "contact_solver", 0.5);
+    sc.contact_solver.pressure_average_area = r.number(t, *spec.find("pressure_average_area"), "contact_solver", 25e-6);
   }
 }
 
@@ -791,6 +798,12 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
   read_pipeline(r, root);
   read_contact_solver(r, root, sc);
   return sc;
+}
+
+std::string contact_method(const ContactSpec& c) {
+  if (!c.method.empty()) return c.method;
+  const bool self_contact = !c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface;
+  return c.plane || self_contact || c.two_pass ? "node_to_surface" : "mortar";
 }
 
 }  // namespace tactus::solver

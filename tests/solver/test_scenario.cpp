@@ -286,6 +286,20 @@ TEST_F(ScenarioFile, SelfContactWithMortarOrTwoPassIsRefused) {
   expect_error(self("two_pass = true"), {"contact[0].two_pass", "self-contact"});
 }
 
+// The default method: mortar between two bodies in one pass, node to surface for self-contact and
+// two_pass (a rigid plane has its own master); mortar with two_pass is refused.
+TEST_F(ScenarioFile, ContactMethodDefaults) {
+  const Model one = build_model(read_scenario(write(contact_scenario(0.0105, "master_surface = \"zmin\""))));
+  ASSERT_EQ(one.contact_pairs.size(), 1u);
+  EXPECT_EQ(one.contact_pairs[0].master->describe().rfind("mortar surface", 0), 0u) << one.contact_pairs[0].master->describe();
+  const Model two = build_model(read_scenario(write(contact_scenario(0.0105, "master_surface = \"zmin\"\ntwo_pass = true"))));
+  ASSERT_EQ(two.contact_pairs.size(), 2u);
+  EXPECT_EQ(two.contact_pairs[0].master->describe().rfind("deformable surface", 0), 0u) << two.contact_pairs[0].master->describe();
+  const Model chosen = build_model(read_scenario(write(contact_scenario(0.0105, "master_surface = \"zmin\"\nmethod = \"node_to_surface\""))));
+  EXPECT_EQ(chosen.contact_pairs[0].master->describe().rfind("deformable surface", 0), 0u) << chosen.contact_pairs[0].master->describe();
+  expect_error(contact_scenario(0.0105, "master_surface = \"zmin\"\ntwo_pass = true\nmethod = \"mortar\""), {"contact[0].two_pass", "mortar"});
+}
+
 // Silently accepted before: a duplicated node used by tets (a crack in the mesh).
 TEST_F(ScenarioFile, CrackedMeshIsRefused) {
   TetMesh m = samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01);

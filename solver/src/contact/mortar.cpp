@@ -418,7 +418,13 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
     // A node whose own position is beyond the master's edge is held only from in front (behind the
     // plane's extension there is no surface to push it out of).
     if (!over[k] && ni.G < 0) continue;
-    MortarRow r{static_cast<std::int32_t>(k), p.slave_nodes[k], masters_.size(), 0, {ni.N[0] / nn, ni.N[1] / nn, ni.N[2] / nn}, ni.G / ni.D, 0, ni.D};
+    // The row's area (its pressure's denominator and its share of the contact area) is the
+    // covered area D_j, but at least half the node's tributary area: a node whose tributary hangs
+    // over the master's edge is held by that edge, a line load whose pressure the mesh cannot
+    // resolve; over the covered sliver alone its pressure grew without bound (2.8 GPa in one step
+    // on the hand). A node at least half covered reports r_n / D_j exactly (the patch tests).
+    const double area = std::max(ni.D, 0.5 * p.slave_area[k]);
+    MortarRow r{static_cast<std::int32_t>(k), p.slave_nodes[k], masters_.size(), 0, {ni.N[0] / nn, ni.N[1] / nn, ni.N[2] / nn}, ni.G / ni.D, 0, area};
     for (const auto& [m, v] : ni.M) masters_.push_back(m), weights_.push_back(-v / ni.D);
     r.end = masters_.size();
     r.along_normal = along_normal(r, masters_, weights_, x);

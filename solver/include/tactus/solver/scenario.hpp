@@ -105,8 +105,14 @@ struct ContactSpec {
   std::optional<std::array<Vec3, 2>> plane;  // point, outward normal (rigid plane master)
   double friction = 0;                       // Coulomb coefficient mu
   bool two_pass = false;                     // also the master's nodes against the slave surface
-  std::string method = "node_to_surface";    // or "mortar" (segment-to-segment integrals of the slave surface)
+  std::string method;                        // "node_to_surface", "mortar", or empty: contact_method() chooses
 };
+
+// The method of a [[contact]] entry: its own, or by default mortar (segment-to-segment integrals of
+// the slave surface: a pressure field that passes the contact patch test) for a deformable master
+// of another surface in one pass, and node_to_surface for self-contact, a rigid plane and two_pass
+// (mortar has no second pass: its rows already weigh the master's nodes).
+std::string contact_method(const ContactSpec& c);
 
 // [contact_solver]: the Uzawa iterations and the search.
 struct ContactSettings {
@@ -119,6 +125,11 @@ struct ContactSettings {
   // The reported contact pressure is the per-step pressure r_n / A averaged over an exponential
   // window of tau = max(pressure_window, 10 x the initial critical step), s.
   double pressure_window = 1e-5;
+  // The area of the pressure "sensor": at each output the reported pressure field is also averaged
+  // over every disc of this area on the slave surfaces (centred on a contact node), and the largest
+  // such average is reported. Unlike a node's value it does not grow when the mesh is refined at
+  // an edge or corner load, m^2.
+  double pressure_average_area = 25e-6;
 };
 
 struct Scenario {
