@@ -190,6 +190,34 @@ bool DeformableSurface::in_ring(std::size_t slave, const std::int32_t* tri) cons
 
 }  // namespace
 
+void BuildSnapshot::record(const ContactPair& p, const std::vector<std::int32_t>& master_triangles, const double* x_now, double band_now) {
+  if (nodes.empty()) {  // the topology does not change: once
+    nodes.assign(p.slave_nodes.begin(), p.slave_nodes.end());
+    nodes.insert(nodes.end(), master_triangles.begin(), master_triangles.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  }
+  x.resize(3 * nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    for (int c = 0; c < 3; ++c) x[3 * i + c] = x_now[3 * nodes[i] + c];
+  band = band_now;
+}
+
+bool BuildSnapshot::holds(const double* x_now, double band_now, double reach, int threads) const {
+  if (band != band_now || x.empty()) return false;
+  const std::size_t n = nodes.size();
+  const std::int32_t* ids = nodes.data();
+  const double* x0 = x.data();
+  double worst = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : worst) if (n > 20000)
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* xi = x_now + 3 * ids[i];
+    const double dx = xi[0] - x0[3 * i], dy = xi[1] - x0[3 * i + 1], dz = xi[2] - x0[3 * i + 2];
+    worst = std::max(worst, dx * dx + dy * dy + dz * dz);
+  }
+  return worst <= reach * reach;
+}
+
 void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double scale, const double* x, double margin, DetectionScratch::Grid& g) {
   const std::size_t T = triangles_.size() / 3;
   double lo[3], hi[3];
@@ -206,6 +234,7 @@ void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double sca
   const std::size_t cells = static_cast<std::size_t>(g.n[0]) * g.n[1] * g.n[2];
   g.count.assign(cells + 1, 0);
   g.box.resize(T);
+  g.extent.resize(6 * T);
   g.normal.resize(4 * T);
   for (std::size_t t = 0; t < T; ++t) {
     double a[3], b[3];
@@ -216,6 +245,7 @@ void build_triangle_grid(const std::vector<std::int32_t>& triangles_, double sca
     }
     auto& bx = g.box[t];
     for (int c = 0; c < 3; ++c) bx[c] = g.cell_of(a[c] - margin, c), bx[3 + c] = g.cell_of(b[c] + margin, c);
+    std::copy(a, a + 3, &g.extent[6 * t]), std::copy(b, b + 3, &g.extent[6 * t + 3]);
     store_triangle_normal(&triangles_[3 * t], x, &g.normal[4 * t]);
     for (int k = bx[2]; k <= bx[5]; ++k)
       for (int j = bx[1]; j <= bx[4]; ++j)
@@ -240,18 +270,7 @@ namespace {
 // moved more than skin / 2 since: a triangle point moves at most as far as its farthest vertex, so
 // a slave node and any master point have closed in by at most the skin.
 bool DeformableSurface::lists_valid(const double* x, double band, DetectionScratch& s, int threads) const {
-  if (s.skin <= 0 || s.built_band != band || s.x_built.empty()) return false;
-  const std::size_t n = s.involved.size();
-  const std::int32_t* nodes = s.involved.data();
-  const double* x0 = s.x_built.data();
-  double worst = 0;
-#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : worst) if (n > 20000)
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* xi = x + 3 * nodes[i];
-    const double dx = xi[0] - x0[3 * i], dy = xi[1] - x0[3 * i + 1], dz = xi[2] - x0[3 * i + 2];
-    worst = std::max(worst, dx * dx + dy * dy + dz * dz);
-  }
-  return 4 * worst <= s.skin * s.skin;
+  return s.skin > 0 && s.built.holds(x, band, 0.5 * s.skin, threads);
 }
 
 // Candidates of each slave node: the triangles in its grid cell whose bounding box grown by
@@ -260,16 +279,7 @@ void DeformableSurface::build_lists(const ContactPair& p, const double* x, doubl
   const double reach = band + s.skin;
   DetectionScratch::Grid& g = s.grid;
   build_triangle_grid(triangles_, p.search_scale, x, reach, g);
-  if (s.involved.empty()) {
-    s.involved.assign(p.slave_nodes.begin(), p.slave_nodes.end());
-    s.involved.insert(s.involved.end(), triangles_.begin(), triangles_.end());
-    std::sort(s.involved.begin(), s.involved.end());
-    s.involved.erase(std::unique(s.involved.begin(), s.involved.end()), s.involved.end());
-  }
-  s.x_built.resize(3 * s.involved.size());
-  for (std::size_t i = 0; i < s.involved.size(); ++i)
-    for (int c = 0; c < 3; ++c) s.x_built[3 * i + c] = x[3 * s.involved[i] + c];
-  s.built_band = band;
+  s.built.record(p, triangles_, x, band);
   ++s.builds;
   const std::size_t S = p.slave_nodes.size();
   s.candidate_start.assign(S + 1, 0);

@@ -10,12 +10,28 @@
 
 namespace tactus::solver {
 
+struct ContactPair;
+
+// Where a pair's nodes were when its search was last built, to tell when it must be built again:
+// the node-to-surface Verlet lists and the mortar segments' integration both hold while no node of
+// the pair has moved more than a reach since, and the band is the one they were built for.
+struct BuildSnapshot {
+  double band = -1;
+  std::vector<std::int32_t> nodes;  // the pair's slave nodes and master vertices, sorted, unique
+  std::vector<double> x;            // their positions at the build, 3 each
+  // Records the positions x of the pair's nodes (its slave nodes and master_triangles' vertices).
+  void record(const ContactPair& p, const std::vector<std::int32_t>& master_triangles, const double* x, double band);
+  // True when a build was recorded for this band and no node has moved more than `reach` since.
+  bool holds(const double* x, double band, double reach, int threads) const;
+};
+
 struct DetectionScratch {
   struct Grid {
     double lo[3]{}, cell = 1;
     int n[3]{1, 1, 1};
     std::vector<std::int32_t> start, items, count;
     std::vector<std::array<int, 6>> box;  // cell range of each triangle
+    std::vector<double> extent;           // 6 per triangle: its own box (min x, y, z, max x, y, z), not grown
     std::vector<double> normal;           // 4 per triangle: unit outward normal, 1 / (2 area); 0 if degenerate
     // The cell index along axis c of coordinate v, clamped to the grid.
     int cell_of(double v, int c) const { return std::clamp(static_cast<int>((v - lo[c]) / cell), 0, n[c] - 1); }
@@ -29,9 +45,7 @@ struct DetectionScratch {
   // slave node when they were built stay the only candidates while no node of the pair has moved
   // more than skin / 2 since (then no triangle can have come within band unseen).
   double skin = 0;                                        // extra search distance, m (set by the contact solver; 0: search every step)
-  double built_band = -1;                                 // the band the lists were built for
-  std::vector<std::int32_t> involved;                     // the pair's slave and master nodes, sorted, unique
-  std::vector<double> x_built;                            // their positions at the last build, 3 each
+  BuildSnapshot built;                                    // the last build of the lists
   std::vector<std::int32_t> candidate_start, candidates;  // per slave node, CSR
   std::vector<std::int32_t> active_triangles;             // the triangles whose normals the lists need, sorted
   std::size_t builds = 0, searches = 0;                   // list builds (mortar: integrations), and steps searched
@@ -39,7 +53,7 @@ struct DetectionScratch {
 
 // A uniform grid over the triangles (3 node ids each, outward) at positions x, each triangle in
 // the cells its box grown by `margin` touches; cells about `scale` wide (at most ~8 per triangle).
-// Also each triangle's unit outward normal and 1 / (2 area). (detection.cpp)
+// Also each triangle's own box, unit outward normal and 1 / (2 area). (detection.cpp)
 void build_triangle_grid(const std::vector<std::int32_t>& triangles, double scale, const double* x, double margin, DetectionScratch::Grid& g);
 
 }  // namespace tactus::solver

@@ -211,14 +211,10 @@ class MortarSurface final : public ContactMaster {
   mutable std::vector<std::int32_t> masters_;
   mutable std::vector<double> weights_;
   mutable std::vector<MortarRow> integrated_rows_;
-  mutable std::vector<std::int32_t> tracked_;  // the pair's slave and master nodes
-  mutable std::vector<double> tracked_at_integration_;
-  mutable double integrated_band_ = -1;
-  bool integration_holds(const ContactPair& p, const double* x, double band) const;
-  void emit_rows(std::int32_t pi, const double* x, ContactRows& rows) const;
+  mutable BuildSnapshot integrated_;  // where the pair's nodes were at the last integration
   mutable std::vector<std::size_t> slave_local_;
-  mutable std::vector<double> master_box_;  // 6 per master triangle: its box at this step
-  mutable std::vector<char> over_;          // per slave node: its own position is over a master triangle
+  mutable std::vector<char> over_;  // per slave node: its own position is over a master triangle
+  void emit_rows(std::int32_t pi, const double* x, ContactRows& rows) const;
   void segments_of(const ContactPair& p, std::size_t st, const double* x, double band, const DetectionScratch::Grid& g,
                    std::vector<std::size_t>& seen, SegmentChunk& w) const;
 };
@@ -253,7 +249,7 @@ void MortarSurface::segments_of(const ContactPair& p, std::size_t st, const doub
           const auto t = static_cast<std::size_t>(g.items[static_cast<std::size_t>(it)]);
           if (seen[t] == st) continue;
           seen[t] = st;
-          const double* mb = &master_box_[6 * t];  // most candidates of a cell are beyond the band: their boxes tell
+          const double* mb = &g.extent[6 * t];  // most candidates of a cell are beyond the band: their boxes tell
           if (mb[0] > sb[3] + band || mb[3] < sb[0] - band || mb[1] > sb[4] + band || mb[4] < sb[1] - band || mb[2] > sb[5] + band ||
               mb[5] < sb[2] - band)
             continue;
@@ -324,24 +320,6 @@ void MortarSurface::segments_of(const ContactPair& p, std::size_t st, const doub
   w.triangles.push_back(ti);
 }
 
-bool MortarSurface::integration_holds(const ContactPair& p, const double* x, double band) const {
-  if (tracked_.empty()) {
-    tracked_.assign(p.slave_nodes.begin(), p.slave_nodes.end());
-    tracked_.insert(tracked_.end(), triangles_.begin(), triangles_.end());
-    std::sort(tracked_.begin(), tracked_.end());
-    tracked_.erase(std::unique(tracked_.begin(), tracked_.end()), tracked_.end());
-  }
-  if (band != integrated_band_ || tracked_at_integration_.size() != 3 * tracked_.size()) return false;
-  const double limit = kMortarRefresh * p.search_scale;
-  for (std::size_t i = 0; i < tracked_.size(); ++i) {
-    const double* now = x + 3 * tracked_[i];
-    const double* then = &tracked_at_integration_[3 * i];
-    const double d0 = now[0] - then[0], d1 = now[1] - then[1], d2 = now[2] - then[2];
-    if (d0 * d0 + d1 * d1 + d2 * d2 > limit * limit) return false;
-  }
-  return true;
-}
-
 // n . (x_j - sum_k w_k x_k) of a row.
 double along_normal(const MortarRow& r, const std::vector<std::int32_t>& masters, const std::vector<double>& weights, const double* x) {
   Vec3 d{x[3 * r.slave_node], x[3 * r.slave_node + 1], x[3 * r.slave_node + 2]};
@@ -359,7 +337,7 @@ void MortarSurface::emit_rows(std::int32_t pi, const double* x, ContactRows& row
 void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
                            int threads) const {
   ++scratch.searches;
-  if (integration_holds(p, x, band)) {
+  if (integrated_.holds(x, band, kMortarRefresh * p.search_scale, threads)) {
     emit_rows(pi, x, rows);
     return;
   }
@@ -372,12 +350,6 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
     local.resize(p.slave_triangles.size());
     for (std::size_t i = 0; i < local.size(); ++i)
       local[i] = static_cast<std::size_t>(std::lower_bound(p.slave_nodes.begin(), p.slave_nodes.end(), p.slave_triangles[i]) - p.slave_nodes.begin());
-  }
-  master_box_.resize(6 * T);
-  for (std::size_t t = 0; t < T; ++t) {
-    const double* v[3] = {x + 3 * triangles_[3 * t], x + 3 * triangles_[3 * t + 1], x + 3 * triangles_[3 * t + 2]};
-    for (int c = 0; c < 3; ++c)
-      master_box_[6 * t + c] = std::min({v[0][c], v[1][c], v[2][c]}), master_box_[6 * t + 3 + c] = std::max({v[0][c], v[1][c], v[2][c]});
   }
   // The segment pass in parallel: the slave triangles in kChunks contiguous chunks, taken by the
   // threads as they come (the triangles near the master sit in a few chunks) and added in chunk
@@ -430,10 +402,7 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
     r.along_normal = along_normal(r, masters_, weights_, x);
     integrated_rows_.push_back(r);
   }
-  tracked_at_integration_.resize(3 * tracked_.size());
-  for (std::size_t i = 0; i < tracked_.size(); ++i)
-    for (std::size_t c = 0; c < 3; ++c) tracked_at_integration_[3 * i + c] = x[3 * static_cast<std::size_t>(tracked_[i]) + c];
-  integrated_band_ = band;
+  integrated_.record(p, triangles_, x, band);
   emit_rows(pi, x, rows);
 }
 
