@@ -168,11 +168,7 @@ class RunLoop {
     if (!solver_.contact().empty()) {
       const ContactStepReport& cr = solver_.contact_report();
       const ContactSolver::AveragedPressure avg = solver_.contact().averaged_peak_pressure(u.data(), sc_.contact_solver.pressure_average_area);
-      RunPeaks::AtOutput o{t, cr.normal_force, cr.area, cr.peak_pressure, avg.value, {0, 0, 0}};
-      if (avg.node >= 0)
-        for (std::size_t d = 0; d < 3; ++d)
-          o.averaged_at[d] = model_.X[3 * static_cast<std::size_t>(avg.node) + d] + u[3 * static_cast<std::size_t>(avg.node) + d];
-      peaks_.at_outputs.push_back(o);
+      peaks_.at_outputs.push_back({t, cr.normal_force, cr.area, cr.peak_pressure, avg.value, avg.at});
     }
     pvd_.emplace_back(t, "results/" + name);
     ++summary_.outputs;

@@ -706,7 +706,7 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
       c.method = r.string(t, *spec.find("method"), path, "");
-      if (!c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface) {
+      if (is_self_contact(c)) {
         const std::string what = "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself (self-contact)";
         if (c.method == "mortar") r.fail(path + ".method", "node_to_surface for self-contact", what + " with mortar");
         if (c.two_pass) r.fail(path + ".two_pass", "false for self-contact (every node of the surface is already a slave)", what + " with two_pass");
@@ -802,8 +802,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
 
 std::string contact_method(const ContactSpec& c) {
   if (!c.method.empty()) return c.method;
-  const bool self_contact = !c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface;
-  return c.plane || self_contact || c.two_pass ? "node_to_surface" : "mortar";
+  return c.plane || is_self_contact(c) || c.two_pass ? "node_to_surface" : "mortar";
 }
+
+bool is_self_contact(const ContactSpec& c) { return !c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface; }
 
 }  // namespace tactus::solver

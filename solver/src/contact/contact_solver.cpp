@@ -190,7 +190,7 @@ ContactSolver::AveragedPressure ContactSolver::averaged_peak_pressure(const doub
       const Vec3 d = sub(s.x.data(), xc.data());
       if (dot(d, d) <= radius * radius) force += s.force, area += s.area;
     }
-    if (area > 0 && force / area > best.value) best.value = force / area, best.node = c;
+    if (area > 0 && force / area > best.value) best.value = force / area, best.node = c, best.at = xc;
   }
   return best;
 }

@@ -165,8 +165,7 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       m.contact_pairs.push_back(std::move(p));
       continue;
     }
-    const std::size_t mb = body_index(cs.master_body);
-    if (mb == sb && cs.master_surface == cs.slave_surface) {
+    if (is_self_contact(cs)) {
       ContactPair p;
       p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " self-contact";
       p.friction = cs.friction;
@@ -176,7 +175,7 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       m.contact_pairs.push_back(std::move(p));
       continue;
     }
-    const auto master_tris = group_triangles(m, mb, cs.master_surface, file, key + ".master_surface");
+    const auto master_tris = group_triangles(m, body_index(cs.master_body), cs.master_surface, file, key + ".master_surface");
     for (int pass = 0; pass < (cs.two_pass ? 2 : 1); ++pass) {
       ContactPair p;
       const bool swap = pass == 1;

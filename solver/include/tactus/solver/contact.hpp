@@ -215,6 +215,7 @@ class ContactSolver {
   struct AveragedPressure {
     double value = 0;
     std::int32_t node = -1;
+    Vec3 at{0, 0, 0};  // the centre node's current position
   };
   AveragedPressure averaged_peak_pressure(const double* u, double sensor_area) const;
 

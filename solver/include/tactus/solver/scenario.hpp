@@ -113,6 +113,8 @@ struct ContactSpec {
 // of another surface in one pass, and node_to_surface for self-contact, a rigid plane and two_pass
 // (mortar has no second pass: its rows already weigh the master's nodes).
 std::string contact_method(const ContactSpec& c);
+// A [[contact]] entry whose master is its own slave surface (skin on skin).
+bool is_self_contact(const ContactSpec& c);
 
 // [contact_solver]: the Uzawa iterations and the search.
 struct ContactSettings {
