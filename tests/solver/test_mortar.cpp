@@ -15,6 +15,7 @@
 
 #include "tactus/core/gmsh_session.hpp"
 
+#include "gmsh_kit.hpp"
 #include "scenario_kit.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
@@ -45,20 +46,8 @@ TetMesh gmsh_box(double z0, double h, const char* name) {
   gmsh::model::occ::synchronize();
   gmsh::model::addPhysicalGroup(3, {vol}, 1);
   gmsh::model::setPhysicalName(3, 1, "body");
-  gmsh::vectorpair faces;
-  gmsh::model::getBoundary({{3, vol}}, faces, false, false, false);
-  static const char* names[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
-  for (const auto& f : faces) {
-    double lo[3], hi[3];
-    gmsh::model::getBoundingBox(2, f.second, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
-    const double box_lo[3] = {0, 0, z0}, box_hi[3] = {L, L, z0 + H};
-    for (int c = 0; c < 3; ++c)
-      for (int side = 0; side < 2; ++side)
-        if (hi[c] - lo[c] < 1e-6 && std::abs(0.5 * (lo[c] + hi[c]) - (side ? box_hi[c] : box_lo[c])) < 1e-6) {  // OCC boxes carry a 1e-7 tolerance
-          gmsh::model::addPhysicalGroup(2, {f.second}, 11 + 2 * c + side);
-          gmsh::model::setPhysicalName(2, 11 + 2 * c + side, names[2 * c + side]);
-        }
-  }
+  const double lo[3] = {0, 0, z0}, hi[3] = {L, L, z0 + H};
+  testkit::tag_box_plane_faces(vol, lo, hi);
   gmsh::option::setNumber("Mesh.MeshSizeMin", h);
   gmsh::option::setNumber("Mesh.MeshSizeMax", h);
   gmsh::option::setNumber("Mesh.RandomSeed", 1);
