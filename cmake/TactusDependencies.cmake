@@ -74,4 +74,8 @@ if(NOT TACTUS_DEPENDENCIES_FOR_CONSUMER)
 
   find_package(OpenCV 4.6 QUIET COMPONENTS core imgproc imgcodecs)
   tactus_require(OpenCV libopencv-dev)
+
+  # DICOM: GDCM decodes (and the phantom writes) pixel data; tactus walks every file first.
+  find_package(GDCM 3 QUIET)
+  tactus_require(GDCM libgdcm-dev)
 endif()

@@ -1,5 +1,5 @@
-// tactus-phantom: writes a synthetic hand CT slice stack (slice_NNNN.png + stack.json) and its
-// ground truth (truth.h5, truth.vti) into the output folder.
+// tactus-phantom: writes a synthetic hand CT, a slice stack (slice_NNNN.png + stack.json) or a
+// DICOM series (IM_NNNN.dcm), and its ground truth (truth.h5, truth.vti) into the output folder.
 #include <chrono>
 
 #include "tactus/core/cli.hpp"
@@ -20,11 +20,24 @@ int main(int argc, char** argv) {
   app.add_option("--blur", p.blur_voxels, "partial-volume blur, Gaussian sigma in voxels")->capture_default_str();
   app.add_option("--flexion", p.flexion_deg, "flexion of each finger joint, degrees")->capture_default_str();
   app.add_option("--seed", p.seed, "noise seed")->capture_default_str();
+  std::string format = "png";
+  samples::DicomSeriesOptions dicom;
+  app.add_option("--format", format, "png: slice_NNNN.png + stack.json; dicom: a CT Image Storage series IM_NNNN.dcm")
+      ->check(CLI::IsMember({"png", "dicom"}))
+      ->capture_default_str();
+  app.add_option("--dicom-compression", dicom.compression, "DICOM transfer syntax: none (explicit VR little endian), rle, jpeg-lossless")
+      ->check(CLI::IsMember({"none", "rle", "jpeg-lossless"}))
+      ->capture_default_str();
+  app.add_option("--series-uid", dicom.series_uid, "DICOM SeriesInstanceUID (default: a new one)");
+  app.add_option("--series-description", dicom.description, "DICOM SeriesDescription")->capture_default_str();
   return cli::run(app, argc, argv, common, [&] {
     const auto t0 = std::chrono::steady_clock::now();
     OutputFolder out(common.output, common.output_rules({}));
     const samples::Phantom ph = samples::make_hand_phantom(p);
-    samples::write_slice_stack(ph.ct, out.path());
+    if (format == "dicom")
+      samples::write_dicom_series(ph.ct, out.path(), dicom);
+    else
+      samples::write_slice_stack(ph.ct, out.path());
     write_h5(out.path() / "truth.h5", "/labels", ph.truth, &ph.labels);
     write_vti(out.path() / "truth.vti", ph.truth, "labels");
     out.commit();

@@ -9,9 +9,10 @@ BUILD=${TACTUS_BUILD_DIR:-$ROOT/build}
 PACKAGES=(
   g++ cmake ninja-build pkg-config git
   libeigen3-dev libhdf5-dev libgmsh-dev libvtk9-dev libcgal-dev libopencv-dev libtbb-dev
-  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libgtest-dev
+  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libgtest-dev libgdcm-dev
   xvfb xauth
   python3 python3-numpy python3-h5py python3-meshio python3-vtk9
+  python3-pydicom dicom3tools
 )
 
 missing=()

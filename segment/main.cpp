@@ -1,4 +1,4 @@
-// tactus-segment: CT slice stack -> labels.h5/.vti (air, soft tissue, one id per bone),
+// tactus-segment: CT slice stack or DICOM series -> labels.h5/.vti (air, soft tissue, one id per bone),
 // surfaces/*.stl|ply (skin and bones) and segment.json. Thin driver over tactus::segment.
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
@@ -7,14 +7,15 @@
 
 int main(int argc, char** argv) {
   using namespace tactus;
-  CLI::App app{"tactus-segment: segment a hand CT slice stack into soft tissue and individual bones", "tactus-segment"};
+  CLI::App app{"tactus-segment: segment a hand CT (slice stack or DICOM series) into soft tissue and individual bones", "tactus-segment"};
   cli::CommonOptions common;
   cli::add_common_options(app, common, "output folder (labels.h5, labels.vti, surfaces/, segment.json)", "an output folder");
   std::string stack;
   segment::StageOptions o;
   double body = 0, bone = 0;
   bool no_surfaces = false;
-  app.add_option("stack", stack, "slice stack folder (slice_NNNN.png|tif + stack.json)")->required();
+  app.add_option("stack", stack, "CT input folder: a slice stack (slice_NNNN.png|tif + stack.json) or DICOM files")->required();
+  app.add_option("--series", o.dicom_series, "SeriesInstanceUID of the DICOM series to read (a folder with several lists them)");
   auto* body_opt = app.add_option("--body-threshold", body, "HU separating air from the body (default: Otsu)");
   auto* bone_opt = app.add_option("--bone-threshold", bone, "HU separating soft tissue from bone (default: Otsu in the body)");
   app.add_option("--denoise", o.segment.denoise_sigma_voxels, "Gaussian denoising sigma, voxels")->capture_default_str();

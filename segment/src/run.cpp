@@ -3,8 +3,10 @@
 #include <chrono>
 #include <fstream>
 
+#include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/version.hpp"
+#include "tactus/segment/dicom.hpp"
 #include "tactus/segment/stack.hpp"
 
 namespace fs = std::filesystem;
@@ -21,7 +23,11 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); };
   const auto t0 = Clock::now();
-  const SliceStack stack = read_slice_stack(stack_folder);
+  // A folder with stack.json is a slice stack; one with DICOM files (and no stack.json) a series.
+  const bool dicom = is_dicom_folder(stack_folder);
+  if (!dicom && !o.dicom_series.empty())
+    throw InputError(stack_folder.string(), "--series", "a folder of DICOM files (--series chooses among its series)", "a slice stack folder");
+  const SliceStack stack = dicom ? read_dicom_series(stack_folder, o.dicom_series) : read_slice_stack(stack_folder);
   const double t_read = seconds(t0);
   const auto t1 = Clock::now();
   const Segmentation s = segment_hand(stack.hu, o.segment);
@@ -37,6 +43,7 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   j["dims"] = stack.hu.dims;
   j["spacing_m"] = stack.hu.spacing;
   j["bit_depth"] = stack.bit_depth;
+  j["input"] = stack.source;
   j["thresholds"] = {{"body_hu", s.body_threshold_hu},         {"body_source", s.body_threshold_source},   {"bone_hu", s.bone_threshold_hu},
                      {"bone_source", s.bone_threshold_source}, {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
   j["steps"] = {"3-D Gaussian denoise sigma " + std::to_string(o.segment.denoise_sigma_voxels) + " voxel",

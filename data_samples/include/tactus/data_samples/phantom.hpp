@@ -42,3 +42,21 @@ Phantom make_hand_phantom(const PhantomParams& params);
 void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::path& folder);
 
 }  // namespace tactus::samples
+
+namespace tactus::samples {
+
+// A CT Image Storage series (one file per slice, IM_NNNN.dcm) of `ct`: explicit VR little
+// endian, or compressed by GDCM (RLE lossless, JPEG lossless); stored = HU + 1024 unsigned with
+// RescaleIntercept -1024, PixelSpacing, ImagePositionPatient (the slice's voxel-centre origin),
+// axial ImageOrientationPatient 1\0\0\0\1\0, and the patient, study, series, frame-of-reference,
+// equipment and SOP common attributes a CT image requires.
+struct DicomSeriesOptions {
+  std::string compression = "none";  // "none", "rle", "jpeg-lossless"
+  std::string series_uid;            // empty: a new UID
+  std::string study_uid;             // empty: a new UID
+  std::string description = "tactus phantom";
+  int series_number = 1;
+};
+void write_dicom_series(const Volume<std::int16_t>& ct, const std::filesystem::path& folder, const DicomSeriesOptions& options = {});
+
+}  // namespace tactus::samples

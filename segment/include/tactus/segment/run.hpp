@@ -1,5 +1,6 @@
 #pragma once
-// The segment stage as a whole: slice stack -> labels.h5, labels.vti, surfaces/, segment.json.
+// The segment stage as a whole: slice stack or DICOM series -> labels.h5, labels.vti, surfaces/,
+// segment.json.
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@ struct StageOptions {
   SegmentParams segment;
   SurfaceParams surfaces;
   bool write_surfaces = true;
+  std::string dicom_series;  // a DICOM folder's SeriesInstanceUID (empty: its only series)
 };
 
 // Writes labels.h5, labels.vti, surfaces/ and segment.json into `out` and commits it; returns the

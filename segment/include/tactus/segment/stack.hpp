@@ -15,6 +15,7 @@ struct SliceStack {
   Volume<float> hu;   // Hounsfield units; spacing/origin in metres
   int bit_depth = 0;  // 8 or 16
   std::size_t files = 0;
+  std::string source = "slice stack";  // or "DICOM series <uid>"
 };
 
 SliceStack read_slice_stack(const std::filesystem::path& folder);
