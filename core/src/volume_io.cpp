@@ -2,6 +2,7 @@
 #include <hdf5.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
+#include <vtkMatrix3x3.h>
 #include <vtkNew.h>
 #include <vtkObject.h>
 #include <vtkPointData.h>
@@ -27,6 +28,18 @@
 namespace fs = std::filesystem;
 
 namespace tactus {
+
+void validate_direction(const Direction& d, const std::string& file, const std::string& field) {
+  for (double x : d)
+    if (!std::isfinite(x)) throw InputError(file, field, "a finite orientation matrix", "a non-finite entry");
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      const double dot = d[a] * d[b] + d[3 + a] * d[3 + b] + d[6 + a] * d[6 + b];
+      if (std::abs(dot - (a == b ? 1.0 : 0.0)) > 1e-4)
+        throw InputError(file, field, "orthonormal axis directions (a rotation, possibly with a reflection)",
+                         "axes " + std::to_string(a) + " and " + std::to_string(b) + " with dot product " + std::to_string(dot));
+    }
+}
 
 void validate_volume_geometry(const std::array<int, 3>& dims, const std::array<double, 3>& spacing, const std::array<double, 3>& origin,
                               std::size_t bytes_per_voxel, const std::string& file, const std::string& field) {
@@ -127,6 +140,24 @@ void write_double3_attribute(hid_t obj, const char* name, const std::array<doubl
   H5Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
   H5Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, v.data());
+}
+
+void write_doubles_attribute(hid_t obj, const char* name, const double* v, hsize_t n) {
+  H5Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  H5Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, v);
+}
+
+// The optional direction attribute (9 numbers, row by row); identity when absent (older files).
+Direction read_direction_attribute(hid_t obj, const std::string& file, const std::string& dataset) {
+  if (H5Aexists(obj, "direction") <= 0) return kIdentityDirection;
+  H5Handle attr(H5Aopen(obj, "direction", H5P_DEFAULT), H5Aclose);
+  H5Handle space(H5Aget_space(attr.get()), H5Sclose);
+  if (H5Sget_simple_extent_npoints(space.get()) != 9) throw InputError(file, dataset + "@direction", "9 numbers (a 3x3 matrix, row by row)");
+  Direction d{};
+  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, d.data()) < 0) throw InputError(file, dataset + "@direction", "numeric values");
+  validate_direction(d, file, dataset + "@direction");
+  return d;
 }
 
 void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
@@ -242,6 +273,7 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
       throw WriteError(file.string(), "HDF5 failed writing " + dataset);
     write_double3_attribute(ds.get(), "spacing", volume.spacing);
     write_double3_attribute(ds.get(), "origin", volume.origin);
+    write_doubles_attribute(ds.get(), "direction", volume.direction.data(), 9);
     write_string_attribute(ds.get(), "units", "m");
     write_string_attribute(ds.get(), "axes", "z,y,x (attributes are x,y,z)");
     if (labels) {
@@ -284,6 +316,7 @@ Volume<T> read_h5_direct(const fs::path& file, const std::string& dataset, Label
   v.dims = {static_cast<int>(shape[2]), static_cast<int>(shape[1]), static_cast<int>(shape[0])};
   v.spacing = read_double3_attribute(ds.get(), "spacing", fname, dataset);
   v.origin = read_double3_attribute(ds.get(), "origin", fname, dataset);
+  v.direction = read_direction_attribute(ds.get(), fname, dataset);
   validate_volume_geometry(v.dims, v.spacing, v.origin, sizeof(T), fname, dataset);
   // The declared shape must be backed by the file: stored bytes cannot be more than ~1000x
   // smaller than the raw data (deflate's limit), so a 6 kB file cannot declare 10^15 voxels.
@@ -316,6 +349,7 @@ Volume<T> get_volume(ByteReader& r) {
   v.dims = r.get<std::array<int, 3>>();
   v.spacing = r.get<std::array<double, 3>>();
   v.origin = r.get<std::array<double, 3>>();
+  v.direction = r.get<Direction>();
   v.data = r.get_vector<T>();
   return v;
 }
@@ -334,7 +368,7 @@ Volume<T> read_h5(const fs::path& file, const std::string& dataset, LabelTable* 
       [&](ByteWriter& w) {
         LabelTable table;
         const Volume<T> v = read_h5_direct<T>(file, dataset, labels ? &table : nullptr);
-        w.put(v.dims), w.put(v.spacing), w.put(v.origin);
+        w.put(v.dims), w.put(v.spacing), w.put(v.origin), w.put(v.direction);
         w.put_vector(v.data);
         w.put<std::uint64_t>(table.size());
         for (const auto& [id, name] : table) w.put(id), w.put_string(name);
@@ -358,6 +392,7 @@ void write_vti(const fs::path& file, const Volume<T>& volume, const std::string&
   image->SetDimensions(volume.dims[0], volume.dims[1], volume.dims[2]);
   image->SetSpacing(volume.spacing.data());
   image->SetOrigin(volume.origin.data());
+  image->SetDirectionMatrix(volume.direction.data());  // ParaView places the voxels where they are in the world
   auto array = make_vtk_array<T>();
   array->SetName(array_name.c_str());
   array->SetNumberOfComponents(1);
@@ -394,10 +429,14 @@ Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
         if (!array) throw InputError(fname, array_name, "a point-data array named " + array_name);
         std::array<int, 3> d{};
         std::array<double, 3> spacing{}, origin{};
+        Direction direction{};
         image->GetDimensions(d.data());
         image->GetSpacing(spacing.data());
         image->GetOrigin(origin.data());
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) direction[static_cast<std::size_t>(3 * r + c)] = image->GetDirectionMatrix()->GetElement(r, c);
         validate_volume_geometry(d, spacing, origin, sizeof(T), fname, array_name);
+        validate_direction(direction, fname, array_name + " direction");
         if (array->GetNumberOfTuples() != image->GetNumberOfPoints() || array->GetNumberOfComponents() != 1)
           throw InputError(fname, array_name, "one value per voxel");
         std::vector<T> data(static_cast<std::size_t>(array->GetNumberOfTuples()));
@@ -407,7 +446,7 @@ Volume<T> read_vti(const fs::path& file, const std::string& array_name) {
           if (!(value >= lo && value <= hi)) throw InputError(fname, array_name, "values this volume type can hold", std::to_string(value));
           data[static_cast<std::size_t>(i)] = static_cast<T>(value);
         }
-        w.put(d), w.put(spacing), w.put(origin);
+        w.put(d), w.put(spacing), w.put(origin), w.put(direction);
         w.put_vector(data);
       },
       limits_for_file(fname, 20, 2));

@@ -47,6 +47,13 @@ void write_dicom_series(const Volume<std::int16_t>& ct, const std::filesystem::p
   const std::string study = o.study_uid.empty() ? uids.Generate() : o.study_uid;
   const std::string series = o.series_uid.empty() ? uids.Generate() : o.series_uid;
   const std::string frame = uids.Generate();
+  validate_direction(ct.direction, folder.string(), "direction");
+  {
+    const Direction& D = ct.direction;  // the slice normal must be row x column, as readers assume
+    const double n[3] = {D[3] * D[7] - D[6] * D[4], D[6] * D[1] - D[0] * D[7], D[0] * D[4] - D[3] * D[1]};
+    if (std::abs(n[0] - D[2]) + std::abs(n[1] - D[5]) + std::abs(n[2] - D[8]) > 1e-6)
+      throw InputError(folder.string(), "direction", "a rotation (the slice axis = row x column direction)", "a reflection");
+  }
   const int nx = ct.dims[0], ny = ct.dims[1], nz = ct.dims[2];
   std::vector<std::uint16_t> pixels(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
   for (int k = 0; k < nz; ++k) {
@@ -63,10 +70,12 @@ void write_dicom_series(const Volume<std::int16_t>& ct, const std::filesystem::p
     image->SetSpacing(0, ct.spacing[0] * 1e3);
     image->SetSpacing(1, ct.spacing[1] * 1e3);
     image->SetSpacing(2, ct.spacing[2] * 1e3);
-    const double origin[3] = {ct.origin[0] * 1e3, ct.origin[1] * 1e3, (ct.origin[2] + k * ct.spacing[2]) * 1e3};
+    const Direction& D = ct.direction;
+    double origin[3];
+    for (int a = 0; a < 3; ++a) origin[a] = (ct.origin[a] + D[3 * static_cast<std::size_t>(a) + 2] * k * ct.spacing[2]) * 1e3;
     image->SetOrigin(origin);
     image->SetOrigin(2, origin[2]);  // a 2-D image keeps only two components of SetOrigin(double[3])
-    const double cosines[6] = {1, 0, 0, 0, 1, 0};
+    const double cosines[6] = {D[0], D[3], D[6], D[1], D[4], D[7]};
     image->SetDirectionCosines(cosines);
     image->SetIntercept(kIntercept);
     image->SetSlope(1.0);

@@ -371,6 +371,19 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
     if (peeled > 0 && p.relocate_passes > 0) relocate_short_tets(mesh, p.facet_distance_mm * 1e-3, post);
   }
   check_every_label_meshed(labels, table, per_label);
+  // Meshed and improved in the voxels' axis-aligned frame (the relocation pass tries moves along
+  // its axes); now placed where the voxels are in the world. A reflection turns every tet and
+  // triangle inside out, so their node order is turned back.
+  if (!is_identity(labels.direction)) {
+    for (Vec3& x : mesh.nodes) {
+      const auto w = labels.to_world({x[0], x[1], x[2]});
+      x = {w[0], w[1], w[2]};
+    }
+    if (determinant(labels.direction) < 0) {
+      for (auto& t : mesh.tets) std::swap(t[2], t[3]);
+      for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+    }
+  }
   for (const auto& [label, count] : per_label) {
     auto it = table.find(label);
     mesh.groups.push_back({3, label, it != table.end() ? it->second : "label_" + std::to_string(label)});

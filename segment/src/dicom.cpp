@@ -386,16 +386,11 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
   if (slices.size() < 2) throw InputError(dir, "series " + chosen->uid, "at least 2 slices (the slice spacing comes from their positions)", "1");
 
   // Volume axes: x along the row cosine (column index), y along the column cosine (row index),
-  // z along their cross product, the slice normal.
+  // z along their cross product, the slice normal; any orthonormal orientation is carried as the
+  // volume's direction (through labels.h5 to the mesh's coordinates).
   const double* r = first.orientation.data();
   const double* c = first.orientation.data() + 3;
   const double n[3] = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
-  if (std::abs(r[0] - 1) > 1e-4 || std::abs(c[1] - 1) > 1e-4)
-    throw InputError(first.file.string(), "(0020,0037) ImageOrientationPatient",
-                     "axial slices with rows along +x and columns along +y (1\\0\\0\\0\\1\\0): tactus volumes are axis-aligned; "
-                     "rotated or flipped orientations are not carried yet",
-                     std::to_string(r[0]) + "\\" + std::to_string(r[1]) + "\\" + std::to_string(r[2]) + "\\" + std::to_string(c[0]) + "\\" +
-                         std::to_string(c[1]) + "\\" + std::to_string(c[2]));
   std::sort(slices.begin(), slices.end(),
             [&](const DicomSlice& a, const DicomSlice& b) { return dot(a.position.data(), n) < dot(b.position.data(), n); });
   std::vector<double> gaps;
@@ -460,6 +455,8 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
   const std::vector<std::uint16_t> stored = reader.get_vector<std::uint16_t>();
   SliceStack out;
   out.hu = Volume<float>({nx, ny, nz}, spacing, origin);
+  out.hu.direction = {r[0], c[0], n[0], r[1], c[1], n[1], r[2], c[2], n[2]};  // columns: row, column, slice normal
+  validate_direction(out.hu.direction, first.file.string(), "(0020,0037) ImageOrientationPatient");
   if (stored.size() != out.hu.size()) throw InputError(dir, "", "slices of one size", "a malformed read");
   out.bit_depth = first.bits_allocated;
   out.files = slices.size();

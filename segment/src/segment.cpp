@@ -40,7 +40,7 @@ double otsu_threshold(const std::vector<float>& values, const std::vector<std::u
 
 namespace {
 
-Volume<std::uint8_t> mask_like(const Volume<float>& v) { return Volume<std::uint8_t>(v.dims, v.spacing, v.origin, 0); }
+Volume<std::uint8_t> mask_like(const Volume<float>& v) { return v.like<std::uint8_t>(0); }
 
 // 6-neighbour erosion repeated `n` times.
 Volume<std::uint8_t> erode(const Volume<std::uint8_t>& m, int n) {
@@ -238,6 +238,7 @@ void label_bones(const Volume<float>& hu, const Volume<std::uint8_t>& body, cons
       continue;
     }
     for (int a = 0; a < 3; ++a) b.centroid_m[a] = hu.origin[a] + hu.spacing[a] * b.centroid_m[a] / static_cast<double>(b.voxels);
+    b.centroid_m = hu.to_world(b.centroid_m);
     b.volume_m3 = static_cast<double>(b.voxels) * hu.voxel_volume();
     order.push_back(c);
   }

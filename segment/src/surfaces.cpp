@@ -172,6 +172,16 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
       << r.self_intersecting << "); not written";
     throw NumericalError(o.str());
   }
+  // Extracted in the volume's axis-aligned frame; written in the world frame (a reflection in
+  // the scanner's axes flips the triangles' turn, so they are turned back to face outwards).
+  if (!is_identity(L.direction)) {
+    for (auto v : mesh.vertices()) {
+      const Point& q = mesh.point(v);
+      const auto w = L.to_world({q.x(), q.y(), q.z()});
+      mesh.point(v) = Point(w[0], w[1], w[2]);
+    }
+    if (determinant(L.direction) < 0) PMP::reverse_face_orientations(mesh);
+  }
   r.stl = folder / (name + ".stl");
   r.ply = folder / (name + ".ply");
   {

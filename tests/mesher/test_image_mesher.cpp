@@ -244,3 +244,40 @@ TEST(ImageMesher, StableStepNotSetBySlivers) {
   std::printf("worst bone: L_e min/median %.3f\n", worst_bone);
   EXPECT_GE(worst_bone, 0.2);
 }
+
+// Oracle: the same labels meshed in the world frame. A label volume whose axes are rotated (and,
+// a second time, reflected) in the world gives the identity mesh's tets, with every node at
+// origin + D (x - origin), and every tet still positively oriented; labels.h5 carries D.
+TEST(ImageMesher, OrientationMovesTheMeshIntoTheWorldFrame) {
+  Volume<std::uint8_t> aligned = small_labels();
+  aligned.origin = {0.01, -0.02, 0.03};
+  const double c = std::cos(0.5), s = std::sin(0.5);
+  const Direction rotation{c, -s, 0, s * 0.6, c * 0.6, -0.8, s * 0.8, c * 0.8, 0.6};  // about z, then about x
+  const Direction reflection{-1, 0, 0, 0, 1, 0, 0, 0, 1};                             // a feet-first / mirrored scanner frame
+  const TetMesh reference = mesher::mesh_label_volume(aligned, {}, {});
+  for (const Direction& D : {rotation, reflection}) {
+    Volume<std::uint8_t> turned = aligned;
+    turned.direction = D;
+    testkit::TempDir dir;
+    write_h5(dir / "labels.h5", "/labels", turned);
+    const Volume<std::uint8_t> back = read_h5<std::uint8_t>(dir / "labels.h5", "/labels");
+    EXPECT_EQ(back.direction, D);
+    const TetMesh mesh = mesher::mesh_label_volume(back, {}, {});
+    ASSERT_EQ(mesh.nodes.size(), reference.nodes.size());
+    ASSERT_EQ(mesh.tets.size(), reference.tets.size());
+    double worst = 0, smallest_volume = 1e300;
+    for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
+      const auto w = turned.to_world({reference.nodes[i][0], reference.nodes[i][1], reference.nodes[i][2]});
+      for (int a = 0; a < 3; ++a) worst = std::max(worst, std::abs(mesh.nodes[i][a] - w[a]));
+    }
+    for (const auto& t : mesh.tets) {
+      const auto& n = mesh.nodes;
+      smallest_volume = std::min(smallest_volume, tet_volume(n[static_cast<std::size_t>(t[0])], n[static_cast<std::size_t>(t[1])],
+                                                             n[static_cast<std::size_t>(t[2])], n[static_cast<std::size_t>(t[3])]));
+    }
+    std::printf("oriented labels (det %+.0f): %zu nodes, largest distance to the rotated identity mesh %.2e m, smallest tet volume %.3e m^3\n",
+                determinant(D), mesh.nodes.size(), worst, smallest_volume);
+    EXPECT_LE(worst, 1e-12);
+    EXPECT_GT(smallest_volume, 0.0);
+  }
+}

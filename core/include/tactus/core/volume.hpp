@@ -3,6 +3,7 @@
 // then z: exactly the z-y-x C-order layout of the HDF5 dataset, so I/O needs no reshuffle.
 // Geometry is in metres (SI everywhere inside tactus).
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -11,12 +12,21 @@
 
 namespace tactus {
 
+// The orientation of a volume's axes in the world (patient) frame: a 3x3 rotation (or rotation
+// with a reflection) stored row by row, whose column a is the world direction of voxel axis a.
+// A voxel (i, j, k) lies at origin + D (i dx, j dy, k dz). World coordinates follow DICOM's
+// patient frame (LPS: x to the patient's left, y posterior, z superior); readers of formats in
+// other frames (NIfTI's RAS) convert.
+using Direction = std::array<double, 9>;
+inline constexpr Direction kIdentityDirection{1, 0, 0, 0, 1, 0, 0, 0, 1};
+
 template <class T>
 struct Volume {
   std::array<int, 3> dims{0, 0, 0};        // nx, ny, nz
   std::array<double, 3> spacing{1, 1, 1};  // m
   std::array<double, 3> origin{0, 0, 0};   // m, centre of voxel (0,0,0)
-  std::vector<T> data;                     // nx*ny*nz values
+  Direction direction = kIdentityDirection;
+  std::vector<T> data;  // nx*ny*nz values
 
   Volume() = default;
   Volume(std::array<int, 3> d, std::array<double, 3> h, std::array<double, 3> o, T fill = T{})
@@ -33,7 +43,33 @@ struct Volume {
   T& at(int x, int y, int z) noexcept { return data[index(x, y, z)]; }
   const T& at(int x, int y, int z) const noexcept { return data[index(x, y, z)]; }
   double voxel_volume() const noexcept { return spacing[0] * spacing[1] * spacing[2]; }
+  // The world position of a point given in the axis-aligned frame (origin + index * spacing).
+  std::array<double, 3> to_world(const std::array<double, 3>& aligned) const noexcept {
+    const double d[3] = {aligned[0] - origin[0], aligned[1] - origin[1], aligned[2] - origin[2]};
+    std::array<double, 3> w{};
+    for (int r = 0; r < 3; ++r) w[r] = origin[r] + direction[3 * r] * d[0] + direction[3 * r + 1] * d[1] + direction[3 * r + 2] * d[2];
+    return w;
+  }
+  // The same geometry (dims, spacing, origin, direction) with every voxel `fill`.
+  template <class U>
+  Volume<U> like(U fill = U{}) const {
+    Volume<U> v(dims, spacing, origin, fill);
+    v.direction = direction;
+    return v;
+  }
 };
+
+inline bool is_identity(const Direction& d) {
+  for (int i = 0; i < 9; ++i)
+    if (std::abs(d[i] - kIdentityDirection[i]) > 1e-12) return false;
+  return true;
+}
+inline double determinant(const Direction& d) {
+  return d[0] * (d[4] * d[8] - d[5] * d[7]) - d[1] * (d[3] * d[8] - d[5] * d[6]) + d[2] * (d[3] * d[7] - d[4] * d[6]);
+}
+// Throws InputError (naming `file` and `field`) unless d is orthonormal within 1e-4 (DICOM and
+// NIfTI store cosines to ~6 digits).
+void validate_direction(const Direction& d, const std::string& file, const std::string& field);
 
 // Names of the labels in a label volume: 0 background, 1 soft tissue, 2.. bones.
 using LabelTable = std::map<int, std::string>;

@@ -47,9 +47,10 @@ namespace tactus::samples {
 
 // A CT Image Storage series (one file per slice, IM_NNNN.dcm) of `ct`: explicit VR little
 // endian, or compressed by GDCM (RLE lossless, JPEG lossless); stored = HU + 1024 unsigned with
-// RescaleIntercept -1024, PixelSpacing, ImagePositionPatient (the slice's voxel-centre origin),
-// axial ImageOrientationPatient 1\0\0\0\1\0, and the patient, study, series, frame-of-reference,
-// equipment and SOP common attributes a CT image requires.
+// RescaleIntercept -1024, PixelSpacing, ImageOrientationPatient from the volume's direction (its
+// first two columns; the third must be their cross product), ImagePositionPatient of each slice
+// (origin + k dz along the normal), and the patient, study, series, frame-of-reference, equipment
+// and SOP common attributes a CT image requires.
 struct DicomSeriesOptions {
   std::string compression = "none";  // "none", "rle", "jpeg-lossless"
   std::string series_uid;            // empty: a new UID

@@ -7,7 +7,8 @@
 // supports: uncompressed, RLE, JPEG lossless, JPEG-LS, JPEG 2000), in an isolated child
 // process. Slices are sorted along the slice normal by ImagePositionPatient, the spacing comes
 // from the positions (never SliceThickness), and uneven spacing, a missing slice, gantry tilt and
-// mixed sizes are clear errors.
+// mixed sizes are clear errors. The orientation (ImageOrientationPatient) becomes the volume's
+// direction, its origin the first slice's position: world coordinates are DICOM's patient frame.
 #include <array>
 #include <filesystem>
 #include <string>
