@@ -78,4 +78,6 @@ if(NOT TACTUS_DEPENDENCIES_FOR_CONSUMER)
   # DICOM: GDCM decodes (and the phantom writes) pixel data; tactus walks every file first.
   find_package(GDCM 3 QUIET)
   tactus_require(GDCM libgdcm-dev)
+  find_package(ZLIB QUIET)  # gzip-compressed NIfTI, NRRD and MetaImage voxels
+  tactus_require(ZLIB zlib1g-dev)
 endif()

@@ -1,4 +1,4 @@
-// tactus-segment: CT slice stack or DICOM series -> labels.h5/.vti (air, soft tissue, one id per bone),
+// tactus-segment: CT (slice stack, DICOM series, NIfTI, NRRD, MetaImage) -> labels.h5/.vti (air, soft tissue, one id per bone),
 // surfaces/*.stl|ply (skin and bones) and segment.json. Thin driver over tactus::segment.
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
@@ -14,7 +14,10 @@ int main(int argc, char** argv) {
   segment::StageOptions o;
   double body = 0, bone = 0;
   bool no_surfaces = false;
-  app.add_option("stack", stack, "CT input folder: a slice stack (slice_NNNN.png|tif + stack.json) or DICOM files")->required();
+  app.add_option("stack", stack,
+                 "CT input: a slice stack folder (slice_NNNN.png|tif + stack.json), a folder of DICOM files, or a .nii/.nii.gz, .nrrd/.nhdr or "
+                 ".mha/.mhd file")
+      ->required();
   app.add_option("--series", o.dicom_series, "SeriesInstanceUID of the DICOM series to read (a folder with several lists them)");
   auto* body_opt = app.add_option("--body-threshold", body, "HU separating air from the body (default: Otsu)");
   auto* bone_opt = app.add_option("--bone-threshold", bone, "HU separating soft tissue from bone (default: Otsu in the body)");

@@ -8,6 +8,7 @@
 #include "tactus/core/version.hpp"
 #include "tactus/segment/dicom.hpp"
 #include "tactus/segment/stack.hpp"
+#include "tactus/segment/volume_files.hpp"
 
 namespace fs = std::filesystem;
 
@@ -23,11 +24,16 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); };
   const auto t0 = Clock::now();
-  // A folder with stack.json is a slice stack; one with DICOM files (and no stack.json) a series.
-  const bool dicom = is_dicom_folder(stack_folder);
+  // A NIfTI, NRRD or MetaImage file; a folder with stack.json is a slice stack; one with DICOM
+  // files (and no stack.json) a series.
+  std::error_code ec;
+  const bool file = fs::is_regular_file(stack_folder, ec);
+  const bool dicom = !file && is_dicom_folder(stack_folder);
   if (!dicom && !o.dicom_series.empty())
-    throw InputError(stack_folder.string(), "--series", "a folder of DICOM files (--series chooses among its series)", "a slice stack folder");
-  const SliceStack stack = dicom ? read_dicom_series(stack_folder, o.dicom_series) : read_slice_stack(stack_folder);
+    throw InputError(stack_folder.string(), "--series", "a folder of DICOM files (--series chooses among its series)", "another input");
+  const SliceStack stack = file    ? read_volume_file(stack_folder)
+                           : dicom ? read_dicom_series(stack_folder, o.dicom_series)
+                                   : read_slice_stack(stack_folder);
   const double t_read = seconds(t0);
   const auto t1 = Clock::now();
   const Segmentation s = segment_hand(stack.hu, o.segment);

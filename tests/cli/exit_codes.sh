@@ -45,7 +45,7 @@ check 1 "closed 2-manifold" -- "$B/mesher/tactus-mesh" stl "$(dirname "$0")/open
 check 1 "expected a results folder written by tactus-solve, found no such folder" -- "$B/postproc/tactus-post" "$T/none" -o "$T/report" --no-pictures
 mkdir -p "$T/empty_results"
 check 1 "results.pvd: expected the results listing results.pvd" -- "$B/postproc/tactus-post" "$T/empty_results" -o "$T/report" --no-pictures
-check 1 "expected a slice stack folder" -- /usr/bin/python3 "$(dirname "$0")/../../pipeline/tactus-pipeline" "$T/none" "$T/bad.toml" -o "$T/work"
+check 1 "expected a CT input" -- /usr/bin/python3 "$(dirname "$0")/../../pipeline/tactus-pipeline" "$T/none" "$T/bad.toml" -o "$T/work"
 # Nothing half-written was left.
 leftovers=$(find "$T" -name '*.partial-*' -o -name 'results' -o -name 'out' -o -name 'mesh' -o -name 'obj.msh' -o -name 'report' -o -name 'work')
 [ -z "$leftovers" ] || { echo "FAIL: outputs left behind: $leftovers"; fail=1; }
