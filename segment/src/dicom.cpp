@@ -10,6 +10,7 @@
 
 #include <gdcmImage.h>
 #include <gdcmImageReader.h>
+#include <gdcmTrace.h>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/isolated.hpp"
@@ -427,6 +428,7 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
   const std::string bytes = run_isolated(
       dir, "DICOM image",
       [&](ByteWriter& w) {
+        gdcm::Trace::ErrorOff(), gdcm::Trace::WarningOff(), gdcm::Trace::DebugOff();  // (in the child: tactus says what failed, once)
         std::vector<std::uint16_t> stored(per_slice * paths.size());
         std::vector<char> buffer(per_slice * static_cast<std::size_t>(bytes_per_pixel));
         Progress progress("decode DICOM slices", paths.size());

@@ -31,7 +31,9 @@
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/postproc/results.hpp"
 #include "tactus/postproc/summary.hpp"
+#include "tactus/segment/dicom.hpp"
 #include "tactus/segment/stack.hpp"
+#include "tactus/segment/volume_files.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -163,6 +165,43 @@ std::vector<Target> make_targets(const fs::path& work) {
     Target png{"png", slice, false, [d] { segment::read_slice_stack(d); }};
     png.fixup = fix_png_crcs;
     t.push_back(png);
+    // DICOM: one file of a series mutated (tactus's element walk, then GDCM's decoder), plain and RLE.
+    for (const char* compression : {"none", "rle"}) {
+      const fs::path dd = work / (std::string("dicom_") + compression);
+      samples::DicomSeriesOptions o;
+      o.compression = compression;
+      samples::write_dicom_series(samples::make_hand_phantom(p).ct, dd, o);
+      t.push_back({"dicom_" + std::string(compression), dd / "IM_0005.dcm", false, [dd] { segment::read_dicom_series(dd); }});
+    }
+    // NIfTI, NRRD and MetaImage headers and voxels, written by hand from the same phantom.
+    const Volume<std::int16_t> ct = samples::make_hand_phantom(p).ct;
+    const std::string voxels(reinterpret_cast<const char*>(ct.data.data()), ct.data.size() * sizeof(std::int16_t));
+    const fs::path dv = work / "volumes";
+    fs::create_directories(dv);
+    const std::string sizes = std::to_string(ct.dims[0]) + " " + std::to_string(ct.dims[1]) + " " + std::to_string(ct.dims[2]);
+    write_file(dv / "ct.nrrd", "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: " + sizes +
+                                   "\nspace directions: (8,0,0) (0,8,0) (0,0,8)\nendian: little\nencoding: raw\nspace origin: (1,2,3)\n\n" + voxels);
+    t.push_back({"nrrd", dv / "ct.nrrd", true, [dv] { segment::read_volume_file(dv / "ct.nrrd"); }});
+    write_file(dv / "ct.mha", "ObjectType = Image\nNDims = 3\nDimSize = " + sizes +
+                                  "\nElementType = MET_SHORT\nElementSpacing = 8 8 8\nOffset = 1 2 3\nTransformMatrix = 0 1 0 -1 0 0 0 0 1\n"
+                                  "ElementDataFile = LOCAL\n" +
+                                  voxels);
+    t.push_back({"metaimage", dv / "ct.mha", true, [dv] { segment::read_volume_file(dv / "ct.mha"); }});
+    std::string nifti(352, '\0');
+    auto put = [&](std::size_t off, const auto& v) { std::memcpy(nifti.data() + off, &v, sizeof v); };
+    put(0, std::int32_t{348});
+    const std::int16_t dim[8] = {
+        3, static_cast<std::int16_t>(ct.dims[0]), static_cast<std::int16_t>(ct.dims[1]), static_cast<std::int16_t>(ct.dims[2]), 1, 1, 1, 1};
+    std::memcpy(nifti.data() + 40, dim, sizeof dim);
+    put(70, std::int16_t{4}), put(72, std::int16_t{16});
+    const float pixdim[4] = {1, 8, 8, 8};
+    std::memcpy(nifti.data() + 76, pixdim, sizeof pixdim);
+    put(108, 352.0f), put(112, 1.0f), put(116, 0.0f);
+    nifti[123] = 2;  // mm
+    put(252, std::int16_t{1}), put(256, 0.0f), put(260, 0.0f), put(264, 0.7071068f), put(268, 1.0f), put(272, 2.0f), put(276, 3.0f);
+    std::memcpy(nifti.data() + 344, "n+1\0", 4);
+    write_file(dv / "ct.nii", nifti + voxels);
+    t.push_back({"nifti", dv / "ct.nii", false, [dv] { segment::read_volume_file(dv / "ct.nii"); }});
   }
   {  // labels.h5
     Volume<std::uint8_t> v({6, 5, 4}, {1e-3, 1e-3, 2e-3}, {0, 0, 0});
