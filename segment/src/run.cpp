@@ -82,7 +82,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
                                {"min_angle_deg", r.min_angle_deg},
                                {"closed", r.closed},
                                {"manifold", r.manifold},
-                               {"self_intersecting", r.self_intersecting}});
+                               {"self_intersecting", r.self_intersecting},
+                               {"edge_factor", r.edge_factor}});
   }
   j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
   std::ofstream(out / "segment.json") << j.dump(2) << '\n';

@@ -143,29 +143,39 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
   smooth->FeatureEdgeSmoothingOff();
   smooth->NonManifoldSmoothingOn();
   smooth->Update();
-  Mesh mesh = to_cgal(smooth->GetOutput());
-  const double h = p.target_edge_voxels * std::cbrt(L.voxel_volume());
-  PMP::isotropic_remeshing(faces(mesh), h, mesh, CGAL::parameters::number_of_iterations(static_cast<unsigned>(p.remeshing_iterations)));
-  mesh.collect_garbage();
-  // Marching cubes on a binary mask chamfers every convex edge, so the enclosed volume comes out
-  // 1-3 % below the voxel count for bone-sized objects. Restore it with one uniform offset along
-  // the vertex normals, delta = (V_label - V_surface) / area (a few hundredths of a voxel).
-  if (CGAL::is_closed(mesh)) {
-    PMP::orient_to_bound_a_volume(mesh);
-    const double delta = (r.label_volume_m3 - PMP::volume(mesh)) / PMP::area(mesh);
-    std::vector<std::pair<Mesh::Vertex_index, Kernel::Vector_3>> moves;
-    for (auto v : mesh.vertices()) moves.emplace_back(v, delta * PMP::compute_vertex_normal(v, mesh));
-    for (const auto& [v, d] : moves) mesh.point(v) = mesh.point(v) + d;
+  const Mesh extracted = to_cgal(smooth->GetOutput());
+  // Remeshed at the target edge; a surface that fails its checks (a self-intersection where two
+  // thin parts nearly touch, seen with 0.5 x 0.5 x 2.5 mm voxels) is remeshed again at 1.5x and
+  // 2.25x the edge before tactus gives up: a coarser edge cannot fold into the gap.
+  Mesh mesh;
+  for (const double factor : {1.0, 1.5, 2.25}) {
+    mesh = extracted;
+    const double h = factor * p.target_edge_voxels * std::cbrt(L.voxel_volume());
+    PMP::isotropic_remeshing(faces(mesh), h, mesh, CGAL::parameters::number_of_iterations(static_cast<unsigned>(p.remeshing_iterations)));
+    mesh.collect_garbage();
+    // Marching cubes on a binary mask chamfers every convex edge, so the enclosed volume comes out
+    // 1-3 % below the voxel count for bone-sized objects. Restore it with one uniform offset along
+    // the vertex normals, delta = (V_label - V_surface) / area (a few hundredths of a voxel).
+    if (CGAL::is_closed(mesh)) {
+      PMP::orient_to_bound_a_volume(mesh);
+      const double delta = (r.label_volume_m3 - PMP::volume(mesh)) / PMP::area(mesh);
+      std::vector<std::pair<Mesh::Vertex_index, Kernel::Vector_3>> moves;
+      for (auto v : mesh.vertices()) moves.emplace_back(v, delta * PMP::compute_vertex_normal(v, mesh));
+      for (const auto& [v, d] : moves) mesh.point(v) = mesh.point(v) + d;
+    }
+    r.closed = CGAL::is_closed(mesh);
+    r.manifold = CGAL::is_valid_polygon_mesh(mesh) && CGAL::is_triangle_mesh(mesh);
+    r.self_intersecting = PMP::does_self_intersect(mesh);
+    if (r.closed) PMP::orient_to_bound_a_volume(mesh);
+    r.surface_volume_m3 = r.closed ? PMP::volume(mesh) : 0.0;
+    r.area_m2 = PMP::area(mesh);
+    r.vertices = mesh.number_of_vertices();
+    r.triangles = mesh.number_of_faces();
+    r.min_angle_deg = min_angle_deg(mesh);
+    r.edge_factor = factor;
+    if (r.closed && r.manifold && !r.self_intersecting) break;
   }
-  r.closed = CGAL::is_closed(mesh);
-  r.manifold = CGAL::is_valid_polygon_mesh(mesh) && CGAL::is_triangle_mesh(mesh);
-  r.self_intersecting = PMP::does_self_intersect(mesh);
-  if (r.closed) PMP::orient_to_bound_a_volume(mesh);
-  r.surface_volume_m3 = r.closed ? PMP::volume(mesh) : 0.0;
-  r.area_m2 = PMP::area(mesh);
-  r.vertices = mesh.number_of_vertices();
-  r.triangles = mesh.number_of_faces();
-  r.min_angle_deg = min_angle_deg(mesh);
+  if (r.edge_factor > 1) log::info() << "surface '" << name << "': remeshed at " << r.edge_factor << "x the target edge to pass its checks";
   if (!r.closed || !r.manifold || r.self_intersecting) {
     std::ostringstream o;
     o << "surface '" << name << "' failed its checks (closed " << r.closed << ", 2-manifold " << r.manifold << ", self-intersecting "

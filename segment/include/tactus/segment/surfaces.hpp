@@ -25,6 +25,7 @@ struct SurfaceReport {
   double surface_volume_m3 = 0, label_volume_m3 = 0, area_m2 = 0;
   double min_angle_deg = 0;
   bool closed = false, manifold = false, self_intersecting = true;
+  double edge_factor = 1;  // the target edge it was remeshed at, x SurfaceParams::target_edge_voxels
   std::filesystem::path stl, ply;
 };
 
