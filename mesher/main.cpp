@@ -18,6 +18,7 @@
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/objects.hpp"
 #include "tactus/mesher/quality.hpp"
+#include "tactus/mesher/small_regions.hpp"
 
 namespace {
 
@@ -31,7 +32,7 @@ std::vector<std::filesystem::path> output_files(const std::filesystem::path& out
 
 // Writes the mesh, its .vtu and the quality report into the staged output and commits it.
 template <class Output>
-void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, const std::map<int, double>& speeds) {
+void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, const std::map<int, double>& speeds, const nlohmann::json& extra) {
   const auto path = [&](std::size_t i) {
     if constexpr (std::is_same_v<Output, tactus::OutputFiles>)
       return out.staged(first + i);
@@ -40,7 +41,8 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
   };
   tactus::write_msh(path(0), mesh);
   tactus::write_vtu(path(1), mesh);
-  const auto report = tactus::mesher::quality_report(mesh, speeds);
+  auto report = tactus::mesher::quality_report(mesh, speeds);
+  for (const auto& [key, value] : extra.items()) report[key] = value;
   std::ofstream(path(2)) << report.dump(2) << '\n';
   out.commit();
   const auto& all = report["all"];
@@ -90,11 +92,11 @@ struct MeshOutput {
     else
       folder = std::make_unique<tactus::OutputFolder>(out, rules);
   }
-  void write(const tactus::TetMesh& mesh, const std::map<int, double>& speeds) {
+  void write(const tactus::TetMesh& mesh, const std::map<int, double>& speeds, const nlohmann::json& extra = nlohmann::json::object()) {
     if (files)
-      write_outputs(mesh, *files, 0, speeds);
+      write_outputs(mesh, *files, 0, speeds, extra);
     else
-      write_outputs(mesh, *folder, 0, speeds);
+      write_outputs(mesh, *folder, 0, speeds, extra);
   }
 };
 
@@ -147,6 +149,13 @@ int main(int argc, char** argv) {
   app.add_option("--time-limit", p.optimiser_time_limit_s, "time limit of each optimiser, s")->capture_default_str();
   bool keep_surfaces = false;
   app.add_flag("--no-volume-restore", keep_surfaces, "keep CGAL's surfaces (bones then come out 3-4 % small)");
+  double min_region_mm3 = 0;
+  bool keep_small_regions = false;
+  app.add_option("--min-region-mm3", min_region_mm3,
+                 "connected regions of one label (or enclosed background pockets) smaller than this go to the label they border most "
+                 "(0: two tets of the bone cell size, bone-cell-size^3 / 5)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--keep-small-regions", keep_small_regions, "mesh every region however small (tiny tets set the stable step)");
   app.add_option("--seed", p.seed, "random seed")->capture_default_str();
   app.add_option("--max-elements", p.max_elements, "refuse meshes expected to have more tets than this")->capture_default_str();
   app.add_option("--wave-speed", speed_args,
@@ -201,10 +210,24 @@ int main(int argc, char** argv) {
     MeshOutput output(out, common.output_rules({labels_file}));
     p.restore_volumes = !keep_surfaces;
     LabelTable table;
-    const auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
+    auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
+    nlohmann::json absorbed = nlohmann::json::array();
+    if (!keep_small_regions) {
+      const std::size_t min_voxels = mesher::min_region_voxels(labels, min_region_mm3, p.bone_cell_size_mm);
+      for (const auto& r : mesher::absorb_small_regions(labels, min_voxels)) {
+        const auto name = [&](int id) {
+          return table.count(id) ? table.at(id) : id == 0 ? std::string("background") : "label " + std::to_string(id);
+        };
+        std::ostringstream m;
+        m << "mesher: a region of " << name(r.label) << " of " << r.voxels << " voxel(s) at (" << r.at[0] << ", " << r.at[1] << ", " << r.at[2]
+          << ") m is below " << min_voxels << " voxels (--min-region-mm3); it becomes " << name(r.into);
+        log::warn(m.str());
+        absorbed.push_back({{"label", r.label}, {"name", name(r.label)}, {"voxels", r.voxels}, {"into", r.into}, {"at_m", r.at}});
+      }
+    }
     const auto t0 = std::chrono::steady_clock::now();
     const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
     log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
-    output.write(mesh, wave_speeds(mesh, speed_args));
+    output.write(mesh, wave_speeds(mesh, speed_args), {{"absorbed_regions", absorbed}});
   });
 }
