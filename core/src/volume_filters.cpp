@@ -72,23 +72,54 @@ std::vector<std::int32_t> connected_components(const Volume<std::uint8_t>& mask,
   return id;
 }
 
+// A scanline flood fill of the background from the border: each seed grows into its whole run
+// along x (contiguous in memory), and each run seeds the runs of the four rows beside it
+// (y +- 1, z +- 1). Several times faster than a voxel-by-voxel fill on CT-sized volumes (100 M
+// voxels of mostly air): memory is walked along rows and the coordinates come with the seed.
 void fill_holes(Volume<std::uint8_t>& mask) {
   std::vector<std::uint8_t> outside(mask.size(), 0);
-  std::vector<std::size_t> stack;
-  const auto& d = mask.dims;
-  for (int z = 0; z < d[2]; ++z)
-    for (int y = 0; y < d[1]; ++y)
-      for (int x = 0; x < d[0]; ++x) {
-        const bool border = x == 0 || y == 0 || z == 0 || x == d[0] - 1 || y == d[1] - 1 || z == d[2] - 1;
-        const std::size_t i = mask.index(x, y, z);
-        if (border && !mask.data[i] && !outside[i]) outside[i] = 1, stack.push_back(i);
+  const int nx = mask.dims[0], ny = mask.dims[1], nz = mask.dims[2];
+  if (mask.size() == 0) return;
+  struct Seed {
+    int x, y, z;
+  };
+  std::vector<Seed> stack;
+  auto open = [&](int x, int y, int z) {
+    const std::size_t i = mask.index(x, y, z);
+    return !mask.data[i] && !outside[i];
+  };
+  // Pushes one seed per run of open voxels in row (y, z) between x0 and x1.
+  auto seed_row = [&](int x0, int x1, int y, int z) {
+    if (y < 0 || y >= ny || z < 0 || z >= nz) return;
+    bool in_run = false;
+    for (int x = x0; x <= x1; ++x) {
+      const bool o = open(x, y, z);
+      if (o && !in_run) stack.push_back({x, y, z});
+      in_run = o;
+    }
+  };
+  for (int z = 0; z < nz; ++z)
+    for (int y = 0; y < ny; ++y) {
+      if (z == 0 || y == 0 || z == nz - 1 || y == ny - 1)
+        seed_row(0, nx - 1, y, z);
+      else {
+        if (open(0, y, z)) stack.push_back({0, y, z});
+        if (open(nx - 1, y, z)) stack.push_back({nx - 1, y, z});
       }
+    }
   while (!stack.empty()) {
-    const std::size_t v = stack.back();
+    const Seed s = stack.back();
     stack.pop_back();
-    for_neighbours(d, v, [&](std::size_t w) {
-      if (!mask.data[w] && !outside[w]) outside[w] = 1, stack.push_back(w);
-    });
+    if (!open(s.x, s.y, s.z)) continue;
+    int x0 = s.x, x1 = s.x;
+    while (x0 > 0 && open(x0 - 1, s.y, s.z)) --x0;
+    while (x1 + 1 < nx && open(x1 + 1, s.y, s.z)) ++x1;
+    std::fill(outside.begin() + static_cast<std::ptrdiff_t>(mask.index(x0, s.y, s.z)),
+              outside.begin() + static_cast<std::ptrdiff_t>(mask.index(x1, s.y, s.z)) + 1, std::uint8_t{1});
+    seed_row(x0, x1, s.y - 1, s.z);
+    seed_row(x0, x1, s.y + 1, s.z);
+    seed_row(x0, x1, s.y, s.z - 1);
+    seed_row(x0, x1, s.y, s.z + 1);
   }
   for (std::size_t i = 0; i < mask.size(); ++i)
     if (!outside[i]) mask.data[i] = 1;
