@@ -11,6 +11,7 @@
 #include <functional>
 #include <random>
 
+#include "expect_error.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/segment/dicom.hpp"
@@ -37,15 +38,6 @@ double largest_difference(const Volume<float>& a, const Volume<float>& b) {
   double worst = 0;
   for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, static_cast<double>(std::abs(a.data[i] - b.data[i])));
   return worst;
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 std::vector<fs::path> files_of(const fs::path& folder) {
@@ -105,7 +97,7 @@ TEST(Dicom, MissingSliceIsAnError) {
   testkit::TempDir dir;
   samples::write_dicom_series(small_phantom().ct, dir / "s");
   fs::remove(dir / "s" / "IM_0040.dcm");
-  const std::string message = error_of([&] { segment::read_dicom_series(dir / "s"); });
+  const std::string message = testkit::input_error_of([&] { segment::read_dicom_series(dir / "s"); });
   std::printf("%s\n", message.c_str());
   EXPECT_NE(message.find("IM_0041.dcm"), std::string::npos);
   EXPECT_NE(message.find("IM_0039.dcm"), std::string::npos);
@@ -126,14 +118,15 @@ TEST(Dicom, TwoSeriesAreListedAndOneIsChosen) {
   fs::create_directories(dir / "both");
   for (const char* s : {"one", "two"})
     for (const auto& f : files_of(dir / s)) fs::copy_file(f, dir / "both" / (std::string(s) + "_" + f.filename().string()));
-  const std::string message = error_of([&] { segment::read_dicom_series(dir / "both"); });
+  const std::string message = testkit::input_error_of([&] { segment::read_dicom_series(dir / "both"); });
   std::printf("%s\n", message.c_str());
   EXPECT_NE(message.find(first.series_uid + " ('soft kernel', 96 images)"), std::string::npos);
   EXPECT_NE(message.find(second.series_uid + " ('bone kernel', 96 images)"), std::string::npos);
   const segment::SliceStack two = segment::read_dicom_series(dir / "both", second.series_uid);
   const segment::SliceStack alone = segment::read_dicom_series(dir / "two");
   EXPECT_EQ(largest_difference(two.hu, alone.hu), 0.0);
-  EXPECT_NE(error_of([&] { segment::read_dicom_series(dir / "both", "1.2.3"); }).find("one of the folder's series"), std::string::npos);
+  EXPECT_NE(testkit::input_error_of([&] { segment::read_dicom_series(dir / "both", "1.2.3"); }).find("one of the folder's series"),
+            std::string::npos);
 }
 
 // A series written by pydicom (implicit VR little endian, signed 16-bit, slope 2, intercept -1000,
@@ -198,7 +191,7 @@ TEST(Dicom, CorruptFilesAreNamedBeforeDecoding) {
   }
   auto write = [&](const std::string& b) { std::ofstream(victim, std::ios::binary | std::ios::trunc) << b; };
   write(bytes.substr(0, bytes.size() - 100));  // pixel data cut short
-  std::string m = error_of([&] { segment::read_dicom_series(dir / "s"); });
+  std::string m = testkit::input_error_of([&] { segment::read_dicom_series(dir / "s"); });
   std::printf("truncated: %s\n", m.c_str());
   EXPECT_NE(m.find("IM_0005.dcm"), std::string::npos);
   EXPECT_NE(m.find("(7FE0,0010)"), std::string::npos);
@@ -207,11 +200,11 @@ TEST(Dicom, CorruptFilesAreNamedBeforeDecoding) {
   ASSERT_NE(rows, std::string::npos);
   broken[rows + 6] = '\x7F', broken[rows + 7] = '\x7F';  // Rows' length: 32,639 bytes
   write(broken);
-  m = error_of([&] { segment::read_dicom_series(dir / "s"); });
+  m = testkit::input_error_of([&] { segment::read_dicom_series(dir / "s"); });
   std::printf("bad length: %s\n", m.c_str());
   EXPECT_NE(m.find("IM_0005.dcm"), std::string::npos);
   write(std::string(200, 'x'));  // not DICOM at all: left aside, and then a slice is missing
-  m = error_of([&] { segment::read_dicom_series(dir / "s"); });
+  m = testkit::input_error_of([&] { segment::read_dicom_series(dir / "s"); });
   std::printf("not DICOM: %s\n", m.c_str());
   EXPECT_NE(m.find("missing slice"), std::string::npos);
 }

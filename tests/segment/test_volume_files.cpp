@@ -12,6 +12,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 
+#include "expect_error.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/segment/volume_files.hpp"
 #include "temp_dir.hpp"
@@ -26,15 +27,6 @@ fs::path written_files(const testkit::TempDir& dir) {
   const std::string command = "/usr/bin/python3 " TACTUS_SOURCE_DIR "/tests/segment/volume_files.py '" + (dir / "v").string() + "'";
   EXPECT_EQ(std::system(command.c_str()), 0) << command << " (needs Debian's python3-nibabel, python3-vtk9, python3-numpy)";
   return dir / "v";
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace
@@ -82,7 +74,7 @@ TEST(VolumeFiles, TruncatedAndCorruptFilesAreNamed) {
       b.assign((std::istreambuf_iterator<char>(in)), {});
     }
     std::ofstream(p, std::ios::binary | std::ios::trunc) << b.substr(0, b.size() - keep_from_end);
-    return error_of([&] { segment::read_volume_file(folder / name); });
+    return testkit::input_error_of([&] { segment::read_volume_file(folder / name); });
   };
   for (const char* name : {"sform.nii", "qform.nii.gz", "ras.nrrd", "rotated.mha", "vtk_zlib.mhd"}) {
     const std::string m = cut(name, std::string(name) == "vtk_zlib.mhd" ? "vtk_zlib.zraw" : name, 20);
@@ -94,7 +86,7 @@ TEST(VolumeFiles, TruncatedAndCorruptFilesAreNamed) {
     std::ofstream(folder / "shear.nrrd") << "NRRD0004\ntype: short\ndimension: 3\nspace: LPS\nsizes: 2 2 2\n"
                                             "space directions: (1,0,0) (0.5,1,0) (0,0,1)\nendian: little\nencoding: raw\n\n"
                                          << std::string(16, '\0');
-    const std::string m = error_of([&] { segment::read_volume_file(folder / "shear.nrrd"); });
+    const std::string m = testkit::input_error_of([&] { segment::read_volume_file(folder / "shear.nrrd"); });
     std::printf("sheared: %s\n", m.c_str());
     EXPECT_NE(m.find("sheared"), std::string::npos);
   }
@@ -102,7 +94,7 @@ TEST(VolumeFiles, TruncatedAndCorruptFilesAreNamed) {
     std::ofstream(folder / "rgb.mha") << "NDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\nElementNumberOfChannels = 3\n"
                                          "ElementSpacing = 1 1 1\nElementDataFile = LOCAL\n"
                                       << std::string(24, '\0');
-    const std::string m = error_of([&] { segment::read_volume_file(folder / "rgb.mha"); });
+    const std::string m = testkit::input_error_of([&] { segment::read_volume_file(folder / "rgb.mha"); });
     std::printf("channels: %s\n", m.c_str());
     EXPECT_NE(m.find("ElementNumberOfChannels"), std::string::npos);
   }

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "tactus/core/mesh.hpp"
+#include "tactus/solver/explicit.hpp"
 #include "tactus/solver/scenario.hpp"
 #include "temp_dir.hpp"
 
@@ -29,6 +30,16 @@ inline solver::BoundarySpec boundary(const std::string& body, const std::string&
   solver::BoundarySpec b;
   b.body = body, b.group = group, b.type = type, b.components = components, b.name = name;
   return b;
+}
+
+// Advances a quasi-static run until, after t_min, its kinetic energy is below `ratio` of its
+// strain energy (or the run ends); stops after a velocity update, as the solver reports.
+inline void run_to_rest(solver::ExplicitSolver& s, double t_min, double ratio) {
+  while (true) {
+    s.advance_velocity();
+    if (s.finished() || (s.time() > t_min && s.energies().kinetic <= ratio * s.energies().internal)) break;
+    s.advance_position();
+  }
 }
 
 }  // namespace tactus::testkit

@@ -128,11 +128,7 @@ HertzOutcome hertz_press(double h, bool on_block) {
   sc.contact_solver.max_iterations = 2000;
   const Model m = build_model(sc);
   ExplicitSolver s(m, sc.run, sc.damping);
-  while (true) {
-    s.advance_velocity();
-    if (s.finished() || (s.time() > 80 * transit && s.energies().kinetic <= 1e-8 * s.energies().internal)) break;
-    s.advance_position();
-  }
+  testkit::run_to_rest(s, 80 * transit, 1e-8);
   HertzOutcome o;
   o.tets = m.num_elements, o.steps = s.step_index();
   o.kinetic_ratio = s.energies().kinetic / s.energies().internal;

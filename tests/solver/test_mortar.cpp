@@ -89,11 +89,7 @@ PatchResult patch_test(const TetMesh& lower, const TetMesh& upper, const std::st
   sc.contact_solver.max_iterations = 2000;
   const Model m = build_model(sc);
   ExplicitSolver s(m, sc.run, sc.damping);
-  while (true) {
-    s.advance_velocity();
-    if (s.finished() || (s.time() > 0.01 && s.energies().kinetic <= 1e-6 * s.energies().internal)) break;
-    s.advance_position();
-  }
+  testkit::run_to_rest(s, 0.01, 1e-6);
   PatchResult r;
   r.kinetic_ratio = s.energies().kinetic / s.energies().internal;
   r.exact = std::abs(s.reactions().force[3 * (sc.boundaries.size() - 1) + 2]) / (L * L);

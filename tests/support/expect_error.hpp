@@ -19,4 +19,15 @@ void expect_input_error(F&& f, std::initializer_list<std::string> fragments) {
   }
 }
 
+// The message of the InputError `f` throws, or "" when it throws none (for tests that print it).
+template <class F>
+std::string input_error_of(F&& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 }  // namespace tactus::testkit
