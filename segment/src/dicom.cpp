@@ -264,6 +264,9 @@ void check_image(const DicomSlice& s) {
     throw InputError(f, "(0028,0010/0011) Rows/Columns", "at least 1 x 1 pixels", std::to_string(s.rows) + " x " + std::to_string(s.columns));
   if (s.samples_per_pixel != 1) throw InputError(f, "(0028,0002) SamplesPerPixel", "1 (a grey CT image)", std::to_string(s.samples_per_pixel));
   if (s.bits_allocated != 8 && s.bits_allocated != 16) throw InputError(f, "(0028,0100) BitsAllocated", "8 or 16", std::to_string(s.bits_allocated));
+  if (s.bits_stored != 0 && (s.bits_stored > s.bits_allocated || (s.high_bit >= 0 && s.high_bit != s.bits_stored - 1)))
+    throw InputError(f, "(0028,0101/0102) BitsStored/HighBit", "BitsStored <= BitsAllocated and HighBit = BitsStored - 1",
+                     std::to_string(s.bits_stored) + " / " + std::to_string(s.high_bit));
   if (s.pixel_representation != 0 && s.pixel_representation != 1)
     throw InputError(f, "(0028,0103) PixelRepresentation", "0 (unsigned) or 1 (signed)", std::to_string(s.pixel_representation));
   if (!s.has_position) throw InputError(f, "(0020,0032) ImagePositionPatient", "the slice's position", "missing");
@@ -468,9 +471,14 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
     const double slope = slices[k].slope, intercept = slices[k].intercept;
     const std::uint16_t* in = stored.data() + k * per_slice;
     float* hu = out.hu.data.data() + k * per_slice;
+    // Only the low BitsStored bits are the pixel (the rest may hold anything, e.g. retired
+    // overlays); a signed pixel's sign is its bit BitsStored - 1.
+    const int stored_bits = first.bits_stored > 0 ? first.bits_stored : first.bits_allocated;
+    const std::uint32_t mask = (1u << stored_bits) - 1u, sign = 1u << (stored_bits - 1);
     for (std::size_t i = 0; i < per_slice; ++i) {
-      double v = in[i];
-      if (first.pixel_representation == 1) v = bytes_per_pixel == 2 ? static_cast<std::int16_t>(in[i]) : static_cast<std::int8_t>(in[i]);
+      const std::uint32_t raw = in[i] & mask;
+      const double v =
+          first.pixel_representation == 1 && (raw & sign) ? static_cast<double>(raw) - static_cast<double>(mask) - 1.0 : static_cast<double>(raw);
       hu[i] = static_cast<float>(slope * v + intercept);
     }
   }

@@ -3,7 +3,8 @@
 
 Usage: pydicom_series.py FOLDER
 
-Writes 6 slices of 9 columns x 7 rows in implicit VR little endian, signed 16-bit, RescaleSlope 2,
+Writes 6 slices of 9 columns x 7 rows in implicit VR little endian, signed 12 of 16 bits (the
+upper 4 bits set, as overlay planes once were), RescaleSlope 2,
 RescaleIntercept -1000, PixelSpacing 0.8 (rows) \\ 0.6 (columns) mm, slices 1.25 mm apart from
 (10, -20, 30) mm, under random file names written in random order, each with a nested sequence of
 undefined length; plus a text file and a DICOMDIR-like file without pixels. Stored value
@@ -48,7 +49,7 @@ def main(folder: Path) -> None:
         ds.RescaleSlope, ds.RescaleIntercept = 2, -1000
         ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
         ds.Rows, ds.Columns = ny, nx
-        ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 1
+        ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 12, 11, 1
         item = Dataset()
         item.ReferencedSOPClassUID, item.ReferencedSOPInstanceUID = CT, generate_uid()
         inner = Dataset()
@@ -56,7 +57,9 @@ def main(folder: Path) -> None:
         item.PurposeOfReferenceCodeSequence = Sequence([inner])
         ds.ReferencedImageSequence = Sequence([item])
         v = [(7 * i + 13 * j + 29 * k) % 500 - 250 for j in range(ny) for i in range(nx)]
-        ds.PixelData = struct.pack(f"<{nx * ny}h", *v)
+        # 12-bit two's complement in 16-bit words, the 4 bits above them set (as old overlay planes
+        # did): a reader must use BitsStored, not the whole word.
+        ds.PixelData = struct.pack(f"<{nx * ny}H", *[0xA000 | (x & 0x0FFF) for x in v])
         ds.save_as(str(name), write_like_original=False)
     (folder / "notes.txt").write_text("not a DICOM file\n")
     meta = FileMetaDataset()

@@ -129,7 +129,8 @@ TEST(Dicom, TwoSeriesAreListedAndOneIsChosen) {
             std::string::npos);
 }
 
-// A series written by pydicom (implicit VR little endian, signed 16-bit, slope 2, intercept -1000,
+// A series written by pydicom (implicit VR little endian, signed 12 of 16 bits with the upper 4
+// set, slope 2, intercept -1000,
 // PixelSpacing 0.8 \ 0.6, positions 1.25 mm apart while SliceThickness says 3, nested sequences of
 // undefined length, random names written in random order, a text file and a pixel-less DICOM file
 // beside them): every voxel equals 2 v - 1000 with v = (7 i + 13 j + 29 k) % 500 - 250.
