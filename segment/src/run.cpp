@@ -56,7 +56,9 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
                 "body = largest 3-D component above the body threshold, holes filled",
                 "bone = body voxels above the bone threshold, marrow holes filled (3-D and per slice)",
                 "bones split: 6-connected components of the mask eroded by " + std::to_string(o.segment.split_erosion_voxels) +
-                    " voxel, grown back; components under " + std::to_string(o.segment.min_bone_volume_mm3) + " mm^3 removed"};
+                    " voxel, grown back; pieces touching across " + std::to_string(o.segment.split_neck_ratio) +
+                    " of the smaller one's V^(2/3) joined again; components under " + std::to_string(o.segment.min_bone_volume_mm3) +
+                    " mm^3 removed"};
   j["body_volume_m3"] = static_cast<double>(s.body_voxels) * stack.hu.voxel_volume();
   j["bone_volume_m3"] = static_cast<double>(s.bone_voxels) * stack.hu.voxel_volume();
   j["specks_removed"] = s.specks_removed;

@@ -107,7 +107,7 @@ Volume<std::uint8_t> find_body(const Volume<float>& hu, const SegmentParams& p, 
       std::ostringstream o;
       o << "a body brighter than the body threshold " << s.body_threshold_hu << " HU (" << s.body_threshold_source
         << "); set it with --body-threshold";
-      throw InputError("slice stack", "body", o.str(), "no voxel above it");
+      throw InputError("CT", "body", o.str(), "no voxel above it");
     }
     const auto largest = static_cast<std::int32_t>(std::max_element(sizes.begin() + 1, sizes.end()) - sizes.begin());
     for (std::size_t i = 0; i < body.size(); ++i) body.data[i] = comp[i] == largest;
@@ -180,9 +180,48 @@ Volume<std::uint8_t> find_bone(Volume<float>& hu, const Volume<std::uint8_t>& bo
   return bone;
 }
 
+// Joins the grown pieces of the split whose shared voxel faces reach `ratio` times the smaller
+// piece's V^(2/3) (its cross-section): the erosion cut through a bone, not through a joint.
+// Relabels the pieces 1..kept.
+void merge_broad_contacts(const std::array<int, 3>& d, std::vector<std::int32_t>& comp, std::int32_t& kept, double ratio) {
+  if (kept < 2 || ratio <= 0) return;
+  std::vector<std::size_t> volume(static_cast<std::size_t>(kept) + 1, 0);
+  for (auto c : comp) ++volume[static_cast<std::size_t>(c)];
+  std::map<std::pair<std::int32_t, std::int32_t>, std::size_t> contact;
+  const std::size_t nx = static_cast<std::size_t>(d[0]), nxy = nx * static_cast<std::size_t>(d[1]);
+  for (std::size_t v = 0; v < comp.size(); ++v) {
+    const std::int32_t a = comp[v];
+    if (!a) continue;
+    const std::size_t x = v % nx, y = (v / nx) % static_cast<std::size_t>(d[1]), z = v / nxy;
+    const std::size_t nb[3] = {x + 1 < nx ? v + 1 : v, y + 1 < static_cast<std::size_t>(d[1]) ? v + nx : v,
+                               z + 1 < static_cast<std::size_t>(d[2]) ? v + nxy : v};
+    for (std::size_t w : nb)
+      if (const std::int32_t b = comp[w]; b && b != a) ++contact[{std::min(a, b), std::max(a, b)}];
+  }
+  std::vector<std::int32_t> root(static_cast<std::size_t>(kept) + 1);
+  for (std::size_t c = 0; c < root.size(); ++c) root[c] = static_cast<std::int32_t>(c);
+  auto find = [&](std::int32_t c) {
+    while (root[static_cast<std::size_t>(c)] != c)
+      c = root[static_cast<std::size_t>(c)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(c)])];
+    return c;
+  };
+  for (const auto& [pair, faces] : contact) {
+    const double section = std::pow(
+        static_cast<double>(std::min(volume[static_cast<std::size_t>(pair.first)], volume[static_cast<std::size_t>(pair.second)])), 2.0 / 3.0);
+    if (static_cast<double>(faces) >= ratio * section) root[static_cast<std::size_t>(find(pair.second))] = find(pair.first);
+  }
+  std::vector<std::int32_t> id(root.size(), 0);
+  std::int32_t n = 0;
+  for (std::int32_t c = 1; c <= kept; ++c)
+    if (find(c) == c) id[static_cast<std::size_t>(c)] = ++n;
+  for (auto& c : comp)
+    if (c) c = id[static_cast<std::size_t>(find(c))];
+  kept = n;
+}
+
 // Split at joints: components of the eroded mask, cores too small dropped, labels grown back
-// into the mask (each voxel joins the nearest core). Returns the core id of every voxel (0: none)
-// and the number of cores kept.
+// into the mask (each voxel joins the nearest core), pieces touching across their whole section
+// joined again. Returns the core id of every voxel (0: none) and the number of cores kept.
 std::vector<std::int32_t> split_bones(const Volume<float>& hu, const Volume<std::uint8_t>& bone, const SegmentParams& p, std::size_t min_voxels,
                                       std::int32_t& kept) {
   const Volume<std::uint8_t> core = erode(bone, p.split_erosion_voxels);
@@ -212,6 +251,7 @@ std::vector<std::int32_t> split_bones(const Volume<float>& hu, const Volume<std:
     }
     frontier.swap(next);
   }
+  merge_broad_contacts(hu.dims, comp, kept, p.split_neck_ratio);
   return comp;
 }
 
@@ -248,9 +288,9 @@ void label_bones(const Volume<float>& hu, const Volume<std::uint8_t>& body, cons
       << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "; soft tissue at " << s.soft_tissue_hu << " HU, brightest 1 % of the body at "
       << s.cortical_hu << " HU" << (no_contrast ? ", less than 200 HU of contrast" : "") << "), minimum bone volume " << p.min_bone_volume_mm3
       << " mm^3; set --bone-threshold (cortical bone is ~700-2000 HU) or --body-threshold";
-    throw InputError("slice stack", "bones", o.str(), "no bone");
+    throw InputError("CT", "bones", o.str(), "no bone");
   }
-  if (order.size() > 253) throw InputError("slice stack", "bones", "at most 253 bones (uint8 labels)", std::to_string(order.size()));
+  if (order.size() > 253) throw InputError("CT", "bones", "at most 253 bones (uint8 labels)", std::to_string(order.size()));
   // Deterministic ids: bones ordered along the slice axis, then across.
   std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
     const auto& A = info[static_cast<std::size_t>(a)].centroid_m;

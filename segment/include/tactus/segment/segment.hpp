@@ -20,6 +20,11 @@ struct SegmentParams {
   double denoise_sigma_voxels = 0.8;
   double min_bone_volume_mm3 = 30.0;  // smaller bone components are specks
   int split_erosion_voxels = 1;       // erosion that separates bones touching at a joint
+  // Pieces of the split that touch across at least this fraction of the smaller piece's V^(2/3)
+  // (its cross-section, in voxel faces) are one bone: a joint bridged by partial volume touches
+  // through a narrow neck, a bone shattered by the erosion (thin bones on coarse voxels) across its
+  // whole section.
+  double split_neck_ratio = 0.5;
 };
 
 struct BoneInfo {
