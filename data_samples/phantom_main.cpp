@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   app.add_option("--voxel-mm", p.voxel_mm, "in-plane pixel size in mm (the paper: 0.7)")->capture_default_str();
   app.add_option("--slice-mm", p.slice_mm, "slice spacing in mm")->capture_default_str();
   app.add_option("--noise", p.noise_hu, "noise standard deviation in HU")->capture_default_str();
+  app.add_option("--bias", p.bias_hu, "amplitude of a smooth intensity bias across the volume, HU")->capture_default_str();
   app.add_option("--blur", p.blur_voxels, "partial-volume blur, Gaussian sigma in voxels")->capture_default_str();
   app.add_option("--flexion", p.flexion_deg, "flexion of each finger joint, degrees")->capture_default_str();
   app.add_option("--seed", p.seed, "noise seed")->capture_default_str();

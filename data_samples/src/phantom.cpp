@@ -145,6 +145,7 @@ Anatomy build_anatomy(double flexion) {
 Phantom make_hand_phantom(const PhantomParams& p) {
   for (double v : {p.voxel_mm, p.slice_mm})
     if (!(v >= 0.05 && v <= 50)) throw InputError("phantom parameters", "--voxel-mm/--slice-mm", "voxel sizes from 0.05 to 50 mm", std::to_string(v));
+  if (!(std::abs(p.bias_hu) <= 1000)) throw InputError("phantom parameters", "--bias", "a bias amplitude within 1000 HU", std::to_string(p.bias_hu));
   if (!(p.noise_hu >= 0 && p.noise_hu <= 5000) || !(p.blur_voxels >= 0 && p.blur_voxels <= 20))
     throw InputError("phantom parameters", "--noise/--blur", "noise 0..5000 HU and blur 0..20 voxels");
   if (!(std::abs(p.flexion_deg) <= 90))
@@ -228,7 +229,12 @@ Phantom make_hand_phantom(const PhantomParams& p) {
     std::normal_distribution<float> noise(0.0f, static_cast<float>(p.noise_hu));
     const std::size_t begin = out.ct.index(0, 0, k), end = begin + static_cast<std::size_t>(dims[0]) * dims[1];
     for (std::size_t idx = begin; idx < end; ++idx) {
-      const float v = hu[idx] + (p.noise_hu > 0 ? noise(rng) : 0.0f);
+      float v = hu[idx] + (p.noise_hu > 0 ? noise(rng) : 0.0f);
+      if (p.bias_hu != 0) {  // a smooth additive field: +-bias_hu from one end of the slice axis to the other, and across x
+        const double sz = dims[2] > 1 ? static_cast<double>(k) / (dims[2] - 1) : 0.5;
+        const double sx = static_cast<double>((idx - begin) % static_cast<std::size_t>(dims[0])) / std::max(1, dims[0] - 1);
+        v += static_cast<float>(p.bias_hu * (std::sin(M_PI * (sz - 0.5)) + 0.5 * std::cos(M_PI * sx)));
+      }
       out.ct.data[idx] = static_cast<std::int16_t>(std::lround(std::clamp(v, -1024.0f, 3071.0f)));
     }
   }

@@ -17,6 +17,7 @@ struct PhantomParams {
   double voxel_mm = 0.7;      // in-plane pixel size (x, y)
   double slice_mm = 0.7;      // slice spacing (z, the hand's long axis)
   double noise_hu = 25.0;     // standard deviation of the additive noise
+  double bias_hu = 0.0;       // amplitude of a smooth additive intensity bias (scanner drift, beam hardening)
   double blur_voxels = 0.6;   // partial-volume blur, Gaussian sigma in voxels
   double flexion_deg = 12.0;  // flexion of each finger joint towards the palm
   double margin_mm = 6.0;     // air around the hand
