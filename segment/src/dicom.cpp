@@ -1,12 +1,18 @@
 #include "tactus/segment/dicom.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <thread>
+
+#include <omp.h>
 
 #include <gdcmImage.h>
 #include <gdcmImageReader.h>
@@ -331,10 +337,30 @@ std::vector<DicomSeries> list_dicom_series(const fs::path& folder) {
   if (files.empty()) throw InputError(dir, "", "DICOM files (a 128-byte preamble, then DICM)", "none");
   std::map<std::string, DicomSeries> by_uid;
   std::size_t not_images = 0;
-  Progress progress("scan DICOM files", files.size());
+  // The walks are independent: in parallel, the first error (in file order) reported.
+  std::vector<DicomSlice> scanned(files.size());
+  std::vector<std::exception_ptr> failed(files.size());
+  {
+    Progress progress("scan DICOM files", files.size());
+    std::atomic<std::size_t> done{0};
+    const long n = static_cast<long>(files.size());
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long k = 0; k < n; ++k) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      try {
+        scanned[i] = scan_dicom_file(files[i]);
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+      const std::size_t d = ++done;
+      if (omp_get_thread_num() == 0) progress.update(d);
+    }
+    progress.finish();
+  }
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
   for (std::size_t k = 0; k < files.size(); ++k) {
-    DicomSlice s = scan_dicom_file(files[k]);
-    progress.update(k + 1);
+    DicomSlice s = std::move(scanned[k]);
     if (!s.has_pixels) {  // a DICOMDIR, a report, a presentation state: not part of any image series
       ++not_images;
       continue;
@@ -345,7 +371,6 @@ std::vector<DicomSeries> list_dicom_series(const fs::path& folder) {
     if (series.description.empty()) series.description = s.series_description;
     series.slices.push_back(std::move(s));
   }
-  progress.finish();
   if (others || not_images)
     log::info() << "DICOM folder " << dir << ": " << others << " other file(s) and " << not_images << " DICOM file(s) without an image left aside";
   std::vector<DicomSeries> out;
@@ -356,7 +381,9 @@ std::vector<DicomSeries> list_dicom_series(const fs::path& folder) {
 
 SliceStack read_dicom_series(const fs::path& folder, const std::string& series_uid) {
   const std::string dir = folder.string();
+  const auto t0 = std::chrono::steady_clock::now();
   std::vector<DicomSeries> all = list_dicom_series(folder);
+  const double scan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::string listing;
   for (const DicomSeries& s : all) listing += "\n  " + describe(s);
   DicomSeries* chosen = nullptr;
@@ -433,31 +460,52 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
       [&](ByteWriter& w) {
         gdcm::Trace::ErrorOff(), gdcm::Trace::WarningOff(), gdcm::Trace::DebugOff();  // (in the child: tactus says what failed, once)
         std::vector<std::uint16_t> stored(per_slice * paths.size());
-        std::vector<char> buffer(per_slice * static_cast<std::size_t>(bytes_per_pixel));
+        // Slices decode independently: std::threads (not OpenMP, whose thread pool does not
+        // survive the fork into this child), each with its own reader; the first error in slice
+        // order is reported.
         Progress progress("decode DICOM slices", paths.size());
-        for (std::size_t k = 0; k < paths.size(); ++k) {
-          gdcm::ImageReader reader;
-          reader.SetFileName(paths[k].string().c_str());
-          if (!reader.Read()) throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
-          const gdcm::Image& image = reader.GetImage();
-          if (image.GetBufferLength() != buffer.size())
-            throw InputError(paths[k].string(), "(7FE0,0010) PixelData", std::to_string(buffer.size()) + " bytes of pixels",
-                             std::to_string(image.GetBufferLength()) + " bytes decoded");
-          if (!image.GetBuffer(buffer.data()))
-            throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
-          std::uint16_t* out = stored.data() + k * per_slice;
-          if (bytes_per_pixel == 2)
-            std::memcpy(out, buffer.data(), buffer.size());
-          else
-            for (std::size_t i = 0; i < per_slice; ++i) out[i] = static_cast<unsigned char>(buffer[i]);
-          progress.update(k + 1);
-        }
+        std::atomic<std::size_t> next{0}, done{0};
+        std::vector<std::exception_ptr> failed(paths.size());
+        auto work = [&](bool report) {
+          std::vector<char> buffer(per_slice * static_cast<std::size_t>(bytes_per_pixel));
+          for (std::size_t k = next++; k < paths.size(); k = next++) {
+            try {
+              gdcm::ImageReader reader;
+              reader.SetFileName(paths[k].string().c_str());
+              if (!reader.Read()) throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
+              const gdcm::Image& image = reader.GetImage();
+              if (image.GetBufferLength() != buffer.size())
+                throw InputError(paths[k].string(), "(7FE0,0010) PixelData", std::to_string(buffer.size()) + " bytes of pixels",
+                                 std::to_string(image.GetBufferLength()) + " bytes decoded");
+              if (!image.GetBuffer(buffer.data()))
+                throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
+              std::uint16_t* out = stored.data() + k * per_slice;
+              if (bytes_per_pixel == 2)
+                std::memcpy(out, buffer.data(), buffer.size());
+              else
+                for (std::size_t i = 0; i < per_slice; ++i) out[i] = static_cast<unsigned char>(buffer[i]);
+            } catch (...) {
+              failed[k] = std::current_exception();
+            }
+            const std::size_t d = ++done;
+            if (report) progress.update(d);
+          }
+        };
+        const unsigned helpers = std::min<unsigned>(std::max(1u, std::thread::hardware_concurrency()), 8u) - 1;
+        std::vector<std::thread> threads;
+        for (unsigned t = 0; t < helpers; ++t) threads.emplace_back(work, false);
+        work(true);
+        for (auto& t : threads) t.join();
         progress.finish();
+        for (const auto& e : failed)
+          if (e) std::rethrow_exception(e);
         w.put_vector(stored);
       },
       IsolationLimits{30.0 + 0.5 * static_cast<double>(paths.size()), 0});
   ByteReader reader(bytes);
   const std::vector<std::uint16_t> stored = reader.get_vector<std::uint16_t>();
+  log::verbose() << "DICOM: walked " << all.size() << " series in " << scan_s << " s, decoded " << paths.size() << " slices in "
+                 << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - scan_s << " s";
   SliceStack out;
   out.hu = Volume<float>({nx, ny, nz}, spacing, origin);
   out.hu.direction = {r[0], c[0], n[0], r[1], c[1], n[1], r[2], c[2], n[2]};  // columns: row, column, slice normal
