@@ -12,8 +12,6 @@
 #include <sstream>
 #include <thread>
 
-#include <omp.h>
-
 #include <gdcmImage.h>
 #include <gdcmImageReader.h>
 #include <gdcmTrace.h>
@@ -257,6 +255,12 @@ class Walker {
 
 double dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+// Threads for `items` independent files: the cores (at most 8), one per 16 files at least.
+unsigned worker_threads(std::size_t items) {
+  const unsigned cores = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  return static_cast<unsigned>(std::max<std::size_t>(1, std::min<std::size_t>(cores, items / 16)));
+}
+
 std::string describe(const DicomSeries& s) {
   return s.uid + " (" + (s.description.empty() ? std::string("no description") : "'" + s.description + "'") + ", " + std::to_string(s.slices.size()) +
          " images)";
@@ -337,24 +341,28 @@ std::vector<DicomSeries> list_dicom_series(const fs::path& folder) {
   if (files.empty()) throw InputError(dir, "", "DICOM files (a 128-byte preamble, then DICM)", "none");
   std::map<std::string, DicomSeries> by_uid;
   std::size_t not_images = 0;
-  // The walks are independent: in parallel, the first error (in file order) reported.
+  // The walks are independent: in parallel (std::threads that end here: an OpenMP pool would keep
+  // spinning beside the decoding child), the first error in file order reported.
   std::vector<DicomSlice> scanned(files.size());
   std::vector<std::exception_ptr> failed(files.size());
   {
     Progress progress("scan DICOM files", files.size());
-    std::atomic<std::size_t> done{0};
-    const long n = static_cast<long>(files.size());
-#pragma omp parallel for schedule(dynamic, 4)
-    for (long k = 0; k < n; ++k) {
-      const std::size_t i = static_cast<std::size_t>(k);
-      try {
-        scanned[i] = scan_dicom_file(files[i]);
-      } catch (...) {
-        failed[i] = std::current_exception();
+    std::atomic<std::size_t> next{0}, done{0};
+    auto work = [&](bool report) {
+      for (std::size_t k = next++; k < files.size(); k = next++) {
+        try {
+          scanned[k] = scan_dicom_file(files[k]);
+        } catch (...) {
+          failed[k] = std::current_exception();
+        }
+        const std::size_t d = ++done;
+        if (report) progress.update(d);
       }
-      const std::size_t d = ++done;
-      if (omp_get_thread_num() == 0) progress.update(d);
-    }
+    };
+    std::vector<std::thread> threads;
+    for (unsigned t = 1; t < worker_threads(files.size()); ++t) threads.emplace_back(work, false);
+    work(true);
+    for (auto& t : threads) t.join();
     progress.finish();
   }
   for (const auto& e : failed)
@@ -491,9 +499,8 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
             if (report) progress.update(d);
           }
         };
-        const unsigned helpers = std::min<unsigned>(std::max(1u, std::thread::hardware_concurrency()), 8u) - 1;
         std::vector<std::thread> threads;
-        for (unsigned t = 0; t < helpers; ++t) threads.emplace_back(work, false);
+        for (unsigned t = 1; t < worker_threads(paths.size()); ++t) threads.emplace_back(work, false);
         work(true);
         for (auto& t : threads) t.join();
         progress.finish();
