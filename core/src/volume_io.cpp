@@ -135,18 +135,13 @@ struct QuietHdf5 {
   void* data = nullptr;
 };
 
-void write_double3_attribute(hid_t obj, const char* name, const std::array<double, 3>& v) {
-  const hsize_t n = 3;
-  H5Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
-  H5Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, v.data());
-}
-
 void write_doubles_attribute(hid_t obj, const char* name, const double* v, hsize_t n) {
   H5Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
   H5Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, v);
 }
+
+void write_double3_attribute(hid_t obj, const char* name, const std::array<double, 3>& v) { write_doubles_attribute(obj, name, v.data(), 3); }
 
 // The optional direction attribute (9 numbers, row by row); identity when absent (older files).
 Direction read_direction_attribute(hid_t obj, const std::string& file, const std::string& dataset) {

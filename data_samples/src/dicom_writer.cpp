@@ -48,12 +48,10 @@ void write_dicom_series(const Volume<std::int16_t>& ct, const std::filesystem::p
   const std::string series = o.series_uid.empty() ? uids.Generate() : o.series_uid;
   const std::string frame = uids.Generate();
   validate_direction(ct.direction, folder.string(), "direction");
-  {
-    const Direction& D = ct.direction;  // the slice normal must be row x column, as readers assume
-    const double n[3] = {D[3] * D[7] - D[6] * D[4], D[6] * D[1] - D[0] * D[7], D[0] * D[4] - D[3] * D[1]};
-    if (std::abs(n[0] - D[2]) + std::abs(n[1] - D[5]) + std::abs(n[2] - D[8]) > 1e-6)
-      throw InputError(folder.string(), "direction", "a rotation (the slice axis = row x column direction)", "a reflection");
-  }
+  // Readers take the slice axis as row x column: of an orthonormal direction, that holds when it
+  // is a rotation (det +1), not a reflection.
+  if (determinant(ct.direction) < 0)
+    throw InputError(folder.string(), "direction", "a rotation (the slice axis = row x column direction)", "a reflection");
   const int nx = ct.dims[0], ny = ct.dims[1], nz = ct.dims[2];
   std::vector<std::uint16_t> pixels(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
   for (int k = 0; k < nz; ++k) {

@@ -261,6 +261,34 @@ unsigned worker_threads(std::size_t items) {
   return static_cast<unsigned>(std::max<std::size_t>(1, std::min<std::size_t>(cores, items / 16)));
 }
 
+// Runs work(k) for k = 0..n-1 on worker_threads(n) std::threads (not OpenMP: its idle pool would
+// keep spinning after the work, and it does not survive a fork into an isolated child), with a
+// progress line; the first error in index order is rethrown once all are done.
+template <class Work>
+void for_each_file(const char* label, std::size_t n, Work&& work) {
+  Progress progress(label, n);
+  std::atomic<std::size_t> next{0}, done{0};
+  std::vector<std::exception_ptr> failed(n);
+  auto run = [&](bool report) {
+    for (std::size_t k = next++; k < n; k = next++) {
+      try {
+        work(k);
+      } catch (...) {
+        failed[k] = std::current_exception();
+      }
+      const std::size_t d = ++done;
+      if (report) progress.update(d);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (unsigned t = 1; t < worker_threads(n); ++t) threads.emplace_back(run, false);
+  run(true);
+  for (auto& t : threads) t.join();
+  progress.finish();
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
+}
+
 std::string describe(const DicomSeries& s) {
   return s.uid + " (" + (s.description.empty() ? std::string("no description") : "'" + s.description + "'") + ", " + std::to_string(s.slices.size()) +
          " images)";
@@ -341,32 +369,9 @@ std::vector<DicomSeries> list_dicom_series(const fs::path& folder) {
   if (files.empty()) throw InputError(dir, "", "DICOM files (a 128-byte preamble, then DICM)", "none");
   std::map<std::string, DicomSeries> by_uid;
   std::size_t not_images = 0;
-  // The walks are independent: in parallel (std::threads that end here: an OpenMP pool would keep
-  // spinning beside the decoding child), the first error in file order reported.
+  // The walks are independent: in parallel, the first error in file order reported.
   std::vector<DicomSlice> scanned(files.size());
-  std::vector<std::exception_ptr> failed(files.size());
-  {
-    Progress progress("scan DICOM files", files.size());
-    std::atomic<std::size_t> next{0}, done{0};
-    auto work = [&](bool report) {
-      for (std::size_t k = next++; k < files.size(); k = next++) {
-        try {
-          scanned[k] = scan_dicom_file(files[k]);
-        } catch (...) {
-          failed[k] = std::current_exception();
-        }
-        const std::size_t d = ++done;
-        if (report) progress.update(d);
-      }
-    };
-    std::vector<std::thread> threads;
-    for (unsigned t = 1; t < worker_threads(files.size()); ++t) threads.emplace_back(work, false);
-    work(true);
-    for (auto& t : threads) t.join();
-    progress.finish();
-  }
-  for (const auto& e : failed)
-    if (e) std::rethrow_exception(e);
+  for_each_file("scan DICOM files", files.size(), [&](std::size_t k) { scanned[k] = scan_dicom_file(files[k]); });
   for (std::size_t k = 0; k < files.size(); ++k) {
     DicomSlice s = std::move(scanned[k]);
     if (!s.has_pixels) {  // a DICOMDIR, a report, a presentation state: not part of any image series
@@ -468,44 +473,26 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
       [&](ByteWriter& w) {
         gdcm::Trace::ErrorOff(), gdcm::Trace::WarningOff(), gdcm::Trace::DebugOff();  // (in the child: tactus says what failed, once)
         std::vector<std::uint16_t> stored(per_slice * paths.size());
-        // Slices decode independently: std::threads (not OpenMP, whose thread pool does not
-        // survive the fork into this child), each with its own reader; the first error in slice
-        // order is reported.
-        Progress progress("decode DICOM slices", paths.size());
-        std::atomic<std::size_t> next{0}, done{0};
-        std::vector<std::exception_ptr> failed(paths.size());
-        auto work = [&](bool report) {
-          std::vector<char> buffer(per_slice * static_cast<std::size_t>(bytes_per_pixel));
-          for (std::size_t k = next++; k < paths.size(); k = next++) {
-            try {
-              gdcm::ImageReader reader;
-              reader.SetFileName(paths[k].string().c_str());
-              if (!reader.Read()) throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
-              const gdcm::Image& image = reader.GetImage();
-              if (image.GetBufferLength() != buffer.size())
-                throw InputError(paths[k].string(), "(7FE0,0010) PixelData", std::to_string(buffer.size()) + " bytes of pixels",
-                                 std::to_string(image.GetBufferLength()) + " bytes decoded");
-              if (!image.GetBuffer(buffer.data()))
-                throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
-              std::uint16_t* out = stored.data() + k * per_slice;
-              if (bytes_per_pixel == 2)
-                std::memcpy(out, buffer.data(), buffer.size());
-              else
-                for (std::size_t i = 0; i < per_slice; ++i) out[i] = static_cast<unsigned char>(buffer[i]);
-            } catch (...) {
-              failed[k] = std::current_exception();
-            }
-            const std::size_t d = ++done;
-            if (report) progress.update(d);
-          }
-        };
-        std::vector<std::thread> threads;
-        for (unsigned t = 1; t < worker_threads(paths.size()); ++t) threads.emplace_back(work, false);
-        work(true);
-        for (auto& t : threads) t.join();
-        progress.finish();
-        for (const auto& e : failed)
-          if (e) std::rethrow_exception(e);
+        // Slices decode independently, each with its own reader (and each thread its own buffer);
+        // the first error in slice order is reported.
+        for_each_file("decode DICOM slices", paths.size(), [&](std::size_t k) {
+          thread_local std::vector<char> buffer;
+          buffer.resize(per_slice * static_cast<std::size_t>(bytes_per_pixel));
+          gdcm::ImageReader reader;
+          reader.SetFileName(paths[k].string().c_str());
+          if (!reader.Read()) throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
+          const gdcm::Image& image = reader.GetImage();
+          if (image.GetBufferLength() != buffer.size())
+            throw InputError(paths[k].string(), "(7FE0,0010) PixelData", std::to_string(buffer.size()) + " bytes of pixels",
+                             std::to_string(image.GetBufferLength()) + " bytes decoded");
+          if (!image.GetBuffer(buffer.data()))
+            throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
+          std::uint16_t* out = stored.data() + k * per_slice;
+          if (bytes_per_pixel == 2)
+            std::memcpy(out, buffer.data(), buffer.size());
+          else
+            for (std::size_t i = 0; i < per_slice; ++i) out[i] = static_cast<unsigned char>(buffer[i]);
+        });
         w.put_vector(stored);
       },
       IsolationLimits{30.0 + 0.5 * static_cast<double>(paths.size()), 0});

@@ -80,58 +80,51 @@ std::string inflate_exactly(const std::string& in, std::size_t expected, const s
   return out;
 }
 
+// w <= 8 bytes at p into b, reversed when `swap` (the other byte order than this machine's).
+void load_bytes(const unsigned char* p, std::size_t w, bool swap, unsigned char* b) {
+  for (std::size_t k = 0; k < w && k < 8; ++k) b[k] = p[swap ? w - 1 - k : k];
+}
+
+template <class T>
+double value_as(const unsigned char* b) {
+  T x;
+  std::memcpy(&x, b, sizeof x);
+  return static_cast<double>(x);
+}
+
 // Stored values (of type t, in the given byte order) as HU = slope * v + intercept.
 void convert(const char* bytes, std::size_t n, Scalar t, bool big, double slope, double intercept, float* out, const std::string& file) {
   const std::size_t w = scalar_size(t);
   const bool swap = big != (std::endian::native == std::endian::big);
   unsigned char b[8] = {};
   for (std::size_t i = 0; i < n; ++i) {
-    const auto* p = reinterpret_cast<const unsigned char*>(bytes) + i * w;
-    for (std::size_t k = 0; k < w && k < 8; ++k) b[k] = p[swap ? w - 1 - k : k];
+    load_bytes(reinterpret_cast<const unsigned char*>(bytes) + i * w, w, swap, b);
     double v = 0;
     switch (t) {
       case Scalar::u8:
-        v = b[0];
+        v = value_as<std::uint8_t>(b);
         break;
       case Scalar::i8:
-        v = static_cast<std::int8_t>(b[0]);
+        v = value_as<std::int8_t>(b);
         break;
-      case Scalar::u16: {
-        std::uint16_t x;
-        std::memcpy(&x, b, 2);
-        v = x;
+      case Scalar::u16:
+        v = value_as<std::uint16_t>(b);
         break;
-      }
-      case Scalar::i16: {
-        std::int16_t x;
-        std::memcpy(&x, b, 2);
-        v = x;
+      case Scalar::i16:
+        v = value_as<std::int16_t>(b);
         break;
-      }
-      case Scalar::u32: {
-        std::uint32_t x;
-        std::memcpy(&x, b, 4);
-        v = x;
+      case Scalar::u32:
+        v = value_as<std::uint32_t>(b);
         break;
-      }
-      case Scalar::i32: {
-        std::int32_t x;
-        std::memcpy(&x, b, 4);
-        v = x;
+      case Scalar::i32:
+        v = value_as<std::int32_t>(b);
         break;
-      }
-      case Scalar::f32: {
-        float x;
-        std::memcpy(&x, b, 4);
-        v = x;
+      case Scalar::f32:
+        v = value_as<float>(b);
         break;
-      }
-      case Scalar::f64: {
-        double x;
-        std::memcpy(&x, b, 8);
-        v = x;
+      case Scalar::f64:
+        v = value_as<double>(b);
         break;
-      }
     }
     const double hu = slope * v + intercept;
     if (!std::isfinite(hu) || std::abs(hu) > 1e7)
@@ -201,20 +194,14 @@ SliceStack read_nifti(const fs::path& path) {
     big = true;
   }
   const bool swap = big != (std::endian::native == std::endian::big);
-  auto get = [&](std::size_t off, std::size_t w, void* out) {
-    unsigned char b[8] = {};
-    for (std::size_t k = 0; k < w && k < 8; ++k) b[k] = h[off + (swap ? w - 1 - k : k)];
-    std::memcpy(out, b, w);
-  };
+  unsigned char word[8] = {};
   auto i16 = [&](std::size_t off) {
-    std::int16_t v;
-    get(off, 2, &v);
-    return static_cast<int>(v);
+    load_bytes(h + off, 2, swap, word);
+    return static_cast<int>(value_as<std::int16_t>(word));
   };
   auto f32 = [&](std::size_t off) {
-    float v;
-    get(off, 4, &v);
-    return static_cast<double>(v);
+    load_bytes(h + off, 4, swap, word);
+    return value_as<float>(word);
   };
   if (std::memcmp(h + 344, "n+1\0", 4) != 0)
     throw InputError(file, "magic", "\"n+1\" (a single-file .nii; a .hdr/.img pair is not supported)",

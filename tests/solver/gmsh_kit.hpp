@@ -4,7 +4,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
+
+#include "tactus/core/gmsh_session.hpp"
 
 namespace tactus::testkit {
 
@@ -54,6 +57,16 @@ inline void graded_size_field(const double centre[3], double h_min, double h_max
   gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
   gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
   gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+}
+
+// Meshes the current gmsh model in 3-D reproducibly (Delaunay, optimised, seed 1) and returns
+// it as a TetMesh.
+inline TetMesh generate_tet_mesh(const std::string& model) {
+  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+  gmsh::option::setNumber("Mesh.Optimize", 1);
+  gmsh::option::setNumber("Mesh.RandomSeed", 1);
+  gmsh::model::mesh::generate(3);
+  return tet_mesh_from_gmsh_model(model);
 }
 
 }  // namespace tactus::testkit

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "gmsh_kit.hpp"
 #include "linear_reference.hpp"
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
@@ -153,11 +154,7 @@ TetMesh shell_octant(double a, double b, double h) {
   }
   gmsh::option::setNumber("Mesh.MeshSizeMax", h);
   gmsh::option::setNumber("Mesh.MeshSizeMin", 0.5 * h);
-  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
-  gmsh::option::setNumber("Mesh.Optimize", 1);
-  gmsh::option::setNumber("Mesh.RandomSeed", 1);
-  gmsh::model::mesh::generate(3);
-  return tet_mesh_from_gmsh_model("shell");
+  return testkit::generate_tet_mesh("shell");
 }
 
 struct ShellResult {

@@ -12,6 +12,7 @@
 
 #include <gmsh.h>
 
+#include "gmsh_kit.hpp"
 #include "material_kit.hpp"
 #include "scenario_kit.hpp"
 #include "tactus/core/gmsh_session.hpp"
@@ -349,11 +350,7 @@ TetMesh graded_sphere(double R, const Vec3& bottom, double h_min, double h_max, 
   gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
   gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
   gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
-  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
-  gmsh::option::setNumber("Mesh.Optimize", 1);
-  gmsh::option::setNumber("Mesh.RandomSeed", 1);
-  gmsh::model::mesh::generate(3);
-  return tet_mesh_from_gmsh_model("sphere");
+  return testkit::generate_tet_mesh("sphere");
 }
 }  // namespace
 

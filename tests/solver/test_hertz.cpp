@@ -53,11 +53,7 @@ TetMesh quarter_sphere(double gap, double h) {
   gmsh::model::setPhysicalName(2, 20, "surface");
   const double pole[3] = {0, 0, gap};
   testkit::graded_size_field(pole, h, 2.5e-3, 1.5 * kContactRadius, 0.3);
-  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
-  gmsh::option::setNumber("Mesh.Optimize", 1);
-  gmsh::option::setNumber("Mesh.RandomSeed", 1);
-  gmsh::model::mesh::generate(3);
-  return tet_mesh_from_gmsh_model("quarter_sphere");
+  return testkit::generate_tet_mesh("quarter_sphere");
 }
 
 // The quarter block [0, B] x [0, B] x [-B, 0], graded from h at the origin like the sphere.
@@ -72,11 +68,7 @@ TetMesh quarter_block(double h) {
   testkit::tag_box_plane_faces(vol, lo, hi);
   const double centre[3] = {0, 0, 0};
   testkit::graded_size_field(centre, h, 2.5e-3, 1.5 * kContactRadius, 0.3);
-  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
-  gmsh::option::setNumber("Mesh.Optimize", 1);
-  gmsh::option::setNumber("Mesh.RandomSeed", 1);
-  gmsh::model::mesh::generate(3);
-  return tet_mesh_from_gmsh_model("quarter_block");
+  return testkit::generate_tet_mesh("quarter_block");
 }
 
 struct HertzOutcome {
