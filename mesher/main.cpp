@@ -54,6 +54,13 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
   tactus::log::info() << "mesh: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets; min dihedral "
                       << all["min_dihedral_deg"].get<double>() << " deg, " << 100 * all["fraction_min_dihedral_below_10deg"].get<double>()
                       << " % of tets below 10 deg" << step.str();
+  for (const auto& u : report["guarantees"]["unmet"]) {
+    std::ostringstream o;
+    o << "mesh: guarantee " << u["guarantee"].get<std::string>() << " not met in " << u["group"].get<std::string>() << ": "
+      << u["value"].get<double>() << " at tet " << u["element"].get<long>() << " (" << u["tets_below"].get<long>() << " tets below); "
+      << u["why"].get<std::string>() << " (quality.json \"guarantees\")";
+    tactus::log::warn(o.str());
+  }
 }
 
 // The P-wave speed of every volume group from --wave-speed GROUP=SPEED arguments ("*" for the

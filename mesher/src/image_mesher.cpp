@@ -370,6 +370,18 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
     log::verbose() << "mesher: peeled " << peeled << " soft-tissue slivers lying on the skin";
     if (peeled > 0 && p.relocate_passes > 0) relocate_short_tets(mesh, p.facet_distance_mm * 1e-3, post);
   }
+  if (p.relocate_passes > 0) {
+    // The guarantees: relocation and interior edge splits, then short surface edges collapsed
+    // where those could not help, and relocation again around them.
+    std::size_t left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+    for (int round = 0; round < post.split_rounds && left > 0; ++round) {
+      const std::size_t merged = collapse_poor_surface_edges(mesh, p.facet_distance_mm * 1e-3, post);
+      log::verbose() << "mesher: " << left << " tets below the guarantees; " << merged << " surface edges collapsed";
+      if (merged == 0) break;
+      left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+    }
+    log::verbose() << "mesher: " << left << " tets below the guarantees after the post-passes";
+  }
   check_every_label_meshed(labels, table, per_label);
   // Meshed and improved in the voxels' axis-aligned frame (the relocation pass tries moves along
   // its axes); now placed where the voxels are in the world. A reflection turns every tet and

@@ -64,29 +64,39 @@ Volume<std::uint8_t> erode(const Volume<std::uint8_t>& m, int n) {
 
 // 2-D hole filling in every z slice (4-connected background reached from the slice's border).
 void fill_slice_holes(Volume<std::uint8_t>& m) {
-  const int nx = m.dims[0], ny = m.dims[1];
-#pragma omp parallel for schedule(dynamic)
-  for (int z = 0; z < m.dims[2]; ++z) {
-    std::vector<std::uint8_t> outside(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
-    std::vector<int> stack;
-    auto push = [&](int x, int y) {
-      const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(y);
-      if (!m.at(x, y, z) && !outside[i]) outside[i] = 1, stack.push_back(static_cast<int>(i));
+  // Planes normal to each axis in turn: a tubular bone (a phalanx lying in the slice plane, cut
+  // by thick slices) has its marrow enclosed only in the planes across it.
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
+    const int nu = m.dims[u_axis], nv = m.dims[v_axis];
+    auto voxel = [&](int w, int u, int v) -> std::uint8_t& {
+      std::array<int, 3> c{};
+      c[static_cast<std::size_t>(axis)] = w, c[static_cast<std::size_t>(u_axis)] = u, c[static_cast<std::size_t>(v_axis)] = v;
+      return m.at(c[0], c[1], c[2]);
     };
-    for (int x = 0; x < nx; ++x) push(x, 0), push(x, ny - 1);
-    for (int y = 0; y < ny; ++y) push(0, y), push(nx - 1, y);
-    while (!stack.empty()) {
-      const int i = stack.back();
-      stack.pop_back();
-      const int x = i % nx, y = i / nx;
-      if (x > 0) push(x - 1, y);
-      if (x + 1 < nx) push(x + 1, y);
-      if (y > 0) push(x, y - 1);
-      if (y + 1 < ny) push(x, y + 1);
+#pragma omp parallel for schedule(dynamic)
+    for (int w = 0; w < m.dims[axis]; ++w) {
+      std::vector<std::uint8_t> outside(static_cast<std::size_t>(nu) * static_cast<std::size_t>(nv), 0);
+      std::vector<int> stack;
+      auto push = [&](int u, int v) {
+        const std::size_t i = static_cast<std::size_t>(u) + static_cast<std::size_t>(nu) * static_cast<std::size_t>(v);
+        if (!voxel(w, u, v) && !outside[i]) outside[i] = 1, stack.push_back(static_cast<int>(i));
+      };
+      for (int u = 0; u < nu; ++u) push(u, 0), push(u, nv - 1);
+      for (int v = 0; v < nv; ++v) push(0, v), push(nu - 1, v);
+      while (!stack.empty()) {
+        const int i = stack.back();
+        stack.pop_back();
+        const int u = i % nu, v = i / nu;
+        if (u > 0) push(u - 1, v);
+        if (u + 1 < nu) push(u + 1, v);
+        if (v > 0) push(u, v - 1);
+        if (v + 1 < nv) push(u, v + 1);
+      }
+      for (int v = 0; v < nv; ++v)
+        for (int u = 0; u < nu; ++u)
+          if (!outside[static_cast<std::size_t>(u) + static_cast<std::size_t>(nu) * static_cast<std::size_t>(v)]) voxel(w, u, v) = 1;
     }
-    for (int y = 0; y < ny; ++y)
-      for (int x = 0; x < nx; ++x)
-        if (!outside[static_cast<std::size_t>(x) + static_cast<std::size_t>(nx) * static_cast<std::size_t>(y)]) m.at(x, y, z) = 1;
   }
 }
 
@@ -255,6 +265,101 @@ std::vector<std::int32_t> split_bones(const Volume<float>& hu, const Volume<std:
   return comp;
 }
 
+// Closes each bone by a box of half-width marrow_closing_mm (per axis in voxels, at least one
+// where the spacing allows it): the marrow of a bone whose cortex partial volume opened (thick
+// slices across a thin shell) is filled. Voxels are added only inside the body, where no bone is,
+// and not next to another bone (so a joint gap of one voxel stays).
+void close_bone_marrow(const Volume<std::uint8_t>& body, std::vector<std::int32_t>& comp, std::int32_t kept, double radius_mm) {
+  if (radius_mm <= 0 || kept < 1) return;
+  const std::array<int, 3> d = body.dims;
+  std::array<int, 3> r{};
+  for (std::size_t a = 0; a < 3; ++a) r[a] = static_cast<int>(std::floor(radius_mm * 1e-3 / body.spacing[a] + 0.5));
+  if (r[0] + r[1] + r[2] == 0) return;
+  const auto idx = [&](int x, int y, int z) {
+    return static_cast<std::size_t>(x) +
+           static_cast<std::size_t>(d[0]) * (static_cast<std::size_t>(y) + static_cast<std::size_t>(d[1]) * static_cast<std::size_t>(z));
+  };
+  std::vector<std::array<int, 6>> box(static_cast<std::size_t>(kept) + 1, {d[0], d[1], d[2], -1, -1, -1});
+  for (int z = 0; z < d[2]; ++z)
+    for (int y = 0; y < d[1]; ++y)
+      for (int x = 0; x < d[0]; ++x)
+        if (const std::int32_t c = comp[idx(x, y, z)]) {
+          auto& b = box[static_cast<std::size_t>(c)];
+          b = {std::min(b[0], x), std::min(b[1], y), std::min(b[2], z), std::max(b[3], x), std::max(b[4], y), std::max(b[5], z)};
+        }
+  std::vector<std::pair<std::size_t, std::int32_t>> added;
+#pragma omp parallel for schedule(dynamic)
+  for (std::int32_t c = 1; c <= kept; ++c) {
+    const auto& b = box[static_cast<std::size_t>(c)];
+    if (b[3] < 0) continue;
+    // The bone's box grown by twice the radius (the dilation must not be cut by the box's edge).
+    std::array<int, 3> lo{}, n{};
+    for (std::size_t a = 0; a < 3; ++a) {
+      lo[a] = b[a] - 2 * r[a];
+      n[a] = b[a + 3] + 2 * r[a] - lo[a] + 1;
+    }
+    const auto local = [&](int x, int y, int z) {
+      return static_cast<std::size_t>(x) +
+             static_cast<std::size_t>(n[0]) * (static_cast<std::size_t>(y) + static_cast<std::size_t>(n[1]) * static_cast<std::size_t>(z));
+    };
+    std::vector<std::uint8_t> m(static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1]) * static_cast<std::size_t>(n[2]), 0), tmp;
+    for (int z = 0; z < n[2]; ++z)
+      for (int y = 0; y < n[1]; ++y)
+        for (int x = 0; x < n[0]; ++x) {
+          const int gx = x + lo[0], gy = y + lo[1], gz = z + lo[2];
+          if (gx >= 0 && gy >= 0 && gz >= 0 && gx < d[0] && gy < d[1] && gz < d[2]) m[local(x, y, z)] = comp[idx(gx, gy, gz)] == c;
+        }
+    // Separable box filter along each axis: max (dilate) then min (erode).
+    const auto filter = [&](bool dilate) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        if (r[a] == 0) continue;
+        tmp = m;
+        for (int z = 0; z < n[2]; ++z)
+          for (int y = 0; y < n[1]; ++y)
+            for (int x = 0; x < n[0]; ++x) {
+              std::array<int, 3> p{x, y, z};
+              std::uint8_t v = dilate ? 0 : 1;
+              for (int k = -r[a]; k <= r[a]; ++k) {
+                std::array<int, 3> q = p;
+                q[a] += k;
+                const std::uint8_t w = q[a] >= 0 && q[a] < n[a] ? tmp[local(q[0], q[1], q[2])] : 0;
+                v = dilate ? std::max(v, w) : std::min(v, w);
+              }
+              m[local(x, y, z)] = v;
+            }
+      }
+    };
+    filter(true);
+    filter(false);
+    std::vector<std::pair<std::size_t, std::int32_t>> mine;
+    for (int z = 0; z < n[2]; ++z)
+      for (int y = 0; y < n[1]; ++y)
+        for (int x = 0; x < n[0]; ++x) {
+          const int gx = x + lo[0], gy = y + lo[1], gz = z + lo[2];
+          if (!m[local(x, y, z)] || gx < 0 || gy < 0 || gz < 0 || gx >= d[0] || gy >= d[1] || gz >= d[2]) continue;
+          const std::size_t i = idx(gx, gy, gz);
+          if (comp[i] || !body.data[i]) continue;
+          bool near_other = false;
+          for (int k = 0; k < 6 && !near_other; ++k) {
+            std::array<int, 3> q{gx, gy, gz};
+            q[static_cast<std::size_t>(k / 2)] += k % 2 ? 1 : -1;
+            if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= d[0] || q[1] >= d[1] || q[2] >= d[2]) continue;
+            const std::int32_t o = comp[idx(q[0], q[1], q[2])];
+            near_other = o && o != c;
+          }
+          if (!near_other) mine.push_back({i, c});
+        }
+#pragma omp critical
+    added.insert(added.end(), mine.begin(), mine.end());
+  }
+  // Two bones may both claim a voxel between them: it stays soft tissue (a joint gap).
+  std::sort(added.begin(), added.end());
+  for (std::size_t k = 0; k < added.size(); ++k) {
+    const bool shared = (k > 0 && added[k - 1].first == added[k].first) || (k + 1 < added.size() && added[k + 1].first == added[k].first);
+    if (!shared) comp[added[k].first] = added[k].second;
+  }
+}
+
 // Per-bone statistics, specks back to soft tissue, deterministic ids, and the label volume.
 void label_bones(const Volume<float>& hu, const Volume<std::uint8_t>& body, const std::vector<std::int32_t>& comp, std::int32_t kept,
                  std::size_t min_voxels, bool no_contrast, const SegmentParams& p, Segmentation& s) {
@@ -331,7 +436,8 @@ Segmentation segment_hand(const Volume<float>& hu_in, const SegmentParams& p) {
   const double voxel_mm3 = hu.voxel_volume() * 1e9;
   const std::size_t min_voxels = static_cast<std::size_t>(std::ceil(p.min_bone_volume_mm3 / voxel_mm3));
   std::int32_t kept = 0;
-  const std::vector<std::int32_t> comp = split_bones(hu, bone, p, min_voxels, kept);
+  std::vector<std::int32_t> comp = split_bones(hu, bone, p, min_voxels, kept);
+  close_bone_marrow(body, comp, kept, p.marrow_closing_mm);
   label_bones(hu, body, comp, kept, min_voxels, no_contrast, p, s);
   log::verbose() << "segment: body threshold " << s.body_threshold_hu << " HU, bone threshold " << s.bone_threshold_hu << " HU, " << s.bones.size()
                  << " bones, " << s.specks_removed << " specks removed";

@@ -1,6 +1,7 @@
 // Peeling soft-tissue tets that lie flat on the skin (post_passes.hpp). Such a tet (two or three
 // faces on the skin, or one with a short neighbour) whose characteristic length is below
-// p.peel_ratio_goal of the soft-tissue median is a sliver of the surface approximation (its four
+// p.peel_ratio_goal of the soft-tissue median, or whose smallest dihedral angle is below the
+// guarantee (p.guarantee_dihedral_deg), is a sliver of the surface approximation (its four
 // nodes on the skin, e.g. at the wrist cut's rim or over a thin finger): no node can be moved to
 // fix it without leaving the surface, and it sets the explicit time step. Removing it exposes its
 // inner faces; the skin stays closed and 2-manifold (checked around every edge and node of the
@@ -13,6 +14,7 @@
 #include "tactus/core/log.hpp"
 #include "tactus/core/stable_step.hpp"
 #include "tactus/mesher/post_passes.hpp"
+#include "tactus/mesher/quality.hpp"
 #include "topology.hpp"
 
 namespace tactus::mesher {
@@ -38,7 +40,8 @@ class SkinPeeler {
     median_ = soft[soft.size() / 2];
     std::vector<std::pair<double, std::size_t>> candidates;
     for (std::size_t e = 0; e < mesh_.tets.size(); ++e)
-      if (mesh_.tet_group[e] == kSoft && length(e) < p_.peel_ratio_goal * median_) candidates.push_back({length(e), e});
+      if (mesh_.tet_group[e] == kSoft && (length(e) < p_.peel_ratio_goal * median_ || min_dihedral(e) < p_.guarantee_dihedral_deg))
+        candidates.push_back({length(e), e});
     std::sort(candidates.begin(), candidates.end());
     std::size_t removed = 0;
     for (const auto& [len, e] : candidates) removed += try_peel(e, len);
@@ -54,6 +57,13 @@ class SkinPeeler {
     const TetGradients g = tet_shape_gradients(mesh_.nodes[static_cast<std::size_t>(t[0])], mesh_.nodes[static_cast<std::size_t>(t[1])],
                                                mesh_.nodes[static_cast<std::size_t>(t[2])], mesh_.nodes[static_cast<std::size_t>(t[3])]);
     return g.volume > 0 ? characteristic_length(g) : 0.0;
+  }
+
+  double min_dihedral(std::size_t e) const {
+    const auto& t = mesh_.tets[e];
+    return tet_quality(mesh_.nodes[static_cast<std::size_t>(t[0])], mesh_.nodes[static_cast<std::size_t>(t[1])],
+                       mesh_.nodes[static_cast<std::size_t>(t[2])], mesh_.nodes[static_cast<std::size_t>(t[3])])
+        .min_dihedral_deg;
   }
 
   std::size_t live_owners(const Face& key) {
@@ -137,8 +147,8 @@ class SkinPeeler {
   std::size_t try_pair(std::size_t e) {
     for (const auto& f : kFaces)
       for (std::size_t other : owners_[face(e, f)]) {
-        if (other == e || !alive_[other] || mesh_.tet_group[other] != kSoft || length(other) >= p_.peel_pair_factor * p_.peel_ratio_goal * median_)
-          continue;
+        if (other == e || !alive_[other] || mesh_.tet_group[other] != kSoft) continue;
+        if (length(other) >= p_.peel_pair_factor * p_.peel_ratio_goal * median_ && min_dihedral(other) >= p_.guarantee_dihedral_deg) continue;
         bool behind_soft = true;  // the pair's faces that become skin lie over soft tissue
         for (const auto& g : kFaces)
           for (std::size_t o : owners_[face(other, g)])

@@ -22,6 +22,12 @@ struct PostPassParams {
   double peel_ratio_goal = 0.3;    // skin slivers below this fraction of the soft-tissue median are peeled
   double peel_pair_factor = 1.5;   // a neighbour peeled with one is short too: below this x peel_ratio_goal
   int peel_sweeps = 8;
+  // The guarantees on any label volume: every tet's smallest dihedral angle and its L_e over its
+  // subdomain's median at least these; the last pass aims this factor above them.
+  double guarantee_dihedral_deg = 10;
+  double guarantee_length_ratio = 0.2;
+  double guarantee_margin = 1.1;
+  int split_rounds = 4;  // rounds of interior-edge splits at the tets relocation cannot fix
 };
 
 // The tets around every node.
@@ -35,6 +41,12 @@ std::array<double, 3> area_normal(const TetMesh& mesh, const std::array<int, 3>&
 void restore_volumes(TetMesh& mesh, const Volume<std::uint8_t>& labels, const std::vector<int>& triangle_inner, const PostPassParams& p = {});
 // Moves the nodes of the tets whose L_e is below p.relocate_ratio_goal of their subdomain's median.
 void relocate_short_tets(TetMesh& mesh, double max_surface_move, const PostPassParams& p = {});
+// Moves the nodes of the tets below the guarantees (dihedral angle or L_e ratio) to raise the
+// worst of them; returns how many tets are still below.
+std::size_t relocate_poor_tets(TetMesh& mesh, double max_surface_move, const PostPassParams& p = {});
+// Merges a node into its neighbour across a short surface edge of a tet below the guarantees,
+// where that raises the worst measure around them (edge_collapse.cpp); returns the number merged.
+std::size_t collapse_poor_surface_edges(TetMesh& mesh, double max_surface_move, const PostPassParams& p = {});
 // One sweep of peeling; returns the number of tets removed (the boundary triangles are rebuilt).
 std::size_t peel_skin_slivers(TetMesh& mesh, const PostPassParams& p = {});
 // The faces between different labels (0 = outside): skin or bone interface, oriented outward.

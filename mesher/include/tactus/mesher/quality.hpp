@@ -15,8 +15,18 @@ struct TetQuality {
 };
 TetQuality tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
+// What the mesher guarantees in every subdomain (docs/design.md, "Mesh quality"): the smallest
+// dihedral angle of any tet, and the smallest L_e over the subdomain's median L_e (the tet that
+// sets the explicit time step is not much smaller than a typical one).
+struct QualityGuarantees {
+  double min_dihedral_deg = 10;
+  double min_length_ratio = 0.2;
+};
+
 // Report as JSON (written as quality.json). wave_speed(group tag) gives the dilatational speed
-// used for the critical step (<= 0: group skipped).
-nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg = 10.0);
+// used for the critical step (<= 0: group skipped). "guarantees" says whether `goal` is met in
+// every subdomain and, for each unmet one, the worst tet, where it is and why.
+nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg = 10.0,
+                              const QualityGuarantees& goal = {});
 
 }  // namespace tactus::mesher

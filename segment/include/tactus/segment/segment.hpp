@@ -25,6 +25,10 @@ struct SegmentParams {
   // through a narrow neck, a bone shattered by the erosion (thin bones on coarse voxels) across its
   // whole section.
   double split_neck_ratio = 0.5;
+  // Each bone is closed (dilated, then eroded) by a box of this half-width: a marrow left open by
+  // partial volume (a thin cortex across thick slices) is filled. Never into another bone or next
+  // to one, so joint gaps stay. 0: off.
+  double marrow_closing_mm = 1.5;
 };
 
 struct BoneInfo {

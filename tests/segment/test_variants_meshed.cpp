@@ -1,0 +1,52 @@
+// Phantom scans that are not the one the stages were tuned on, segmented and meshed with the
+// defaults, as tactus-segment then tactus-mesh run them (small regions absorbed): anisotropic
+// voxels (0.5 x 0.5 x 2.5 mm), a coarse 3 mm scan, and noise of 60 HU with a smooth bias of
+// +-100 HU on 1 mm voxels. Every subdomain of each mesh must meet the mesher's guarantees
+// (min dihedral >= 10 deg, L_e min/median >= 0.2), recomputed from the node coordinates
+// (mesh_guarantees.hpp); the mesher's quality report must say they are met.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "mesh_guarantees.hpp"
+#include "tactus/data_samples/phantom.hpp"
+#include "tactus/mesher/image_mesher.hpp"
+#include "tactus/mesher/quality.hpp"
+#include "tactus/mesher/small_regions.hpp"
+#include "tactus/segment/run.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+
+namespace {
+
+void segment_and_mesh(const char* name, const samples::PhantomParams& params) {
+  testkit::TempDir dir;
+  samples::write_slice_stack(samples::make_hand_phantom(params).ct, dir / "stack");
+  segment::StageOptions o;
+  o.write_surfaces = false;
+  const nlohmann::json seg = segment::run_segment_stage(dir / "stack", dir / "out", o);
+  LabelTable table;
+  Volume<std::uint8_t> labels = read_h5<std::uint8_t>(dir / "out" / "labels.h5", "/labels", &table);
+  const mesher::ImageMeshParams p;
+  const auto absorbed = mesher::absorb_small_regions(labels, mesher::min_region_voxels(labels, 0, p.bone_cell_size_mm));
+  const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
+  std::printf("%s: %zu bones, %zu regions absorbed, %zu tets\n", name, seg["bones"].size(), absorbed.size(), mesh.tets.size());
+  testkit::expect_mesh_guarantees(name, mesh);
+  const auto report = mesher::quality_report(mesh, {});
+  EXPECT_TRUE(report["guarantees"]["met"].get<bool>()) << report["guarantees"].dump(1);
+}
+
+}  // namespace
+
+TEST(SegmentVariantsMeshed, WithinTheGuarantees) {
+  samples::PhantomParams aniso;
+  aniso.voxel_mm = 0.5, aniso.slice_mm = 2.5;
+  segment_and_mesh("anisotropic 0.5 x 0.5 x 2.5 mm", aniso);
+  samples::PhantomParams coarse;
+  coarse.voxel_mm = coarse.slice_mm = 3.0;
+  segment_and_mesh("coarse 3 mm", coarse);
+  samples::PhantomParams noisy;
+  noisy.voxel_mm = noisy.slice_mm = 1.0, noisy.noise_hu = 60, noisy.bias_hu = 100;
+  segment_and_mesh("noise 60 HU, bias +-100 HU", noisy);
+}

@@ -1,0 +1,60 @@
+#pragma once
+// The mesher's guarantees (min dihedral 10 deg, L_e min/median >= 0.2 in every subdomain) checked
+// from the node coordinates alone, independently of the mesher's own quality report: dihedral
+// angles from the face normals (-grad N_a is the outward normal of the face opposite node a), L_e
+// = (sum_a |grad N_a|^2)^(-1/2) from the inverse of the 4x4 coordinate matrix.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <vector>
+
+#include "tactus/core/mesh.hpp"
+
+namespace tactus::testkit {
+
+struct WorstTet {
+  double min_dihedral_deg = 180, length_ratio = 1;
+};
+
+// Per volume group: the smallest dihedral angle and the smallest L_e over the group's median.
+inline std::map<int, WorstTet> recomputed_quality(const TetMesh& m) {
+  std::map<int, std::vector<double>> lengths;
+  std::map<int, WorstTet> worst;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) {
+    Eigen::Matrix4d A;
+    for (int a = 0; a < 4; ++a) {
+      const Vec3& p = m.nodes[static_cast<std::size_t>(m.tets[e][static_cast<std::size_t>(a)])];
+      A.row(a) << 1.0, p[0], p[1], p[2];
+    }
+    const Eigen::Matrix4d G = A.inverse();  // rows 1..3: the gradients of N_a (columns)
+    lengths[m.tet_group[e]].push_back(1.0 / std::sqrt(G.bottomRows(3).squaredNorm()));
+    // The dihedral angle at the edge shared by the faces opposite nodes i and j is pi minus the
+    // angle between their outward normals.
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const Eigen::Vector3d ni = -G.block<3, 1>(1, i).normalized(), nj = -G.block<3, 1>(1, j).normalized();
+        const double angle = 180.0 - std::acos(std::clamp(ni.dot(nj), -1.0, 1.0)) * 180.0 / M_PI;
+        worst[m.tet_group[e]].min_dihedral_deg = std::min(worst[m.tet_group[e]].min_dihedral_deg, angle);
+      }
+  }
+  for (auto& [label, v] : lengths) {
+    std::sort(v.begin(), v.end());
+    worst[label].length_ratio = v.front() / v[v.size() / 2];
+  }
+  return worst;
+}
+
+// Prints each group's numbers against the guarantees and expects them met.
+inline void expect_mesh_guarantees(const char* name, const TetMesh& mesh) {
+  for (const auto& [label, w] : recomputed_quality(mesh)) {
+    std::printf("  %s, label %d: min dihedral %.2f deg (>= 10), L_e min/median %.3f (>= 0.2)\n", name, label, w.min_dihedral_deg, w.length_ratio);
+    EXPECT_GE(w.min_dihedral_deg, 10.0) << name << " label " << label;
+    EXPECT_GE(w.length_ratio, 0.2) << name << " label " << label;
+  }
+}
+
+}  // namespace tactus::testkit
