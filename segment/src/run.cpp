@@ -31,12 +31,13 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   const bool dicom = !file && is_dicom_folder(stack_folder);
   if (!dicom && !o.dicom_series.empty())
     throw InputError(stack_folder.string(), "--series", "a folder of DICOM files (--series chooses among its series)", "another input");
-  const SliceStack stack = file    ? read_volume_file(stack_folder)
-                           : dicom ? read_dicom_series(stack_folder, o.dicom_series)
-                                   : read_slice_stack(stack_folder);
+  SliceStack stack = file ? read_volume_file(stack_folder) : dicom ? read_dicom_series(stack_folder, o.dicom_series) : read_slice_stack(stack_folder);
   const double t_read = seconds(t0);
   const auto t1 = Clock::now();
-  const Segmentation s = segment_hand(stack.hu, o.segment);
+  const std::array<int, 3> dims = stack.hu.dims;
+  const std::array<double, 3> spacing = stack.hu.spacing;
+  const double voxel_volume = stack.hu.voxel_volume();
+  const Segmentation s = segment_hand(std::move(stack.hu), o.segment);  // the HU volume is not needed after
   const double t_segment = seconds(t1);
 
   write_h5(out / "labels.h5", "/labels", s.labels, &s.table);
@@ -46,8 +47,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   j["tactus_version"] = kVersion;
   j["stack"] = fs::absolute(stack_folder).string();
   j["units"] = "SI (m, m^3); thresholds in HU";
-  j["dims"] = stack.hu.dims;
-  j["spacing_m"] = stack.hu.spacing;
+  j["dims"] = dims;
+  j["spacing_m"] = spacing;
   j["bit_depth"] = stack.bit_depth;
   j["input"] = stack.source;
   j["thresholds"] = {{"body_hu", s.body_threshold_hu},         {"body_source", s.body_threshold_source},   {"bone_hu", s.bone_threshold_hu},
@@ -59,8 +60,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
                     " voxel, grown back; pieces touching across " + std::to_string(o.segment.split_neck_ratio) +
                     " of the smaller one's V^(2/3) joined again; components under " + std::to_string(o.segment.min_bone_volume_mm3) +
                     " mm^3 removed"};
-  j["body_volume_m3"] = static_cast<double>(s.body_voxels) * stack.hu.voxel_volume();
-  j["bone_volume_m3"] = static_cast<double>(s.bone_voxels) * stack.hu.voxel_volume();
+  j["body_volume_m3"] = static_cast<double>(s.body_voxels) * voxel_volume;
+  j["bone_volume_m3"] = static_cast<double>(s.bone_voxels) * voxel_volume;
   j["specks_removed"] = s.specks_removed;
   j["bones"] = nlohmann::json::array();
   for (const auto& b : s.bones)

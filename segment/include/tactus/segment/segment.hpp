@@ -48,7 +48,9 @@ struct Segmentation {
   std::size_t body_voxels = 0, bone_voxels = 0, specks_removed = 0;
 };
 
-Segmentation segment_hand(const Volume<float>& hu, const SegmentParams& params);
+// `hu` is taken by value: pass an rvalue (std::move) when the caller no longer needs it, to save
+// a copy of the largest array of the stage.
+Segmentation segment_hand(Volume<float> hu, const SegmentParams& params);
 
 // Otsu's threshold over values in [lo, hi] (256 bins), for `values` where `mask` is set (or all).
 double otsu_threshold(const std::vector<float>& values, const std::vector<std::uint8_t>* mask, double lo, double hi);
