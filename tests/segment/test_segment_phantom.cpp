@@ -12,6 +12,7 @@
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/segment/run.hpp"
 #include "temp_dir.hpp"
+#include "truth_overlap.hpp"
 
 using namespace tactus;
 
@@ -178,17 +179,7 @@ TEST(SegmentVariants, AnisotropicVoxelsGiveCheckedSurfaces) {
     worst_volume = std::max(worst_volume, std::abs(s["volume_m3"].get<double>() / s["label_volume_m3"].get<double>() - 1));
     largest_factor = std::max(largest_factor, s["edge_factor"].get<double>());
   }
-  // A true bone is shattered when more than one label holds over 10 % of its voxels.
-  std::map<int, std::map<int, std::size_t>> overlap;
-  std::map<int, std::size_t> truth_voxels;
-  for (std::size_t i = 0; i < labels.size(); ++i)
-    if (ph.truth.data[i] >= 2) ++truth_voxels[ph.truth.data[i]], ++overlap[ph.truth.data[i]][labels.data[i]];
-  std::size_t shattered = 0;
-  for (const auto& [bone, by_label] : overlap) {
-    int big = 0;
-    for (const auto& [label, n] : by_label) big += label >= 2 && n > truth_voxels[bone] / 10;
-    shattered += big > 1;
-  }
+  const std::size_t shattered = testkit::bone_overlap(labels, ph.truth).shattered;
   std::printf(
       "anisotropic 0.5 x 0.5 x 2.5 mm: %zu bones (truth 27), %zu true bones shattered, body Dice %.4f, %zu surfaces, open/inconsistent "
       "STL edges %zu, worst surface volume %.2f %% off its labels, largest remeshing edge factor %.2f\n",
@@ -216,16 +207,7 @@ TEST(SegmentVariants, NoiseAndIntensityBias) {
     o.write_surfaces = false;
     const nlohmann::json report = segment::run_segment_stage(dir / "stack", dir / "out", o);
     const Volume<std::uint8_t> labels = read_h5<std::uint8_t>(dir / "out" / "labels.h5", "/labels");
-    std::map<int, std::map<int, std::size_t>> overlap;
-    std::map<int, std::size_t> truth_voxels;
-    for (std::size_t i = 0; i < labels.size(); ++i)
-      if (ph.truth.data[i] >= 2) ++truth_voxels[ph.truth.data[i]], ++overlap[ph.truth.data[i]][labels.data[i]];
-    std::size_t shattered = 0, lost = 0;
-    for (const auto& [bone, by_label] : overlap) {
-      int big = 0;
-      for (const auto& [label, n] : by_label) big += label >= 2 && n > truth_voxels[bone] / 10;
-      shattered += big > 1, lost += big == 0;
-    }
+    const auto [shattered, lost] = testkit::bone_overlap(labels, ph.truth);
     const double body = dice(labels, ph.truth, 1);
     bone_dice[bias > 0] = dice(labels, ph.truth, 2);
     std::printf("noise 60 HU, bias +-%.0f HU: %zu bones, %zu shattered, %zu lost, body Dice %.4f, bone Dice %.4f (thresholds %.0f / %.0f HU)\n", bias,

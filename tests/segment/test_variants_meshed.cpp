@@ -15,26 +15,32 @@
 #include "tactus/mesher/small_regions.hpp"
 #include "tactus/segment/run.hpp"
 #include "temp_dir.hpp"
+#include "truth_overlap.hpp"
 
 using namespace tactus;
 
 namespace {
 
-void segment_and_mesh(const char* name, const samples::PhantomParams& params) {
+// Segments and meshes; returns how the bones map onto the truth.
+testkit::BoneOverlap segment_and_mesh(const char* name, const samples::PhantomParams& params) {
   testkit::TempDir dir;
-  samples::write_slice_stack(samples::make_hand_phantom(params).ct, dir / "stack");
+  const samples::Phantom phantom = samples::make_hand_phantom(params);
+  samples::write_slice_stack(phantom.ct, dir / "stack");
   segment::StageOptions o;
   o.write_surfaces = false;
   const nlohmann::json seg = segment::run_segment_stage(dir / "stack", dir / "out", o);
   LabelTable table;
   Volume<std::uint8_t> labels = read_h5<std::uint8_t>(dir / "out" / "labels.h5", "/labels", &table);
+  const testkit::BoneOverlap overlap = testkit::bone_overlap(labels, phantom.truth);
   const mesher::ImageMeshParams p;
   const auto absorbed = mesher::absorb_small_regions(labels, mesher::min_region_voxels(labels, 0, p.bone_cell_size_mm));
   const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
-  std::printf("%s: %zu bones, %zu regions absorbed, %zu tets\n", name, seg["bones"].size(), absorbed.size(), mesh.tets.size());
+  std::printf("%s: %zu bones (truth 27), %zu true bones shattered, %zu lost; %zu regions absorbed, %zu tets\n", name, seg["bones"].size(),
+              overlap.shattered, overlap.lost, absorbed.size(), mesh.tets.size());
   testkit::expect_mesh_guarantees(name, mesh);
   const auto report = mesher::quality_report(mesh, {});
   EXPECT_TRUE(report["guarantees"]["met"].get<bool>()) << report["guarantees"].dump(1);
+  return overlap;
 }
 
 }  // namespace
@@ -42,11 +48,17 @@ void segment_and_mesh(const char* name, const samples::PhantomParams& params) {
 TEST(SegmentVariantsMeshed, WithinTheGuarantees) {
   samples::PhantomParams aniso;
   aniso.voxel_mm = 0.5, aniso.slice_mm = 2.5;
-  segment_and_mesh("anisotropic 0.5 x 0.5 x 2.5 mm", aniso);
+  EXPECT_EQ(segment_and_mesh("anisotropic 0.5 x 0.5 x 2.5 mm", aniso).shattered, 0u);
   samples::PhantomParams coarse;
   coarse.voxel_mm = coarse.slice_mm = 3.0;
+  // At 3 mm a phalanx is 2-3 voxels across and the 2 mm joint gaps are invisible: the one-voxel
+  // erosion cuts some bones where they are thinnest instead of at a joint (4 true bones split
+  // between two labels), and 3 carpals of 19-26 voxels fall below the bone threshold by partial
+  // volume. Printed, not asserted: the "never shatters" is not met at 3 mm (closing note).
   segment_and_mesh("coarse 3 mm", coarse);
   samples::PhantomParams noisy;
   noisy.voxel_mm = noisy.slice_mm = 1.0, noisy.noise_hu = 60, noisy.bias_hu = 100;
-  segment_and_mesh("noise 60 HU, bias +-100 HU", noisy);
+  const auto with_noise = segment_and_mesh("noise 60 HU, bias +-100 HU", noisy);
+  EXPECT_EQ(with_noise.shattered, 0u);
+  EXPECT_EQ(with_noise.lost, 0u);
 }
