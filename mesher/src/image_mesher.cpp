@@ -380,6 +380,11 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
       if (merged == 0) break;
       left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
     }
+    if (left > 0) {
+      const std::size_t given = give_wedges_to_bone(mesh, post);
+      log::verbose() << "mesher: " << given << " soft-tissue wedges between bone faces given to the bone";
+      if (given > 0) left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+    }
     log::verbose() << "mesher: " << left << " tets below the guarantees after the post-passes";
   }
   check_every_label_meshed(labels, table, per_label);

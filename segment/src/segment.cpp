@@ -203,10 +203,13 @@ Volume<std::uint8_t> find_bone(Volume<float>& hu, const Volume<std::uint8_t>& bo
   return bone;
 }
 
-// Joins the grown pieces of the split whose shared voxel faces reach `ratio` times the smaller
-// piece's V^(2/3) (its cross-section): the erosion cut through a bone, not through a joint.
+// Joins the grown pieces of the split whose shared voxel faces reach p.split_neck_ratio times the
+// smaller piece's V^(2/3) (its cross-section): the erosion cut through a bone, not through a joint;
+// and touching pieces of which the erosion left less than p.split_min_core_fraction as a core.
 // Relabels the pieces 1..kept.
-void merge_broad_contacts(const std::array<int, 3>& d, std::vector<std::int32_t>& comp, std::int32_t& kept, double ratio) {
+void merge_broad_contacts(const std::array<int, 3>& d, std::vector<std::int32_t>& comp, std::int32_t& kept,
+                          const std::vector<std::size_t>& core_voxels, const SegmentParams& p) {
+  const double ratio = p.split_neck_ratio;
   if (kept < 2 || ratio <= 0) return;
   std::vector<std::size_t> volume(static_cast<std::size_t>(kept) + 1, 0);
   for (auto c : comp) ++volume[static_cast<std::size_t>(c)];
@@ -231,7 +234,15 @@ void merge_broad_contacts(const std::array<int, 3>& d, std::vector<std::int32_t>
   for (const auto& [pair, faces] : contact) {
     const double section = std::pow(
         static_cast<double>(std::min(volume[static_cast<std::size_t>(pair.first)], volume[static_cast<std::size_t>(pair.second)])), 2.0 / 3.0);
-    if (static_cast<double>(faces) >= ratio * section) root[static_cast<std::size_t>(find(pair.second))] = find(pair.first);
+    // The erosion resolves a joint only where it leaves most of each piece: a piece whose core is a
+    // small part of it is a few voxels across, and its cut falls wherever it is thinnest.
+    const double core_fraction = std::min(
+        static_cast<double>(core_voxels[static_cast<std::size_t>(pair.first)]) / static_cast<double>(volume[static_cast<std::size_t>(pair.first)]),
+        static_cast<double>(core_voxels[static_cast<std::size_t>(pair.second)]) / static_cast<double>(volume[static_cast<std::size_t>(pair.second)]));
+    log::debug() << "split: pieces " << pair.first << " and " << pair.second << " touch across " << static_cast<double>(faces) / section
+                 << " of the smaller's section; smaller core fraction " << core_fraction;
+    if (static_cast<double>(faces) >= ratio * section || core_fraction < p.split_min_core_fraction)
+      root[static_cast<std::size_t>(find(pair.second))] = find(pair.first);
   }
   std::vector<std::int32_t> id(root.size(), 0);
   std::int32_t n = 0;
@@ -254,8 +265,9 @@ std::vector<std::int32_t> split_bones(const Volume<float>& hu, const Volume<std:
   // min_voxels / 4); relabel kept cores 1..n.
   std::vector<std::int32_t> keep(sizes.size(), 0);
   kept = 0;
+  std::vector<std::size_t> core_voxels{0};
   for (std::size_t c = 1; c < sizes.size(); ++c)
-    if (sizes[c] >= std::max<std::size_t>(1, min_voxels / 4)) keep[c] = ++kept;
+    if (sizes[c] >= std::max<std::size_t>(1, min_voxels / 4)) keep[c] = ++kept, core_voxels.push_back(sizes[c]);
   for (auto& c : comp) c = keep[static_cast<std::size_t>(c)];
   // Grow back into the bone mask, breadth first (each voxel joins the nearest core).
   std::vector<std::size_t> frontier, next;
@@ -274,7 +286,7 @@ std::vector<std::int32_t> split_bones(const Volume<float>& hu, const Volume<std:
     }
     frontier.swap(next);
   }
-  merge_broad_contacts(hu.dims, comp, kept, p.split_neck_ratio);
+  merge_broad_contacts(hu.dims, comp, kept, core_voxels, p);
   return comp;
 }
 

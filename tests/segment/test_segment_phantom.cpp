@@ -185,7 +185,8 @@ TEST(SegmentVariants, AnisotropicVoxelsGiveCheckedSurfaces) {
       "STL edges %zu, worst surface volume %.2f %% off its labels, largest remeshing edge factor %.2f\n",
       report["bones"].size(), shattered, body, report["surfaces"].size(), bad, 100 * worst_volume, largest_factor);
   EXPECT_LE(report["bones"].size(), 27u);
-  EXPECT_EQ(shattered, 0u);  // 2 before pieces touching across their whole section were joined again
+  EXPECT_EQ(shattered, 0u);  // 2 before pieces touching across their whole section were joined again (13 bones; 11
+                             // since touching pieces the erosion left a small core of are joined too)
   EXPECT_GE(body, 0.99);
   EXPECT_EQ(bad, 0u);
   EXPECT_LE(worst_volume, 0.03);

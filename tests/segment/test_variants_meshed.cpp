@@ -51,11 +51,14 @@ TEST(SegmentVariantsMeshed, WithinTheGuarantees) {
   EXPECT_EQ(segment_and_mesh("anisotropic 0.5 x 0.5 x 2.5 mm", aniso).shattered, 0u);
   samples::PhantomParams coarse;
   coarse.voxel_mm = coarse.slice_mm = 3.0;
-  // At 3 mm a phalanx is 2-3 voxels across and the 2 mm joint gaps are invisible: the one-voxel
-  // erosion cuts some bones where they are thinnest instead of at a joint (4 true bones split
-  // between two labels), and 3 carpals of 19-26 voxels fall below the bone threshold by partial
-  // volume. Printed, not asserted: the "never shatters" is not met at 3 mm (closing note).
-  segment_and_mesh("coarse 3 mm", coarse);
+  // At 3 mm a phalanx is 2-3 voxels across and the 2 mm joint gaps are invisible: touching pieces
+  // whose eroded core is a small part of them are kept as one bone (4 labels; 4 true bones were
+  // split where they are thinnest before), and 3 carpals of 19-26 voxels fall below the bone
+  // threshold by partial volume. One true bone is still split: partial volume breaks it into two
+  // components of the mask that do not touch.
+  const auto at_3mm = segment_and_mesh("coarse 3 mm", coarse);
+  EXPECT_LE(at_3mm.shattered, 1u);
+  EXPECT_LE(at_3mm.lost, 3u);
   samples::PhantomParams noisy;
   noisy.voxel_mm = noisy.slice_mm = 1.0, noisy.noise_hu = 60, noisy.bias_hu = 100;
   const auto with_noise = segment_and_mesh("noise 60 HU, bias +-100 HU", noisy);

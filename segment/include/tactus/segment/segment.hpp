@@ -25,6 +25,9 @@ struct SegmentParams {
   // through a narrow neck, a bone shattered by the erosion (thin bones on coarse voxels) across its
   // whole section.
   double split_neck_ratio = 0.5;
+  // Touching pieces are joined too when the erosion left less than this fraction of either as its
+  // core: a bone a few voxels across (a coarse scan) is cut where it is thinnest, not at a joint.
+  double split_min_core_fraction = 0.3;
   // Each bone is closed (dilated, then eroded) by a box of this half-width: a marrow left open by
   // partial volume (a thin cortex across thick slices) is filled. Never into another bone or next
   // to one, so joint gaps stay. 0: off.
