@@ -81,41 +81,36 @@ class SurfaceEdgeCollapser {
     return false;
   }
 
+  // The nodes that share an element (of `elements`, alive) with both a and b share one that holds
+  // both: merging b into a then pinches nothing.
+  template <class Element>
+  static bool link_condition(const std::vector<std::vector<std::size_t>>& of, const std::vector<char>& alive, const std::vector<Element>& elements,
+                             int a, int b) {
+    std::set<int> near_a, near_b, around_edge;
+    for (std::size_t e : of[static_cast<std::size_t>(a)])
+      if (alive[e])
+        for (int v : elements[e]) near_a.insert(v);
+    for (std::size_t e : of[static_cast<std::size_t>(b)]) {
+      if (!alive[e]) continue;
+      const bool has_a = std::count(elements[e].begin(), elements[e].end(), a) > 0;
+      for (int v : elements[e]) {
+        near_b.insert(v);
+        if (has_a) around_edge.insert(v);
+      }
+    }
+    for (int v : near_b)
+      if (v != a && v != b && near_a.count(v) && !around_edge.count(v)) return false;
+    return true;
+  }
+
   // Merges node b into node a if that is allowed and better (see the file's comment).
   bool try_collapse(int b, int a) {
     const auto ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
     // a takes b's place on every surface b is on.
     if (!std::includes(labels_[ka].begin(), labels_[ka].end(), labels_[kb].begin(), labels_[kb].end())) return false;
-    // Link condition on the nodes: the nodes next to both a and b are those of the tets around ab.
-    std::set<int> near_a, near_b, around_edge;
-    for (std::size_t e : tets_of_[ka])
-      if (tet_alive_[e])
-        for (int v : mesh_.tets[e]) near_a.insert(v);
-    for (std::size_t e : tets_of_[kb])
-      if (tet_alive_[e]) {
-        const bool has_a = std::count(mesh_.tets[e].begin(), mesh_.tets[e].end(), a) > 0;
-        for (int v : mesh_.tets[e]) {
-          near_b.insert(v);
-          if (has_a) around_edge.insert(v);
-        }
-      }
-    for (int v : near_b)
-      if (v != a && v != b && near_a.count(v) && !around_edge.count(v)) return false;
-    // The same on the surface: the surface nodes next to both are the apexes of the edge's triangles.
-    std::set<int> tri_a, tri_b, tri_edge;
-    for (std::size_t t : tris_of_[ka])
-      if (tri_alive_[t])
-        for (int v : mesh_.triangles[t]) tri_a.insert(v);
-    for (std::size_t t : tris_of_[kb])
-      if (tri_alive_[t]) {
-        const bool has_a = std::count(mesh_.triangles[t].begin(), mesh_.triangles[t].end(), a) > 0;
-        for (int v : mesh_.triangles[t]) {
-          tri_b.insert(v);
-          if (has_a) tri_edge.insert(v);
-        }
-      }
-    for (int v : tri_b)
-      if (v != a && v != b && tri_a.count(v) && !tri_edge.count(v)) return false;
+    // Link condition: the nodes next to both a and b are those of the tets around the edge ab;
+    // on the surface, those of its triangles.
+    if (!link_condition(tets_of_, tet_alive_, mesh_.tets, a, b) || !link_condition(tris_of_, tri_alive_, mesh_.triangles, a, b)) return false;
     // Before: the worst measure and the tets below it around a and b.
     std::set<std::size_t> around;
     for (std::size_t e : tets_of_[ka])
