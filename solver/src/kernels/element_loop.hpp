@@ -21,16 +21,7 @@
 
 namespace tactus::solver {
 
-struct ThreadAccumulator {
-  double energy = 0, viscous_power = 0;
-  double dt2 = std::numeric_limits<double>::infinity();  // squared element step (no beta)
-  double dt = std::numeric_limits<double>::infinity();   // element step with beta
-  std::size_t dt_element = 0;
-  double min_J = std::numeric_limits<double>::infinity();
-  std::size_t min_J_element = 0;
-};
-
-// One thread's share of one material block.
+// One partition of one material block (internal_force.hpp).
 struct StressKernelArgs {
   const std::int32_t* conn;  // 4 per tet (model numbering)
   const double* grad;        // 9 per tet
@@ -42,7 +33,8 @@ struct StressKernelArgs {
   std::size_t begin, end;      // the elements of this call
   const double* u;
   const double* v;  // for the viscous part (beta > 0)
-  double* f;        // this thread's force buffer
+  double* f;        // the force buffer of this call's partition: node n's force at f[3 (n - f_node_offset)]
+  std::size_t f_node_offset = 0;
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
@@ -145,14 +137,14 @@ void stress_range(const StressKernelArgs& a, ThreadAccumulator& acc) {
 
     double f0[3] = {0, 0, 0};
     for (int k = 0; k < 3; ++k) {
-      double* fa = f + 3 * static_cast<std::size_t>(c[k + 1]);
+      double* fa = f + 3 * (static_cast<std::size_t>(c[k + 1]) - a.f_node_offset);
       for (int i = 0; i < 3; ++i) {
         const double h = -V0 * (sp.P(i, 0) * g[3 * k] + sp.P(i, 1) * g[3 * k + 1] + sp.P(i, 2) * g[3 * k + 2]);
         fa[i] += h;
         f0[i] -= h;
       }
     }
-    double* fz = f + 3 * static_cast<std::size_t>(c[0]);
+    double* fz = f + 3 * (static_cast<std::size_t>(c[0]) - a.f_node_offset);
     fz[0] += f0[0], fz[1] += f0[1], fz[2] += f0[2];
   }
 }

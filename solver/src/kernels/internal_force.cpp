@@ -1,5 +1,6 @@
-// The stress pass over all blocks, in parallel: each thread takes a contiguous share of every
-// block and calls the block's law kernel (kernels/element_loop.hpp, compiled per law) once for it.
+// The stress pass over all blocks, in parallel: the threads take the fixed partitions of every
+// block as they come and call the block's law kernel (kernels/element_loop.hpp, compiled per law)
+// once for each; the partitions' forces are then summed per node in partition order.
 #include "tactus/solver/internal_force.hpp"
 
 #include "element_loop.hpp"
@@ -28,12 +29,6 @@ int default_threads(std::size_t elements) {
   return std::min(n, useful);
 }
 
-// Thread tid's contiguous share [lo, hi) of n items starting at begin.
-std::pair<std::size_t, std::size_t> share(std::size_t begin, std::size_t n, int tid, int nth) {
-  return {begin + n * static_cast<std::size_t>(tid) / static_cast<std::size_t>(nth),
-          begin + n * static_cast<std::size_t>(tid + 1) / static_cast<std::size_t>(nth)};
-}
-
 double determinant_at(const Model& m, std::size_t e, const double* u) {
   Mat3 F = nodal_gradient(u, &m.conn[4 * e], &m.grad[9 * e]);
   F(0, 0) += 1.0, F(1, 1) += 1.0, F(2, 2) += 1.0;
@@ -49,11 +44,11 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
   return V;
 }
 
-void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume) {
+void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
   for (std::size_t e = begin; e < end; ++e) {
     const double quarter = 0.25 * determinant_at(m, e, u) * m.volume[e];
     const std::int32_t* c = &m.conn[4 * e];
-    node_volume[c[0]] += quarter, node_volume[c[1]] += quarter, node_volume[c[2]] += quarter, node_volume[c[3]] += quarter;
+    for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
   }
 }
 
@@ -82,14 +77,38 @@ std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
 
 InternalForces::InternalForces(const Model& model, double beta, int threads)
     : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads(model.num_elements)) {
-  thread_forces_.resize(static_cast<std::size_t>(threads_ - 1));
-  for (auto& buf : thread_forces_) buf.assign(3 * model.num_nodes, 0.0);
   block_pressure_.assign(model.blocks.size(), nullptr);
   for (std::size_t k = 0; k < model.blocks.size(); ++k)
     if (model.blocks[k].material.anp())
       anp_.push_back({k, anp_reference_node_volumes(model, model.blocks[k]), std::vector<double>(model.num_nodes, 0.0)});
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
-  if (!anp_.empty()) thread_node_volumes_.assign(static_cast<std::size_t>(threads_ - 1), std::vector<double>(model.num_nodes, 0.0));
+  // Fixed partitions (independent of the thread count) and the node range each touches; the
+  // Morton order of nodes and tets (model.cpp) keeps the ranges short.
+  std::size_t forces = 0, volumes = 0;
+  for (std::size_t k = 0; k < model.blocks.size(); ++k) {
+    const MaterialBlock& b = model.blocks[k];
+    const std::size_t n = b.end - b.begin,
+                      parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
+    for (std::size_t p = 0; p < parts; ++p) {
+      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes};
+      for (std::size_t e = q.begin; e < q.end; ++e)
+        for (int a = 0; a < 4; ++a) {
+          const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
+          q.node_lo = std::min(q.node_lo, node), q.node_hi = std::max(q.node_hi, node + 1);
+        }
+      if (q.begin == q.end) q.node_lo = q.node_hi = 0;
+      forces += 3 * (q.node_hi - q.node_lo);
+      if (b.material.anp()) volumes += q.node_hi - q.node_lo;
+      partitions_.push_back(q);
+    }
+  }
+  partition_forces_.assign(forces, 0.0);
+  partition_volumes_.assign(volumes, 0.0);
+  partition_acc_.resize(partitions_.size());
+  chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
+  for (std::size_t p = 0; p < partitions_.size(); ++p)
+    for (std::size_t c = partitions_[p].node_lo / kNodeChunk; c * kNodeChunk < partitions_[p].node_hi; ++c) chunk_partitions_[c].push_back(p);
+  chunk_anp_energy_.assign(chunk_partitions_.size(), 0.0);
 }
 
 void InternalForces::enable_mass_scaling() {
@@ -98,83 +117,101 @@ void InternalForces::enable_mass_scaling() {
 }
 
 std::size_t InternalForces::memory_bytes() const {
-  std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity()) * sizeof(double);
-  for (const auto& buf : thread_forces_) b += buf.capacity() * sizeof(double);
-  for (const auto& buf : thread_node_volumes_) b += buf.capacity() * sizeof(double);
+  std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity()) * sizeof(double);
+  b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(ThreadAccumulator);
+  for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
   for (const auto& a : anp_) b += (a.reference_volume.capacity() + a.pressure.capacity()) * sizeof(double);
   return b;
 }
 
-// The J pass of the ANP blocks, inside the parallel region (every thread calls it): each thread
-// adds its share of the block's current tet volumes to its own nodal array, then sums a share of
-// the nodes over the threads and turns them into pressures. Returns this thread's part of the
+// The J pass of the ANP blocks, inside the parallel region (every thread calls it): the
+// partitions' current tet volumes to their own nodal arrays, then per node chunk their sum in
+// partition order, turned into pressures; chunk_anp_energy_ receives each chunk's part of the
 // volumetric energy sum_a V_a U(J_a).
-double InternalForces::anp_pass(const double* u, int tid, int nth) {
-  double energy = 0;
-  const std::size_t N = model_.num_nodes;
+void InternalForces::anp_pass(const double* u) {
+#pragma omp single
+  std::fill(chunk_anp_energy_.begin(), chunk_anp_energy_.end(), 0.0);
   for (AnpBlock& a : anp_) {
     const MaterialBlock& b = model_.blocks[a.block];
-    double* mine = tid == 0 ? a.pressure.data() : thread_node_volumes_[static_cast<std::size_t>(tid - 1)].data();
-    std::fill(mine, mine + N, 0.0);
-    const auto [lo, hi] = share(b.begin, b.end - b.begin, tid, nth);
-    add_current_node_volumes(model_, lo, hi, u, mine);
-#pragma omp barrier
-    const auto [nlo, nhi] = share(0, N, tid, nth);
-    for (int t = 1; t < nth; ++t) {
-      const double* other = thread_node_volumes_[static_cast<std::size_t>(t - 1)].data();
-      for (std::size_t i = nlo; i < nhi; ++i) a.pressure[i] += other[i];
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t p = 0; p < partitions_.size(); ++p) {
+      const Partition& q = partitions_[p];
+      if (q.block != a.block) continue;
+      double* mine = partition_volumes_.data() + q.volume_offset;
+      std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
+      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo);
     }
-    energy += b.material.type().anp_nodal_pressure(b.material.law(), a.reference_volume.data(), a.pressure.data(), nlo, nhi);
-#pragma omp barrier
+#pragma omp for schedule(static)
+    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
+      const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
+      std::fill(a.pressure.begin() + static_cast<std::ptrdiff_t>(lo), a.pressure.begin() + static_cast<std::ptrdiff_t>(hi), 0.0);
+      for (std::size_t p : chunk_partitions_[c]) {
+        const Partition& q = partitions_[p];
+        if (q.block != a.block) continue;
+        const double* theirs = partition_volumes_.data() + q.volume_offset;
+        for (std::size_t i = std::max(lo, q.node_lo); i < std::min(hi, q.node_hi); ++i) a.pressure[i] += theirs[i - q.node_lo];
+      }
+      chunk_anp_energy_[c] += b.material.type().anp_nodal_pressure(b.material.law(), a.reference_volume.data(), a.pressure.data(), lo, hi);
+    }
   }
-  return energy;
 }
 
 StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out) {
-  const std::size_t ndof = 3 * model_.num_nodes;
-  ThreadAccumulator total;
   const bool viscous = beta_ > 0;
 #pragma omp parallel num_threads(threads_)
   {
-    const int tid = omp_get_thread_num();
-    const int nth = omp_get_num_threads();
-    double* f = tid == 0 ? f_out : thread_forces_[static_cast<std::size_t>(tid - 1)].data();
-    std::fill(f, f + ndof, 0.0);
-    ThreadAccumulator acc;
-    if (!anp_.empty()) acc.energy += anp_pass(u, tid, nth);
-    for (std::size_t k = 0; k < model_.blocks.size(); ++k) {
-      const MaterialBlock& b = model_.blocks[k];
-      // Static contiguous split: each thread touches a compact set of nodes.
-      const auto [lo, hi] = share(b.begin, b.end - b.begin, tid, nth);
-      StressKernelArgs args{
-          model_.conn.data(),   model_.grad.data(), model_.volume.data(), b.material.law(), b.data(), b.data_stride(), b.begin, lo, hi, u, v, f,
-          viscous ? beta_ : 0.0};
-      args.nodal_pressure = block_pressure_[k];
+    if (!anp_.empty()) anp_pass(u);
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t p = 0; p < partitions_.size(); ++p) {
+      const Partition& q = partitions_[p];
+      const MaterialBlock& b = model_.blocks[q.block];
+      double* f = partition_forces_.data() + q.force_offset;
+      std::fill(f, f + 3 * (q.node_hi - q.node_lo), 0.0);
+      ThreadAccumulator acc;
+      StressKernelArgs args{model_.conn.data(),
+                            model_.grad.data(),
+                            model_.volume.data(),
+                            b.material.law(),
+                            b.data(),
+                            b.data_stride(),
+                            b.begin,
+                            q.begin,
+                            q.end,
+                            u,
+                            v,
+                            f,
+                            q.node_lo,
+                            viscous ? beta_ : 0.0};
+      args.nodal_pressure = block_pressure_[q.block];
       if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
       b.material.type().stress_pass(args, acc);
+      partition_acc_[p] = acc;
     }
-#pragma omp barrier
-    if (nth > 1) {
 #pragma omp for schedule(static)
-      for (std::size_t i = 0; i < ndof; ++i) {
-        double sum = f_out[i];
-        for (int t = 1; t < nth; ++t) sum += thread_forces_[static_cast<std::size_t>(t - 1)][i];
-        f_out[i] = sum;
-      }
-    }
-#pragma omp critical
-    {
-      total.energy += acc.energy;
-      total.viscous_power += acc.viscous_power;
-      if (acc.min_J < total.min_J) total.min_J = acc.min_J, total.min_J_element = acc.min_J_element;
-      const double dt = viscous ? acc.dt : std::sqrt(acc.dt2);
-      const double best = viscous ? total.dt : std::sqrt(total.dt2);
-      if (dt < best) {
-        total.dt = acc.dt, total.dt2 = acc.dt2;
-        total.dt_element = acc.dt_element;
+    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
+      const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
+      std::fill(f_out + 3 * lo, f_out + 3 * hi, 0.0);
+      for (std::size_t p : chunk_partitions_[c]) {
+        const Partition& q = partitions_[p];
+        const double* theirs = partition_forces_.data() + q.force_offset;
+        for (std::size_t i = 3 * std::max(lo, q.node_lo); i < 3 * std::min(hi, q.node_hi); ++i) f_out[i] += theirs[i - 3 * q.node_lo];
       }
     }
   }
+  // The partitions' sums in partition order; ties of the smallest step or Jacobian go to the first.
+  ThreadAccumulator total;
+  for (const ThreadAccumulator& acc : partition_acc_) {
+    total.energy += acc.energy;
+    total.viscous_power += acc.viscous_power;
+    if (acc.min_J < total.min_J) total.min_J = acc.min_J, total.min_J_element = acc.min_J_element;
+    const double dt = viscous ? acc.dt : std::sqrt(acc.dt2);
+    const double best = viscous ? total.dt : std::sqrt(total.dt2);
+    if (dt < best) {
+      total.dt = acc.dt, total.dt2 = acc.dt2;
+      total.dt_element = acc.dt_element;
+    }
+  }
+  for (double e : chunk_anp_energy_) total.energy += e;
   StressPassResult r;
   r.strain_energy = total.energy;
   r.viscous_power = total.viscous_power;

@@ -224,25 +224,34 @@ void ExplicitSolver::advance_velocity() {
       pending_added_mass_[n] = 0;
     }
   }
-#pragma omp parallel for num_threads(threads) reduction(+ : kinetic, ext_back, ext_fwd, damp_back, damp_fwd) schedule(static)
-  for (std::size_t i = 0; i < ndof; ++i) {
-    const double m = mass_of[i / 3];
-    const double fext = external_force(i);
-    const double v_old = v_old_of[i], v_new = v_new_of[i];
-    double reaction = 0;
-    if (model_.constrained[i]) {                                           // the support force that holds the prescribed velocity
-      reaction = m * (v_new - free_velocity(i, fext)) / (dtbar * c_plus);  // what the update added: dtbar c_plus R / m
+  // The energy sums over fixed chunks of dofs, added in chunk order: the same bits for any
+  // number of threads (an OpenMP reduction adds in an order that depends on it).
+  const std::size_t chunks = (ndof + kEnergyChunk - 1) / kEnergyChunk;
+  energy_chunks_.resize(chunks);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::size_t c = 0; c < chunks; ++c) {
+    std::array<double, 5> sum{};  // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
+    for (std::size_t i = c * kEnergyChunk; i < std::min(ndof, (c + 1) * kEnergyChunk); ++i) {
+      const double m = mass_of[i / 3];
+      const double fext = external_force(i);
+      const double v_old = v_old_of[i], v_new = v_new_of[i];
+      double reaction = 0;
+      if (model_.constrained[i]) {                                           // the support force that holds the prescribed velocity
+        reaction = m * (v_new - free_velocity(i, fext)) / (dtbar * c_plus);  // what the update added: dtbar c_plus R / m
+      }
+      const double v_n = first ? v_old : 0.5 * (v_old + v_new);
+      sum[0] += 0.5 * m * v_n * v_n;
+      // Work of F^n over du^{n-1/2} (closes step n-1) and du^{n+1/2} (carried to step n+1).
+      const double F = fext + reaction;
+      const double fdamp = alpha * m * v_n;
+      sum[1] += F * dt_prev_ * v_old;
+      sum[2] += F * dt * v_new;
+      sum[3] += fdamp * dt_prev_ * v_old;
+      sum[4] += fdamp * dt * v_new;
     }
-    const double v_n = first ? v_old : 0.5 * (v_old + v_new);
-    kinetic += 0.5 * m * v_n * v_n;
-    // Work of F^n over du^{n-1/2} (closes step n-1) and du^{n+1/2} (carried to step n+1).
-    const double F = fext + reaction;
-    const double fdamp = alpha * m * v_n;
-    ext_back += F * dt_prev_ * v_old;
-    ext_fwd += F * dt * v_new;
-    damp_back += fdamp * dt_prev_ * v_old;
-    damp_fwd += fdamp * dt * v_new;
+    energy_chunks_[c] = sum;
   }
+  for (const auto& sum : energy_chunks_) kinetic += sum[0], ext_back += sum[1], ext_fwd += sum[2], damp_back += sum[3], damp_fwd += sum[4];
   const ContactStepReport& c = contact_report_;
   ext_back += c.support_work_back;
   ext_fwd += c.support_work_forward;

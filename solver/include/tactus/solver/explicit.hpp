@@ -8,6 +8,7 @@
 // (u^n, v^n = (v^{n-1/2} + v^{n+1/2})/2, energies) is visible to outputs between them:
 //   advance_velocity(): needs u^n and the stress pass at u^n; gives v^{n+1/2} and energies at t^n.
 //   advance_position(): gives u^{n+1}, t^{n+1} and the stress pass at u^{n+1}.
+#include <array>
 #include <string>
 #include <vector>
 
@@ -117,11 +118,13 @@ class ExplicitSolver {
   Vec3 added_momentum_{0, 0, 0};
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
   double gravity_factor_ = 1;
-  std::vector<double> prescribed_v_;                     // per dof: the velocity a constrained dof takes over the step
-  std::vector<std::int32_t> constrained_dofs_;           // every constrained dof, for the reactions
-  std::vector<std::int32_t> driven_dofs_;                // those whose velocity changes in time (curve or displacement)
-  std::vector<double> pressure_force_;                   // follower pressure forces at t^n (empty without [[load]])
-  std::vector<double> support_force_;                    // per constrained dof (constrained_dofs_ order), at t^n
+  std::vector<double> prescribed_v_;                 // per dof: the velocity a constrained dof takes over the step
+  std::vector<std::int32_t> constrained_dofs_;       // every constrained dof, for the reactions
+  std::vector<std::int32_t> driven_dofs_;            // those whose velocity changes in time (curve or displacement)
+  std::vector<double> pressure_force_;               // follower pressure forces at t^n (empty without [[load]])
+  std::vector<double> support_force_;                // per constrained dof (constrained_dofs_ order), at t^n
+  static constexpr std::size_t kEnergyChunk = 4096;  // dofs per partial energy sum (fixed: thread-count independent)
+  std::vector<std::array<double, 5>> energy_chunks_;
   std::vector<double> curve_at_next_, curve_increment_;  // per curve, this step: C(t^{n+1}), I(t^{n+1}) - I(t^n)
   Reactions reactions_;
   ContactSolver contact_;

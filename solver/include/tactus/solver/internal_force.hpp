@@ -1,9 +1,12 @@
 #pragma once
 // The stress pass: one loop over all tets computing the internal (and viscous) nodal forces,
 // the strain energy, the smallest Jacobian and the element stable step, in the same pass
-// (Laghos' qdata.dt_est idea). Race-free assembly: each thread scatters into its own force
-// array; the arrays are summed per node afterwards.
+// (Laghos' qdata.dt_est idea). Race-free and deterministic assembly: the tets are cut into
+// fixed partitions of kPartitionElements (not one per thread), each scattering into its own force
+// array over the nodes it touches; every node's sum is then taken in partition order, so the
+// forces, energies and steps are bit-identical for any number of threads.
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "tactus/solver/model.hpp"
@@ -40,15 +43,28 @@ struct StressPassResult {
 // (0 at the other nodes), one entry per node; adding J_e V_e / 4 of tets [begin, end) at u to
 // the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial: for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
-void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume);
+// node_volume[n - node_offset] receives node n's share.
+void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
+                              std::size_t node_offset = 0);
 std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& block, const double* u);
 
 // The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
 // volumetric part is the average of its nodes' pressures.
 std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
 
+// What a run of the element loop (kernels/element_loop.hpp) accumulates besides the forces.
+struct ThreadAccumulator {
+  double energy = 0, viscous_power = 0;
+  double dt2 = std::numeric_limits<double>::infinity();  // squared element step (no beta)
+  double dt = std::numeric_limits<double>::infinity();   // element step with beta
+  std::size_t dt_element = 0;
+  double min_J = std::numeric_limits<double>::infinity();
+  std::size_t min_J_element = 0;
+};
+
 class InternalForces {
  public:
+  static constexpr std::size_t kPartitionElements = 1024, kPartitions = 8, kNodeChunk = 2048;
   // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
   InternalForces(const Model& model, double beta, int threads);
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
@@ -66,18 +82,28 @@ class InternalForces {
   const Model& model_;
   double beta_;
   int threads_;
-  std::vector<std::vector<double>> thread_forces_;  // threads-1 extra buffers (thread 0 writes f_out)
+  // A contiguous run of one block's tets, and the node range [node_lo, node_hi) they touch: its
+  // forces go to partition_forces_ from force_offset (3 per node of the range), its current nodal
+  // volumes (ANP blocks) to partition_volumes_ from volume_offset.
+  struct Partition {
+    std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
+  };
+  std::vector<Partition> partitions_;
+  std::vector<double> partition_forces_, partition_volumes_;
+  std::vector<ThreadAccumulator> partition_acc_;
+  // Nodes in chunks of kNodeChunk: the partitions whose node range meets each chunk, ascending.
+  std::vector<std::vector<std::size_t>> chunk_partitions_;
   // ANP blocks: their nodal reference volumes and, per step, the nodal pressures (which first
-  // hold thread 0's share of the current nodal volumes); the other threads' shares.
+  // hold the current nodal volumes); per node chunk, that chunk's part of the volumetric energy.
   struct AnpBlock {
     std::size_t block;
     std::vector<double> reference_volume, pressure;
   };
   std::vector<AnpBlock> anp_;
   std::vector<const double*> block_pressure_;  // per block: its AnpBlock's pressure, or nullptr
-  std::vector<std::vector<double>> thread_node_volumes_;
+  std::vector<double> chunk_anp_energy_;
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
-  double anp_pass(const double* u, int tid, int nth);
+  void anp_pass(const double* u);
 };
 
 }  // namespace tactus::solver
