@@ -107,11 +107,8 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   j["sliver_bound_deg"] = sliver_deg;
   j["all"] = to_json(all);
   j["groups"] = nlohmann::json::object();
-  for (auto& [tag, a] : acc) {
-    const auto* g = mesh.find_group(3, tag);
-    j["groups"][g ? g->name : std::to_string(tag)] = to_json(a);
-  }
-  // The guarantees, per subdomain: each unmet one with its worst tet, where it is, and why.
+  // Per subdomain, its figures and the guarantees: each unmet one with its worst tet, where it
+  // is, and why.
   std::vector<char> on_surface(mesh.nodes.size(), 0);
   for (const auto& f : mesh.triangles)
     for (int v : f) on_surface[static_cast<std::size_t>(v)] = 1;
@@ -125,6 +122,7 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   for (auto& [tag, a] : acc) {
     const auto* g = mesh.find_group(3, tag);
     const std::string name = g ? g->name : std::to_string(tag);
+    j["groups"][name] = to_json(a);  // sorts a.lengths
     if (a.min_dihedral < goal.min_dihedral_deg) {
       int surface = 0;
       for (int v : mesh.tets[a.worst_angle_tet]) surface += on_surface[static_cast<std::size_t>(v)];
@@ -142,7 +140,7 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
                                 : "node relocation and interior edge splits could not raise it without making a neighbour worse (a region "
                                   "already below the length guarantee, or nodes pinned on surface creases)"}});
     }
-    const double median = a.lengths[a.lengths.size() / 2];  // sorted by to_json
+    const double median = a.lengths[a.lengths.size() / 2];
     if (a.min_length < goal.min_length_ratio * median) {
       const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median) - a.lengths.begin();
       std::ostringstream why;

@@ -55,11 +55,13 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
                      {"bone_source", s.bone_threshold_source}, {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
   j["steps"] = {"3-D Gaussian denoise sigma " + std::to_string(o.segment.denoise_sigma_voxels) + " voxel",
                 "body = largest 3-D component above the body threshold, holes filled",
-                "bone = body voxels above the bone threshold, marrow holes filled (3-D and per slice)",
+                "bone = body voxels above the bone threshold, marrow holes filled (3-D and in the planes across each axis)",
                 "bones split: 6-connected components of the mask eroded by " + std::to_string(o.segment.split_erosion_voxels) +
-                    " voxel, grown back; pieces touching across " + std::to_string(o.segment.split_neck_ratio) +
-                    " of the smaller one's V^(2/3) joined again; components under " + std::to_string(o.segment.min_bone_volume_mm3) +
-                    " mm^3 removed"};
+                    " voxel, grown back; touching pieces joined again when they touch across " + std::to_string(o.segment.split_neck_ratio) +
+                    " of the smaller one's V^(2/3) or either kept less than " + std::to_string(o.segment.split_min_core_fraction) +
+                    " of itself as its eroded core",
+                "each bone closed by a box of half-width " + std::to_string(o.segment.marrow_closing_mm) + " mm (not into or next to another bone)",
+                "bone components under " + std::to_string(o.segment.min_bone_volume_mm3) + " mm^3 removed"};
   j["body_volume_m3"] = static_cast<double>(s.body_voxels) * voxel_volume;
   j["bone_volume_m3"] = static_cast<double>(s.bone_voxels) * voxel_volume;
   j["specks_removed"] = s.specks_removed;

@@ -63,7 +63,8 @@ Volume<std::uint8_t> erode(const Volume<std::uint8_t>& m, int n) {
   return cur;
 }
 
-// 2-D hole filling in every z slice (4-connected background reached from the slice's border).
+// 2-D hole filling in every plane across each axis (4-connected background reached from the
+// plane's border).
 void fill_slice_holes(Volume<std::uint8_t>& m) {
   // Planes normal to each axis in turn: a tubular bone (a phalanx lying in the slice plane, cut
   // by thick slices) has its marrow enclosed only in the planes across it. Only the mask's
@@ -236,9 +237,10 @@ void merge_broad_contacts(const std::array<int, 3>& d, std::vector<std::int32_t>
         static_cast<double>(std::min(volume[static_cast<std::size_t>(pair.first)], volume[static_cast<std::size_t>(pair.second)])), 2.0 / 3.0);
     // The erosion resolves a joint only where it leaves most of each piece: a piece whose core is a
     // small part of it is a few voxels across, and its cut falls wherever it is thinnest.
-    const double core_fraction = std::min(
-        static_cast<double>(core_voxels[static_cast<std::size_t>(pair.first)]) / static_cast<double>(volume[static_cast<std::size_t>(pair.first)]),
-        static_cast<double>(core_voxels[static_cast<std::size_t>(pair.second)]) / static_cast<double>(volume[static_cast<std::size_t>(pair.second)]));
+    const auto core_of = [&](std::int32_t c) {
+      return static_cast<double>(core_voxels[static_cast<std::size_t>(c)]) / static_cast<double>(volume[static_cast<std::size_t>(c)]);
+    };
+    const double core_fraction = std::min(core_of(pair.first), core_of(pair.second));
     log::debug() << "split: pieces " << pair.first << " and " << pair.second << " touch across " << static_cast<double>(faces) / section
                  << " of the smaller's section; smaller core fraction " << core_fraction;
     if (static_cast<double>(faces) >= ratio * section || core_fraction < p.split_min_core_fraction)

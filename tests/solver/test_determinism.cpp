@@ -4,7 +4,6 @@
 // displacements, velocities and every energy must be the same bits (memcmp), not merely close.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 

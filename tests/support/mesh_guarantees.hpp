@@ -10,9 +10,14 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "tactus/core/mesh.hpp"
+#include "tactus/core/volume.hpp"
+#include "tactus/mesher/image_mesher.hpp"
+#include "tactus/mesher/quality.hpp"
+#include "tactus/mesher/small_regions.hpp"
 
 namespace tactus::testkit {
 
@@ -48,13 +53,24 @@ inline std::map<int, WorstTet> recomputed_quality(const TetMesh& m) {
   return worst;
 }
 
-// Prints each group's numbers against the guarantees and expects them met.
+// Meshes `labels` the way tactus-mesh does with its defaults (small regions absorbed first);
+// returns the mesh and the number of regions absorbed.
+inline std::pair<TetMesh, std::size_t> mesh_like_tactus_mesh(Volume<std::uint8_t> labels, const LabelTable& table) {
+  const mesher::ImageMeshParams p;
+  const auto absorbed = mesher::absorb_small_regions(labels, mesher::min_region_voxels(labels, 0, p.bone_cell_size_mm));
+  return {mesher::mesh_label_volume(labels, table, p), absorbed.size()};
+}
+
+// Prints each group's numbers against the guarantees and expects them met, and the mesher's
+// quality report to say so.
 inline void expect_mesh_guarantees(const char* name, const TetMesh& mesh) {
   for (const auto& [label, w] : recomputed_quality(mesh)) {
     std::printf("  %s, label %d: min dihedral %.2f deg (>= 10), L_e min/median %.3f (>= 0.2)\n", name, label, w.min_dihedral_deg, w.length_ratio);
     EXPECT_GE(w.min_dihedral_deg, 10.0) << name << " label " << label;
     EXPECT_GE(w.length_ratio, 0.2) << name << " label " << label;
   }
+  const auto report = mesher::quality_report(mesh, {});
+  EXPECT_TRUE(report["guarantees"]["met"].get<bool>()) << report["guarantees"].dump(1);
 }
 
 }  // namespace tactus::testkit

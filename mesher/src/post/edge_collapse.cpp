@@ -21,8 +21,6 @@ namespace tactus::mesher {
 
 namespace {
 
-double dot3(const std::array<double, 3>& a, const std::array<double, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
 class SurfaceEdgeCollapser {
  public:
   SurfaceEdgeCollapser(TetMesh& mesh, double max_surface_move, const PostPassParams& p)
@@ -49,22 +47,9 @@ class SurfaceEdgeCollapser {
     const std::size_t n = mesh_.tets.size();
     for (std::size_t e = 0; e < n; ++e) {
       if (!tet_alive_[e] || measure(e) >= 1) continue;
-      std::vector<std::pair<double, std::pair<int, int>>> edges;
-      const auto t = mesh_.tets[e];
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) {
-          const int a = t[static_cast<std::size_t>(i)], b = t[static_cast<std::size_t>(j)];
-          if (!surface_edge(a, b)) continue;
-          const auto& xa = node(a);
-          const auto& xb = node(b);
-          edges.push_back({std::hypot(xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]), {a, b}});
-        }
-      std::sort(edges.begin(), edges.end());  // shortest first
       bool done = false;
-      for (const auto& [len, ab] : edges) {
-        if (done) break;
-        done = try_collapse(ab.second, ab.first) || try_collapse(ab.first, ab.second);
-      }
+      for (const auto& [a, b] : tet_edges_by_length(mesh_, mesh_.tets[e], false, [&](int x, int y) { return surface_edge(x, y); }))
+        if ((done = try_collapse(b, a) || try_collapse(a, b))) break;
       collapsed += done;
     }
     if (collapsed > 0) compact();
@@ -155,29 +140,25 @@ class SurfaceEdgeCollapser {
   }
 
   void apply(int b, int a) {
-    const auto ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
-    for (std::size_t e : tets_of_[kb]) {
-      if (!tet_alive_[e]) continue;
-      auto& t = mesh_.tets[e];
-      if (std::count(t.begin(), t.end(), a)) {
-        tet_alive_[e] = 0;
+    merge_node(mesh_.tets, tets_of_, tet_alive_, b, a);
+    merge_node(mesh_.triangles, tris_of_, tri_alive_, b, a);
+    node_alive_[static_cast<std::size_t>(b)] = 0;
+  }
+
+  // Node b becomes a in `elements`: those holding both die, the others move to a's list.
+  template <class Element>
+  static void merge_node(std::vector<Element>& elements, std::vector<std::vector<std::size_t>>& of, std::vector<char>& alive, int b, int a) {
+    for (std::size_t e : of[static_cast<std::size_t>(b)]) {
+      if (!alive[e]) continue;
+      Element& el = elements[e];
+      if (std::count(el.begin(), el.end(), a)) {
+        alive[e] = 0;
       } else {
-        std::replace(t.begin(), t.end(), b, a);
-        tets_of_[ka].push_back(e);
+        std::replace(el.begin(), el.end(), b, a);
+        of[static_cast<std::size_t>(a)].push_back(e);
       }
     }
-    for (std::size_t t : tris_of_[kb]) {
-      if (!tri_alive_[t]) continue;
-      auto& f = mesh_.triangles[t];
-      if (std::count(f.begin(), f.end(), a)) {
-        tri_alive_[t] = 0;
-      } else {
-        std::replace(f.begin(), f.end(), b, a);
-        tris_of_[ka].push_back(t);
-      }
-    }
-    tets_of_[kb].clear(), tris_of_[kb].clear();
-    node_alive_[kb] = 0;
+    of[static_cast<std::size_t>(b)].clear();
   }
 
   // Drops the removed tets, triangles and nodes and renumbers the nodes.
@@ -186,24 +167,21 @@ class SurfaceEdgeCollapser {
     std::vector<Vec3> nodes;
     for (std::size_t k = 0; k < mesh_.nodes.size(); ++k)
       if (node_alive_[k]) id[k] = static_cast<int>(nodes.size()), nodes.push_back(mesh_.nodes[k]);
-    std::vector<std::array<int, 4>> tets;
-    std::vector<int> tet_group;
-    for (std::size_t e = 0; e < mesh_.tets.size(); ++e) {
-      if (!tet_alive_[e]) continue;
-      auto t = mesh_.tets[e];
-      for (int& v : t) v = id[static_cast<std::size_t>(v)];
-      tets.push_back(t), tet_group.push_back(mesh_.tet_group[e]);
+    mesh_.nodes = std::move(nodes);
+    keep_alive(mesh_.tets, mesh_.tet_group, tet_alive_, id);
+    keep_alive(mesh_.triangles, mesh_.triangle_group, tri_alive_, id);
+  }
+
+  // The live elements (and their groups), their nodes renumbered by `id`.
+  template <class Element>
+  static void keep_alive(std::vector<Element>& elements, std::vector<int>& groups, const std::vector<char>& alive, const std::vector<int>& id) {
+    std::size_t kept = 0;
+    for (std::size_t e = 0; e < elements.size(); ++e) {
+      if (!alive[e]) continue;
+      for (int& v : elements[e]) v = id[static_cast<std::size_t>(v)];
+      elements[kept] = elements[e], groups[kept] = groups[e], ++kept;
     }
-    std::vector<std::array<int, 3>> triangles;
-    std::vector<int> triangle_group;
-    for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
-      if (!tri_alive_[t]) continue;
-      auto f = mesh_.triangles[t];
-      for (int& v : f) v = id[static_cast<std::size_t>(v)];
-      triangles.push_back(f), triangle_group.push_back(mesh_.triangle_group[t]);
-    }
-    mesh_.nodes = std::move(nodes), mesh_.tets = std::move(tets), mesh_.tet_group = std::move(tet_group);
-    mesh_.triangles = std::move(triangles), mesh_.triangle_group = std::move(triangle_group);
+    elements.resize(kept), groups.resize(kept);
   }
 
   TetMesh& mesh_;

@@ -17,8 +17,6 @@ namespace tactus::mesher {
 
 namespace {
 
-double dot3(const std::array<double, 3>& a, const std::array<double, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
 // Moves single nodes by a pattern search that maximises the worst value of a per-tet measure over
 // the node's tets: interior nodes freely, surface nodes in their tangent plane and by at most
 // `max_surface_move` from where they started (so the surface approximation is kept), nodes on a
@@ -28,7 +26,7 @@ double dot3(const std::array<double, 3>& a, const std::array<double, 3>& b) { re
 class NodeRelocator {
  public:
   NodeRelocator(TetMesh& mesh, double max_surface_move, const PostPassParams& p)
-      : mesh_(mesh), p_(p), max_surface_move_(max_surface_move), tets_of_(tets_around_nodes(mesh)) {
+      : mesh_(mesh), p_(p), max_surface_move_(max_surface_move), tets_of_(tets_around_nodes(mesh)), median_(median_lengths(mesh)) {
     const std::size_t nn = mesh.nodes.size();
     normal_.assign(nn, {0, 0, 0});
     on_surface_.assign(nn, 0), crease_.assign(nn, 0);
@@ -58,30 +56,17 @@ class NodeRelocator {
         if (std::abs(dot3(fnrm, normal_[k])) < std::cos(p.crease_angle_deg * M_PI / 180)) crease_[k] = 1;
     }
     origin_ = mesh.nodes;
-    std::map<int, std::vector<double>> per;
-    for (std::size_t e = 0; e < mesh.tets.size(); ++e) per[mesh.tet_group[e]].push_back(length(e));
-    for (auto& [g, v] : per) {
-      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-      median_[g] = v[v.size() / 2];
-    }
   }
 
   const std::vector<std::vector<std::size_t>>& tets_of() const { return tets_of_; }
   bool crease(std::size_t k) const { return crease_[k]; }
   bool on_surface(std::size_t k) const { return on_surface_[k]; }
 
-  double length(std::size_t e) const {
-    const auto& t = mesh_.tets[e];
-    const TetGradients g = tet_shape_gradients(node(t[0]), node(t[1]), node(t[2]), node(t[3]));
-    return g.volume > 0 ? characteristic_length(g) : -1.0;
-  }
+  const std::map<int, double>& medians() const { return median_; }
   // L_e over its subdomain's median (negative for an inverted tet).
-  double ratio(std::size_t e) const { return length(e) / median_.at(mesh_.tet_group[e]); }
-  double min_dihedral(std::size_t e) const {
-    const auto& t = mesh_.tets[e];
-    if (tet_volume(node(t[0]), node(t[1]), node(t[2]), node(t[3])) <= 0) return -1;
-    return tet_quality(node(t[0]), node(t[1]), node(t[2]), node(t[3])).min_dihedral_deg;
-  }
+  double ratio(std::size_t e) const { return tet_length(mesh_, mesh_.tets[e]) / median_.at(mesh_.tet_group[e]); }
+  // The smallest dihedral angle (-1 for an inverted tet).
+  double min_dihedral(std::size_t e) const { return tet_length(mesh_, mesh_.tets[e]) > 0 ? tet_min_dihedral(mesh_, mesh_.tets[e]) : -1; }
   double worst(std::size_t k, const std::function<double(std::size_t)>& measure) const {
     double q = 1e300;
     for (std::size_t e : tets_of_[k]) q = std::min(q, measure(e));
@@ -196,7 +181,6 @@ class NodeRelocator {
     std::map<std::size_t, std::vector<std::size_t>> tets_of;       // the tet lists changed, as they were
   };
   static std::pair<int, int> edge_key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
-  const Vec3& node(int v) const { return mesh_.nodes[static_cast<std::size_t>(v)]; }
 
   TetMesh& mesh_;
   const PostPassParams& p_;
@@ -204,8 +188,8 @@ class NodeRelocator {
   std::vector<std::vector<std::size_t>> tets_of_;
   std::vector<std::array<double, 3>> normal_;
   std::vector<char> on_surface_, crease_;
-  std::vector<Vec3> origin_;  // where each node was when the pass began (the surface move is bounded from there)
-  std::map<int, double> median_;
+  std::vector<Vec3> origin_;      // where each node was when the pass began (the surface move is bounded from there)
+  std::map<int, double> median_;  // of L_e per group, when the pass began
   std::set<std::pair<int, int>> surface_edges_;
   Split last_split_;
 };
@@ -235,7 +219,7 @@ void relocate_short_tets(TetMesh& mesh, double max_surface_move, const PostPassP
 // The guarantees as one measure per tet (GuaranteeMeasure, topology.hpp), raised node by node.
 std::size_t relocate_poor_tets(TetMesh& mesh, double max_surface_move, const PostPassParams& p) {
   NodeRelocator r(mesh, max_surface_move, p);
-  const GuaranteeMeasure guarantee(mesh, p);
+  const GuaranteeMeasure guarantee(r.medians(), p);
   const auto measure = [&](std::size_t e) { return guarantee(mesh, mesh.tets[e], mesh.tet_group[e]); };
   auto poor = [&] {
     std::set<std::size_t> nodes;
@@ -264,18 +248,8 @@ std::size_t relocate_poor_tets(TetMesh& mesh, double max_surface_move, const Pos
     const std::size_t before_splits = mesh.tets.size();
     for (std::size_t e = 0; e < before_splits; ++e) {
       if (measure(e) >= 1) continue;
-      std::vector<std::pair<double, std::pair<int, int>>> edges;
-      const auto& t = mesh.tets[e];
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) {
-          const int a = t[static_cast<std::size_t>(i)], b = t[static_cast<std::size_t>(j)];
-          if (!r.interior_edge(a, b)) continue;
-          const auto& xa = mesh.nodes[static_cast<std::size_t>(a)];
-          const auto& xb = mesh.nodes[static_cast<std::size_t>(b)];
-          edges.push_back({-std::hypot(xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]), {a, b}});
-        }
-      std::sort(edges.begin(), edges.end());  // longest first
-      for (const auto& [len, ab] : edges) {
+      const auto edges = tet_edges_by_length(mesh, mesh.tets[e], true, [&](int x, int y) { return r.interior_edge(x, y); });
+      for (const auto& ab : edges) {
         double old_worst = 1e300;
         std::size_t old_poor = 0;
         for (std::size_t o : r.tets_of()[static_cast<std::size_t>(ab.first)])

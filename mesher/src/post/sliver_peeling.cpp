@@ -12,9 +12,7 @@
 
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/log.hpp"
-#include "tactus/core/stable_step.hpp"
 #include "tactus/mesher/post_passes.hpp"
-#include "tactus/mesher/quality.hpp"
 #include "topology.hpp"
 
 namespace tactus::mesher {
@@ -52,19 +50,8 @@ class SkinPeeler {
  private:
   Face face(std::size_t e, const int* f) const { return sorted_face(mesh_.tets[e][f[0]], mesh_.tets[e][f[1]], mesh_.tets[e][f[2]]); }
 
-  double length(std::size_t e) const {
-    const auto& t = mesh_.tets[e];
-    const TetGradients g = tet_shape_gradients(mesh_.nodes[static_cast<std::size_t>(t[0])], mesh_.nodes[static_cast<std::size_t>(t[1])],
-                                               mesh_.nodes[static_cast<std::size_t>(t[2])], mesh_.nodes[static_cast<std::size_t>(t[3])]);
-    return g.volume > 0 ? characteristic_length(g) : 0.0;
-  }
-
-  double min_dihedral(std::size_t e) const {
-    const auto& t = mesh_.tets[e];
-    return tet_quality(mesh_.nodes[static_cast<std::size_t>(t[0])], mesh_.nodes[static_cast<std::size_t>(t[1])],
-                       mesh_.nodes[static_cast<std::size_t>(t[2])], mesh_.nodes[static_cast<std::size_t>(t[3])])
-        .min_dihedral_deg;
-  }
+  double length(std::size_t e) const { return std::max(0.0, tet_length(mesh_, mesh_.tets[e])); }  // 0: inverted or flat
+  double min_dihedral(std::size_t e) const { return tet_min_dihedral(mesh_, mesh_.tets[e]); }
 
   std::size_t live_owners(const Face& key) {
     std::size_t n = 0;

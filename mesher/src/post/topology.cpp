@@ -30,32 +30,43 @@ std::array<double, 3> area_normal(const TetMesh& mesh, const std::array<int, 3>&
   return {0.5 * (u[1] * w[2] - u[2] * w[1]), 0.5 * (u[2] * w[0] - u[0] * w[2]), 0.5 * (u[0] * w[1] - u[1] * w[0])};
 }
 
-GuaranteeMeasure::GuaranteeMeasure(const TetMesh& mesh, const PostPassParams& p)
-    : dihedral_goal_(p.guarantee_dihedral_deg * p.guarantee_margin), ratio_goal_(p.guarantee_length_ratio * p.guarantee_margin) {
-  std::map<int, std::vector<double>> per;
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
-    median_[mesh.tet_group[e]] = 1;  // placeholder for length_ratio below
-    per[mesh.tet_group[e]].push_back(length_ratio(mesh, mesh.tets[e], mesh.tet_group[e]));
-  }
-  for (auto& [g, v] : per) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    median_[g] = v[v.size() / 2];
-  }
-}
-
-double GuaranteeMeasure::length_ratio(const TetMesh& mesh, const std::array<int, 4>& t, int group) const {
+double tet_length(const TetMesh& mesh, const std::array<int, 4>& t) {
   const TetGradients g = tet_shape_gradients(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
                                              mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]);
-  return g.volume > 0 ? characteristic_length(g) / median_.at(group) : -1.0;
+  return g.volume > 0 ? characteristic_length(g) : -1.0;
+}
+
+double tet_min_dihedral(const TetMesh& mesh, const std::array<int, 4>& t) {
+  return tet_quality(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
+                     mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])])
+      .min_dihedral_deg;
+}
+
+std::map<int, double> median_lengths(const TetMesh& mesh) {
+  std::map<int, std::vector<double>> per;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) per[mesh.tet_group[e]].push_back(tet_length(mesh, mesh.tets[e]));
+  std::map<int, double> median;
+  for (auto& [g, v] : per) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    median[g] = v[v.size() / 2];
+  }
+  return median;
+}
+
+GuaranteeMeasure::GuaranteeMeasure(std::map<int, double> medians, const PostPassParams& p)
+    : median_(std::move(medians)),
+      dihedral_goal_(p.guarantee_dihedral_deg * p.guarantee_margin),
+      ratio_goal_(p.guarantee_length_ratio * p.guarantee_margin) {}
+
+double GuaranteeMeasure::length_ratio(const TetMesh& mesh, const std::array<int, 4>& t, int group) const {
+  const double length = tet_length(mesh, t);
+  return length > 0 ? length / median_.at(group) : -1.0;
 }
 
 double GuaranteeMeasure::operator()(const TetMesh& mesh, const std::array<int, 4>& t, int group) const {
   const double ratio = length_ratio(mesh, t, group);
   if (ratio < 0) return -1.0;
-  const double dihedral = tet_quality(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
-                                      mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])])
-                              .min_dihedral_deg;
-  return std::min({1.0, dihedral / dihedral_goal_, ratio / ratio_goal_});
+  return std::min({1.0, tet_min_dihedral(mesh, t) / dihedral_goal_, ratio / ratio_goal_});
 }
 
 std::array<int, 3> sorted_face(int a, int b, int c) {

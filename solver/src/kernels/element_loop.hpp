@@ -66,7 +66,7 @@ TACTUS_KERNEL_INLINE StressPoint evaluate_law(const Law& mat, const Mat3& F, con
 }
 
 template <class Law, bool kViscous, bool kAnp = false>
-void stress_range(const StressKernelArgs& a, ThreadAccumulator& acc) {
+void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
   const Law& mat = *static_cast<const Law*>(a.law);
   const std::int32_t* __restrict conn = a.conn;
   const double* __restrict grad = a.grad;

@@ -118,10 +118,23 @@ void InternalForces::enable_mass_scaling() {
 
 std::size_t InternalForces::memory_bytes() const {
   std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity()) * sizeof(double);
-  b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(ThreadAccumulator);
+  b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
   for (const auto& a : anp_) b += (a.reference_volume.capacity() + a.pressure.capacity()) * sizeof(double);
   return b;
+}
+
+template <class Use>
+void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, std::size_t width, double* out,
+                               Use use) const {
+  const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
+  std::fill(out + width * lo, out + width * hi, 0.0);
+  for (std::size_t p : chunk_partitions_[c]) {
+    const Partition& q = partitions_[p];
+    if (!use(q)) continue;
+    const double* theirs = arrays.data() + q.*offset;
+    for (std::size_t i = width * std::max(lo, q.node_lo); i < width * std::min(hi, q.node_hi); ++i) out[i] += theirs[i - width * q.node_lo];
+  }
 }
 
 // The J pass of the ANP blocks, inside the parallel region (every thread calls it): the
@@ -143,14 +156,8 @@ void InternalForces::anp_pass(const double* u) {
     }
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
+      sum_chunk(c, partition_volumes_, &Partition::volume_offset, 1, a.pressure.data(), [&](const Partition& q) { return q.block == a.block; });
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
-      std::fill(a.pressure.begin() + static_cast<std::ptrdiff_t>(lo), a.pressure.begin() + static_cast<std::ptrdiff_t>(hi), 0.0);
-      for (std::size_t p : chunk_partitions_[c]) {
-        const Partition& q = partitions_[p];
-        if (q.block != a.block) continue;
-        const double* theirs = partition_volumes_.data() + q.volume_offset;
-        for (std::size_t i = std::max(lo, q.node_lo); i < std::min(hi, q.node_hi); ++i) a.pressure[i] += theirs[i - q.node_lo];
-      }
       chunk_anp_energy_[c] += b.material.type().anp_nodal_pressure(b.material.law(), a.reference_volume.data(), a.pressure.data(), lo, hi);
     }
   }
@@ -167,7 +174,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       const MaterialBlock& b = model_.blocks[q.block];
       double* f = partition_forces_.data() + q.force_offset;
       std::fill(f, f + 3 * (q.node_hi - q.node_lo), 0.0);
-      ThreadAccumulator acc;
+      StressAccumulator acc;
       StressKernelArgs args{model_.conn.data(),
                             model_.grad.data(),
                             model_.volume.data(),
@@ -188,19 +195,12 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       partition_acc_[p] = acc;
     }
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
-      std::fill(f_out + 3 * lo, f_out + 3 * hi, 0.0);
-      for (std::size_t p : chunk_partitions_[c]) {
-        const Partition& q = partitions_[p];
-        const double* theirs = partition_forces_.data() + q.force_offset;
-        for (std::size_t i = 3 * std::max(lo, q.node_lo); i < 3 * std::min(hi, q.node_hi); ++i) f_out[i] += theirs[i - 3 * q.node_lo];
-      }
-    }
+    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c)
+      sum_chunk(c, partition_forces_, &Partition::force_offset, 3, f_out, [](const Partition&) { return true; });
   }
   // The partitions' sums in partition order; ties of the smallest step or Jacobian go to the first.
-  ThreadAccumulator total;
-  for (const ThreadAccumulator& acc : partition_acc_) {
+  StressAccumulator total;
+  for (const StressAccumulator& acc : partition_acc_) {
     total.energy += acc.energy;
     total.viscous_power += acc.viscous_power;
     if (acc.min_J < total.min_J) total.min_J = acc.min_J, total.min_J_element = acc.min_J_element;

@@ -53,7 +53,7 @@ MaterialType make_material_type() {
   t.density = [](const void* law) { return static_cast<const Law*>(law)->density; };
   t.small_strain_bulk = [](const void* law) { return static_cast<const Law*>(law)->small_strain_bulk(); };
   t.small_strain_shear = [](const void* law) { return static_cast<const Law*>(law)->small_strain_shear(); };
-  t.stress_pass = [](const StressKernelArgs& args, ThreadAccumulator& acc) {
+  t.stress_pass = [](const StressKernelArgs& args, StressAccumulator& acc) {
     if constexpr (VolumetricSplit<Law>) {
       if (args.nodal_pressure) {
         if (args.beta > 0)

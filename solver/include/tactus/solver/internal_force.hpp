@@ -1,10 +1,11 @@
 #pragma once
 // The stress pass: one loop over all tets computing the internal (and viscous) nodal forces,
 // the strain energy, the smallest Jacobian and the element stable step, in the same pass
-// (Laghos' qdata.dt_est idea). Race-free and deterministic assembly: the tets are cut into
-// fixed partitions of kPartitionElements (not one per thread), each scattering into its own force
-// array over the nodes it touches; every node's sum is then taken in partition order, so the
-// forces, energies and steps are bit-identical for any number of threads.
+// (Laghos' qdata.dt_est idea). Race-free and deterministic assembly: each block's tets are cut
+// into at most kPartitions fixed partitions of at least kPartitionElements (by element count, not
+// by threads), each scattering into its own force array over the nodes it touches; every node's
+// sum is then taken in partition order, so the forces, energies and steps are bit-identical for
+// any number of threads.
 #include <cstddef>
 #include <limits>
 #include <vector>
@@ -53,7 +54,7 @@ std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& 
 std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
 
 // What a run of the element loop (kernels/element_loop.hpp) accumulates besides the forces.
-struct ThreadAccumulator {
+struct StressAccumulator {
   double energy = 0, viscous_power = 0;
   double dt2 = std::numeric_limits<double>::infinity();  // squared element step (no beta)
   double dt = std::numeric_limits<double>::infinity();   // element step with beta
@@ -90,7 +91,7 @@ class InternalForces {
   };
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
-  std::vector<ThreadAccumulator> partition_acc_;
+  std::vector<StressAccumulator> partition_acc_;
   // Nodes in chunks of kNodeChunk: the partitions whose node range meets each chunk, ascending.
   std::vector<std::vector<std::size_t>> chunk_partitions_;
   // ANP blocks: their nodal reference volumes and, per step, the nodal pressures (which first
@@ -104,6 +105,10 @@ class InternalForces {
   std::vector<double> chunk_anp_energy_;
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);
+  // Node chunk c of `out` (`width` values per node) = the arrays of the partitions meeting it that
+  // `use` accepts (each from its `offset` in `arrays`), summed in partition order.
+  template <class Use>
+  void sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, std::size_t width, double* out, Use use) const;
 };
 
 }  // namespace tactus::solver

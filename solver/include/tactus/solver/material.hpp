@@ -90,7 +90,7 @@ struct ResultFieldSpec {
 
 struct StressKernelArgs;  // kernels/element_loop.hpp
 struct OutputKernelArgs;
-struct ThreadAccumulator;
+struct StressAccumulator;
 
 // One registered law: its declarations and its kernels (made by make_material_type<Law>()).
 struct MaterialType {
@@ -115,7 +115,7 @@ struct MaterialType {
   double (*density)(const void* law) = nullptr;
   double (*small_strain_bulk)(const void* law) = nullptr;  // for Rayleigh beta and the initial step
   double (*small_strain_shear)(const void* law) = nullptr;
-  void (*stress_pass)(const StressKernelArgs& args, ThreadAccumulator& acc) = nullptr;
+  void (*stress_pass)(const StressKernelArgs& args, StressAccumulator& acc) = nullptr;
 
   // Laws with W = W_iso(F) + U(J) (null otherwise): the isochoric part alone (P, W; the modulus
   // is still the whole one), and the ANP nodal pass over nodes [lo, hi): `volume` holds each
