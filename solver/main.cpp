@@ -2,6 +2,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/output.hpp"
@@ -9,6 +10,7 @@
 #include "tactus/core/cli.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/staged_output.hpp"
+#include "tactus/solver/checkpoint.hpp"
 #include "tactus/solver/reference.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -35,6 +37,14 @@ int main(int argc, char** argv) {
   cli::add_common_options(app, common, "output folder for results (default: results next to the scenario)");
   std::string scenario_file;
   app.add_option("scenario", scenario_file, "scenario.toml")->check(CLI::ExistingFile);
+  std::string restart_dir;
+  app.add_option("--restart", restart_dir,
+                 "continue the killed or interrupted run that was writing this output folder from its newest checkpoint "
+                 "(run.checkpoint_interval); its scenario, meshes and end time are the ones it was started with");
+  bool resume = false;
+  app.add_flag("--resume", resume,
+               "continue a killed run of this same scenario into -o from its newest checkpoint when there is one "
+               "(inputs unchanged), else start from t = 0 (what tactus-pipeline does)");
   std::string mesh_dir;
   app.add_option("--meshes", mesh_dir,
                  "folder that relative mesh and fibre paths of the scenario start from "
@@ -90,6 +100,20 @@ int main(int argc, char** argv) {
       }
       return;
     }
+    // --restart OUT: the run's scenario and options come from its checkpoint.
+    std::optional<solver::RestartPoint> from;
+    if (!restart_dir.empty()) {
+      if (!scenario_file.empty() || !mesh_dir.empty() || *end_time_opt || !common.output.empty())
+        throw InputError("command line", "--restart", "the output folder alone (the scenario, --meshes, --end-time and -o are the checkpoint's)",
+                         "more arguments");
+      from = solver::find_restart_point(restart_dir);
+      if (!from)
+        throw InputError(restart_dir, "--restart", "a killed tactus-solve run writing this folder, with a checkpoint (run.checkpoint_interval)",
+                         "none: nothing to continue");
+      scenario_file = from->identity.scenario;
+      mesh_dir = from->identity.meshes;
+      common.output = restart_dir;
+    }
     if (scenario_file.empty()) throw CLI::RequiredError("scenario");
     solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
     if (*end_time_opt) {
@@ -98,8 +122,29 @@ int main(int argc, char** argv) {
       sc.run.end_time = end_time;
       std::erase_if(sc.run.output_times, [&](double t) { return t > end_time * (1 + 1e-12); });
     }
+    if (from && from->identity.end_time != sc.run.end_time) {
+      sc.run.end_time = from->identity.end_time;
+      std::erase_if(sc.run.output_times, [&](double t) { return t > sc.run.end_time * (1 + 1e-12); });
+    }
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
+    const solver::RunIdentity identity = solver::run_identity(sc, mesh_dir);
+    if (from) solver::check_restart_identity(*from, identity);
+    if (resume && !from) {
+      from = solver::find_restart_point(out);
+      if (from) {
+        try {
+          solver::check_restart_identity(*from, identity);
+        } catch (const InputError& e) {
+          log::warn(std::string("not continuing the killed run: ") + e.what() + "; starting from t = 0");
+          from.reset();
+        }
+      }
+    }
+    if (!from && !resume)
+      for (const auto& killed : resumable_staging(out, "tactus-solve"))
+        log::warn("a killed run writing " + out.string() + " can still be continued (tactus-solve --restart " + out.string() + "); its folder " +
+                  killed.string() + " is kept: delete it to drop it");
     // The reference is read before the run: a malformed one is refused up front.
     nlohmann::json reference;
     if (!check_file.empty()) {
@@ -108,8 +153,8 @@ int main(int argc, char** argv) {
       solver::check_reference(nlohmann::json::object(), reference, check_file);
     }
     if (!write_reference.empty()) guard_reference_path(write_reference);
-    OutputFolder output(out, common.output_rules(solver::scenario_inputs(sc)));
-    const solver::RunSummary summary = solver::run_simulation(sc, output);
+    OutputFolder output(out, common.output_rules(solver::scenario_inputs(sc)), from ? from->staging : std::filesystem::path());
+    const solver::RunSummary summary = solver::run_simulation(sc, output, identity, from ? &*from : nullptr);
     if (!write_reference.empty()) {
       StagedOutput staged(write_reference);
       std::ofstream(staged.path()) << solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2) << '\n';

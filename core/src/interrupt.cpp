@@ -54,6 +54,8 @@ const char* signal_name(int s) {
 }  // namespace
 
 Interrupted::Interrupted(int s) : Error(std::string("interrupted (") + signal_name(s) + "); partial output removed"), signal_(s) {}
+Interrupted::Interrupted(int s, const std::string& what_was_kept)
+    : Error(std::string("interrupted (") + signal_name(s) + "); " + what_was_kept), signal_(s) {}
 
 bool interrupt_requested() noexcept { return g_signal.load(std::memory_order_relaxed) != 0; }
 

@@ -236,8 +236,10 @@ void remove_listed(const fs::path& dir, const json& files) {
   fs::remove(dir, ec);
 }
 
-// Staging folders `<name>.partial-*` of `tool` whose process is gone.
-void remove_stale_staging(const fs::path& final, const std::string& tool) {
+// Staging folders `<name>.partial-*` of `tool` whose process is gone; `resumable`: only those
+// holding a kResumableDir (a killed run that can be continued), else only those without.
+std::vector<fs::path> dead_staging(const fs::path& final, const std::string& tool, bool resumable) {
+  std::vector<fs::path> found;
   const fs::path parent = canonical_path(final).parent_path();
   const std::string prefix = final.filename().string() + ".partial-";
   std::error_code ec;
@@ -251,8 +253,18 @@ void remove_stale_staging(const fs::path& final, const std::string& tool) {
     id.start = m.value("process_start", 0ULL);
     id.boot = m.value("boot_id", "");
     if (still_running(id)) continue;
+    std::error_code exists;
+    if (fs::is_directory(it->path() / kResumableDir, exists) == resumable) found.push_back(it->path());
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+// Staging folders of `tool` whose process is gone, except those a killed run can be continued from.
+void remove_stale_staging(const fs::path& final, const std::string& tool) {
+  for (const fs::path& p : dead_staging(final, tool, false)) {
     std::error_code rm;
-    fs::remove_all(it->path(), rm);
+    fs::remove_all(p, rm);
   }
 }
 
@@ -354,17 +366,38 @@ std::string human_bytes(std::uintmax_t bytes) {
 }
 
 // ---------------------------------------------------------------------------------------------
-OutputFolder::OutputFolder(fs::path folder, OutputRules rules) : final_(std::move(folder)), rules_(std::move(rules)) {
+OutputFolder::OutputFolder(fs::path folder, OutputRules rules, const fs::path& resume) : final_(std::move(folder)), rules_(std::move(rules)) {
   check_place(final_, rules_, "output folder");
   check_folder_replaceable(final_, rules_);
   make_parent(final_);
   remove_stale_staging(final_, rules_.tool);
-  staging_ = create_staging(final_, rules_.tool);
+  if (resume.empty()) {
+    staging_ = create_staging(final_, rules_.tool);
+    return;
+  }
+  // The killed run's staging folder becomes this process's: renamed to our pid, marked as ours.
+  const std::vector<fs::path> dead = dead_staging(final_, rules_.tool, true);
+  if (std::find(dead.begin(), dead.end(), canonical_path(resume)) == dead.end())
+    throw InputError(resume.string(), "", "the staging folder of a killed " + rules_.tool + " run writing " + final_.string(),
+                     "not one (its process still runs, or it belongs elsewhere)");
+  staging_ = canonical_path(final_).parent_path() / (final_.filename().string() + ".partial-" + std::to_string(getpid()));
+  std::error_code ec;
+  fs::rename(resume, staging_, ec);
+  if (ec) throw WriteError(resume.string(), "cannot take over the interrupted run's folder (" + ec.message() + ")");
+  register_staging_path(staging_);
+  write_json_atomically(staging_ / kFolderMarker, staging_marker(rules_.tool));
 }
 
 OutputFolder::~OutputFolder() {
-  if (!committed_) discard_staging(staging_);
+  if (!committed_ && !kept_) discard_staging(staging_);
 }
+
+void OutputFolder::keep_for_resume() {
+  kept_ = true;
+  unregister_staging_path(staging_);
+}
+
+std::vector<fs::path> resumable_staging(const fs::path& folder, const std::string& tool) { return dead_staging(folder, tool, true); }
 
 void OutputFolder::require_space(std::uintmax_t bytes, const std::string& what) const { check_space(staging_, bytes, what, final_); }
 

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hdf5_handle.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/isolated.hpp"
 #include "tactus/core/staged_output.hpp"
@@ -86,91 +87,12 @@ LabelTable parse_label_table(const std::string& text, const std::string& file, c
   return out;
 }
 
-namespace {
-
-template <class T>
-hid_t native_type();
-template <>
-hid_t native_type<std::uint8_t>() {
-  return H5T_NATIVE_UINT8;
-}
-template <>
-hid_t native_type<std::uint16_t>() {
-  return H5T_NATIVE_UINT16;
-}
-template <>
-hid_t native_type<std::int16_t>() {
-  return H5T_NATIVE_INT16;
-}
-template <>
-hid_t native_type<float>() {
-  return H5T_NATIVE_FLOAT;
-}
-
-// RAII for HDF5 identifiers, so every error path closes what it opened.
-class H5Handle {
- public:
-  H5Handle(hid_t id, herr_t (*closer)(hid_t)) : id_(id), closer_(closer) {}
-  ~H5Handle() {
-    if (id_ >= 0) closer_(id_);
-  }
-  H5Handle(const H5Handle&) = delete;
-  H5Handle& operator=(const H5Handle&) = delete;
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*closer_)(hid_t);
-};
-
-// Silences HDF5's own error stack printing: we report errors ourselves, once.
-struct QuietHdf5 {
-  QuietHdf5() {
-    H5Eget_auto2(H5E_DEFAULT, &func, &data);
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  }
-  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func, data); }
-  H5E_auto2_t func = nullptr;
-  void* data = nullptr;
-};
-
-void write_doubles_attribute(hid_t obj, const char* name, const double* v, hsize_t n) {
-  H5Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
-  H5Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, v);
-}
-
-void write_double3_attribute(hid_t obj, const char* name, const std::array<double, 3>& v) { write_doubles_attribute(obj, name, v.data(), 3); }
-
-// The optional direction attribute (9 numbers, row by row); identity when absent (older files).
-Direction read_direction_attribute(hid_t obj, const std::string& file, const std::string& dataset) {
-  if (H5Aexists(obj, "direction") <= 0) return kIdentityDirection;
-  H5Handle attr(H5Aopen(obj, "direction", H5P_DEFAULT), H5Aclose);
-  H5Handle space(H5Aget_space(attr.get()), H5Sclose);
-  if (H5Sget_simple_extent_npoints(space.get()) != 9) throw InputError(file, dataset + "@direction", "9 numbers (a 3x3 matrix, row by row)");
-  Direction d{};
-  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, d.data()) < 0) throw InputError(file, dataset + "@direction", "numeric values");
-  validate_direction(d, file, dataset + "@direction");
-  return d;
-}
-
 void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
   H5Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
   H5Tset_size(type.get(), value.empty() ? 1 : value.size());
   H5Handle space(H5Screate(H5S_SCALAR), H5Sclose);
   H5Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   H5Awrite(attr.get(), type.get(), value.c_str());
-}
-
-std::array<double, 3> read_double3_attribute(hid_t obj, const char* name, const std::string& file, const std::string& dataset) {
-  if (H5Aexists(obj, name) <= 0) throw InputError(file, dataset + "@" + name, "an attribute of 3 numbers (x, y, z)", "none");
-  H5Handle attr(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
-  H5Handle space(H5Aget_space(attr.get()), H5Sclose);
-  if (H5Sget_simple_extent_npoints(space.get()) != 3) throw InputError(file, dataset + "@" + name, "3 numbers (x, y, z)");
-  std::array<double, 3> v{};
-  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, v.data()) < 0) throw InputError(file, dataset + "@" + name, "numeric values");
-  return v;
 }
 
 // A string attribute of any kind HDF5 stores (fixed-length with NUL-terminated, NUL-padded or
@@ -205,6 +127,57 @@ std::string read_string_attribute(hid_t obj, const char* name, const std::string
     s.resize(std::strlen(s.c_str()));  // NUL-terminated or NUL-padded
   }
   return s;
+}
+
+namespace {
+
+template <class T>
+hid_t native_type();
+template <>
+hid_t native_type<std::uint8_t>() {
+  return H5T_NATIVE_UINT8;
+}
+template <>
+hid_t native_type<std::uint16_t>() {
+  return H5T_NATIVE_UINT16;
+}
+template <>
+hid_t native_type<std::int16_t>() {
+  return H5T_NATIVE_INT16;
+}
+template <>
+hid_t native_type<float>() {
+  return H5T_NATIVE_FLOAT;
+}
+
+void write_doubles_attribute(hid_t obj, const char* name, const double* v, hsize_t n) {
+  H5Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  H5Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, v);
+}
+
+void write_double3_attribute(hid_t obj, const char* name, const std::array<double, 3>& v) { write_doubles_attribute(obj, name, v.data(), 3); }
+
+// The optional direction attribute (9 numbers, row by row); identity when absent (older files).
+Direction read_direction_attribute(hid_t obj, const std::string& file, const std::string& dataset) {
+  if (H5Aexists(obj, "direction") <= 0) return kIdentityDirection;
+  H5Handle attr(H5Aopen(obj, "direction", H5P_DEFAULT), H5Aclose);
+  H5Handle space(H5Aget_space(attr.get()), H5Sclose);
+  if (H5Sget_simple_extent_npoints(space.get()) != 9) throw InputError(file, dataset + "@direction", "9 numbers (a 3x3 matrix, row by row)");
+  Direction d{};
+  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, d.data()) < 0) throw InputError(file, dataset + "@direction", "numeric values");
+  validate_direction(d, file, dataset + "@direction");
+  return d;
+}
+
+std::array<double, 3> read_double3_attribute(hid_t obj, const char* name, const std::string& file, const std::string& dataset) {
+  if (H5Aexists(obj, name) <= 0) throw InputError(file, dataset + "@" + name, "an attribute of 3 numbers (x, y, z)", "none");
+  H5Handle attr(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  H5Handle space(H5Aget_space(attr.get()), H5Sclose);
+  if (H5Sget_simple_extent_npoints(space.get()) != 3) throw InputError(file, dataset + "@" + name, "3 numbers (x, y, z)");
+  std::array<double, 3> v{};
+  if (H5Aread(attr.get(), H5T_NATIVE_DOUBLE, v.data()) < 0) throw InputError(file, dataset + "@" + name, "numeric values");
+  return v;
 }
 
 // The voxels of a 3-D dataset as T, slice by slice through a wide integer or a double, so a value

@@ -8,11 +8,17 @@
 #include <limits>
 #include <sstream>
 
+#include <signal.h>
+
+#include <cstdlib>
+
 #include "output/results.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/progress.hpp"
+#include "tactus/core/state_file.hpp"
+#include "tactus/solver/checkpoint.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
 
@@ -31,7 +37,7 @@ std::vector<fs::path> scenario_inputs(const Scenario& sc) {
 
 RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
   OutputFolder out(output_dir, {"tactus-solve", scenario_inputs(sc), false});
-  return run_simulation(sc, out);
+  return run_simulation(sc, out, run_identity(sc, {}));
 }
 
 namespace {
@@ -63,27 +69,70 @@ std::vector<std::string> mass_scaled_bodies(const Model& model, const ExplicitSo
   return names;
 }
 
+// The restart tests' way to die like a killed process at a chosen moment, from the environment
+// (never set in normal use): TACTUS_KILL_AT="step:N" (at the start of step N) or
+// "checkpoint:K:PHASE" (while writing this process's K-th checkpoint, PHASE one of begin, data,
+// written, renamed; core/state_file.hpp): the process raises SIGKILL on itself. "interrupt:N":
+// a SIGTERM as the interrupt watcher would take it, at the start of step N.
+struct KillHook {
+  long step = -1, checkpoint = -1, interrupt = -1;
+  std::string phase;
+  KillHook() {
+    const char* spec = std::getenv("TACTUS_KILL_AT");
+    if (!spec) return;
+    const std::string s = spec;
+    char buf[32] = {};
+    if (std::sscanf(s.c_str(), "step:%ld", &step) == 1 || std::sscanf(s.c_str(), "interrupt:%ld", &interrupt) == 1) return;
+    if (std::sscanf(s.c_str(), "checkpoint:%ld:%31s", &checkpoint, buf) == 2) phase = buf;
+  }
+  void at_step(std::size_t n) const {
+    if (step >= 0 && n == static_cast<std::size_t>(step)) raise(SIGKILL);
+    if (interrupt >= 0 && n == static_cast<std::size_t>(interrupt)) request_interrupt_for_testing(SIGTERM);
+  }
+  void at_checkpoint(std::size_t k, const char* p) const {
+    if (checkpoint >= 0 && k == static_cast<std::size_t>(checkpoint) && phase == p) raise(SIGKILL);
+  }
+};
+
+// The length of the history a checkpoint continues from.
+std::uintmax_t history_length(const RestartPoint* from) {
+  if (!from) return HistoryWriter::kNew;
+  StateArchive a(from->state, from->file.string());
+  std::size_t bytes = 0;
+  a.io("loop.history_bytes", bytes);
+  return bytes;
+}
+
 // The steps of one run and what they write as they go.
 class RunLoop {
  public:
-  RunLoop(const Scenario& sc, const Model& model, ExplicitSolver& solver, const fs::path& folder, double est_steps)
+  RunLoop(const Scenario& sc, const Model& model, ExplicitSolver& solver, OutputFolder& out, double est_steps, const RunIdentity& identity,
+          const RestartPoint* from)
       : sc_(sc),
         model_(model),
         solver_(solver),
-        folder_(folder),
-        history_(folder / "history.csv", model.boundaries, mass_scaled_bodies(model, solver)),
+        out_(out),
+        folder_(out.path()),
+        identity_(identity),
+        history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from)),
         history_every_(sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
                                                 : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000))),
-        progress_("solve", static_cast<std::size_t>(est_steps) + 1) {
+        progress_("solve", static_cast<std::size_t>(est_steps) + 1),
+        next_checkpoint_time_(sc.run.checkpoint_interval),
+        last_checkpoint_wall_(std::chrono::steady_clock::now()) {
     summary_.dt_min = std::numeric_limits<double>::infinity();
     summary_.von_mises_peak.assign(model.blocks.size(), 0.0);
+    if (from) restore(*from);
   }
 
-  // Steps to the end time; a numerical failure writes the last good state and is returned.
+  // Steps to the end time; a numerical failure writes the last good state and is returned. An
+  // interrupt with checkpoints on writes one first and keeps the staging folder for a restart.
   nlohmann::json run() {
     try {
       while (true) {
+        kill_.at_step(solver_.step_index());
         check_interrupt();
+        if (checkpoint_due()) write_checkpoint();
         solver_.advance_velocity();
         observe_step();
         solver_.check_energy();
@@ -100,6 +149,14 @@ class RunLoop {
       }
       summary_.status = "completed";
       return nullptr;
+    } catch (const Interrupted& e) {
+      if (!sc_.run.checkpoints()) throw;
+      write_checkpoint();
+      out_.keep_for_resume();
+      std::ostringstream kept;
+      kept << "checkpoint written at step " << solver_.step_index() << ", t = " << solver_.time() << " s, kept in " << out_.path().string()
+           << ": tactus-solve --restart " << out_.final_path().string() << " continues the run";
+      throw Interrupted(e.signal_number(), kept.str());
     } catch (const NumericalError& e) {
       summary_.status = "failed";
       // The last good state: u^{n-1} (before the failing update), with the half-step velocity.
@@ -126,8 +183,105 @@ class RunLoop {
 
   RunSummary& summary() { return summary_; }
   const RunPeaks& peaks() const { return peaks_; }
+  // The checkpoints are the run's own business: a finished run (completed or failed) drops them.
+  void drop_checkpoints() {
+    std::error_code ec;
+    fs::remove_all(folder_ / kResumableDir, ec);
+  }
 
  private:
+  bool checkpoint_due() {
+    const RunSpec& r = sc_.run;
+    if (r.checkpoint_interval > 0 && solver_.time() >= next_checkpoint_time_ && !solver_.finished()) {
+      while (next_checkpoint_time_ <= solver_.time()) next_checkpoint_time_ += r.checkpoint_interval;
+      return true;
+    }
+    return r.checkpoint_wall_interval > 0 &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint_wall_).count() >= r.checkpoint_wall_interval;
+  }
+
+  // checkpoints/checkpoint_<step>.h5 of the state at the start of this step (checkpoint.hpp); the
+  // newest two are kept.
+  void write_checkpoint() {
+    const std::size_t k = checkpoints_written_++;
+    kill_.at_checkpoint(k, "begin");
+    StateArchive a;
+    a.arrays().kind = kCheckpointKind;
+    identity_.io(a);
+    solver_.checkpoint(a);
+    loop_state(a);
+    const fs::path dir = folder_ / kResumableDir;
+    fs::create_directories(dir);
+    char name[48];
+    std::snprintf(name, sizeof name, "checkpoint_%012zu.h5", solver_.step_index());
+    write_state_file(dir / name, a.arrays(), [&](const char* phase) { kill_.at_checkpoint(k, phase); });
+    std::vector<fs::path> all;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().extension() == ".h5") all.push_back(e.path());
+    std::sort(all.begin(), all.end());
+    for (std::size_t i = 0; i + 2 < all.size(); ++i) fs::remove(all[i]);
+    last_checkpoint_wall_ = std::chrono::steady_clock::now();
+    log::debug() << "checkpoint at step " << solver_.step_index() << ", t = " << solver_.time() << " s: " << (dir / name).string();
+  }
+
+  // The loop's own part of a checkpoint (both directions).
+  void loop_state(StateArchive& a) {
+    std::size_t history_bytes = a.loading() ? 0 : history_.flush();
+    a.io("loop.history_bytes", history_bytes);
+    a.io("loop.next_output", next_out_);
+    std::vector<double> pvd_times;
+    std::string pvd_names;
+    for (const auto& [t, file] : pvd_) pvd_times.push_back(t), pvd_names += file + '\n';
+    a.io("loop.pvd_times", pvd_times), a.io("loop.pvd_files", pvd_names);
+    if (a.loading()) {
+      pvd_.clear();
+      std::istringstream names(pvd_names);
+      std::string file;
+      for (double t : pvd_times) std::getline(names, file), pvd_.emplace_back(t, file);
+    }
+    a.io("loop.next_checkpoint_time", next_checkpoint_time_);
+    a.io("loop.restarts", restarts_);
+    a.io("loop.summary.dt_min", summary_.dt_min), a.io("loop.summary.dt_max", summary_.dt_max);
+    a.io("loop.summary.max_relative_balance_error", summary_.max_relative_balance_error);
+    a.io("loop.summary.outputs", summary_.outputs);
+    a.io("loop.summary.von_mises_peak", summary_.von_mises_peak, summary_.von_mises_peak.size());
+    RunPeaks& p = peaks_;
+    for (auto [name, x] : {std::pair<const char*, double*>{"force", &p.force},
+                           {"force_time", &p.force_time},
+                           {"area", &p.area},
+                           {"area_time", &p.area_time},
+                           {"pressure", &p.pressure},
+                           {"pressure_time", &p.pressure_time},
+                           {"step_pressure", &p.step_pressure},
+                           {"step_pressure_time", &p.step_pressure_time}})
+      a.io(std::string("loop.peaks.") + name, *x);
+    a.io_record("loop.peaks.pressure_at", p.pressure_at);
+    a.io("loop.peaks.pressure_node", p.pressure_node), a.io("loop.peaks.max_iterations", p.max_iterations);
+    a.io("loop.peaks.unconverged_steps", p.unconverged_steps), a.io("loop.peaks.contact_steps", p.contact_steps);
+    a.io("loop.peaks.von_mises", p.von_mises), a.io("loop.peaks.reaction_peak", p.reaction_peak);
+    a.io("loop.peaks.reaction_peak_time", p.reaction_peak_time), a.io("loop.peaks.reaction_peak_force", p.reaction_peak_force);
+    a.io_records("loop.peaks.pairs", p.pairs), a.io_records("loop.peaks.at_outputs", p.at_outputs);
+  }
+
+  // Continues from a checkpoint: the state, the bookkeeping, and the results folder as it was
+  // then (states written after it, and half-written files of the killed process, go).
+  void restore(const RestartPoint& from) {
+    StateArchive a(from.state, from.file.string());
+    solver_.checkpoint(a);
+    loop_state(a);
+    restarts_.push_back(static_cast<double>(from.step)), restarts_.push_back(from.time);
+    std::error_code ec;
+    for (auto it = fs::directory_iterator(folder_ / "results", ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      unsigned index = 0;
+      const bool later_state = std::sscanf(name.c_str(), "state_%u.vtu", &index) == 1 && index >= next_out_;
+      if (later_state || name.find(".partial-") != std::string::npos) fs::remove(it->path());
+    }
+    for (const auto& e : fs::directory_iterator(folder_ / kResumableDir))
+      if (e.path().filename().string().find(".partial-") != std::string::npos) fs::remove(e.path());
+    log::info() << "continuing from " << from.file.string() << ": step " << from.step << ", t = " << from.time << " s";
+  }
+
   bool scheduled() const { return next_out_ < solver_.schedule().size() && solver_.time() == solver_.schedule()[next_out_]; }
 
   // Peaks, the Uzawa warning and the history row of the state just computed (t^n).
@@ -177,7 +331,9 @@ class RunLoop {
   const Scenario& sc_;
   const Model& model_;
   ExplicitSolver& solver_;
+  OutputFolder& out_;
   fs::path folder_;
+  RunIdentity identity_;
   HistoryWriter history_;
   std::size_t history_every_;
   Progress progress_;
@@ -185,11 +341,19 @@ class RunLoop {
   RunPeaks peaks_;
   std::vector<std::pair<double, std::string>> pvd_;
   std::size_t next_out_ = 0;
+  double next_checkpoint_time_;
+  std::chrono::steady_clock::time_point last_checkpoint_wall_;
+  std::size_t checkpoints_written_ = 0;  // by this process
+  std::vector<double> restarts_;         // step and time of each restart, in pairs
+  KillHook kill_;
+
+ public:
+  const std::vector<double>& restarts() const { return restarts_; }
 };
 
 }  // namespace
 
-RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
+RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIdentity& identity, const RestartPoint* from) {
   const auto wall_start = std::chrono::steady_clock::now();
   const Model model = build_model(sc);
   log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size() << " materials, "
@@ -203,9 +367,12 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged) {
   const double est_steps = check_runaway(sc, model, solver, staged);
 
   fs::create_directories(staged.path() / "results");
-  RunLoop loop(sc, model, solver, staged.path(), est_steps);
+  RunLoop loop(sc, model, solver, staged, est_steps, identity, from);
   const nlohmann::json failure = loop.finish(loop.run());
+  loop.drop_checkpoints();
   RunSummary& summary = loop.summary();
+  for (std::size_t k = 0; k + 1 < loop.restarts().size(); k += 2)
+    summary.restarts.push_back({static_cast<std::size_t>(loop.restarts()[k]), loop.restarts()[k + 1]});
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary.run_json = run_json(sc, model, solver, summary, loop.peaks(), failure);
   std::ofstream(staged.path() / "run.json") << summary.run_json.dump(2) << '\n';

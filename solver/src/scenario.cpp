@@ -60,7 +60,14 @@ const SectionSpec& run_section() {
                   0, false),
            "0 (off)"),
        opt(number("added_mass_limit", "", "stop the run when mass scaling has added more than this fraction of a body's mass", 0, true, 1, false),
-           "0.01")}};
+           "0.01"),
+       opt(number("checkpoint_interval", "s",
+                  "write a restart checkpoint every this much simulated time (and on an interrupt); tactus-solve --restart OUT "
+                  "continues a killed run from the newest (0: off)",
+                  0, false),
+           "0 (off)"),
+       opt(number("checkpoint_wall_interval", "s", "also write a checkpoint every this many seconds of wall-clock time (0: off)", 0, false),
+           "0 (off)")}};
   return s;
 }
 
@@ -425,6 +432,8 @@ void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
     run.max_steps = r.number(t, *spec.find("max_steps"), "run", 1e7);
     run.minimum_time_step = r.number(t, *spec.find("minimum_time_step"), "run", 0);
     run.added_mass_limit = r.number(t, *spec.find("added_mass_limit"), "run", 0.01);
+    run.checkpoint_interval = r.number(t, *spec.find("checkpoint_interval"), "run", 0);
+    run.checkpoint_wall_interval = r.number(t, *spec.find("checkpoint_wall_interval"), "run", 0);
     for (double time : run.output_times)
       if (time > run.end_time) r.fail("run.output_times", "times <= run.end_time", std::to_string(time));
     // Counted before anything is built: an interval of 1e-9 s over 1000 s is 10^12 states.

@@ -7,9 +7,11 @@
 #   3. a run that ends before the bodies meet: the report says no contact occurred;
 #   4. a stage failing mid-way (bad scenario): the pipeline names it, earlier outputs stay;
 #   5. a results folder with a missing state file: tactus-post refuses it, naming the file;
-#   6. interrupts: SIGTERM during the solve stops it cleanly (no partial folder, the stale report
-#      removed, pipeline.json "interrupted"); a second pipeline on a locked folder is refused;
-#      a folder tactus did not write is refused as the work folder.
+#   6. interrupts: SIGTERM during the solve stops it cleanly (the stale report removed,
+#      pipeline.json "interrupted"; the scenario writes checkpoints, so the solve keeps its newest
+#      in its staging folder and nothing else is left) and the next pipeline run continues the
+#      solve from it; a second pipeline on a locked folder is refused; a folder tactus did not
+#      write is refused as the work folder.
 # Usage: e2e.sh <build dir>
 set -euo pipefail
 BUILD=$(cd "$1" && pwd)
@@ -83,9 +85,17 @@ cat "$T/sixth.err"
 grep -q "interrupted" "$T/sixth.err" || fail "no interrupt message"
 "$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='interrupted' and j['failed_stage']=='solve' else 1)" \
   || fail "pipeline.json does not record the interrupt"
-[ -z "$(find "$T/work" -name '*.partial-*')" ] || fail "partial output left: $(find "$T/work" -name '*.partial-*')"
+kept=$(find "$T/work" -name '*.partial-*')
+[ "$(echo "$kept" | wc -w)" = 1 ] && [ -d "$kept/checkpoints" ] && ls "$kept"/checkpoints/checkpoint_*.h5 > /dev/null ||
+  fail "expected only the stopped solve's staging folder with its checkpoint, found: $kept"
 [ ! -e "$T/work/report" ] || fail "the old report was left looking current"
 pgrep -f "tactus-solve.*$T/work" > /dev/null && fail "the solver is still running"
+"$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/work" --end-time 2e-3 \
+  --mesh-args "$MESH_ARGS" --object "$OBJECT" -q > "$T/resumed.log"
+grep -q "continuing from .*checkpoint_" "$T/work/.pipeline/solve.log" || fail "the solve did not continue from its checkpoint"
+grep -o "continuing from .*" "$T/work/.pipeline/solve.log"
+"$PY" "$SRC/tests/pipeline/check_report.py" "$T/work/solve" "$T/work/report" --expect-contact
+[ -z "$(find "$T/work" -name '*.partial-*')" ] || fail "partial output left after the resumed run"
 mkdir -p "$T/mine" && echo "my notes" > "$T/mine/notes.txt"
 if "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/mine" -q 2> "$T/foreign.err"; then
   fail "a foreign folder was used"

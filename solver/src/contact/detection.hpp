@@ -25,6 +25,14 @@ struct BuildSnapshot {
   bool holds(const double* x, double band, double reach, int threads) const;
 };
 
+// A mortar row as integrated (contact/mortar.cpp), kept until the next integration.
+struct MortarRow {
+  std::int32_t slave_index, slave_node;
+  std::size_t begin, end;  // its masters and weights
+  std::array<double, 3> n;
+  double gap, along_normal, area;  // h and n . (x_j - sum_k w_k x_k) when integrated
+};
+
 struct DetectionScratch {
   struct Grid {
     double lo[3]{}, cell = 1;
@@ -49,6 +57,16 @@ struct DetectionScratch {
   std::vector<std::int32_t> candidate_start, candidates;  // per slave node, CSR
   std::vector<std::int32_t> active_triangles;             // the triangles whose normals the lists need, sorted
   std::size_t builds = 0, searches = 0;                   // list builds (mortar: integrations), and steps searched
+
+  // A mortar pair's rows as last integrated, and where its nodes were then: the rows hold (their
+  // gaps following the nodes' motion) until a node has moved a reach since.
+  struct Mortar {
+    std::vector<MortarRow> rows;
+    std::vector<std::int32_t> masters;
+    std::vector<double> weights;
+    BuildSnapshot integrated;
+    std::vector<std::size_t> slave_local;  // each slave triangle's nodes as positions in the pair's slave_nodes
+  } mortar;
 };
 
 // A uniform grid over the triangles (3 node ids each, outward) at positions x, each triangle in

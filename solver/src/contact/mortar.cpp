@@ -186,14 +186,6 @@ constexpr std::size_t kChunks = 64;
 // between, as the band reaches 50 %.
 constexpr double kMortarRefresh = 0.02;
 
-// A row as integrated, kept until the next integration.
-struct MortarRow {
-  std::int32_t slave_index, slave_node;
-  std::size_t begin, end;  // its masters and weights
-  Vec3 n;
-  double gap, along_normal, area;  // h and n . (x_j - sum_k w_k x_k) when integrated
-};
-
 class MortarSurface final : public ContactMaster {
  public:
   explicit MortarSurface(std::vector<std::int32_t> triangles) : triangles_(std::move(triangles)) {}
@@ -204,24 +196,19 @@ class MortarSurface final : public ContactMaster {
 
  private:
   std::vector<std::int32_t> triangles_;  // 3 per triangle, outward
-  // Per-step storage, reused (detect is called by one thread per pair and step).
+  // Storage of one integration, reused (detect is called by one thread per pair and step); what
+  // lasts from one step to the next is the pair's (DetectionScratch::mortar).
   mutable std::vector<NodeIntegrals> integrals_;
   mutable std::vector<SegmentChunk> chunks_;
   mutable std::vector<std::vector<std::size_t>> seen_;  // per thread and master triangle: the last slave triangle that tried it
-  mutable std::vector<std::int32_t> masters_;
-  mutable std::vector<double> weights_;
-  mutable std::vector<MortarRow> integrated_rows_;
-  mutable BuildSnapshot integrated_;  // where the pair's nodes were at the last integration
-  mutable std::vector<std::size_t> slave_local_;
-  mutable std::vector<char> over_;  // per slave node: its own position is over a master triangle
-  void emit_rows(std::int32_t pi, const double* x, ContactRows& rows) const;
-  void segments_of(const ContactPair& p, std::size_t st, const double* x, double band, const DetectionScratch::Grid& g,
-                   std::vector<std::size_t>& seen, SegmentChunk& w) const;
+  mutable std::vector<char> over_;                      // per slave node: its own position is over a master triangle
+  void segments_of(const ContactPair& p, const std::vector<std::size_t>& slave_local, std::size_t st, const double* x, double band,
+                   const DetectionScratch::Grid& g, std::vector<std::size_t>& seen, SegmentChunk& w) const;
 };
 
 // The mortar segments of slave triangle st with the master triangles near it, integrated.
-void MortarSurface::segments_of(const ContactPair& p, std::size_t st, const double* x, double band, const DetectionScratch::Grid& g,
-                                std::vector<std::size_t>& seen, SegmentChunk& w) const {
+void MortarSurface::segments_of(const ContactPair& p, const std::vector<std::size_t>& slave_local, std::size_t st, const double* x, double band,
+                                const DetectionScratch::Grid& g, std::vector<std::size_t>& seen, SegmentChunk& w) const {
   const std::int32_t* sv = &p.slave_triangles[3 * st];
   const double* xs[3] = {x + 3 * sv[0], x + 3 * sv[1], x + 3 * sv[2]};
   int lo[3], hi[3];
@@ -314,7 +301,7 @@ void MortarSurface::segments_of(const ContactPair& p, std::size_t st, const doub
       }
   if (points.empty()) return;
   TriangleIntegrals ti;
-  for (std::size_t v = 0; v < 3; ++v) ti.node[v] = slave_local_[3 * st + v];
+  for (std::size_t v = 0; v < 3; ++v) ti.node[v] = slave_local[3 * st + v];
   ti.over = over;
   integrate_segments(points, ti, w.terms);
   w.triangles.push_back(ti);
@@ -328,24 +315,26 @@ double along_normal(const MortarRow& r, const std::vector<std::int32_t>& masters
   return dot(d, r.n);
 }
 
-void MortarSurface::emit_rows(std::int32_t pi, const double* x, ContactRows& rows) const {
-  for (const MortarRow& r : integrated_rows_)
-    rows.add(pi, r.slave_index, r.slave_node, masters_.data() + r.begin, weights_.data() + r.begin, static_cast<int>(r.end - r.begin), r.n,
-             r.gap + along_normal(r, masters_, weights_, x) - r.along_normal, r.area);
+// The pair's rows as integrated, each gap moved on by the row's own kinematics since.
+void emit_rows(const DetectionScratch::Mortar& m, std::int32_t pi, const double* x, ContactRows& rows) {
+  for (const MortarRow& r : m.rows)
+    rows.add(pi, r.slave_index, r.slave_node, m.masters.data() + r.begin, m.weights.data() + r.begin, static_cast<int>(r.end - r.begin), r.n,
+             r.gap + along_normal(r, m.masters, m.weights, x) - r.along_normal, r.area);
 }
 
 void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* x, double band, DetectionScratch& scratch, ContactRows& rows,
                            int threads) const {
   ++scratch.searches;
-  if (integrated_.holds(x, band, kMortarRefresh * p.search_scale, threads)) {
-    emit_rows(pi, x, rows);
+  DetectionScratch::Mortar& state = scratch.mortar;
+  if (state.integrated.holds(x, band, kMortarRefresh * p.search_scale, threads)) {
+    emit_rows(state, pi, x, rows);
     return;
   }
   ++scratch.builds;  // an integration
   DetectionScratch::Grid& g = scratch.grid;
   build_triangle_grid(triangles_, p.search_scale, x, band, g);
   const std::size_t S = p.slave_nodes.size(), T = triangles_.size() / 3, ST = p.slave_triangles.size() / 3;
-  std::vector<std::size_t>& local = slave_local_;  // each slave triangle's nodes as positions in slave_nodes, once
+  std::vector<std::size_t>& local = state.slave_local;  // once per pair
   if (local.size() != p.slave_triangles.size()) {
     local.resize(p.slave_triangles.size());
     for (std::size_t i = 0; i < local.size(); ++i)
@@ -364,7 +353,7 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
     SegmentChunk& w = chunks_[c];
     w.triangles.clear(), w.terms.clear();
     std::vector<std::size_t>& seen = seen_[static_cast<std::size_t>(nt > 1 ? omp_get_thread_num() : 0)];
-    for (std::size_t st = ST * c / chunks; st < ST * (c + 1) / chunks; ++st) segments_of(p, st, x, band, g, seen, w);
+    for (std::size_t st = ST * c / chunks; st < ST * (c + 1) / chunks; ++st) segments_of(p, local, st, x, band, g, seen, w);
   }
   std::vector<NodeIntegrals>& node = integrals_;  // kept between steps: no allocation once grown
   node.resize(S);
@@ -382,7 +371,9 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
       for (std::size_t i = ti.terms_begin; i < ti.terms_end; ++i)
         node[ti.node[static_cast<std::size_t>(w.terms[i].vertex)]].add_master(w.terms[i].master, w.terms[i].value);
     }
-  masters_.clear(), weights_.clear(), integrated_rows_.clear();
+  std::vector<std::int32_t>& masters = state.masters;
+  std::vector<double>& weights = state.weights;
+  masters.clear(), weights.clear(), state.rows.clear();
   for (std::size_t k = 0; k < S; ++k) {
     const NodeIntegrals& ni = node[k];
     const double nn = norm(ni.N);
@@ -396,14 +387,14 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
     // resolve; over the covered sliver alone its pressure grew without bound (2.8 GPa in one step
     // on the hand). A node at least half covered reports r_n / D_j exactly (the patch tests).
     const double area = std::max(ni.D, 0.5 * p.slave_area[k]);
-    MortarRow r{static_cast<std::int32_t>(k), p.slave_nodes[k], masters_.size(), 0, {ni.N[0] / nn, ni.N[1] / nn, ni.N[2] / nn}, ni.G / ni.D, 0, area};
-    for (const auto& [m, v] : ni.M) masters_.push_back(m), weights_.push_back(-v / ni.D);
-    r.end = masters_.size();
-    r.along_normal = along_normal(r, masters_, weights_, x);
-    integrated_rows_.push_back(r);
+    MortarRow r{static_cast<std::int32_t>(k), p.slave_nodes[k], masters.size(), 0, {ni.N[0] / nn, ni.N[1] / nn, ni.N[2] / nn}, ni.G / ni.D, 0, area};
+    for (const auto& [m, v] : ni.M) masters.push_back(m), weights.push_back(-v / ni.D);
+    r.end = masters.size();
+    r.along_normal = along_normal(r, masters, weights, x);
+    state.rows.push_back(r);
   }
-  integrated_.record(p, triangles_, x, band);
-  emit_rows(pi, x, rows);
+  state.integrated.record(p, triangles_, x, band);
+  emit_rows(state, pi, x, rows);
 }
 
 }  // namespace

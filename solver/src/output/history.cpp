@@ -61,8 +61,21 @@ static_assert(columns_follow_the_contract(), "history.csv columns must follow co
 }  // namespace
 
 HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
-                             const std::vector<std::string>& mass_scaled_bodies)
-    : out_(file), file_(file), boundaries_(boundaries.size()), mass_scaled_bodies_(mass_scaled_bodies.size()) {
+                             const std::vector<std::string>& mass_scaled_bodies, std::uintmax_t resume_at)
+    : file_(file), boundaries_(boundaries.size()), mass_scaled_bodies_(mass_scaled_bodies.size()) {
+  if (resume_at != kNew) {
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec || size < resume_at)
+      throw InputError(file.string(), "", std::to_string(resume_at) + " bytes of history (as when the checkpoint was written)",
+                       ec ? "no file" : std::to_string(size) + " bytes");
+    std::filesystem::resize_file(file, resume_at, ec);  // the rows after the checkpoint go: they are computed again
+    if (ec) throw WriteError(file.string(), "cannot cut the history back to the checkpoint (" + ec.message() + ")");
+    out_.open(file, std::ios::app);
+    out_ << std::setprecision(17);
+    return;
+  }
+  out_.open(file);
   for (std::size_t k = 0; k < kColumns.size(); ++k) out_ << (k ? "," : "") << kColumns[k].spec->name;
   for (const auto& b : boundaries)
     for (const auto* family : h::per_boundary)
@@ -82,6 +95,14 @@ void HistoryWriter::write(const HistoryRow& row) {
   }
   for (std::size_t b = 0; b < mass_scaled_bodies_; ++b) out_ << ',' << (row.added_mass ? (*row.added_mass)[b] : 0.0);
   out_ << '\n';
+}
+
+std::uintmax_t HistoryWriter::flush() {
+  out_.flush();
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(file_, ec);
+  if (out_.fail() || ec) throw WriteError(file_.string(), "the file system refused the history");
+  return size;
 }
 
 void HistoryWriter::close() {

@@ -39,9 +39,14 @@ class HistoryWriter {
  public:
   // `boundaries`: the model's, for the reaction columns after the fixed ones; `mass_scaled_bodies`:
   // with mass scaling on, the bodies' names, for an added_mass_<body> column each after those.
+  // `resume_at`: continue a history written up to that many bytes (a restart): the file is cut
+  // there and appended to; InputError when it is shorter.
+  static constexpr std::uintmax_t kNew = static_cast<std::uintmax_t>(-1);
   HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
-                const std::vector<std::string>& mass_scaled_bodies = {});
+                const std::vector<std::string>& mass_scaled_bodies = {}, std::uintmax_t resume_at = kNew);
   void write(const HistoryRow& row);
+  // Hands every row written so far to the file system and returns the file's length (a checkpoint's row).
+  std::uintmax_t flush();
   void close();
 
  private:

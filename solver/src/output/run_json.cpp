@@ -110,6 +110,11 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j[k::nodes] = model.num_nodes;
   j[k::tets] = model.num_elements;
   j["threads"] = solver.threads();
+  if (sc.run.checkpoints() || !summary.restarts.empty()) {
+    nlohmann::json from = nlohmann::json::array();
+    for (const auto& [step, time] : summary.restarts) from.push_back({{"step", step}, {"time", time}});
+    j["checkpoints"] = {{"interval", sc.run.checkpoint_interval}, {"wall_interval", sc.run.checkpoint_wall_interval}, {"restarted_from", from}};
+  }
   j[k::steps] = summary.steps;
   j[k::end_time] = summary.end_time;
   j[k::output_times] = solver.schedule();

@@ -17,6 +17,8 @@ namespace tactus {
 class Interrupted : public Error {
  public:
   explicit Interrupted(int signal_number);
+  // When the tool kept something on purpose (a run's checkpoint): says what instead of "partial output removed".
+  Interrupted(int signal_number, const std::string& what_was_kept);
   int signal_number() const noexcept { return signal_; }
   int exit_code() const noexcept { return 128 + signal_; }
 

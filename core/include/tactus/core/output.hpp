@@ -17,7 +17,8 @@
 // output may not be the current folder, nor any input, nor a folder containing an input.
 //
 // Stale staging folders of dead processes (a killed run) are removed by the next run that writes
-// the same output.
+// the same output, except those holding a `checkpoints/` folder (kResumableDir): a killed solve
+// that can be continued (tactus-solve --restart OUT) is never thrown away.
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -34,13 +35,16 @@ struct OutputRules {
 // Marker file names.
 inline constexpr const char* kFolderMarker = ".tactus-output.json";
 inline constexpr const char* kFilesMarker = ".tactus-outputs.json";
+inline constexpr const char* kResumableDir = "checkpoints";
 
 class OutputFolder {
  public:
   // Checks the rules and that the place is writable, creates the staging folder (throws
   // InputError / WriteError naming the path otherwise). Nothing at `folder` is touched yet.
-  OutputFolder(std::filesystem::path folder, OutputRules rules);
-  ~OutputFolder();  // removes the staging folder unless committed
+  // `resume`: continue in the staging folder of a killed run of the same tool writing `folder`
+  // (one of resumable_staging()), which becomes this process's.
+  OutputFolder(std::filesystem::path folder, OutputRules rules, const std::filesystem::path& resume = {});
+  ~OutputFolder();  // removes the staging folder unless committed or kept
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
 
@@ -51,12 +55,18 @@ class OutputFolder {
   // Records every file in the marker and moves the folder into place (replacing the previous
   // output of this tool, re-checked now: the run may have taken hours).
   void commit();
+  // Leaves the staging folder in place when the process ends without committing (an interrupted
+  // run with a checkpoint in it, to be continued later).
+  void keep_for_resume();
 
  private:
   std::filesystem::path final_, staging_;
   OutputRules rules_;
-  bool committed_ = false;
+  bool committed_ = false, kept_ = false;
 };
+
+// The staging folders of killed runs of `tool` writing `folder` that hold a kResumableDir, in name order.
+std::vector<std::filesystem::path> resumable_staging(const std::filesystem::path& folder, const std::string& tool);
 
 class OutputFiles {
  public:

@@ -27,6 +27,10 @@
 
 #include "tactus/solver/scenario.hpp"
 
+namespace tactus {
+class StateArchive;
+}
+
 namespace tactus::solver {
 
 struct Model;
@@ -218,6 +222,10 @@ class ContactSolver {
     Vec3 at{0, 0, 0};  // the centre node's current position
   };
   AveragedPressure averaged_peak_pressure(const double* u, double sensor_area) const;
+
+  // Saves or restores what the next step reads: the warm-start reactions, the windowed pressures
+  // and each pair's search state (Verlet lists, grid, mortar rows and where they were built).
+  void checkpoint(StateArchive& archive);
 
  private:
   void detect(const double* u, double search_factor);

@@ -17,6 +17,10 @@
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/scenario.hpp"
 
+namespace tactus {
+class StateArchive;
+}
+
 namespace tactus::solver {
 
 struct Energies {
@@ -86,6 +90,13 @@ class ExplicitSolver {
   const std::vector<double>& body_mass() const { return body_mass_; }
   const Vec3& added_momentum() const { return added_momentum_; }
   const std::vector<double>& nodal_mass() const { return mass_; }  // the model's plus the added, per node
+
+  // Saves (or, loading, restores) everything the next step reads: the state at t^n between
+  // advance_position() and advance_velocity() - u^n, v^{n-1/2}, the forces and stress pass at u^n,
+  // the step sequence, the pending energy halves, the added masses, the loading and the contact
+  // solver's warm starts and searches (checkpoint.cpp). A solver built from the same model and run
+  // settings and then loaded continues bit for bit as the one that saved.
+  void checkpoint(StateArchive& archive);
 
  private:
   void stress_pass();

@@ -11,7 +11,8 @@
 //                                  energy balance, material and body names, contact peaks
 // The folder is staged (OutputFolder) and moved into place when the run ends. A numerical failure
 // still publishes it, with the last good state written and run.json saying "failed" and why; an
-// interrupt publishes nothing.
+// interrupt publishes nothing (with checkpoints on, it writes one and keeps the staging folder
+// for tactus-solve --restart; checkpoint.hpp).
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -31,11 +32,17 @@ struct RunSummary {
   double max_relative_balance_error = 0;  // max over steps of |error| / scale
   std::size_t outputs = 0;
   std::vector<double> von_mises_peak;  // per material block, over the output states
-  nlohmann::json run_json;             // what run.json holds
+  // Each restart of this run (tactus-solve --restart): the step and time it continued from.
+  std::vector<std::pair<std::size_t, double>> restarts;
+  nlohmann::json run_json;  // what run.json holds
 };
 
+struct RunIdentity;
+struct RestartPoint;
 // Writes into `out` (checks its free space against the estimated size first) and commits it.
-RunSummary run_simulation(const Scenario& scenario, OutputFolder& out);
+// `identity` goes into its checkpoints (checkpoint.hpp); `from`: continue from that checkpoint
+// (in `out`'s staging folder).
+RunSummary run_simulation(const Scenario& scenario, OutputFolder& out, const RunIdentity& identity, const RestartPoint* from = nullptr);
 // The same into a new folder (tests, benchmarks).
 RunSummary run_simulation(const Scenario& scenario, const std::filesystem::path& output_dir);
 // Every file a scenario reads (the scenario, meshes, fibre files): inputs an output may not replace.

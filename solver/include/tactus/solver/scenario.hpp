@@ -34,6 +34,10 @@ struct RunSpec {
   // (0: off); the run stops when a body's added mass exceeds added_mass_limit of its mass.
   double minimum_time_step = 0;
   double added_mass_limit = 0.01;
+  // Restart checkpoints (checkpoint.hpp): every checkpoint_interval of simulated time and every
+  // checkpoint_wall_interval of wall-clock time (0: off), and on an interrupt when either is on.
+  double checkpoint_interval = 0, checkpoint_wall_interval = 0;
+  bool checkpoints() const { return checkpoint_interval > 0 || checkpoint_wall_interval > 0; }
 };
 
 struct DampingSpec {
