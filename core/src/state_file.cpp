@@ -200,9 +200,9 @@ StateArrays read_state_file(const fs::path& file, const std::string& kind) {
 std::string content_digest(const std::vector<fs::path>& files) {
   Checksum c;
   std::vector<char> buffer(1 << 20);
-  for (const fs::path& f : files) {
-    const std::string name = f.string();
-    c.add(name.data(), name.size() + 1);
+  for (const fs::path& f : files) {  // the bytes only: the same file named another way is the same input
+    const std::uint64_t separator = 0x7461637475732d2dULL;
+    c.add(&separator, sizeof separator);
     std::FILE* in = std::fopen(f.c_str(), "rb");
     if (!in) {
       c.add("<missing>", 9);

@@ -26,6 +26,7 @@
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/mesh.hpp"
+#include "tactus/core/state_file.hpp"
 #include "tactus/core/volume.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/data_samples/phantom.hpp"
@@ -213,6 +214,16 @@ std::vector<Target> make_targets(const fs::path& work) {
                    LabelTable lt;
                    read_h5<std::uint8_t>(d / "labels.h5", "/labels", &lt);
                  }});
+  }
+  {  // a restart checkpoint (core/state_file.hpp, as tactus-solve writes them)
+    StateArrays state;
+    state.kind = "tactus-solve checkpoint";
+    for (int i = 0; i < 200; ++i) state.reals["integrator.u"].push_back(1e-4 * i), state.integers["contact.pair0.candidates"].push_back(i % 17);
+    state.records["run.scenario"] = "/cases/s.toml";
+    const fs::path f = work / "checkpoint" / "checkpoint_000000000100.h5";
+    fs::create_directories(f.parent_path());
+    write_state_file(f, state);
+    t.push_back({"checkpoint", f, false, [f] { read_state_file(f, "tactus-solve checkpoint"); }});
   }
   {  // a results folder: run.json, history.csv, a state .vtu
     const fs::path d = work / "results";

@@ -38,8 +38,8 @@ void write_state_file(const std::filesystem::path& file, const StateArrays& stat
 // its arrays do not match their checksum.
 StateArrays read_state_file(const std::filesystem::path& file, const std::string& kind);
 
-// A digest (64-bit FNV-1a, hex) of the files' bytes in order, to tell whether inputs changed;
-// a missing file counts as "<missing>".
+// A digest (64-bit FNV-1a, hex) of the files' bytes in order (not their names), to tell whether
+// inputs changed; a missing file counts as "<missing>".
 std::string content_digest(const std::vector<std::filesystem::path>& files);
 
 class StateArchive {
