@@ -354,6 +354,38 @@ void add_pressure_loads(const Scenario& sc, Model& m) {
   }
 }
 
+// The bodies' spins (initial_angular_velocity, about each body's centre of mass) and their rigid
+// pieces' prescribed motion (rigid.hpp), on input numbering.
+void add_rigid_motion(const Scenario& sc, Model& m) {
+  for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) {
+    const BodySpec& spec = sc.bodies[bi];
+    BodyRange& body = m.bodies[bi];
+    const std::string key = "bodies[" + std::to_string(bi) + "]";
+    if (spec.rigid_velocity) {
+      body.rigid_prescribed = true;
+      body.rigid_velocity = *spec.rigid_velocity, body.rigid_angular_velocity = *spec.rigid_angular_velocity;
+      body.rigid_curve = curve_index(m, spec.rigid_curve);
+      if (!spec.rigid_curve.empty() && body.rigid_curve < 0)
+        throw InputError(sc.file.string(), key + ".rigid_curve", "the name of a [curves] entry", "\"" + spec.rigid_curve + "\"");
+    }
+    const Vec3& w = spec.initial_angular_velocity;
+    body.initial_angular_velocity = w;
+    if (w[0] == 0 && w[1] == 0 && w[2] == 0) continue;
+    double mass = 0;
+    Vec3 c{0, 0, 0};
+    for (std::size_t i = body.node_begin; i < body.node_end; ++i) {
+      mass += m.mass[i];
+      for (std::size_t d = 0; d < 3; ++d) c[d] += m.mass[i] * m.X[3 * i + d];
+    }
+    for (std::size_t d = 0; d < 3; ++d) c[d] /= mass;
+    for (std::size_t i = body.node_begin; i < body.node_end; ++i) {
+      const Vec3 r{m.X[3 * i] - c[0], m.X[3 * i + 1] - c[1], m.X[3 * i + 2] - c[2]};
+      const Vec3 v = cross(w, r);
+      for (std::size_t d = 0; d < 3; ++d) m.initial_velocity[3 * i + d] += v[d];
+    }
+  }
+}
+
 }  // namespace
 
 Model build_model(const Scenario& sc) {
@@ -388,6 +420,7 @@ Model build_model(const Scenario& sc) {
   apply_boundaries(sc, m);  // on input numbering, before reordering
   compute_element_geometry(m);
   lump_mass(m);
+  add_rigid_motion(sc, m);
   reorder_for_locality(m);
   add_scenario_contacts(m, sc);
   add_pressure_loads(sc, m);

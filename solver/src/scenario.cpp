@@ -92,6 +92,15 @@ const SectionSpec& body_section() {
        typed("rotate_about", ValueType::vec3, "m", "the point the rotation keeps fixed (scaled mesh coordinates)", false, "[0, 0, 0]"),
        typed("translate", ValueType::vec3, "m", "translation applied after scaling", false, "[0, 0, 0]"),
        typed("initial_velocity", ValueType::vec3, "m/s", "uniform initial velocity", false, "[0, 0, 0]"),
+       typed("initial_angular_velocity", ValueType::vec3, "rad/s",
+             "initial spin about the body's centre of mass: v = initial_velocity + w x (X - centre)", false, "[0, 0, 0]"),
+       typed("rigid_velocity", ValueType::vec3, "m/s",
+             "prescribed velocity of the centre of each rigid piece of this body (materials of type rigid); with "
+             "rigid_angular_velocity, the pieces move as given and their reaction is reported (default: free rigid pieces)",
+             false),
+       typed("rigid_angular_velocity", ValueType::vec3, "rad/s", "prescribed angular velocity of each rigid piece of this body, about its centre",
+             false),
+       typed("rigid_curve", ValueType::string, "", "a [curves] name scaling rigid_velocity and rigid_angular_velocity", false),
        typed("against", ValueType::string, "",
              "place this body next to an earlier body: after translate, it is moved along against_axis only, "
              "so that against_gap separates the two bounding boxes along that axis",
@@ -546,6 +555,14 @@ void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const f
       read_rotation(r, t, spec, path, b);
       b.translate = r.vec3(t, *spec.find("translate"), path, {0, 0, 0});
       b.initial_velocity = r.vec3(t, *spec.find("initial_velocity"), path, {0, 0, 0});
+      b.initial_angular_velocity = r.vec3(t, *spec.find("initial_angular_velocity"), path, {0, 0, 0});
+      if (t.contains("rigid_velocity") || t.contains("rigid_angular_velocity")) {
+        b.rigid_velocity = r.vec3(t, *spec.find("rigid_velocity"), path, {0, 0, 0});
+        b.rigid_angular_velocity = r.vec3(t, *spec.find("rigid_angular_velocity"), path, {0, 0, 0});
+      } else if (t.contains("rigid_curve")) {
+        r.fail(path + ".rigid_curve", "rigid_velocity or rigid_angular_velocity with it", "a curve alone");
+      }
+      b.rigid_curve = r.string(t, *spec.find("rigid_curve"), path);
       if (t.contains("fibres")) b.fibres = base / r.string(t, *spec.find("fibres"), path);
       if (t.contains("against")) {
         b.against = r.string(t, *spec.find("against"), path);

@@ -87,6 +87,7 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   std::size_t forces = 0, volumes = 0;
   for (std::size_t k = 0; k < model.blocks.size(); ++k) {
     const MaterialBlock& b = model.blocks[k];
+    if (b.material.rigid()) continue;  // moved as rigid bodies (time/rigid.cpp): no stress, no step limit
     const std::size_t n = b.end - b.begin,
                       parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
     for (std::size_t p = 0; p < parts; ++p) {

@@ -38,6 +38,7 @@ MaterialType make_material_type() {
     t.element_data_from_fields = &Law::element_data_from_fields;
     if constexpr (requires { Law::kElementDataAreDirections; }) t.element_data_is_directions = Law::kElementDataAreDirections;
   }
+  if constexpr (requires { Law::kRigid; }) t.rigid = Law::kRigid;
   if constexpr (requires { Law::result_fields(); }) {
     t.result_fields = Law::result_fields();
     t.result_values = [](const void* law, const Mat3& F, const double* data, double* out) {

@@ -6,7 +6,8 @@
   X(NeoHookean)             \
   X(LinearElastic)          \
   X(Hgo)                    \
-  X(MooneyRivlin)
+  X(MooneyRivlin)           \
+  X(Rigid)
 
 #define TACTUS_DECLARE(Law) const tactus::solver::MaterialType& tactus_material_##Law();
 TACTUS_MATERIALS(TACTUS_DECLARE)

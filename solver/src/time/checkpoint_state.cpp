@@ -9,6 +9,7 @@
 #include "tactus/core/state_file.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
+#include "tactus/solver/rigid.hpp"
 
 namespace tactus::solver {
 
@@ -90,6 +91,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
   a.io("integrator.next_target", next_target_);
   a.io("integrator.next_lands", next_lands_);
   a.io("integrator.velocity_advanced", velocity_advanced_);
+  checkpoint_rigid_bodies(a, rigid_);
   contact_.checkpoint(a);
 }
 

@@ -15,6 +15,7 @@
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/rigid.hpp"
 #include "tactus/solver/scenario.hpp"
 
 namespace tactus {
@@ -90,6 +91,8 @@ class ExplicitSolver {
   const std::vector<double>& body_mass() const { return body_mass_; }
   const Vec3& added_momentum() const { return added_momentum_; }
   const std::vector<double>& nodal_mass() const { return mass_; }  // the model's plus the added, per node
+  // Rigid bodies (rigid.hpp): centre and rotation at t^n, momenta at t^{n+1/2} after advance_velocity.
+  const std::vector<RigidBody>& rigid_bodies() const { return rigid_; }
 
   // Saves (or, loading, restores) everything the next step reads: the state at t^n between
   // advance_position() and advance_velocity() - u^n, v^{n-1/2}, the forces and stress pass at u^n,
@@ -115,6 +118,12 @@ class ExplicitSolver {
   double curve_at(std::int32_t curve, double t) const;
   // Sums support_force_ per boundary into reactions_, with the moments about their points (loading.cpp).
   void accumulate_reactions();
+  // Rigid bodies: the initial momenta and nodal velocities; each step's kick by the forces at t^n
+  // and drift to t^{n+1} (velocities of their nodes: the secant ones); their kinetic energy and
+  // mass-damping power at t^n (rigid.cpp, explicit.cpp).
+  void init_rigid_bodies();
+  void advance_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next);
+  double rigid_kinetic_energy(bool first) const;
 
   const Model& model_;
   RunSpec run_;
@@ -152,6 +161,13 @@ class ExplicitSolver {
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
   Energies energy_;
+  std::vector<RigidBody> rigid_;
+  std::vector<std::uint8_t> rigid_node_;  // per node: 1 when it moves with a rigid body
+  struct RigidStep {
+    Vec3d centre;
+    Mat3 rotation;
+  };
+  std::vector<RigidStep> rigid_next_;  // each body's centre and rotation at t^{n+1} (from advance_velocity)
 };
 
 }  // namespace tactus::solver

@@ -103,6 +103,8 @@ struct MaterialType {
   // Whether the element data is 3-vectors in the reference frame that rotate with a body (hgo's
   // fibre directions); a law with other element data cannot be used in a rotated body.
   bool element_data_is_directions = false;
+  // Its tets move as rigid bodies (time/rigid.cpp): no stress pass, no stable-step limit.
+  bool rigid = false;
   std::vector<ResultFieldSpec> result_fields;
 
   // Builds the law from validated values; `constants` receives its element data when the section
@@ -156,6 +158,7 @@ class Material {
   bool needs_element_data() const { return type_->element_data_size > 0 && constants_.empty(); }
   Formulation formulation() const { return formulation_; }
   bool anp() const { return formulation_ == Formulation::anp; }
+  bool rigid() const { return type_->rigid; }
 
   // P, W and modulus at F; `data`: this element's data (default: the constants).
   StressPoint evaluate(const Mat3& F, const double* data = nullptr) const;

@@ -38,6 +38,12 @@ struct BodyRange {
   std::size_t tet_begin = 0, tet_end = 0;
   std::size_t triangle_begin = 0, triangle_end = 0;
   std::size_t group_begin = 0, group_end = 0;  // its physical groups in input_mesh.groups
+  // Its rigid pieces (rigid.hpp): a prescribed velocity and angular velocity (about each piece's
+  // centre), scaled by curves[rigid_curve] (-1: constant).
+  Vec3 initial_angular_velocity{0, 0, 0};  // about the body's centre of mass (model.initial_velocity holds the field)
+  bool rigid_prescribed = false;
+  Vec3 rigid_velocity{0, 0, 0}, rigid_angular_velocity{0, 0, 0};
+  std::int32_t rigid_curve = -1;
 };
 
 struct Model {

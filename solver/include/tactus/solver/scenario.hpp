@@ -73,6 +73,10 @@ struct BodySpec {
   bool rotated = false;
   Vec3 translate{0, 0, 0};
   Vec3 initial_velocity{0, 0, 0};
+  Vec3 initial_angular_velocity{0, 0, 0};  // rad/s about the body's centre of mass: v = v0 + w x (X - c)
+  // Its rigid pieces' prescribed motion (rigid.hpp); either given: prescribed.
+  std::optional<Vec3> rigid_velocity, rigid_angular_velocity;
+  std::string rigid_curve;
   std::filesystem::path fibres;  // optional .vtu with per-tet cell data fibre_1, fibre_2
   // Placement against an earlier body: moved along one axis to leave against_gap between the
   // bounding boxes (e.g. the block 0.5 mm from the hand, whatever the hand mesh).

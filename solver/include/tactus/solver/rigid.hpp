@@ -1,0 +1,77 @@
+#pragma once
+// Rigid bodies (material type "rigid", materials/rigid.cpp): each connected piece of a body's
+// rigid tets is one rigid body with six degrees of freedom. Its mass, centre and inertia tensor
+// come from its tets (exact for linear tets of uniform density) plus the lumped masses that the
+// deformable tets around it put on the nodes they share with it; those nodes, and every node of
+// its tets, move with it: x_a = c + Q (X_a - c_0).
+//
+// Time integration, in the integrator's half-step form (explicit.hpp): the momentum P and the
+// spatial angular momentum L are kicked by the force and the moment (about c) of everything that
+// acts on the body's nodes at t^n - the deformable tets' internal forces on the shared nodes,
+// external loads, contact - with the same mass damping as the nodes:
+//   P^{n+1/2} = [(1 - alpha dtbar/2) P^{n-1/2} + dtbar F^n] / (1 + alpha dtbar/2), L likewise;
+// then c moves by dt P/m and Q by the free rotation under L over dt, split into exact rotations
+// about the principal axes, x(dt/2) y(dt/2) z(dt) y(dt/2) x(dt/2) (Dullweber, Leimkuhler &
+// McLachlan 1997): symplectic and time-reversible, it conserves L exactly (each sub-rotation
+// turns the body and its body-frame angular momentum together) and the energy without drift.
+// A body with a prescribed velocity and angular velocity (bodies.rigid_velocity,
+// rigid_angular_velocity, scaled by rigid_curve) moves by them; the force and moment that hold it
+// are its reaction.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tactus/solver/material.hpp"
+#include "tactus/solver/model.hpp"
+
+namespace tactus {
+class StateArchive;
+}
+
+namespace tactus::solver {
+
+struct RigidBody {
+  std::string name;                 // "hand/bone #3": the body, the material, the piece
+  std::size_t body = 0;             // model.bodies index
+  std::vector<std::int32_t> nodes;  // internal ids, ascending
+  std::vector<double> offset;       // per node, X_a - c_0 (3 each)
+  double mass = 0;
+  Vec3d centre0 = Vec3d::Zero();                                     // reference centre of mass
+  Mat3 inertia0 = Mat3::Zero();                                      // about centre0, reference frame
+  Mat3 axes = Mat3::Identity();                                      // principal axes of inertia0 (columns, right-handed)
+  Vec3d principal = Vec3d::Zero();                                   // principal moments
+  bool prescribed = false;                                           // moves with rigid_velocity / rigid_angular_velocity
+  Vec3d velocity = Vec3d::Zero(), angular_velocity = Vec3d::Zero();  // prescribed, before the curve
+  std::int32_t curve = -1;
+  // State: centre and rotation at t^n, momentum and spatial angular momentum at t^{n+1/2} (after
+  // advance_velocity; at t^{n-1/2} before it), and the previous half step's.
+  Vec3d centre = Vec3d::Zero();
+  Mat3 rotation = Mat3::Identity();
+  Vec3d momentum = Vec3d::Zero(), angular_momentum = Vec3d::Zero();
+  Vec3d momentum_before = Vec3d::Zero(), angular_momentum_before = Vec3d::Zero();
+  // The force and moment (about the centre) on it at t^n from everything but its support; for a
+  // prescribed body, the support's (the reaction).
+  Vec3d force = Vec3d::Zero(), moment = Vec3d::Zero();
+  Vec3d reaction_force = Vec3d::Zero(), reaction_moment = Vec3d::Zero();
+
+  // The world inertia tensor at the current rotation, and its inverse.
+  Mat3 inertia() const { return rotation * inertia0 * rotation.transpose(); }
+  Vec3d angular_velocity_of(const Vec3d& L) const;  // I(t)^-1 L
+  double kinetic_energy(const Vec3d& P, const Vec3d& L) const { return 0.5 * P.squaredNorm() / mass + 0.5 * L.dot(angular_velocity_of(L)); }
+};
+
+// The rigid bodies of a model, found from its rigid material blocks and its bodies' rigid_* keys,
+// at rest in the reference placement. InputError when a [[boundary]] constrains a node of a rigid
+// body (give the body's rigid_velocity instead).
+std::vector<RigidBody> find_rigid_bodies(const Model& model);
+
+// The free rotation over dt under the spatial angular momentum L (DLM splitting): the new rotation.
+Mat3 free_rotation(const RigidBody& body, const Mat3& rotation, const Vec3d& L, double dt);
+
+// Positions of a body's nodes at centre c and rotation Q, as displacements: u_a = c + Q o_a - X_a.
+void rigid_displacements(const RigidBody& body, const Model& model, const Vec3d& centre, const Mat3& rotation, double* u);
+
+void checkpoint_rigid_bodies(StateArchive& archive, std::vector<RigidBody>& bodies);
+
+}  // namespace tactus::solver

@@ -1,0 +1,34 @@
+// rigid: a material group (or a whole body, "*" = ...) that moves as rigid bodies, one per
+// connected piece of its tets (time/rigid.cpp): six degrees of freedom each, mass and inertia from
+// the tets and this density. Its tets carry no stress and do not limit the time step; the
+// deformable tets around them are tied to them through the nodes they share.
+#include "law.hpp"
+
+namespace tactus::solver {
+namespace {
+
+struct Rigid {
+  static constexpr const char* kName = "rigid";
+  static constexpr bool kRigid = true;
+  double density = 0;
+
+  static SectionSpec parameters() {
+    return {"",
+            "Rigid: each connected piece of these tets is one rigid body (6 degrees of freedom; mass, centre and inertia from the "
+            "tets); no stress, no limit on the time step.",
+            {number("density", "kg/m^3", "mass density", 0, true)}};
+  }
+  static Rigid create(const MaterialValues& v, const std::string&, std::vector<double>&) { return {parameter(v, "density")}; }
+  double small_strain_bulk() const { return 0; }
+  double small_strain_shear() const { return 0; }
+  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3&, const Mat3&, double, const double*) const {
+    StressPoint s;
+    s.P.setZero();
+    return s;
+  }
+};
+
+}  // namespace
+}  // namespace tactus::solver
+
+TACTUS_MATERIAL(Rigid)
