@@ -704,3 +704,75 @@ void sliding_over_a_coarser_slab(const std::string& method) {
 }  // namespace
 TEST(Contact, FrictionalSlidingOverACoarserSlabMortar) { sliding_over_a_coarser_slab("mortar"); }
 TEST(Contact, FrictionalSlidingOverACoarserSlabNodeToSurface) { sliding_over_a_coarser_slab("node_to_surface"); }
+
+// Oracle: Hertz's impact, the other way round: a rigid sphere (material type rigid) dropped on a
+// soft elastic block fixed at its base (E* = E / (1 - nu^2) of the block, m the sphere's mass):
+// duration 2.868 (m^2 / (R E*^2 v))^(1/5) and peak force (4/3) E* R^1/2 d^3/2 within 10 %, v chosen
+// so that the contact radius is 0.1 R. The block (40 x 40 x 20 mm, 20 contact radii wide) is graded
+// from 0.25 mm under the pole to 4 mm; its top is the slave, the rigid sphere the mortar master.
+TEST(Contact, RigidSphereDroppedOnASoftBlock) {
+  testkit::TempDir dir;
+  const double R = 0.01, E = 1e7, nu = 0.3, rho = 1000;
+  const double Es = E / (1 - nu * nu), d_target = 0.01 * R;
+  const double W = 0.04, H = 0.02;
+  TetMesh block;
+  {
+    GmshSession session;
+    gmsh::model::add("block");
+    const int vol = gmsh::model::occ::addBox(-W / 2, -W / 2, -H, W, W, H);
+    gmsh::model::occ::synchronize();
+    gmsh::model::addPhysicalGroup(3, {vol}, 1);
+    gmsh::model::setPhysicalName(3, 1, "block");
+    const double lo[3] = {-W / 2, -W / 2, -H}, hi[3] = {W / 2, W / 2, 0}, pole[3] = {0, 0, 0};
+    testkit::tag_box_plane_faces(vol, lo, hi);
+    testkit::graded_size_field(pole, 2.5e-4, 4e-3, 1.5e-3, 0.3);
+    block = testkit::generate_tet_mesh("block");
+  }
+  Scenario sc;
+  sc.file = dir.path() / "drop.toml";
+  sc.materials["soft"] = testkit::linear_elastic_instance("soft", E, nu, rho);
+  sc.materials["steel"] = MaterialInstance{"steel", "rigid", {{{"density", rho}}, {}}};
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "soft"));
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "sphere", graded_sphere(R, {0, 0, 1e-7}, 2.5e-4, 2.5e-3, 1.5e-3), "steel"));
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  ContactSpec c;
+  c.slave_body = "block", c.slave_surface = "zmax", c.master_body = "sphere", c.master_surface = "surface";
+  sc.contacts.push_back(c);
+  sc.contact_solver.tolerance = 1e-8;
+  sc.contact_solver.max_iterations = 1000;
+  sc.run.threads = 1;
+  const double m_sphere = rho * 4.0 / 3.0 * M_PI * R * R * R;
+  const double v = std::sqrt(std::pow(d_target, 2.5) * 16 * Es * std::sqrt(R) / (15 * m_sphere));
+  sc.bodies.back().initial_velocity = {0, 0, -v};
+  sc.run.end_time = 1.4 * 2.868 * std::pow(m_sphere * m_sphere / (R * Es * Es * v), 0.2);
+  const Model model = build_model(sc);
+  ExplicitSolver solver(model, sc.run, sc.damping);
+  ASSERT_EQ(solver.rigid_bodies().size(), 1u);
+  const RigidBody& ball = solver.rigid_bodies()[0];
+  // Hertz for the faceted sphere's own mass (1.8 % below the exact sphere's).
+  const double d_model = std::pow(15 * ball.mass * v * v / (16 * Es * std::sqrt(R)), 0.4);
+  const double F_model = 4.0 / 3.0 * Es * std::sqrt(R) * std::pow(d_model, 1.5);
+  const double T_model = 2.868 * std::pow(ball.mass * ball.mass / (R * Es * Es * v), 0.2);
+  double t_first = -1, t_last = -1, F_peak = 0, worst_balance = 0;
+  while (true) {
+    solver.advance_velocity();
+    const double F = solver.contact_report().normal_force;
+    if (F > 0) {
+      if (t_first < 0) t_first = solver.time();
+      t_last = solver.time();
+    }
+    F_peak = std::max(F_peak, F);
+    worst_balance = std::max(worst_balance, std::abs(solver.energies().balance_error()));
+    if (solver.finished()) break;
+    solver.advance_position();
+  }
+  const double e0 = 0.5 * m_sphere * v * v;
+  std::printf(
+      "rigid sphere on a soft block: %zu tets, %zu steps; mass %.5g kg (exact %.5g); duration %.4e s (Hertz %.4e, %+.1f %%), peak force %.4f N "
+      "(Hertz %.4f, %+.1f %%); rebound %.4f m/s of %.4f; energy balance %.2e of the impact energy\n",
+      model.num_elements, solver.step_index(), ball.mass, m_sphere, t_last - t_first, T_model, 100 * ((t_last - t_first) / T_model - 1), F_peak,
+      F_model, 100 * (F_peak / F_model - 1), ball.momentum[2] / ball.mass, v, worst_balance / e0);
+  EXPECT_NEAR((t_last - t_first) / T_model, 1.0, 0.10);
+  EXPECT_NEAR(F_peak / F_model, 1.0, 0.10);
+  EXPECT_LE(worst_balance / e0, 0.02);
+}

@@ -17,24 +17,84 @@ inline Vec3 augmented_traction(const Vec3& r, const Vec3& u_t, double u_n, const
   return {r[0] + rho * (-u_t[0] - s * n[0]), r[1] + rho * (-u_t[1] - s * n[1]), r[2] + rho * (-u_t[2] - s * n[2])};
 }
 
-// sum_a w_a vel[node_a]: the row's relative velocity.
-inline Vec3 relative_velocity(const ContactRows& rows, std::size_t k, const double* vel) {
+// sum_a w_a vel[node_a]: the row's relative velocity (a free rigid body's nodes: the body's).
+inline Vec3 relative_velocity(const ContactRows& rows, std::size_t k, const double* vel, const RigidRows* rigid = nullptr) {
   Vec3 r{0, 0, 0};
-  for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a)
-    for (int d = 0; d < 3; ++d) r[d] += rows.weights[static_cast<std::size_t>(a)] * vel[3 * rows.nodes[static_cast<std::size_t>(a)] + d];
+  for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a) {
+    const std::int32_t node = rows.nodes[static_cast<std::size_t>(a)];
+    const double wt = rows.weights[static_cast<std::size_t>(a)];
+    const int b = rigid ? rigid->body(node) : -1;
+    const Vec3 v = b >= 0 ? rigid->velocity(node, b) : Vec3{vel[3 * node], vel[3 * node + 1], vel[3 * node + 2]};
+    for (int d = 0; d < 3; ++d) r[d] += wt * v[d];
+  }
   return r;
 }
 
-// v += c w_a dr M^-1 on every dof of the row.
-inline void apply(const ContactRows& rows, std::size_t k, const Vec3& dr, double c, const double* inv_mass, double* v) {
+// v += c w_a dr M^-1 on every dof of the row; a free rigid body's node moves its body.
+inline void apply(const ContactRows& rows, std::size_t k, const Vec3& dr, double c, const double* inv_mass, double* v, RigidRows* rigid) {
   for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a) {
-    const auto node = static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)]);
+    const std::int32_t n = rows.nodes[static_cast<std::size_t>(a)];
+    const auto node = static_cast<std::size_t>(n);
     const double wt = rows.weights[static_cast<std::size_t>(a)];
+    if (const int b = rigid ? rigid->body(n) : -1; b >= 0) {
+      const auto bi = static_cast<std::size_t>(b);
+      const Vec3 f{c * wt * dr[0], c * wt * dr[1], c * wt * dr[2]};
+      const Vec3 dw = rigid->turn(b, cross(rigid->arm(n, b), f));
+      for (int d = 0; d < 3; ++d) rigid->V[bi][d] += f[d] * rigid->inv_mass[bi], rigid->w[bi][d] += dw[d];
+      continue;
+    }
     for (int d = 0; d < 3; ++d) v[3 * node + d] += c * wt * dr[d] * inv_mass[3 * node + d];
   }
 }
 
+// n . (dv per unit reaction along n) of a row: sum_a w_a^2 n.D_a n over the deformable nodes,
+// and per free rigid body |sum w_a n|^2 / m + (sum w_a r_a x n) . I^-1 (sum w_a r_a x n).
+double row_compliance(const ContactRows& rows, std::size_t k, const double* n, const double* inv_mass, const RigidRows* rigid) {
+  double w = 0;
+  int bodies[8];
+  Vec3 push[8], twist[8];
+  int nb = 0;
+  for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a) {
+    const double wt = rows.weights[static_cast<std::size_t>(a)];
+    const std::int32_t node = rows.nodes[static_cast<std::size_t>(a)];
+    const int b = rigid ? rigid->body(node) : -1;
+    if (b < 0) {
+      for (int d = 0; d < 3; ++d) w += wt * wt * n[d] * n[d] * inv_mass[3 * static_cast<std::size_t>(node) + d];
+      continue;
+    }
+    int slot = 0;
+    while (slot < nb && bodies[slot] != b) ++slot;
+    if (slot == nb) {
+      if (nb == 8) continue;  // (a row touches at most a slave and a triangle: never reached)
+      bodies[nb] = b, push[nb] = {0, 0, 0}, twist[nb] = {0, 0, 0}, ++nb;
+    }
+    const Vec3 nn{n[0], n[1], n[2]};
+    const Vec3 t = cross(rigid->arm(node, b), nn);
+    for (int d = 0; d < 3; ++d) push[slot][d] += wt * nn[d], twist[slot][d] += wt * t[d];
+  }
+  for (int s = 0; s < nb; ++s)
+    w += dot(push[s], push[s]) * rigid->inv_mass[static_cast<std::size_t>(bodies[s])] + dot(twist[s], rigid->turn(bodies[s], twist[s]));
+  return w;
+}
+
 }  // namespace
+
+Vec3 RigidRows::arm(std::int32_t node, int b) const {
+  const auto i = 3 * static_cast<std::size_t>(node);
+  const Vec3& c = centre[static_cast<std::size_t>(b)];
+  return {X[i] + u[i] - c[0], X[i + 1] + u[i + 1] - c[1], X[i + 2] + u[i + 2] - c[2]};
+}
+
+Vec3 RigidRows::velocity(std::int32_t node, int b) const {
+  const Vec3 r = arm(node, b), wr = cross(w[static_cast<std::size_t>(b)], r);
+  const Vec3& v = V[static_cast<std::size_t>(b)];
+  return {v[0] + wr[0], v[1] + wr[1], v[2] + wr[2]};
+}
+
+Vec3 RigidRows::turn(int b, const Vec3& m) const {
+  const auto& I = inv_inertia[static_cast<std::size_t>(b)];
+  return {I[0] * m[0] + I[1] * m[1] + I[2] * m[2], I[3] * m[0] + I[4] * m[1] + I[5] * m[2], I[6] * m[0] + I[7] * m[1] + I[8] * m[2]};
+}
 
 Vec3 coulomb_cone_projection(const Vec3& tau, const Vec3& n, double mu) {
   const double tn = dot(tau, n);
@@ -77,17 +137,10 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
   const auto& pairs = *in.pairs;
   auto normal = [&](std::size_t k) { return Vec3{rows.normal[3 * k], rows.normal[3 * k + 1], rows.normal[3 * k + 2]}; };
 
-  // Compliances: w = c sum_a w_a^2 n.D_a n, D the inverse masses (0 on prescribed dofs).
-  for (std::size_t k = 0; k < K; ++k) {
-    const double* n = &rows.normal[3 * k];
-    double w = 0;
-    for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a) {
-      const double wt = rows.weights[static_cast<std::size_t>(a)];
-      const auto node = static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)]);
-      for (int d = 0; d < 3; ++d) w += wt * wt * n[d] * n[d] * inv_mass[3 * node + d];
-    }
-    rows.compliance[k] = c * w;
-  }
+  // Compliances: w = c sum_a w_a^2 n.D_a n, D the inverse masses (0 on prescribed dofs), with the
+  // rigid bodies' coupled terms (row_compliance).
+  RigidRows* rigid = in.rigid;
+  for (std::size_t k = 0; k < K; ++k) rows.compliance[k] = c * row_compliance(rows, k, &rows.normal[3 * k], inv_mass, rigid);
 
   // Warm start: the previous step's reaction of the same slave node, projected on the new cone
   // (a node with two rows, in a concave corner, keeps its first row's).
@@ -99,7 +152,7 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
     if (prev[0] == 0 && prev[1] == 0 && prev[2] == 0) continue;
     const Vec3 r0 = coulomb_cone_projection({prev[0], prev[1], prev[2]}, normal(k), pairs[pi].friction);
     for (int d = 0; d < 3; ++d) rows.reaction[3 * k + d] = r0[d];
-    apply(rows, k, r0, c, inv_mass, v);
+    apply(rows, k, r0, c, inv_mass, v, rigid);
   }
   for (auto& l : last) std::fill(l.begin(), l.end(), 0.0);  // (sized by the surfaces, not per step)
 
@@ -115,7 +168,7 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
       if (!(w > 0)) continue;
       const Vec3 n = normal(k);
       const double mu = pairs[static_cast<std::size_t>(rows.pair[k])].friction;
-      const Vec3 uu = relative_velocity(rows, k, v);
+      const Vec3 uu = relative_velocity(rows, k, v, rigid);
       const double un_vel = dot(uu, n);
       const Vec3 ut{uu[0] - un_vel * n[0], uu[1] - un_vel * n[1], uu[2] - un_vel * n[2]};
       const double un = un_vel + rows.gap[k] * inv_dt;  // the gap folded in: no penetration after the step
@@ -128,7 +181,7 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
       max_r = std::max(max_r, norm(next));
       if (drn == 0) continue;
       for (int d = 0; d < 3; ++d) r[d] = next[d];
-      apply(rows, k, dr, c, inv_mass, v);
+      apply(rows, k, dr, c, inv_mass, v, rigid);
     }
     residual = max_r > 0 ? max_dr / max_r : 0.0;
     if (residual <= in.settings->tolerance) break;
@@ -141,6 +194,12 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
   }
   rep.residual = residual;
   rep.converged = residual <= in.settings->tolerance;
+  if (rigid)  // the rigid bodies' nodes in the rows take their bodies' velocities (for the work below)
+    for (std::size_t a = 0; a < rows.nodes.size(); ++a)
+      if (const int b = rigid->body(rows.nodes[a]); b >= 0) {
+        const Vec3 vb = rigid->velocity(rows.nodes[a], b);
+        for (int d = 0; d < 3; ++d) v[3 * static_cast<std::size_t>(rows.nodes[a]) + static_cast<std::size_t>(d)] = vb[static_cast<std::size_t>(d)];
+      }
 
   // Status, resultants and the work of the reactions (trapezoid halves over du^{n-1/2}, du^{n+1/2}).
   double max_rn = 0;
@@ -181,7 +240,8 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
     for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a)
       for (int d = 0; d < 3; ++d) {
         const std::size_t dof = 3 * static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)]) + d;
-        if (inv_mass[dof] != 0) continue;  // a prescribed dof: its support takes this share
+        if (inv_mass[dof] != 0 || (rigid && rigid->body(rows.nodes[static_cast<std::size_t>(a)]) >= 0))
+          continue;  // a prescribed dof: its support takes this share
         const double support = -rows.weights[static_cast<std::size_t>(a)] * r[d];
         rep.support_work_forward += in.dt * support * v[dof];
         rep.support_work_back += in.dt_prev * support * in.v_old[dof];

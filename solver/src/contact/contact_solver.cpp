@@ -77,11 +77,11 @@ void ContactSolver::check_initial_overlap(const double* u) const {
 }
 
 ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass,
-                                                    double velocity_per_force, double dt, double dt_prev) {
+                                                    double velocity_per_force, double dt, double dt_prev, RigidRows* rigid) {
   if (pairs_.empty()) return {};
   detect(u, settings_.search_factor);
   ContactStepReport rep =
-      solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_});
+      solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid});
   update_windowed_pressure(rep, 0.5 * (dt + dt_prev));
   return rep;
 }

@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "../contact/bipotential.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/solver/schedule.hpp"
 
@@ -94,6 +95,8 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   }
   choose_step();
 }
+
+ExplicitSolver::~ExplicitSolver() = default;
 
 void ExplicitSolver::stress_pass() {
   const auto t0 = std::chrono::steady_clock::now();
@@ -200,14 +203,16 @@ void ExplicitSolver::advance_velocity() {
   auto free_velocity = [&](std::size_t i, double fext) { return (c_minus * v_old_of[i] + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus; };
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : free_velocity(i, external_force(i));
-  if (!rigid_.empty()) advance_rigid_bodies(dt, dtbar, c_minus, c_plus, next_lands_ ? schedule_[next_target_] : time_ + dt);
+  if (!rigid_.empty()) kick_rigid_bodies(dt, dtbar, c_minus, c_plus, next_lands_ ? schedule_[next_target_] : time_ + dt);
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
-    contact_report_ = contact_.correct_velocities(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_);
+    contact_report_ =
+        contact_.correct_velocities(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_, rigid_rows_.get());
     contact_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 
+  if (!rigid_.empty()) drift_rigid_bodies(dt);
   // The supports' forces: R = m (v_new - v_free) / (dtbar c_plus), exactly what the update added.
   for (std::size_t k = 0; k < constrained_dofs_.size(); ++k) {
     const auto i = static_cast<std::size_t>(constrained_dofs_[k]);
@@ -342,6 +347,14 @@ void ExplicitSolver::init_rigid_bodies() {
   if (rigid_.empty()) return;
   rigid_node_.assign(model_.num_nodes, 0);
   rigid_next_.resize(rigid_.size());
+  rigid_rows_ = std::make_unique<RigidRows>();
+  RigidRows& rows = *rigid_rows_;
+  rows.X = model_.X.data(), rows.u = u_.data();
+  rigid_body_of_node_.assign(model_.num_nodes, -1);
+  rows.body_of_node = rigid_body_of_node_.data();
+  const std::size_t nb = rigid_.size();
+  rows.centre.resize(nb), rows.V.resize(nb), rows.w.resize(nb), rows.inv_mass.resize(nb), rows.inv_inertia.resize(nb);
+  rows.V_free.resize(nb), rows.w_free.resize(nb);
   for (RigidBody& b : rigid_) {
     const BodyRange& body = model_.bodies[b.body];
     const auto a0 = static_cast<std::size_t>(b.nodes.front());
@@ -358,6 +371,7 @@ void ExplicitSolver::init_rigid_bodies() {
     for (std::size_t k = 0; k < b.nodes.size(); ++k) {
       const auto a = static_cast<std::size_t>(b.nodes[k]);
       rigid_node_[a] = 1;
+      if (!b.prescribed) rigid_body_of_node_[a] = static_cast<std::int32_t>(&b - rigid_.data());  // (a prescribed one holds like a support)
       const Vec3d v = V + w.cross(Vec3d(&b.offset[3 * k]));
       for (std::size_t d = 0; d < 3; ++d) {
         v_half_[3 * a + d] = v_prev_half_[3 * a + d] = v[static_cast<Eigen::Index>(d)];
@@ -375,7 +389,7 @@ double ExplicitSolver::rigid_kinetic_energy(bool first) const {
   return kinetic;
 }
 
-void ExplicitSolver::advance_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next) {
+void ExplicitSolver::kick_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next) {
   for (std::size_t k = 0; k < rigid_.size(); ++k) {
     RigidBody& b = rigid_[k];
     // Force and moment about the centre at t^n: internal forces of the deformable tets on the
@@ -392,23 +406,51 @@ void ExplicitSolver::advance_rigid_bodies(double dt, double dtbar, double c_minu
     }
     b.force = F, b.moment = T;
     b.momentum_before = b.momentum, b.angular_momentum_before = b.angular_momentum;
-    Mat3 next_rotation;
     if (b.prescribed) {
       // The given motion over the step (its integral, as velocity boundaries do), and the support
       // force and moment that make it: what the kick would have to add.
       const double share = b.curve < 0 ? dt
                                        : model_.curves[static_cast<std::size_t>(b.curve)].integral(t_next) -
                                              model_.curves[static_cast<std::size_t>(b.curve)].integral(time_);
-      const Vec3d V = b.velocity * share / dt, w = b.angular_velocity * share / dt;
-      b.momentum = b.mass * V;
-      b.angular_momentum = b.inertia() * w;
+      b.momentum = b.mass * b.velocity * share / dt;
+      b.angular_momentum = b.inertia() * b.angular_velocity * share / dt;
       b.reaction_force = (b.momentum / c_plus - c_minus * b.momentum_before) / dtbar - F;
       b.reaction_moment = (b.angular_momentum / c_plus - c_minus * b.angular_momentum_before) / dtbar - T;
-      const double angle = w.norm() * dt;
-      next_rotation = (angle > 0 ? Mat3(Eigen::AngleAxisd(angle, w / w.norm())) : Mat3::Identity()) * b.rotation;
     } else {
       b.momentum = (c_minus * b.momentum_before + dtbar * F) * c_plus;
       b.angular_momentum = (c_minus * b.angular_momentum_before + dtbar * T) * c_plus;
+    }
+    // As the contact sweep sees it: velocity and angular velocity at t^{n+1/2}, centre and inverse
+    // inertia at t^n.
+    RigidRows& rows = *rigid_rows_;
+    const Mat3 inv_inertia = b.rotation * b.axes * b.principal.cwiseInverse().asDiagonal() * (b.rotation * b.axes).transpose();
+    const Vec3d w = inv_inertia * b.angular_momentum;
+    for (int d = 0; d < 3; ++d) {
+      rows.centre[k][static_cast<std::size_t>(d)] = b.centre[d], rows.V[k][static_cast<std::size_t>(d)] = b.momentum[d] / b.mass;
+      rows.w[k][static_cast<std::size_t>(d)] = w[d];
+      for (int e = 0; e < 3; ++e) rows.inv_inertia[k][static_cast<std::size_t>(3 * d + e)] = inv_inertia(d, e);
+    }
+    rows.inv_mass[k] = 1.0 / b.mass;
+    rows.V_free[k] = rows.V[k], rows.w_free[k] = rows.w[k];
+  }
+}
+
+void ExplicitSolver::drift_rigid_bodies(double dt) {
+  const RigidRows& rows = *rigid_rows_;
+  for (std::size_t k = 0; k < rigid_.size(); ++k) {
+    RigidBody& b = rigid_[k];
+    Mat3 next_rotation;
+    if (b.prescribed) {
+      const Vec3d w = b.angular_velocity_of(b.angular_momentum);
+      const double angle = w.norm() * dt;
+      next_rotation = (angle > 0 ? Mat3(Eigen::AngleAxisd(angle, w / w.norm())) : Mat3::Identity()) * b.rotation;
+    } else {
+      // The contact sweep's impulses, taken back as momentum and angular momentum (untouched
+      // bodies keep theirs bit for bit).
+      if (rows.V[k] != rows.V_free[k] || rows.w[k] != rows.w_free[k]) {
+        b.momentum = b.mass * Vec3d(rows.V[k].data());
+        b.angular_momentum = b.inertia() * Vec3d(rows.w[k].data());
+      }
       next_rotation = free_rotation(b, b.rotation, b.angular_momentum, dt);
     }
     rigid_next_[k] = {b.centre + dt * b.momentum / b.mass, next_rotation};

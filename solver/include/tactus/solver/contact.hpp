@@ -35,6 +35,7 @@ namespace tactus::solver {
 
 struct Model;
 struct DetectionScratch;  // contact/detection.hpp: per-step search storage, reused
+struct RigidRows;         // contact/bipotential.hpp: free rigid bodies among the rows' nodes
 class ContactMaster;
 
 // One directed contact pair: the slave nodes of a surface against a master kind.
@@ -189,8 +190,9 @@ class ContactSolver {
   // One contact step. v (in/out): free half-step velocities v^{n+1/2}, corrected in place.
   // v_old: v^{n-1/2}. velocity_per_force: dv = velocity_per_force * inv_mass * r (dtbar / (1 + alpha dtbar/2)).
   // dt: the position step that follows; dt_prev: the one before (for the work halves).
+  // rigid: free rigid bodies among the nodes (their velocities read and changed as bodies).
   ContactStepReport correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass, double velocity_per_force, double dt,
-                                       double dt_prev);
+                                       double dt_prev, RigidRows* rigid = nullptr);
 
   const ContactRows& rows() const { return rows_; }
   const std::vector<ContactPair>& pairs() const { return pairs_; }

@@ -9,6 +9,7 @@
 //   advance_velocity(): needs u^n and the stress pass at u^n; gives v^{n+1/2} and energies at t^n.
 //   advance_position(): gives u^{n+1}, t^{n+1} and the stress pass at u^{n+1}.
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,7 @@ class ExplicitSolver {
   // time_step exceeds the stable limit without force_time_step, NumericalError when the
   // initial configuration is inverted.
   ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping);
+  ~ExplicitSolver();
 
   void advance_velocity();
   void advance_position();
@@ -122,7 +124,8 @@ class ExplicitSolver {
   // and drift to t^{n+1} (velocities of their nodes: the secant ones); their kinetic energy and
   // mass-damping power at t^n (rigid.cpp, explicit.cpp).
   void init_rigid_bodies();
-  void advance_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next);
+  void kick_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next);  // P, L to t^{n+1/2}
+  void drift_rigid_bodies(double dt);  // after contact: c, Q at t^{n+1} and the nodes' secant velocities
   double rigid_kinetic_energy(bool first) const;
 
   const Model& model_;
@@ -162,7 +165,9 @@ class ExplicitSolver {
   bool velocity_advanced_ = false;
   Energies energy_;
   std::vector<RigidBody> rigid_;
-  std::vector<std::uint8_t> rigid_node_;  // per node: 1 when it moves with a rigid body
+  std::vector<std::uint8_t> rigid_node_;          // per node: 1 when it moves with a rigid body
+  std::vector<std::int32_t> rigid_body_of_node_;  // per node: its free rigid body, or -1
+  std::unique_ptr<RigidRows> rigid_rows_;         // the free ones, as the contact sweep sees them
   struct RigidStep {
     Vec3d centre;
     Mat3 rotation;
