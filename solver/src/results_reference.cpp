@@ -43,6 +43,9 @@ std::string results_reference_markdown() {
     o << "| `" << c->prefix << "<name>_x`, `_y`, `_z` | " << c->unit << " | per `[[boundary]]` entry (its `name`): " << c->doc << " |\n";
   o << "| `" << contracts::history::added_mass.prefix << "<body>` | " << contracts::history::added_mass.unit
     << " | per body, only with mass scaling on (`run.minimum_time_step` > 0): " << contracts::history::added_mass.doc << " |\n";
+  for (const auto* c : contracts::history::per_rigid_body)
+    o << "| `" << c->prefix << "<rigid body>_x`, `_y`, `_z` | " << c->unit
+      << " | per rigid body (`run.json` `rigid_bodies[].history_columns`): " << c->doc << " |\n";
   o << "\n## `run.json` keys read by other stages\n\n";
   for (const char* k : contracts::run_json::all) o << "`" << k << "` ";
   o << "\n\nLabel ids of `labels.h5`: " << contracts::kBackgroundLabel << " background, " << contracts::kSoftTissueLabel << " "
@@ -63,6 +66,7 @@ nlohmann::json results_reference_json() {
   j["history_boundary_column_prefixes"] = nlohmann::json::array();
   for (const auto* c : contracts::history::per_boundary) j["history_boundary_column_prefixes"].push_back(c->prefix);
   j["history_body_column_prefixes"] = {contracts::history::added_mass.prefix};
+  for (const auto* c : contracts::history::per_rigid_body) j["history_rigid_body_column_prefixes"].push_back(c->prefix);
   j["run_json_keys"] = contracts::run_json::all;
   j["labels"] = {
       {"background", contracts::kBackgroundLabel}, {"soft_tissue", contracts::kSoftTissueLabel}, {"first_bone", contracts::kFirstBoneLabel}};

@@ -103,6 +103,12 @@ std::uintmax_t history_length(const RestartPoint* from) {
   return bytes;
 }
 
+std::vector<std::string> rigid_body_names(const ExplicitSolver& solver) {
+  std::vector<std::string> names;
+  for (const RigidBody& b : solver.rigid_bodies()) names.push_back(b.name);
+  return names;
+}
+
 // The steps of one run and what they write as they go.
 class RunLoop {
  public:
@@ -114,7 +120,7 @@ class RunLoop {
         out_(out),
         folder_(out.path()),
         identity_(identity),
-        history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from)),
+        history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from), rigid_body_names(solver)),
         history_every_(sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
                                                 : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000))),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1),
@@ -306,7 +312,7 @@ class RunLoop {
     }
     if (solver_.step_index() % history_every_ == 0 || scheduled() || solver_.finished())
       history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at, &solver_.reactions(),
-                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr});
+                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr, &solver_.rigid_bodies()});
   }
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly

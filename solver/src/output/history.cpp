@@ -1,6 +1,8 @@
 // history.csv: one table of columns (names from core/contracts.hpp), which writes both the header
 // and every row, so the two can never drift apart.
+#include <Eigen/Geometry>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 
@@ -61,8 +63,9 @@ static_assert(columns_follow_the_contract(), "history.csv columns must follow co
 }  // namespace
 
 HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
-                             const std::vector<std::string>& mass_scaled_bodies, std::uintmax_t resume_at)
-    : file_(file), boundaries_(boundaries.size()), mass_scaled_bodies_(mass_scaled_bodies.size()) {
+                             const std::vector<std::string>& mass_scaled_bodies, std::uintmax_t resume_at,
+                             const std::vector<std::string>& rigid_bodies)
+    : file_(file), boundaries_(boundaries.size()), mass_scaled_bodies_(mass_scaled_bodies.size()), rigid_bodies_(rigid_bodies.size()) {
   if (resume_at != kNew) {
     std::error_code ec;
     const std::uintmax_t size = std::filesystem::file_size(file, ec);
@@ -81,6 +84,9 @@ HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vecto
     for (const auto* family : h::per_boundary)
       for (const char* axis : {"_x", "_y", "_z"}) out_ << ',' << family->prefix << b.name << axis;
   for (const auto& body : mass_scaled_bodies) out_ << ',' << h::added_mass.prefix << body;
+  for (const auto& body : rigid_bodies)
+    for (const auto* family : h::per_rigid_body)
+      for (const char* axis : {"_x", "_y", "_z"}) out_ << ',' << family->prefix << rigid_column_name(body) << axis;
   out_ << '\n' << std::setprecision(17);
 }
 
@@ -94,6 +100,14 @@ void HistoryWriter::write(const HistoryRow& row) {
     for (int c = 0; c < 3; ++c) out_ << ',' << (row.reactions ? row.reactions->moment[3 * b + static_cast<std::size_t>(c)] : 0.0);
   }
   for (std::size_t b = 0; b < mass_scaled_bodies_; ++b) out_ << ',' << (row.added_mass ? (*row.added_mass)[b] : 0.0);
+  for (std::size_t b = 0; b < rigid_bodies_; ++b) {  // in the order of h::per_rigid_body
+    const RigidBody& r = (*row.rigid)[b];
+    const Eigen::AngleAxisd turn(r.rotation);
+    const Vec3d values[6] = {r.centre,         r.momentum / r.mass, turn.angle() * turn.axis(), r.angular_velocity_of(r.angular_momentum),
+                             r.reaction_force, r.reaction_moment};
+    for (const Vec3d& v : values)
+      for (int c = 0; c < 3; ++c) out_ << ',' << v[c];
+  }
   out_ << '\n';
 }
 
@@ -103,6 +117,18 @@ std::uintmax_t HistoryWriter::flush() {
   const std::uintmax_t size = std::filesystem::file_size(file_, ec);
   if (out_.fail() || ec) throw WriteError(file_.string(), "the file system refused the history");
   return size;
+}
+
+std::string rigid_column_name(const std::string& name) {
+  std::string out;
+  for (char ch : name) {
+    if (ch == '#') continue;
+    out += (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-') ? ch : '_';
+  }
+  std::string squeezed;  // one _ for a run of them
+  for (char ch : out)
+    if (ch != '_' || squeezed.empty() || squeezed.back() != '_') squeezed += ch;
+  return squeezed;
 }
 
 void HistoryWriter::close() {

@@ -15,6 +15,7 @@
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/rigid.hpp"
 
 namespace tactus::solver {
 
@@ -32,7 +33,11 @@ struct HistoryRow {
   Vec3 peak_at{0, 0, 0};
   const Reactions* reactions = nullptr;             // one force and moment per boundary (model.boundaries)
   const std::vector<double>* added_mass = nullptr;  // mass scaling: kg per body (model.bodies), or none
+  const std::vector<RigidBody>* rigid = nullptr;    // the rigid bodies (rigid.hpp), or none
 };
+
+// A rigid body's name as it appears in column names: "hand/bone #3" -> "hand_bone_3".
+std::string rigid_column_name(const std::string& name);
 
 // history.csv: its header and rows both come from the one column table (history.cpp).
 class HistoryWriter {
@@ -43,7 +48,8 @@ class HistoryWriter {
   // there and appended to; InputError when it is shorter.
   static constexpr std::uintmax_t kNew = static_cast<std::uintmax_t>(-1);
   HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
-                const std::vector<std::string>& mass_scaled_bodies = {}, std::uintmax_t resume_at = kNew);
+                const std::vector<std::string>& mass_scaled_bodies = {}, std::uintmax_t resume_at = kNew,
+                const std::vector<std::string>& rigid_bodies = {});
   void write(const HistoryRow& row);
   // Hands every row written so far to the file system and returns the file's length (a checkpoint's row).
   std::uintmax_t flush();
@@ -52,7 +58,7 @@ class HistoryWriter {
  private:
   std::ofstream out_;
   std::filesystem::path file_;
-  std::size_t boundaries_ = 0, mass_scaled_bodies_ = 0;
+  std::size_t boundaries_ = 0, mass_scaled_bodies_ = 0, rigid_bodies_ = 0;
 };
 
 // The peaks over a run that run.json reports (contact over every step, von Mises at the outputs).

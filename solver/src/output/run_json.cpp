@@ -1,4 +1,5 @@
 // run.json: the run's facts and figures, with the keys of core/contracts.hpp.
+#include <Eigen/Geometry>
 #include <cmath>
 
 #include "results.hpp"
@@ -147,6 +148,27 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   if (!model.contact_pairs.empty())
     j[k::contact] = contact_json(sc, model, peaks, solver.contact().pressure_window(), solver.contact().search_counts());
   j[k::reactions] = reactions_json(model, solver, peaks);
+  if (!solver.rigid_bodies().empty()) {
+    nlohmann::json rigid = nlohmann::json::array();
+    auto vec = [](const Vec3d& v) { return std::vector<double>{v[0], v[1], v[2]}; };
+    for (const RigidBody& b : solver.rigid_bodies()) {
+      const Eigen::AngleAxisd turn(b.rotation);
+      nlohmann::json e = {{"name", b.name},
+                          {"history_columns", rigid_column_name(b.name)},
+                          {"nodes", b.nodes.size()},
+                          {"mass", b.mass},
+                          {"reference_centre", vec(b.centre0)},
+                          {"principal_moments", vec(b.principal)},
+                          {"prescribed", b.prescribed},
+                          {"final_centre", vec(b.centre)},
+                          {"final_rotation_vector", vec(turn.angle() * turn.axis())},
+                          {"final_velocity", vec(b.momentum / b.mass)},
+                          {"final_angular_velocity", vec(b.angular_velocity_of(b.angular_momentum))}};
+      if (b.prescribed) e["final_reaction"] = {{"force", vec(b.reaction_force)}, {"moment", vec(b.reaction_moment)}};
+      rigid.push_back(e);
+    }
+    j["rigid_bodies"] = rigid;
+  }
   if (solver.mass_scaling()) {
     nlohmann::json bodies = nlohmann::json::object();
     for (std::size_t b = 0; b < model.bodies.size(); ++b)

@@ -131,6 +131,11 @@ void ExplicitSolver::scale_mass() {
       factor[e] = target;
       for (int k = 0; k < 4; ++k) {
         const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
+        // A node of a rigid body gets none: the body's mass is its own (and far larger).
+        if (!rigid_node_.empty() && rigid_node_[n]) {
+          added_mass_body_[static_cast<std::size_t>(element_body_[e])] -= 0.25 * added;
+          continue;
+        }
         mass_[n] += 0.25 * added;
         pending_added_mass_[n] += 0.25 * added;
         for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {

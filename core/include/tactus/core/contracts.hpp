@@ -125,6 +125,19 @@ inline constexpr ColumnFamily moment{"moment_", "N m", "moment of that force abo
 inline constexpr std::array<const ColumnFamily*, 2> per_boundary{&reaction, &moment};
 // Then, only with mass scaling on (run.minimum_time_step > 0), one column per body: prefix + body name.
 inline constexpr ColumnFamily added_mass{"added_mass_", "kg", "mass added to the body by mass scaling so far (one column per body)"};
+// Then per rigid body (material type rigid; <name>: body, material and piece, e.g. hand_bone_3),
+// x, y, z of each: prefix + name + "_x".
+inline constexpr ColumnFamily rigid_centre{"rigid_centre_", "m", "its centre of mass"};
+inline constexpr ColumnFamily rigid_rotation{"rigid_rotation_", "rad",
+                                             "its rotation from the reference placement, as a rotation vector (axis times angle)"};
+inline constexpr ColumnFamily rigid_velocity{"rigid_velocity_", "m/s", "velocity of its centre (at the half step before the row's time)"};
+inline constexpr ColumnFamily rigid_angular_velocity{"rigid_angular_velocity_", "rad/s", "its angular velocity (likewise)"};
+inline constexpr ColumnFamily rigid_reaction{
+    "rigid_reaction_", "N",
+    "force its support applies when its motion is prescribed (bodies.rigid_velocity; contact excluded: see the contact columns), else 0"};
+inline constexpr ColumnFamily rigid_moment{"rigid_moment_", "N m", "moment of that support about its centre"};
+inline constexpr std::array<const ColumnFamily*, 6> per_rigid_body{&rigid_centre,           &rigid_velocity, &rigid_rotation,
+                                                                   &rigid_angular_velocity, &rigid_reaction, &rigid_moment};
 }  // namespace history
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------
