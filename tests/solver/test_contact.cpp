@@ -352,6 +352,30 @@ TetMesh graded_sphere(double R, const Vec3& bottom, double h_min, double h_max, 
   gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
   return testkit::generate_tet_mesh("sphere");
 }
+
+// Hertz's impact of a sphere (mass m, radius R) at speed v on a flat of effective modulus E*:
+// the largest approach d = (15 m v^2 / (16 E* R^1/2))^(2/5), the peak force (4/3) E* R^1/2 d^3/2,
+// the duration 2.868 (m^2 / (R E*^2 v))^(1/5); and what a run gives: when the contact force was
+// first and last non-zero, and its peak.
+struct HertzImpact {
+  double m, R, Es, v;
+  double approach() const { return std::pow(15 * m * v * v / (16 * Es * std::sqrt(R)), 0.4); }
+  double peak_force() const { return 4.0 / 3.0 * Es * std::sqrt(R) * std::pow(approach(), 1.5); }
+  double duration() const { return 2.868 * std::pow(m * m / (R * Es * Es * v), 0.2); }
+  // The speed that makes the largest approach d.
+  static double speed_for(double d, double m, double R, double Es) { return std::sqrt(std::pow(d, 2.5) * 16 * Es * std::sqrt(R) / (15 * m)); }
+};
+struct ImpactRecord {
+  double first = -1, last = -1, peak = 0;
+  void add(double t, double force) {
+    if (force > 0) {
+      if (first < 0) first = t;
+      last = t;
+    }
+    peak = std::max(peak, force);
+  }
+  double duration() const { return last - first; }
+};
 }  // namespace
 
 // Oracle: Hertz's impact of an elastic sphere on a rigid flat (quasi-static Hertz contact,
@@ -366,7 +390,7 @@ TEST(Contact, HertzSphereOnRigidPlane) {
   Model model = build_model(mesh, linear_elastic(E, nu, rho));
   double m = 0;
   for (double mi : model.mass) m += mi;
-  const double v = std::sqrt(std::pow(d_target, 2.5) * 16 * Es * std::sqrt(R) / (15 * m));
+  const double v = HertzImpact::speed_for(d_target, m, R, Es);
   for (std::size_t i = 0; i < model.num_nodes; ++i) model.initial_velocity[3 * i + 2] = -v;
   ContactPair plane;
   plane.name = "floor";
@@ -375,22 +399,16 @@ TEST(Contact, HertzSphereOnRigidPlane) {
   model.contact_pairs.push_back(plane);
   model.contact_settings.tolerance = 1e-8;
 
-  const double d_max = std::pow(15 * m * v * v / (16 * Es * std::sqrt(R)), 0.4);
-  const double F_ref = 4.0 / 3.0 * Es * std::sqrt(R) * std::pow(d_max, 1.5);
-  const double T_ref = 2.868 * std::pow(m * m / (R * Es * Es * v), 0.2);
+  const HertzImpact hertz{m, R, Es, v};
+  const double F_ref = hertz.peak_force(), T_ref = hertz.duration();
   RunSpec run = run_until(1.6 * T_ref);
   run.threads = 1;  // small model: one thread is as fast and immune to busy neighbours under ctest -j
   ExplicitSolver solver(model, run, DampingSpec{});
-  double t_first = -1, t_last = -1, F_peak = 0;
+  ImpactRecord impact;
   SignoriniCheck sig;
   while (true) {
     solver.advance_velocity();
-    const double F = solver.contact_report().normal_force;
-    if (F > 0) {
-      if (t_first < 0) t_first = solver.time();
-      t_last = solver.time();
-    }
-    F_peak = std::max(F_peak, F);
+    impact.add(solver.time(), solver.contact_report().normal_force);
     check_signorini(solver, sig, 2e-4);
     if (solver.time() >= 1.6 * T_ref * (1 - 1e-12)) break;
     solver.advance_position();
@@ -398,10 +416,10 @@ TEST(Contact, HertzSphereOnRigidPlane) {
   std::printf(
       "hertz: %zu tets, %zu steps; duration %.4e s (Hertz %.4e), peak force %.4f N (Hertz %.4f), "
       "balance error %.2e of E0\n",
-      model.num_elements, solver.step_index(), t_last - t_first, T_ref, F_peak, F_ref,
+      model.num_elements, solver.step_index(), impact.duration(), T_ref, impact.peak, F_ref,
       std::abs(solver.energies().balance_error()) / solver.energies().initial);
-  EXPECT_NEAR((t_last - t_first) / T_ref, 1.0, 0.10);
-  EXPECT_NEAR(F_peak / F_ref, 1.0, 0.10);
+  EXPECT_NEAR(impact.duration() / T_ref, 1.0, 0.10);
+  EXPECT_NEAR(impact.peak / F_ref, 1.0, 0.10);
   EXPECT_LE(sig.adhesive, 1e-12);
   EXPECT_LE(sig.penetration, 1e-3);
 }
@@ -705,9 +723,9 @@ void sliding_over_a_coarser_slab(const std::string& method) {
 TEST(Contact, FrictionalSlidingOverACoarserSlabMortar) { sliding_over_a_coarser_slab("mortar"); }
 TEST(Contact, FrictionalSlidingOverACoarserSlabNodeToSurface) { sliding_over_a_coarser_slab("node_to_surface"); }
 
-// Oracle: Hertz's impact, the other way round: a rigid sphere (material type rigid) dropped on a
-// soft elastic block fixed at its base (E* = E / (1 - nu^2) of the block, m the sphere's mass):
-// duration 2.868 (m^2 / (R E*^2 v))^(1/5) and peak force (4/3) E* R^1/2 d^3/2 within 10 %, v chosen
+// Oracle: Hertz's impact (HertzImpact), the other way round: a rigid sphere (material type rigid)
+// dropped on a soft elastic block fixed at its base (E* = E / (1 - nu^2) of the block, m the
+// sphere's mass): duration and peak force within 10 %, v chosen
 // so that the contact radius is 0.1 R. The block (40 x 40 x 20 mm, 20 contact radii wide) is graded
 // from 0.25 mm under the pole to 4 mm; its top is the slave, the rigid sphere the mortar master.
 TEST(Contact, RigidSphereDroppedOnASoftBlock) {
@@ -742,26 +760,21 @@ TEST(Contact, RigidSphereDroppedOnASoftBlock) {
   sc.contact_solver.max_iterations = 1000;
   sc.run.threads = 1;
   const double m_sphere = rho * 4.0 / 3.0 * M_PI * R * R * R;
-  const double v = std::sqrt(std::pow(d_target, 2.5) * 16 * Es * std::sqrt(R) / (15 * m_sphere));
+  const double v = HertzImpact::speed_for(d_target, m_sphere, R, Es);
   sc.bodies.back().initial_velocity = {0, 0, -v};
-  sc.run.end_time = 1.4 * 2.868 * std::pow(m_sphere * m_sphere / (R * Es * Es * v), 0.2);
+  sc.run.end_time = 1.4 * HertzImpact{m_sphere, R, Es, v}.duration();
   const Model model = build_model(sc);
   ExplicitSolver solver(model, sc.run, sc.damping);
   ASSERT_EQ(solver.rigid_bodies().size(), 1u);
   const RigidBody& ball = solver.rigid_bodies()[0];
   // Hertz for the faceted sphere's own mass (1.8 % below the exact sphere's).
-  const double d_model = std::pow(15 * ball.mass * v * v / (16 * Es * std::sqrt(R)), 0.4);
-  const double F_model = 4.0 / 3.0 * Es * std::sqrt(R) * std::pow(d_model, 1.5);
-  const double T_model = 2.868 * std::pow(ball.mass * ball.mass / (R * Es * Es * v), 0.2);
-  double t_first = -1, t_last = -1, F_peak = 0, worst_balance = 0;
+  const HertzImpact hertz{ball.mass, R, Es, v};
+  const double F_model = hertz.peak_force(), T_model = hertz.duration();
+  ImpactRecord impact;
+  double worst_balance = 0;
   while (true) {
     solver.advance_velocity();
-    const double F = solver.contact_report().normal_force;
-    if (F > 0) {
-      if (t_first < 0) t_first = solver.time();
-      t_last = solver.time();
-    }
-    F_peak = std::max(F_peak, F);
+    impact.add(solver.time(), solver.contact_report().normal_force);
     worst_balance = std::max(worst_balance, std::abs(solver.energies().balance_error()));
     if (solver.finished()) break;
     solver.advance_position();
@@ -770,9 +783,9 @@ TEST(Contact, RigidSphereDroppedOnASoftBlock) {
   std::printf(
       "rigid sphere on a soft block: %zu tets, %zu steps; mass %.5g kg (exact %.5g); duration %.4e s (Hertz %.4e, %+.1f %%), peak force %.4f N "
       "(Hertz %.4f, %+.1f %%); rebound %.4f m/s of %.4f; energy balance %.2e of the impact energy\n",
-      model.num_elements, solver.step_index(), ball.mass, m_sphere, t_last - t_first, T_model, 100 * ((t_last - t_first) / T_model - 1), F_peak,
-      F_model, 100 * (F_peak / F_model - 1), ball.momentum[2] / ball.mass, v, worst_balance / e0);
-  EXPECT_NEAR((t_last - t_first) / T_model, 1.0, 0.10);
-  EXPECT_NEAR(F_peak / F_model, 1.0, 0.10);
+      model.num_elements, solver.step_index(), ball.mass, m_sphere, impact.duration(), T_model, 100 * (impact.duration() / T_model - 1), impact.peak,
+      F_model, 100 * (impact.peak / F_model - 1), ball.momentum[2] / ball.mass, v, worst_balance / e0);
+  EXPECT_NEAR(impact.duration() / T_model, 1.0, 0.10);
+  EXPECT_NEAR(impact.peak / F_model, 1.0, 0.10);
   EXPECT_LE(worst_balance / e0, 0.02);
 }
