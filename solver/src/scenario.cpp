@@ -167,7 +167,8 @@ const SectionSpec& contact_section() {
   static const SectionSpec s{
       "contact",
       "[[contact]]: bi-potential Coulomb contact (paper §2.1), slave nodes of one body's surface against "
-      "another body's surface (master) or a rigid plane. The finer surface makes the better slave. A master equal to the slave "
+      "another body's surface (master) or a rigid plane. The finer surface makes the better slave; against a rigid body (material type rigid) the "
+      "deformable surface is the slave. A master equal to the slave "
       "(same body and surface) is self-contact: skin on skin, each node against the faces of the same surface that face it, "
       "its own neighbourhood excluded (node_to_surface, one pass).",
       {typed("slave_body", ValueType::string, "", "body whose surface nodes are the slaves", true),
