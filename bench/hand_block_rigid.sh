@@ -12,15 +12,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
 W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
-mkdir -p "$W/mesh" "$W/object"
-/usr/bin/python3 - "$ROOT/bench/references" "$W" <<'PY'
-import lzma, shutil, sys
-ref, out = sys.argv[1], sys.argv[2]
-for stored, path in (("hand_block_hand.msh.xz", "mesh/mesh.msh"), ("hand_block_block.msh.xz", "object/block.msh")):
-    with lzma.open(f"{ref}/{stored}") as src, open(f"{out}/{path}", "wb") as dst:
-        shutil.copyfileobj(src, dst)
-PY
-"$B/mesher/tactus-mesh" fibres "$W/mesh/mesh.msh" --angle 30 --axis z -o "$W/mesh/fibres.vtu" -q --force
+TACTUS_BUILD_DIR=$B bash "$ROOT/bench/references/hand_block_meshes.sh" "$W"
 for case in hand_block hand_block_rigid; do
   echo "== $case"
   "$B/solver/tactus-solve" "$ROOT/pipeline/scenarios/$case.toml" --meshes "$W" -o "$W/$case.out" -q --force

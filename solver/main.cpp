@@ -116,15 +116,13 @@ int main(int argc, char** argv) {
     }
     if (scenario_file.empty()) throw CLI::RequiredError("scenario");
     solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
-    if (*end_time_opt) {
-      if (!(end_time > 0) || !std::isfinite(end_time))
-        throw InputError("command line", "--end-time", "a time > 0 in s", end_time_opt->as<std::string>());
+    // --end-time (or the end time a restarted run was started with): later output times are dropped.
+    if (*end_time_opt && (!(end_time > 0) || !std::isfinite(end_time)))
+      throw InputError("command line", "--end-time", "a time > 0 in s", end_time_opt->as<std::string>());
+    if (from) end_time = from->identity.end_time;
+    if (end_time > 0 && end_time != sc.run.end_time) {
       sc.run.end_time = end_time;
       std::erase_if(sc.run.output_times, [&](double t) { return t > end_time * (1 + 1e-12); });
-    }
-    if (from && from->identity.end_time != sc.run.end_time) {
-      sc.run.end_time = from->identity.end_time;
-      std::erase_if(sc.run.output_times, [&](double t) { return t > sc.run.end_time * (1 + 1e-12); });
     }
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);

@@ -34,18 +34,8 @@ if [ "$case_name" = pad_press ] || [ "$case_name" = all ]; then
   run_case pad_press "$ROOT/pipeline/scenarios/pad_press.toml" "$W"
 fi
 if [ "$case_name" = hand_block ] || [ "$case_name" = all ]; then
-  # The demo's meshes as they were when the reference was recorded, stored next to it: CGAL's
-  # refinement is reproducible for one binary but not across builds (a change anywhere in the
-  # mesher's translation unit or another CPU moves a few nodes by an ulp, and the Delaunay
-  # refinement then takes another path), so the reference pins the meshes and checks the solver.
-  mkdir -p "$W/hand_block/mesh" "$W/hand_block/object"
-  /usr/bin/python3 - "$REF" "$W/hand_block" <<'PY'
-import lzma, shutil, sys
-ref, out = sys.argv[1], sys.argv[2]
-for stored, path in (("hand_block_hand.msh.xz", "mesh/mesh.msh"), ("hand_block_block.msh.xz", "object/block.msh")):
-    with lzma.open(f"{ref}/{stored}") as src, open(f"{out}/{path}", "wb") as dst:
-        shutil.copyfileobj(src, dst)
-PY
-  "$B/mesher/tactus-mesh" fibres "$W/hand_block/mesh/mesh.msh" --angle 30 --axis z -o "$W/hand_block/mesh/fibres.vtu" -q
+  # The demo's meshes as they were when the reference was recorded, stored next to it (see
+  # hand_block_meshes.sh): the reference pins the meshes and checks the solver.
+  TACTUS_BUILD_DIR=$B bash "$REF/hand_block_meshes.sh" "$W/hand_block"
   run_case hand_block "$ROOT/pipeline/scenarios/hand_block.toml" "$W/hand_block"
 fi

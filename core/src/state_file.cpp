@@ -223,43 +223,26 @@ void StateArchive::missing(const std::string& name) const {
   throw InputError(file_, name, "an array named " + name + " (written by this version of tactus)", "none");
 }
 
-namespace {
-template <class Map, class V, class Convert>
-void io_array(bool loading, Map& map, const std::string& name, V& v, std::size_t size, Convert convert, const StateArchive& a,
-              void (StateArchive::*missing)(const std::string&) const,
-              void (StateArchive::*size_error)(const std::string&, std::size_t, std::size_t) const) {
-  if (!loading) {
+// An array of the archive as the file stores it (Stored: double or int64), in either direction.
+template <class Stored, class T>
+void StateArchive::io_array(std::map<std::string, std::vector<Stored>>& map, const std::string& name, std::vector<T>& v, std::size_t size) {
+  if (!loading_) {
     auto& stored = map[name];
     stored.resize(v.size());
-    for (std::size_t i = 0; i < v.size(); ++i) stored[i] = convert(v[i]);
+    for (std::size_t i = 0; i < v.size(); ++i) stored[i] = static_cast<Stored>(v[i]);
     return;
   }
   const auto it = map.find(name);
-  if (it == map.end()) (a.*missing)(name);
-  if (size != StateArchive::kAnySize && it->second.size() != size) (a.*size_error)(name, size, it->second.size());
+  if (it == map.end()) missing(name);
+  if (size != kAnySize && it->second.size() != size) size_error(name, size, it->second.size());
   v.resize(it->second.size());
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<typename V::value_type>(it->second[i]);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<T>(it->second[i]);
 }
-}  // namespace
 
-void StateArchive::io(const std::string& name, std::vector<double>& v, std::size_t size) {
-  io_array(
-      loading_, arrays_.reals, name, v, size, [](double x) { return x; }, *this, &StateArchive::missing, &StateArchive::size_error);
-}
-void StateArchive::io(const std::string& name, std::vector<std::int32_t>& v, std::size_t size) {
-  io_array(
-      loading_, arrays_.integers, name, v, size, [](std::int32_t x) { return static_cast<std::int64_t>(x); }, *this, &StateArchive::missing,
-      &StateArchive::size_error);
-}
-void StateArchive::io(const std::string& name, std::vector<std::int64_t>& v, std::size_t size) {
-  io_array(
-      loading_, arrays_.integers, name, v, size, [](std::int64_t x) { return x; }, *this, &StateArchive::missing, &StateArchive::size_error);
-}
-void StateArchive::io(const std::string& name, std::vector<std::size_t>& v, std::size_t size) {
-  io_array(
-      loading_, arrays_.integers, name, v, size, [](std::size_t x) { return static_cast<std::int64_t>(x); }, *this, &StateArchive::missing,
-      &StateArchive::size_error);
-}
+void StateArchive::io(const std::string& name, std::vector<double>& v, std::size_t size) { io_array(arrays_.reals, name, v, size); }
+void StateArchive::io(const std::string& name, std::vector<std::int32_t>& v, std::size_t size) { io_array(arrays_.integers, name, v, size); }
+void StateArchive::io(const std::string& name, std::vector<std::int64_t>& v, std::size_t size) { io_array(arrays_.integers, name, v, size); }
+void StateArchive::io(const std::string& name, std::vector<std::size_t>& v, std::size_t size) { io_array(arrays_.integers, name, v, size); }
 void StateArchive::io(const std::string& name, double& x) {
   std::vector<double> v{x};
   io(name, v, 1);

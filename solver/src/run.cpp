@@ -246,7 +246,14 @@ class RunLoop {
       for (double t : pvd_times) std::getline(names, file), pvd_.emplace_back(t, file);
     }
     a.io("loop.next_checkpoint_time", next_checkpoint_time_);
-    a.io("loop.restarts", restarts_);
+    std::vector<std::size_t> restart_steps;
+    std::vector<double> restart_times;
+    for (const auto& [step, time] : summary_.restarts) restart_steps.push_back(step), restart_times.push_back(time);
+    a.io("loop.restart_steps", restart_steps), a.io("loop.restart_times", restart_times, restart_steps.size());
+    if (a.loading()) {
+      summary_.restarts.clear();
+      for (std::size_t k = 0; k < restart_steps.size(); ++k) summary_.restarts.emplace_back(restart_steps[k], restart_times[k]);
+    }
     a.io("loop.summary.dt_min", summary_.dt_min), a.io("loop.summary.dt_max", summary_.dt_max);
     a.io("loop.summary.max_relative_balance_error", summary_.max_relative_balance_error);
     a.io("loop.summary.outputs", summary_.outputs);
@@ -275,7 +282,7 @@ class RunLoop {
     StateArchive a(from.state, from.file.string());
     solver_.checkpoint(a);
     loop_state(a);
-    restarts_.push_back(static_cast<double>(from.step)), restarts_.push_back(from.time);
+    summary_.restarts.emplace_back(from.step, from.time);
     std::error_code ec;
     for (auto it = fs::directory_iterator(folder_ / "results", ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
       const std::string name = it->path().filename().string();
@@ -350,11 +357,7 @@ class RunLoop {
   double next_checkpoint_time_;
   std::chrono::steady_clock::time_point last_checkpoint_wall_;
   std::size_t checkpoints_written_ = 0;  // by this process
-  std::vector<double> restarts_;         // step and time of each restart, in pairs
   KillHook kill_;
-
- public:
-  const std::vector<double>& restarts() const { return restarts_; }
 };
 
 }  // namespace
@@ -377,8 +380,6 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   const nlohmann::json failure = loop.finish(loop.run());
   loop.drop_checkpoints();
   RunSummary& summary = loop.summary();
-  for (std::size_t k = 0; k + 1 < loop.restarts().size(); k += 2)
-    summary.restarts.push_back({static_cast<std::size_t>(loop.restarts()[k]), loop.restarts()[k + 1]});
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary.run_json = run_json(sc, model, solver, summary, loop.peaks(), failure);
   std::ofstream(staged.path() / "run.json") << summary.run_json.dump(2) << '\n';

@@ -41,6 +41,7 @@ inline void apply(const ContactRows& rows, std::size_t k, const Vec3& dr, double
       const Vec3 f{c * wt * dr[0], c * wt * dr[1], c * wt * dr[2]};
       const Vec3 dw = rigid->turn(b, cross(rigid->arm(n, b), f));
       for (int d = 0; d < 3; ++d) rigid->V[bi][d] += f[d] * rigid->inv_mass[bi], rigid->w[bi][d] += dw[d];
+      rigid->moved[bi] = 1;
       continue;
     }
     for (int d = 0; d < 3; ++d) v[3 * node + d] += c * wt * dr[d] * inv_mass[3 * node + d];

@@ -14,14 +14,14 @@ namespace tactus::solver {
 // V + w x (x - c), and a reaction on it moves the whole body (dV = c r / m, dw = c I^-1 (x - c) x r),
 // so the rows on one body are coupled through it within the sweep.
 struct RigidRows {
-  const std::int32_t* body_of_node = nullptr;  // per node: a free rigid body's index, or -1
+  const std::int32_t* body_of_node = nullptr;  // per node: a free rigid body's index, or < 0
   const double* X = nullptr;                   // reference positions and displacements at t^n (3 per node)
   const double* u = nullptr;
   std::vector<Vec3> centre, V, w;                  // per body; V and w (at t^{n+1/2}) are updated by the solve
-  std::vector<Vec3> V_free, w_free;                // per body: V and w before the solve
+  std::vector<char> moved;                         // per body: the solve changed V or w
   std::vector<double> inv_mass;                    // per body
   std::vector<std::array<double, 9>> inv_inertia;  // per body, world frame at t^n, row by row
-  int body(std::int32_t node) const { return body_of_node ? body_of_node[node] : -1; }
+  int body(std::int32_t node) const { return body_of_node && body_of_node[node] >= 0 ? body_of_node[node] : -1; }
   Vec3 arm(std::int32_t node, int b) const;       // x_node - c_b
   Vec3 velocity(std::int32_t node, int b) const;  // V_b + w_b x arm
   Vec3 turn(int b, const Vec3& moment) const;     // I_b^-1 moment

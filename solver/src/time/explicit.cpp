@@ -54,7 +54,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   contact_.set_pressure_window(std::max(model.contact_settings.pressure_window, 10 * initial_critical_));
   double kinetic = rigid_kinetic_energy(true), added = 0;  // the initial energy is the physical one; mass added at t = 0 is booked as added
   for (std::size_t i = 0; i < ndof; ++i) {
-    if (!rigid_node_.empty() && rigid_node_[i / 3]) continue;
+    if (on_rigid_body(i / 3)) continue;
     kinetic += 0.5 * mass_[i / 3] * v_half_[i] * v_half_[i];
     added += 0.5 * (mass_[i / 3] - model.mass[i / 3]) * v_half_[i] * v_half_[i];
     added_momentum_[i % 3] += (mass_[i / 3] - model.mass[i / 3]) * v_half_[i];
@@ -132,7 +132,7 @@ void ExplicitSolver::scale_mass() {
       for (int k = 0; k < 4; ++k) {
         const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
         // A node of a rigid body gets none: the body's mass is its own (and far larger).
-        if (!rigid_node_.empty() && rigid_node_[n]) {
+        if (on_rigid_body(n)) {
           added_mass_body_[static_cast<std::size_t>(element_body_[e])] -= 0.25 * added;
           continue;
         }
@@ -227,7 +227,7 @@ void ExplicitSolver::advance_velocity() {
 
   double kinetic = rigid_kinetic_energy(first), ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
   const double* __restrict mass_of = mass_.data();
-  const std::uint8_t* rigid_of = rigid_node_.empty() ? nullptr : rigid_node_.data();
+  const std::int32_t* rigid_of = rigid_of_node_.empty() ? nullptr : rigid_of_node_.data();
   if (mass_scaling()) {
     // Mass added at t^n: its kinetic energy 1/2 dm (v^n)^2, the difference it makes to the kinetic
     // energy below, and its momentum dm v^{n-1/2}: the update from v^{n-1/2} conserves the
@@ -251,7 +251,7 @@ void ExplicitSolver::advance_velocity() {
     std::array<double, 5> sum{};  // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
     for (std::size_t i = c * kEnergyChunk; i < std::min(ndof, (c + 1) * kEnergyChunk); ++i) {
       // A rigid body's nodes: their kinetic energy and damping are the body's (below).
-      const double m = rigid_of && rigid_of[i / 3] ? 0.0 : mass_of[i / 3];
+      const double m = rigid_of && rigid_of[i / 3] != -1 ? 0.0 : mass_of[i / 3];
       const double fext = external_force(i);
       const double v_old = v_old_of[i], v_new = v_new_of[i];
       double reaction = 0;
@@ -350,16 +350,15 @@ void ExplicitSolver::advance_position() {
 void ExplicitSolver::init_rigid_bodies() {
   rigid_ = find_rigid_bodies(model_);
   if (rigid_.empty()) return;
-  rigid_node_.assign(model_.num_nodes, 0);
   rigid_next_.resize(rigid_.size());
   rigid_rows_ = std::make_unique<RigidRows>();
   RigidRows& rows = *rigid_rows_;
   rows.X = model_.X.data(), rows.u = u_.data();
-  rigid_body_of_node_.assign(model_.num_nodes, -1);
-  rows.body_of_node = rigid_body_of_node_.data();
+  rigid_of_node_.assign(model_.num_nodes, -1);
+  rows.body_of_node = rigid_of_node_.data();
   const std::size_t nb = rigid_.size();
   rows.centre.resize(nb), rows.V.resize(nb), rows.w.resize(nb), rows.inv_mass.resize(nb), rows.inv_inertia.resize(nb);
-  rows.V_free.resize(nb), rows.w_free.resize(nb);
+  rows.moved.resize(nb);
   for (RigidBody& b : rigid_) {
     const BodyRange& body = model_.bodies[b.body];
     const auto a0 = static_cast<std::size_t>(b.nodes.front());
@@ -375,8 +374,7 @@ void ExplicitSolver::init_rigid_bodies() {
     b.angular_momentum_before = b.angular_momentum = b.inertia0 * w;
     for (std::size_t k = 0; k < b.nodes.size(); ++k) {
       const auto a = static_cast<std::size_t>(b.nodes[k]);
-      rigid_node_[a] = 1;
-      if (!b.prescribed) rigid_body_of_node_[a] = static_cast<std::int32_t>(&b - rigid_.data());  // (a prescribed one holds like a support)
+      rigid_of_node_[a] = b.prescribed ? kPrescribedRigid : static_cast<std::int32_t>(&b - rigid_.data());
       const Vec3d v = V + w.cross(Vec3d(&b.offset[3 * k]));
       for (std::size_t d = 0; d < 3; ++d) {
         v_half_[3 * a + d] = v_prev_half_[3 * a + d] = v[static_cast<Eigen::Index>(d)];
@@ -428,7 +426,7 @@ void ExplicitSolver::kick_rigid_bodies(double dt, double dtbar, double c_minus, 
     // As the contact sweep sees it: velocity and angular velocity at t^{n+1/2}, centre and inverse
     // inertia at t^n.
     RigidRows& rows = *rigid_rows_;
-    const Mat3 inv_inertia = b.rotation * b.axes * b.principal.cwiseInverse().asDiagonal() * (b.rotation * b.axes).transpose();
+    const Mat3 inv_inertia = b.inverse_inertia();
     const Vec3d w = inv_inertia * b.angular_momentum;
     for (int d = 0; d < 3; ++d) {
       rows.centre[k][static_cast<std::size_t>(d)] = b.centre[d], rows.V[k][static_cast<std::size_t>(d)] = b.momentum[d] / b.mass;
@@ -436,7 +434,7 @@ void ExplicitSolver::kick_rigid_bodies(double dt, double dtbar, double c_minus, 
       for (int e = 0; e < 3; ++e) rows.inv_inertia[k][static_cast<std::size_t>(3 * d + e)] = inv_inertia(d, e);
     }
     rows.inv_mass[k] = 1.0 / b.mass;
-    rows.V_free[k] = rows.V[k], rows.w_free[k] = rows.w[k];
+    rows.moved[k] = 0;
   }
 }
 
@@ -452,7 +450,7 @@ void ExplicitSolver::drift_rigid_bodies(double dt) {
     } else {
       // The contact sweep's impulses, taken back as momentum and angular momentum (untouched
       // bodies keep theirs bit for bit).
-      if (rows.V[k] != rows.V_free[k] || rows.w[k] != rows.w_free[k]) {
+      if (rows.moved[k]) {
         b.momentum = b.mass * Vec3d(rows.V[k].data());
         b.angular_momentum = b.inertia() * Vec3d(rows.w[k].data());
       }

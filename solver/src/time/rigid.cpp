@@ -31,11 +31,10 @@ Mat3 axis_rotation(int i, double t) {
 
 }  // namespace
 
-Vec3d RigidBody::angular_velocity_of(const Vec3d& L) const {
-  // I(t)^-1 L = R A diag(1/I) A^T R^T L (A the principal axes).
+Mat3 RigidBody::inverse_inertia() const {
+  // I(t)^-1 = R A diag(1/I) A^T R^T (A the principal axes).
   const Mat3 frame = rotation * axes;
-  const Vec3d pi = frame.transpose() * L;
-  return frame * Vec3d(pi[0] / principal[0], pi[1] / principal[1], pi[2] / principal[2]);
+  return frame * principal.cwiseInverse().asDiagonal() * frame.transpose();
 }
 
 std::vector<RigidBody> find_rigid_bodies(const Model& m) {
@@ -86,11 +85,11 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
       r.inertia0 += rho * V / 20.0 * (xx + s * s.transpose());  // (second moment, turned into the inertia below)
     }
   }
+  for (std::size_t a = 0; a < m.num_nodes; ++a)  // each body's nodes, ascending, in one pass
+    if (rigid_node[a]) out[index.at(find_root(parent, static_cast<std::int32_t>(a)))].nodes.push_back(static_cast<std::int32_t>(a));
   std::map<std::string, int> pieces;
   for (const auto& [root, k] : index) {
     RigidBody& r = out[k];
-    for (std::size_t a = 0; a < m.num_nodes; ++a)
-      if (rigid_node[a] && find_root(parent, static_cast<std::int32_t>(a)) == root) r.nodes.push_back(static_cast<std::int32_t>(a));
     // The deformable tets' lumped mass on the shared nodes moves with the body: point masses.
     for (std::int32_t a : r.nodes) {
       const double extra = m.mass[static_cast<std::size_t>(a)] - rigid_share[static_cast<std::size_t>(a)];

@@ -87,6 +87,8 @@ class StateArchive {
   }
 
  private:
+  template <class Stored, class T>
+  void io_array(std::map<std::string, std::vector<Stored>>& map, const std::string& name, std::vector<T>& v, std::size_t size);
   [[noreturn]] void size_error(const std::string& name, std::size_t expected, std::size_t found) const;
   [[noreturn]] void missing(const std::string& name) const;
   StateArrays arrays_;

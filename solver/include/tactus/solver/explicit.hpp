@@ -165,9 +165,13 @@ class ExplicitSolver {
   bool velocity_advanced_ = false;
   Energies energy_;
   std::vector<RigidBody> rigid_;
-  std::vector<std::uint8_t> rigid_node_;          // per node: 1 when it moves with a rigid body
-  std::vector<std::int32_t> rigid_body_of_node_;  // per node: its free rigid body, or -1
-  std::unique_ptr<RigidRows> rigid_rows_;         // the free ones, as the contact sweep sees them
+  // Per node (empty without rigid bodies): its free rigid body's index, kPrescribedRigid on a
+  // prescribed one, -1 on none. The contact sweep reads it as is (a prescribed body's nodes hold
+  // like supports).
+  static constexpr std::int32_t kPrescribedRigid = -2;
+  std::vector<std::int32_t> rigid_of_node_;
+  bool on_rigid_body(std::size_t node) const { return !rigid_of_node_.empty() && rigid_of_node_[node] != -1; }
+  std::unique_ptr<RigidRows> rigid_rows_;  // the free ones, as the contact sweep sees them
   struct RigidStep {
     Vec3d centre;
     Mat3 rotation;

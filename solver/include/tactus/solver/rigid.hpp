@@ -55,9 +55,10 @@ struct RigidBody {
   Vec3d force = Vec3d::Zero(), moment = Vec3d::Zero();
   Vec3d reaction_force = Vec3d::Zero(), reaction_moment = Vec3d::Zero();
 
-  // The world inertia tensor at the current rotation, and its inverse.
+  // The world inertia tensor at the current rotation, its inverse, and I(t)^-1 L.
   Mat3 inertia() const { return rotation * inertia0 * rotation.transpose(); }
-  Vec3d angular_velocity_of(const Vec3d& L) const;  // I(t)^-1 L
+  Mat3 inverse_inertia() const;
+  Vec3d angular_velocity_of(const Vec3d& L) const { return inverse_inertia() * L; }
   double kinetic_energy(const Vec3d& P, const Vec3d& L) const { return 0.5 * P.squaredNorm() / mass + 0.5 * L.dot(angular_velocity_of(L)); }
 };
 
