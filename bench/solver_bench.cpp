@@ -10,6 +10,7 @@
 //  contact     contact time per step against surface size: two slabs (n x n x 1 cells each)
 //              pressed face to face, every slave node in contact, mu = 0.3; detection + Uzawa
 //              per step against the stress pass of the same model, 2 threads.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -55,35 +56,63 @@ std::vector<double> deformed_state(const Model& m) {
   return u;
 }
 
-double updates_per_second(const Model& m, int threads) {
-  InternalForces forces(m, 0.0, threads);
+// Stress-pass rates (tet updates per second) of the vector and the scalar kernels on the same
+// model, each the median of `rounds` timings of >= 0.3 s taken alternately (side by side, so
+// that a noisy neighbour slows both).
+std::pair<double, double> updates_per_second(const Model& m, int threads, int rounds) {
   const auto u = deformed_state(m);
   std::vector<double> v(u.size(), 0.0), f(u.size());
-  forces.compute(u.data(), v.data(), f.data());  // warm-up
-  std::size_t passes = 0;
-  const auto t0 = Clock::now();
-  double elapsed = 0;
-  while (elapsed < 1.5 || passes < 3) {
-    forces.compute(u.data(), v.data(), f.data());
-    ++passes;
-    elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
-  }
-  return static_cast<double>(passes * m.num_elements) / elapsed;
+  InternalForces vector(m, 0.0, threads), scalar(m, 0.0, threads);
+  scalar.set_vectorised(false);
+  auto time = [&](InternalForces& forces) {
+    forces.compute(u.data(), v.data(), f.data());  // warm-up
+    std::size_t passes = 0;
+    const auto t0 = Clock::now();
+    double elapsed = 0;
+    while (elapsed < 0.3 || passes < 3) {
+      forces.compute(u.data(), v.data(), f.data());
+      ++passes;
+      elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
+    }
+    return static_cast<double>(passes * m.num_elements) / elapsed;
+  };
+  std::vector<double> rv, rs;
+  for (int k = 0; k < rounds; ++k) rv.push_back(time(vector)), rs.push_back(time(scalar));
+  auto median = [](std::vector<double> x) {
+    std::sort(x.begin(), x.end());
+    return x[x.size() / 2];
+  };
+  return {median(rv), median(rs)};
 }
 
-void throughput(const std::vector<int>& sizes) {
-  std::printf("%-15s %9s %8s %7s %14s %14s\n", "material", "tets", "order", "threads", "Mupdates/s", "ns/tet-update");
+// lscpu's "Thread(s) per core" (2: the two threads may share one core's SIMD units).
+std::string threads_per_core() {
+  std::string out = "unknown";
+  if (FILE* p = popen("lscpu 2>/dev/null", "r")) {
+    char line[512];
+    while (std::fgets(line, sizeof line, p))
+      if (std::string l = line; l.rfind("Thread(s) per core:", 0) == 0) out = l.substr(l.find(':') + 1), out.erase(0, out.find_first_not_of(" \t"));
+    pclose(p);
+    if (!out.empty() && out.back() == '\n') out.pop_back();
+  }
+  return out;
+}
+
+void throughput(const std::vector<int>& sizes, const std::vector<std::string>& materials, int rounds) {
+  std::printf("lscpu threads per core: %s\n", threads_per_core().c_str());
+  std::printf("%-15s %9s %8s %7s %12s %12s %8s %14s\n", "material", "tets", "order", "threads", "vector M/s", "scalar M/s", "ratio", "ns/tet (vec)");
   for (int n : sizes) {
     TetMesh mesh = samples::make_box_mesh(n, n, n, 0.1, 0.1, 0.1);
     samples::perturb_interior_nodes(mesh, 0.1 / n, 0.2, 1);
     samples::shuffle_numbering(mesh, 2);
-    for (const char* mat : {"neo_hookean", "neo_hookean/anp", "hgo/standard", "hgo/anp", "linear_elastic"}) {
+    for (const std::string& mat : materials) {
       for (bool reorder : {false, true}) {
-        if (!reorder && std::string(mat).find('/') != std::string::npos) continue;  // formulations: Morton order only
+        if (!reorder && mat.find('/') != std::string::npos) continue;  // formulations: Morton order only
         const Model m = build_model(mesh, bench_material(mat), mat, {0, 0, 0}, reorder);
         for (int threads : {1, 2}) {
-          const double rate = updates_per_second(m, threads);
-          std::printf("%-15s %9zu %8s %7d %14.2f %14.2f\n", mat, m.num_elements, reorder ? "morton" : "shuffled", threads, rate / 1e6, 1e9 / rate);
+          const auto [vec, sca] = updates_per_second(m, threads, rounds);
+          std::printf("%-15s %9zu %8s %7d %12.2f %12.2f %8.2f %14.2f\n", mat.c_str(), m.num_elements, reorder ? "morton" : "shuffled", threads,
+                      vec / 1e6, sca / 1e6, vec / sca, 1e9 / vec);
           std::fflush(stdout);
         }
       }
@@ -98,6 +127,8 @@ void throughput(const std::vector<int>& sizes) {
                 static_cast<double>(solver.memory_bytes()) / static_cast<double>(m.num_elements),
                 static_cast<double>(m.memory_bytes() + solver.memory_bytes()) / static_cast<double>(m.num_elements), m.num_nodes);
   }
+  std::printf("rates: medians of %d alternating timings; vector = %d tets per SIMD lane group, scalar = one tet at a time (same formulas)\n", rounds,
+              InternalForces::lanes());
 }
 
 void cube(const std::filesystem::path& work) {
@@ -171,8 +202,12 @@ int main(int argc, char** argv) {
   cli::add_common_options(app, common, "");
   std::vector<int> sizes{12, 26, 55};  // 6 n^3 tets: 10,368 / 105,456 / 998,250
   std::string work = "out/bench";
-  auto* tp = app.add_subcommand("throughput", "stress-pass throughput and memory per tet");
+  std::vector<std::string> materials{"neo_hookean", "neo_hookean/anp", "hgo/standard", "hgo/anp", "linear_elastic"};
+  int rounds = 5;
+  auto* tp = app.add_subcommand("throughput", "stress-pass throughput (vector and scalar kernels) and memory per tet");
   tp->add_option("--cells", sizes, "cells per box edge (6 n^3 tets)")->capture_default_str();
+  tp->add_option("--materials", materials, "laws, or <law>/anp and <law>/standard")->capture_default_str();
+  tp->add_option("--rounds", rounds, "timings per rate (the median is printed)")->capture_default_str()->check(CLI::Range(1, 100));
   auto* cb = app.add_subcommand("cube", "whole-run neo_hookean cube (48,000 tets, 2,000 steps)");
   cb->add_option("--work", work, "folder for the mesh and results")->capture_default_str();
   std::vector<int> contact_sizes{16, 32, 64, 128, 224};  // 2 n^2 master triangles: 512 ... 100,352
@@ -180,7 +215,7 @@ int main(int argc, char** argv) {
   ct->add_option("--cells", contact_sizes, "cells per slab edge (2 n^2 triangles per contact face)")->capture_default_str();
   app.require_subcommand(1);
   return cli::run(app, argc, argv, common, [&] {
-    if (tp->parsed()) throughput(sizes);
+    if (tp->parsed()) throughput(sizes, materials, rounds);
     if (cb->parsed()) cube(work);
     if (ct->parsed()) contact_scaling(contact_sizes);
   });

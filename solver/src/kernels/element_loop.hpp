@@ -5,6 +5,12 @@
 // stable step in the same pass (Laghos' qdata.dt_est idea). No virtual call or branch on the
 // material inside the loop.
 //
+// Vectorised: the loop takes lanes::kLanes consecutive tets at a time, one per SIMD lane (their
+// nodes gathered lane by lane, their forces scattered back in element order), and the laws'
+// formulas are templates over the lane type (lanes.hpp), so the same source is the scalar kernel
+// (T = double: the partition's tail, a group with an inverted tet, and `vectorised = false`) and
+// the vector one. Per node the forces are added in element order either way.
+//
 // Average nodal pressure (ANP) tets (Bonet & Burton 1998; Joldes, Wittek & Miller 2009): for a
 // law with an uncoupled volumetric part, W = W_iso(F) + U(J), the volumetric energy is
 // sum_a V_a U(J_a) over the nodes of the material's tets, with nodal volumes V_a = sum_e V_e / 4
@@ -15,7 +21,9 @@
 #include <concepts>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
+#include "lanes.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/material.hpp"
 
@@ -41,22 +49,31 @@ struct StressKernelArgs {
   // its step is computed with, and where its unscaled squared step (no beta) is stored.
   const double* mass_factor = nullptr;
   double* element_dt2 = nullptr;
+  bool vectorised = true;  // false: one tet at a time (the reference the vector kernel is tested against)
+};
+
+// What a law's evaluation gives for T = double (one tet) or lanes::Pack (one tet per lane).
+template <class T>
+struct LawStress {
+  lanes::M3<T> P;  // first Piola-Kirchhoff stress
+  T W;             // stored energy per reference volume
+  T modulus;       // P-wave modulus for the stable step
 };
 
 // A law whose energy is W_iso(F) + U(J) declares evaluate_isochoric (P, W of W_iso; the modulus
 // still the whole P-wave modulus), volumetric_energy U(J) and volumetric_pressure U'(J); its
 // standard evaluation is their sum. Such a law can run as ANP tets.
 template <class Law>
-concept VolumetricSplit = requires(const Law& l, const Mat3& F, double J, const double* d) {
-  { l.evaluate_isochoric(F, F, J, d) } -> std::same_as<StressPoint>;
+concept VolumetricSplit = requires(const Law& l, const lanes::M3<double>& F, double J, const double* d) {
+  { l.evaluate_isochoric(F, F, J, d) } -> std::same_as<LawStress<double>>;
   { l.volumetric_energy(J) } -> std::same_as<double>;
   { l.volumetric_pressure(J) } -> std::same_as<double>;
 };
 
-template <class Law>
-TACTUS_KERNEL_INLINE StressPoint evaluate_law(const Law& mat, const Mat3& F, const Mat3& cof, double J, const double* data) {
+template <class Law, class T>
+TACTUS_KERNEL_INLINE LawStress<T> evaluate_law(const Law& mat, const lanes::M3<T>& F, const lanes::M3<T>& cof, const T& J, const T* data) {
   if constexpr (VolumetricSplit<Law>) {
-    StressPoint s = mat.evaluate_isochoric(F, cof, J, data);
+    LawStress<T> s = mat.evaluate_isochoric(F, cof, J, data);
     s.P += mat.volumetric_pressure(J) * cof;  // dU/dF = U'(J) cof(F)
     s.W += mat.volumetric_energy(J);
     return s;
@@ -65,88 +82,215 @@ TACTUS_KERNEL_INLINE StressPoint evaluate_law(const Law& mat, const Mat3& F, con
   }
 }
 
+namespace kernel_detail {
+
+using lanes::M3;
+using lanes::Pack;
+
+// Element indices per lane, for the smallest step and Jacobian.
+template <class T>
+using LaneIndex = std::conditional_t<std::is_same_v<T, Pack>, lanes::PackMask, std::int64_t>;
+
+// One lane type's running results over a partition.
+template <class T>
+struct LaneResults {
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  T energy = lanes::splat<T>(0.0), viscous_power = lanes::splat<T>(0.0);
+  T dt2 = lanes::splat<T>(kInf), dt = lanes::splat<T>(kInf), min_J = lanes::splat<T>(kInf);
+  LaneIndex<T> dt_element{}, min_J_element{};
+
+  // Into `acc`, every lane in turn; on equal values the smaller element index wins, which is
+  // what a sequential loop with strict < gives.
+  void add_to(StressAccumulator& acc, bool viscous) const {
+    for (int l = 0; l < lanes::lanes_of<T>; ++l) {
+      acc.energy += lanes::lane(energy, l);
+      acc.viscous_power += lanes::lane(viscous_power, l);
+      const auto take = [](double v, std::size_t e, double& best, std::size_t& best_e) {
+        if (v < best || (v == best && e < best_e)) best = v, best_e = e;
+      };
+      take(lanes::lane(min_J, l), static_cast<std::size_t>(index(min_J_element, l)), acc.min_J, acc.min_J_element);
+      take(lanes::lane(viscous ? dt : dt2, l), static_cast<std::size_t>(index(dt_element, l)), viscous ? acc.dt : acc.dt2, acc.dt_element);
+    }
+  }
+  static std::int64_t index(const LaneIndex<T>& i, int l) {
+    if constexpr (std::is_same_v<T, Pack>)
+      return i[l];
+    else
+      return i;
+  }
+};
+
+template <class T>
+TACTUS_KERNEL_INLINE LaneIndex<T> lane_indices(std::size_t e) {
+  const auto first = static_cast<std::int64_t>(e);
+  if constexpr (std::is_same_v<T, Pack>) {
+    lanes::PackMask i{};
+    for (int l = 0; l < lanes::kLanes; ++l) i[l] = first + l;
+    return i;
+  } else {
+    return first;
+  }
+}
+
+// `values[stride * l + k]` for each lane l.
+template <class T>
+TACTUS_KERNEL_INLINE T load_strided(const double* values, std::size_t stride) {
+  return lanes::make_lanes<T>([&](int l) { return values[stride * static_cast<std::size_t>(l)]; });
+}
+
+// Gradient of a nodal vector field over the lanes' tets (nodal_gradient() for each): conn holds
+// 4 nodes per tet for consecutive tets, g their 9 reference gradients as lanes.
+template <class T>
+TACTUS_KERNEL_INLINE M3<T> nodal_gradient_lanes(const double* __restrict field, const std::int32_t* conn, const T* g) {
+  M3<T> G;
+  for (int i = 0; i < 3; ++i) {
+    T w[4];
+    for (int k = 0; k < 4; ++k) w[k] = lanes::make_lanes<T>([&](int l) { return field[3 * static_cast<std::size_t>(conn[4 * l + k]) + i]; });
+    const T d1 = w[1] - w[0], d2 = w[2] - w[0], d3 = w[3] - w[0];
+    for (int j = 0; j < 3; ++j) G(i, j) = d1 * g[j] + d2 * g[3 + j] + d3 * g[6 + j];
+  }
+  return G;
+}
+
+template <class T>
+TACTUS_KERNEL_INLINE bool all_positive(const T& J) {
+  for (int l = 0; l < lanes::lanes_of<T>; ++l)
+    if (!(lanes::lane(J, l) > 0)) return false;
+  return true;
+}
+
+template <class Law>
+inline constexpr std::size_t element_data_size() {
+  if constexpr (requires { Law::kElementData; })
+    return Law::kElementData;
+  else
+    return 1;
+}
+
+template <class Law, bool kViscous, bool kAnp, class T>
+TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& mat, std::size_t e, LaneResults<T>& out, LaneResults<double>& scalar) {
+  constexpr int L = lanes::lanes_of<T>;
+  const std::int32_t* c = a.conn + 4 * e;
+  T g[9];
+  for (int j = 0; j < 9; ++j) g[j] = load_strided<T>(a.grad + 9 * e + j, 9);
+  M3<T> F = nodal_gradient_lanes(a.u, c, g);
+  for (int i = 0; i < 3; ++i) F(i, i) += 1.0;
+  const M3<T> cof = lanes::cofactor(F);
+  const T J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
+  if constexpr (L > 1) {
+    if (!all_positive(J)) {  // an inverted tet: lane by lane, so it is recorded and skipped as alone
+      for (int l = 0; l < L; ++l) element_lanes<Law, kViscous, kAnp, double>(a, mat, e + static_cast<std::size_t>(l), scalar, scalar);
+      return;
+    }
+  }
+  const LaneIndex<T> index = lane_indices<T>(e);
+  const auto J_smaller = J < out.min_J;
+  out.min_J = J_smaller ? J : out.min_J;
+  out.min_J_element = J_smaller ? index : out.min_J_element;
+  if constexpr (L == 1)
+    if (!(J > 0)) return;  // reported by the caller; the step is abandoned
+
+  constexpr std::size_t kData = element_data_size<Law>();
+  T data[kData];
+  if constexpr (requires { Law::kElementData; }) {
+    const double* first = a.element_data + a.data_stride * (e - a.block_begin);
+    for (std::size_t k = 0; k < kData; ++k) data[k] = load_strided<T>(first + k, a.data_stride);
+  } else {
+    data[0] = lanes::splat<T>(0.0);
+  }
+  LawStress<T> sp;
+  if constexpr (kAnp) {
+    sp = mat.evaluate_isochoric(F, cof, J, data);
+    const double* np = a.nodal_pressure;  // the mean of the tet's nodal pressures: its energy is the nodes' (J pass)
+    const T p = lanes::make_lanes<T>([&](int l) {
+      const std::int32_t* cl = c + 4 * l;
+      return 0.25 * (np[cl[0]] + np[cl[1]] + np[cl[2]] + np[cl[3]]);
+    });
+    sp.P += p * cof;
+  } else {
+    sp = evaluate_law(mat, F, cof, J, data);
+  }
+  const T V0 = load_strided<T>(a.volume + e, 1);
+  out.energy += V0 * sp.W;
+
+  // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J;
+  // s = sum_a |grad_x N_a|^2 is accumulated unscaled (J^2 s) to keep divisions out of the loop.
+  T sJ2 = lanes::splat<T>(0.0), sum[3] = {sJ2, sJ2, sJ2};
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 3; ++i) {
+      const T h = cof(i, 0) * g[3 * k] + cof(i, 1) * g[3 * k + 1] + cof(i, 2) * g[3 * k + 2];
+      sJ2 += h * h;
+      sum[i] += h;
+    }
+  sJ2 += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
+  // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J):
+  // dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M).
+  T dt2 = mat.density * J / (sJ2 * sp.modulus);
+  if (a.element_dt2) {  // mass scaling on: the element's added mass lengthens its step as sqrt(m)
+    for (int l = 0; l < L; ++l) a.element_dt2[e + static_cast<std::size_t>(l)] = lanes::lane(dt2, l);
+    dt2 *= load_strided<T>(a.mass_factor + e, 1);
+  }
+
+  if constexpr (kViscous) {
+    // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
+    // D = sym(Fdot F^{-1}); its first Piola stress is J sigma_v F^{-T} = sigma_v cof.
+    const double visc_mu = mat.small_strain_shear(), visc_lambda = mat.small_strain_bulk() - 2.0 * visc_mu / 3.0;
+    const M3<T> Fdot = nodal_gradient_lanes(a.v, c, g);
+    M3<T> D;
+    const T inv_J = 1.0 / J;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        const T Lij = Fdot(i, 0) * cof(j, 0) + Fdot(i, 1) * cof(j, 1) + Fdot(i, 2) * cof(j, 2);
+        const T Lji = Fdot(j, 0) * cof(i, 0) + Fdot(j, 1) * cof(i, 1) + Fdot(j, 2) * cof(i, 2);
+        D(i, j) = 0.5 * inv_J * (Lij + Lji);
+      }
+    const M3<T> sigma_v = a.beta * (2.0 * visc_mu * D + lanes::identity_times<T>(visc_lambda * lanes::trace(D)));
+    const M3<T> Pv = sigma_v * cof;
+    sp.P += Pv;
+    T power = Pv.a[0] * Fdot.a[0];
+    for (int k = 1; k < 9; ++k) power += Pv.a[k] * Fdot.a[k];
+    out.viscous_power += V0 * power;
+    const T omega = 2.0 / lanes::sqrt_of(dt2);
+    const T xi = 0.5 * a.beta * omega;
+    const T dt = 2.0 / omega * (lanes::sqrt_of(1.0 + xi * xi) - xi);
+    const auto smaller = dt < out.dt;
+    out.dt = smaller ? dt : out.dt;
+    out.dt_element = smaller ? index : out.dt_element;
+  } else {
+    const auto smaller = dt2 < out.dt2;
+    out.dt2 = smaller ? dt2 : out.dt2;
+    out.dt_element = smaller ? index : out.dt_element;
+  }
+
+  T h[4][3];
+  for (int i = 0; i < 3; ++i) h[0][i] = lanes::splat<T>(0.0);
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 3; ++i) {
+      h[k + 1][i] = -V0 * (sp.P(i, 0) * g[3 * k] + sp.P(i, 1) * g[3 * k + 1] + sp.P(i, 2) * g[3 * k + 2]);
+      h[0][i] -= h[k + 1][i];
+    }
+  for (int l = 0; l < L; ++l)  // in element order, node 1, 2, 3 then 0, as the scalar loop always added them
+    for (int k : {1, 2, 3, 0}) {
+      double* fa = a.f + 3 * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
+      for (int i = 0; i < 3; ++i) fa[i] += lanes::lane(h[k][i], l);
+    }
+}
+
+}  // namespace kernel_detail
+
 template <class Law, bool kViscous, bool kAnp = false>
 void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
+  using namespace kernel_detail;
   const Law& mat = *static_cast<const Law*>(a.law);
-  const std::int32_t* __restrict conn = a.conn;
-  const double* __restrict grad = a.grad;
-  const double* __restrict vol = a.volume;
-  const double* __restrict u = a.u;
-  const double* __restrict v = a.v;
-  double* __restrict f = a.f;
-  const double rho0 = mat.density;
-  const double visc_lambda = mat.small_strain_bulk() - 2.0 * mat.small_strain_shear() / 3.0;
-  const double visc_mu = mat.small_strain_shear();
-  for (std::size_t e = a.begin; e < a.end; ++e) {
-    const std::int32_t* c = conn + 4 * e;
-    const double* g = grad + 9 * e;
-    Mat3 F = nodal_gradient(u, c, g);
-    F(0, 0) += 1.0, F(1, 1) += 1.0, F(2, 2) += 1.0;
-    const Mat3 cof = cofactor(F);
-    const double J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
-    if (J < acc.min_J) acc.min_J = J, acc.min_J_element = e;
-    if (!(J > 0)) continue;  // reported by the caller; the step is abandoned
-    const double* data = a.element_data + a.data_stride * (e - a.block_begin);
-    StressPoint sp;
-    if constexpr (kAnp) {
-      sp = mat.evaluate_isochoric(F, cof, J, data);
-      const double* p = a.nodal_pressure;
-      sp.P += (0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]])) * cof;  // its energy is the nodes' (J pass)
-    } else {
-      sp = evaluate_law(mat, F, cof, J, data);
-    }
-    const double V0 = vol[e];
-    acc.energy += V0 * sp.W;
-
-    // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J;
-    // s = sum_a |grad_x N_a|^2 is accumulated unscaled (J^2 s) to keep divisions out of the loop.
-    double sJ2 = 0, sum[3] = {0, 0, 0};
-    for (int k = 0; k < 3; ++k) {
-      double h[3];
-      for (int i = 0; i < 3; ++i) h[i] = cof(i, 0) * g[3 * k] + cof(i, 1) * g[3 * k + 1] + cof(i, 2) * g[3 * k + 2];
-      sJ2 += h[0] * h[0] + h[1] * h[1] + h[2] * h[2];
-      sum[0] += h[0], sum[1] += h[1], sum[2] += h[2];
-    }
-    sJ2 += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
-    // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J):
-    // dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M).
-    double dt2 = rho0 * J / (sJ2 * sp.modulus);
-    if (a.element_dt2) {  // mass scaling on: the element's added mass lengthens its step as sqrt(m)
-      a.element_dt2[e] = dt2;
-      dt2 *= a.mass_factor[e];
-    }
-
-    if constexpr (kViscous) {
-      // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
-      // D = sym(Fdot F^{-1}); its first Piola stress is J sigma_v F^{-T} = sigma_v cof.
-      const Mat3 Fdot = nodal_gradient(v, c, g);
-      const Mat3 L = Fdot * cof.transpose() / J;
-      const Mat3 D = 0.5 * (L + L.transpose());
-      const Mat3 sigma_v = a.beta * (visc_lambda * D.trace() * Mat3::Identity() + 2.0 * visc_mu * D);
-      const Mat3 Pv = sigma_v * cof;
-      sp.P += Pv;
-      acc.viscous_power += V0 * (Pv.cwiseProduct(Fdot)).sum();
-      const double omega = 2.0 / std::sqrt(dt2);
-      const double xi = 0.5 * a.beta * omega;
-      const double dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
-      if (dt < acc.dt) acc.dt = dt, acc.dt_element = e;
-    } else {
-      (void)v;
-      if (dt2 < acc.dt2) acc.dt2 = dt2, acc.dt_element = e;
-    }
-
-    double f0[3] = {0, 0, 0};
-    for (int k = 0; k < 3; ++k) {
-      double* fa = f + 3 * (static_cast<std::size_t>(c[k + 1]) - a.f_node_offset);
-      for (int i = 0; i < 3; ++i) {
-        const double h = -V0 * (sp.P(i, 0) * g[3 * k] + sp.P(i, 1) * g[3 * k + 1] + sp.P(i, 2) * g[3 * k + 2]);
-        fa[i] += h;
-        f0[i] -= h;
-      }
-    }
-    double* fz = f + 3 * (static_cast<std::size_t>(c[0]) - a.f_node_offset);
-    fz[0] += f0[0], fz[1] += f0[1], fz[2] += f0[2];
+  LaneResults<double> scalar;
+  std::size_t e = a.begin;
+  if (a.vectorised) {
+    LaneResults<Pack> packed;
+    for (; e + lanes::kLanes <= a.end; e += lanes::kLanes) element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);
+    packed.add_to(acc, kViscous);
   }
+  for (; e < a.end; ++e) element_lanes<Law, kViscous, kAnp, double>(a, mat, e, scalar, scalar);
+  scalar.add_to(acc, kViscous);
 }
 
 }  // namespace tactus::solver

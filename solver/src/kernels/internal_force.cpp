@@ -29,10 +29,18 @@ int default_threads(std::size_t elements) {
   return std::min(n, useful);
 }
 
-double determinant_at(const Model& m, std::size_t e, const double* u) {
-  Mat3 F = nodal_gradient(u, &m.conn[4 * e], &m.grad[9 * e]);
-  F(0, 0) += 1.0, F(1, 1) += 1.0, F(2, 2) += 1.0;
-  return F.determinant();
+// Each of the lanes' tets adds a quarter of its current volume J V0 to its four nodes.
+template <class T>
+void add_quarter_volumes(const Model& m, std::size_t e, const double* u, double* node_volume, std::size_t node_offset) {
+  const std::int32_t* c = &m.conn[4 * e];
+  T g[9];
+  for (int j = 0; j < 9; ++j) g[j] = kernel_detail::load_strided<T>(&m.grad[9 * e + static_cast<std::size_t>(j)], 9);
+  lanes::M3<T> F = kernel_detail::nodal_gradient_lanes(u, c, g);
+  for (int i = 0; i < 3; ++i) F(i, i) += 1.0;
+  const lanes::M3<T> cof = lanes::cofactor(F);
+  const T quarter = 0.25 * (F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2)) * kernel_detail::load_strided<T>(&m.volume[e], 1);
+  for (int l = 0; l < lanes::lanes_of<T>; ++l)
+    for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[4 * l + k]) - node_offset] += lanes::lane(quarter, l);
 }
 
 }  // namespace
@@ -44,12 +52,12 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
   return V;
 }
 
-void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
-  for (std::size_t e = begin; e < end; ++e) {
-    const double quarter = 0.25 * determinant_at(m, e, u) * m.volume[e];
-    const std::int32_t* c = &m.conn[4 * e];
-    for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
-  }
+void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset,
+                              bool vectorised) {
+  std::size_t e = begin;
+  if (vectorised)
+    for (; e + lanes::kLanes <= end; e += lanes::kLanes) add_quarter_volumes<lanes::Pack>(m, e, u, node_volume, node_offset);
+  for (; e < end; ++e) add_quarter_volumes<double>(m, e, u, node_volume, node_offset);
 }
 
 std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, const double* u) {
@@ -112,6 +120,8 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   chunk_anp_energy_.assign(chunk_partitions_.size(), 0.0);
 }
 
+int InternalForces::lanes() { return lanes::kLanes; }
+
 void InternalForces::enable_mass_scaling() {
   mass_factor_.assign(model_.num_elements, 1.0);
   element_dt2_.assign(model_.num_elements, 0.0);
@@ -153,7 +163,7 @@ void InternalForces::anp_pass(const double* u) {
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.volume_offset;
       std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo);
+      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo, vectorised_);
     }
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
@@ -191,6 +201,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
                             q.node_lo,
                             viscous ? beta_ : 0.0};
       args.nodal_pressure = block_pressure_[q.block];
+      args.vectorised = vectorised_;
       if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
       b.material.type().stress_pass(args, acc);
       partition_acc_[p] = acc;

@@ -77,7 +77,7 @@ struct Hgo {
 
   // sigma_f = sum_a 2 psi'_a J^{-5/3} (F a (x) F a - J4_a / 3 I): the fibre terms of P pushed forward.
   void result_values(const Mat3& F, const double* data, double* out) const {
-    const double J = F.determinant(), Jm13 = inv_cbrt(J);
+    const double J = F.determinant(), Jm13 = lanes::inv_cbrt(J);
     Mat3 sigma = Mat3::Zero();
     for (int f = 0; f < 2; ++f) {
       const Vec3d Fa = F * Vec3d(data + 3 * f);
@@ -94,36 +94,48 @@ struct Hgo {
   double small_strain_bulk() const { return k; }
   double small_strain_shear() const { return 2.0 * c1; }
 
-  double volumetric_energy(double J) const { return 0.5 * k * (J - 1.0) * (J - 1.0); }
-  double volumetric_pressure(double J) const { return k * (J - 1.0); }
+  template <class T>
+  T volumetric_energy(const T& J) const {
+    return 0.5 * k * (J - 1.0) * (J - 1.0);
+  }
+  template <class T>
+  T volumetric_pressure(const T& J) const {
+    return k * (J - 1.0);
+  }
 
   // Everything but the volumetric term k/2 (J - 1)^2 (the fibre terms use J4bar: isochoric).
-  TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* data) const {
-    const Vec3d f1(data), f2(data + 3);
-    const double I1 = F.squaredNorm();
-    const double Jm23 = inv_cbrt(J * J);
-    StressPoint s;
-    double cof_coeff = -2.0 * c1 * Jm23 * I1 / (3.0 * J);
+  // The fibre switch is a per-lane select: a slack fibre (J4bar <= 1) gets d = 0, which makes its
+  // psi', energy and (through `taut`) tangent zero, as fibre_slope's early return does.
+  template <class T>
+  TACTUS_KERNEL_INLINE LawStress<T> evaluate_isochoric(const M3<T>& F, const M3<T>& cof, const T& J, const T* data) const {
+    const T zero = lanes::splat<T>(0.0);
+    const T I1 = lanes::squared_norm(F);
+    const T Jm23 = lanes::inv_cbrt(J * J);
+    const T inv_J = 1.0 / J;  // one division: they cost most in a vector
+    LawStress<T> s;
+    T cof_coeff = (-2.0 / 3.0) * c1 * Jm23 * I1 * inv_J;
     s.P = (2.0 * c1 * Jm23) * F;
     s.W = c1 * (Jm23 * I1 - 3.0);
-    double fibre_modulus = 0;
-    const Vec3d* dirs[2] = {&f1, &f2};
-    for (const Vec3d* a : dirs) {
-      const Vec3d Fa = F * (*a);
-      const double J4 = Fa.squaredNorm();
-      const double J4bar = Jm23 * J4;
-      double dpsi = 0, e = 0;  // dW/dJ4bar
-      if (!fibre_slope(J4bar, dpsi, e)) continue;
-      const double d = J4bar - 1.0;
-      const double d2psi = k1 * e * (1.0 + 2.0 * k2 * d * d);  // d2W/dJ4bar2
-      s.P.noalias() += (2.0 * dpsi * Jm23) * Fa * a->transpose();
-      cof_coeff -= 2.0 * dpsi * Jm23 * J4 / (3.0 * J);
-      s.W += k1 / (2.0 * k2) * (e - 1.0);
-      // Current tangent along the fibre, d(tau_ff)/d(ln lambda) / J = (4 psi'' J4bar^2 + 4 psi' J4bar) / J.
-      fibre_modulus += (4.0 * d2psi * J4bar * J4bar + 4.0 * dpsi * J4bar) / J;
-    }
+    T fibre_modulus = zero;
+    if (k1 != 0.0)  // with k1 = 0 a fibre's exp could overflow and 0 * inf poison the stress
+      for (int f = 0; f < 2; ++f) {
+        const V3<T> a{{data[3 * f], data[3 * f + 1], data[3 * f + 2]}};
+        const V3<T> Fa = F * a;
+        const T J4 = lanes::squared_norm(Fa);
+        const T J4bar = Jm23 * J4;
+        const auto taut = J4bar > 1.0;
+        const T d = taut ? J4bar - 1.0 : zero;
+        const T e = lanes::exp_of(k2 * d * d);
+        const T dpsi = k1 * d * e;                                        // dW/dJ4bar
+        const T d2psi = taut ? k1 * e * (1.0 + 2.0 * k2 * d * d) : zero;  // d2W/dJ4bar2
+        s.P += (2.0 * dpsi * Jm23) * lanes::outer(Fa, a);
+        cof_coeff -= (2.0 / 3.0) * dpsi * Jm23 * J4 * inv_J;
+        s.W += k1 / (2.0 * k2) * (e - 1.0);
+        // Current tangent along the fibre, d(tau_ff)/d(ln lambda) / J = (4 psi'' J4bar^2 + 4 psi' J4bar) / J.
+        fibre_modulus += (4.0 * d2psi * J4bar * J4bar + 4.0 * dpsi * J4bar) * inv_J;
+      }
     s.P += cof_coeff * cof;
-    s.modulus = k + 8.0 * c1 / 3.0 + fibre_modulus;
+    s.modulus = (k + 8.0 * c1 / 3.0) + fibre_modulus;
     return s;
   }
 };

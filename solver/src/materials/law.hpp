@@ -6,13 +6,16 @@
 //   static Law create(const MaterialValues&, const std::string& where, std::vector<double>& constants);
 //   double density;                                           kg/m^3, reference configuration
 //   double small_strain_bulk() const, small_strain_shear() const;   Pa
-//   TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& cof, double J, const double* data) const;
+//   template <class T> TACTUS_KERNEL_INLINE LawStress<T> evaluate(const M3<T>& F, const M3<T>& cof, const T& J, const T* data) const;
 // or, when W = W_iso(F) + U(J) (then the law can also run as ANP tets), instead of evaluate:
-//   TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* data) const;
-//   double volumetric_energy(double J) const;     U(J)
-//   double volumetric_pressure(double J) const;   U'(J)
-// and, when it needs per-element data (fibre directions):
-//   static constexpr std::size_t kElementData;                doubles per element
+//   template <class T> TACTUS_KERNEL_INLINE LawStress<T> evaluate_isochoric(same arguments) const;
+//   template <class T> T volumetric_energy(const T& J) const;     U(J)
+//   template <class T> T volumetric_pressure(const T& J) const;   U'(J)
+// The evaluations are templates over the lane type T: double for one tet, lanes::Pack for one
+// tet per SIMD lane (kernels/lanes.hpp); write them with the operators and helpers of
+// lanes.hpp, and a branch on the deformation as a per-lane select `mask ? a : b`.
+// When the law needs per-element data (fibre directions):
+//   static constexpr std::size_t kElementData;                doubles per element (data[k], as lanes)
 //   static std::vector<std::pair<std::string, int>> element_fields();   cell fields of bodies.fibres
 //   static void element_data_from_fields(const double* fields, double* data, const std::string& where);
 //   static constexpr bool kElementDataAreDirections;          when they are 3-vectors that rotate with a body
@@ -25,6 +28,24 @@
 #include "tactus/solver/material.hpp"
 
 namespace tactus::solver {
+
+using lanes::M3;
+using lanes::V3;
+
+inline M3<double> to_m3(const Mat3& A) {
+  M3<double> r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r(i, j) = A(i, j);
+  return r;
+}
+inline StressPoint to_stress_point(const LawStress<double>& s) {
+  StressPoint r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r.P(i, j) = s.P(i, j);
+  r.W = s.W;
+  r.modulus = s.modulus;
+  return r;
+}
 
 template <class Law>
 MaterialType make_material_type() {
@@ -49,7 +70,7 @@ MaterialType make_material_type() {
     return std::make_shared<const Law>(Law::create(values, where, constants));
   };
   t.evaluate = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
-    return evaluate_law(*static_cast<const Law*>(law), F, cof, J, data);
+    return to_stress_point(evaluate_law(*static_cast<const Law*>(law), to_m3(F), to_m3(cof), J, data));
   };
   t.density = [](const void* law) { return static_cast<const Law*>(law)->density; };
   t.small_strain_bulk = [](const void* law) { return static_cast<const Law*>(law)->small_strain_bulk(); };
@@ -79,7 +100,7 @@ MaterialType make_material_type() {
         "material's tets), which do not lock when nearly incompressible";
     t.parameters.keys.push_back(formulation);
     t.evaluate_isochoric = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
-      return static_cast<const Law*>(law)->evaluate_isochoric(F, cof, J, data);
+      return to_stress_point(static_cast<const Law*>(law)->evaluate_isochoric(to_m3(F), to_m3(cof), J, data));
     };
     t.anp_nodal_pressure = [](const void* law, const double* reference_volume, double* volume, std::size_t lo, std::size_t hi) {
       const Law& mat = *static_cast<const Law*>(law);

@@ -26,14 +26,15 @@ struct LinearElastic {
   double small_strain_bulk() const { return lambda + 2.0 * mu / 3.0; }
   double small_strain_shear() const { return mu; }
 
-  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3& F, const Mat3& /*cof*/, double /*J*/, const double* /*data*/) const {
-    const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
-    const double trE = E.trace();
-    const Mat3 S = lambda * trE * Mat3::Identity() + 2.0 * mu * E;
-    StressPoint s;
+  template <class T>
+  TACTUS_KERNEL_INLINE LawStress<T> evaluate(const M3<T>& F, const M3<T>& /*cof*/, const T& /*J*/, const T* /*data*/) const {
+    const M3<T> E = 0.5 * (lanes::transpose_times(F, F) - lanes::identity_times(lanes::splat<T>(1.0)));
+    const T trE = lanes::trace(E);
+    const M3<T> S = (2.0 * mu) * E + lanes::identity_times<T>(lambda * trE);
+    LawStress<T> s;
     s.P = F * S;
-    s.W = 0.5 * lambda * trE * trE + mu * E.squaredNorm();
-    s.modulus = lambda + 2.0 * mu;
+    s.W = 0.5 * lambda * trE * trE + mu * lanes::squared_norm(E);
+    s.modulus = lanes::splat<T>(lambda + 2.0 * mu);
     return s;
   }
 };

@@ -28,20 +28,27 @@ struct MooneyRivlin {
   double small_strain_bulk() const { return bulk; }
   double small_strain_shear() const { return 2.0 * (c10 + c01); }
 
-  TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
-    const Mat3 C = F.transpose() * F;
-    const double I1 = C.trace();
-    const double I2 = 0.5 * (I1 * I1 - C.squaredNorm());
-    const double Jm23 = inv_cbrt(J * J), Jm43 = Jm23 * Jm23;
-    StressPoint s;
+  template <class T>
+  TACTUS_KERNEL_INLINE LawStress<T> evaluate_isochoric(const M3<T>& F, const M3<T>& cof, const T& J, const T* /*data*/) const {
+    const M3<T> C = lanes::transpose_times(F, F);
+    const T I1 = lanes::trace(C);
+    const T I2 = 0.5 * (I1 * I1 - lanes::squared_norm(C));
+    const T Jm23 = lanes::inv_cbrt(J * J), Jm43 = Jm23 * Jm23;
+    LawStress<T> s;
     s.P = (2.0 * c10 * Jm23) * F + (2.0 * c01 * Jm43) * (I1 * F - F * C) -
           ((2.0 / 3.0) * c10 * Jm23 * I1 / J + (4.0 / 3.0) * c01 * Jm43 * I2 / J) * cof;
     s.W = c10 * (Jm23 * I1 - 3.0) + c01 * (Jm43 * I2 - 3.0);
-    s.modulus = bulk + 4.0 * small_strain_shear() / 3.0;
+    s.modulus = lanes::splat<T>(bulk + 4.0 * small_strain_shear() / 3.0);
     return s;
   }
-  double volumetric_energy(double J) const { return 0.5 * bulk * (J - 1.0) * (J - 1.0); }
-  double volumetric_pressure(double J) const { return bulk * (J - 1.0); }
+  template <class T>
+  T volumetric_energy(const T& J) const {
+    return 0.5 * bulk * (J - 1.0) * (J - 1.0);
+  }
+  template <class T>
+  T volumetric_pressure(const T& J) const {
+    return bulk * (J - 1.0);
+  }
 };
 
 }  // namespace

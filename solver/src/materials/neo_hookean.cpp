@@ -22,17 +22,24 @@ struct NeoHookean {
   double small_strain_shear() const { return mu; }
 
   // The isochoric part: P = mu J^{-2/3} (F - I1/3 F^{-T}), F^{-T} = cof / J.
-  TACTUS_KERNEL_INLINE StressPoint evaluate_isochoric(const Mat3& F, const Mat3& cof, double J, const double* /*data*/) const {
-    const double I1 = F.squaredNorm();
-    const double Jm23 = inv_cbrt(J * J);
-    StressPoint s;
+  template <class T>
+  TACTUS_KERNEL_INLINE LawStress<T> evaluate_isochoric(const M3<T>& F, const M3<T>& cof, const T& J, const T* /*data*/) const {
+    const T I1 = lanes::squared_norm(F);
+    const T Jm23 = lanes::inv_cbrt(J * J);
+    LawStress<T> s;
     s.P = (mu * Jm23) * F - (mu * Jm23 * I1 / (3.0 * J)) * cof;
     s.W = 0.5 * mu * (Jm23 * I1 - 3.0);
-    s.modulus = bulk + 4.0 * mu / 3.0;
+    s.modulus = lanes::splat<T>(bulk + 4.0 * mu / 3.0);
     return s;
   }
-  double volumetric_energy(double J) const { return 0.5 * bulk * (J - 1.0) * (J - 1.0); }
-  double volumetric_pressure(double J) const { return bulk * (J - 1.0); }
+  template <class T>
+  T volumetric_energy(const T& J) const {
+    return 0.5 * bulk * (J - 1.0) * (J - 1.0);
+  }
+  template <class T>
+  T volumetric_pressure(const T& J) const {
+    return bulk * (J - 1.0);
+  }
 };
 
 }  // namespace

@@ -21,10 +21,10 @@ struct Rigid {
   static Rigid create(const MaterialValues& v, const std::string&, std::vector<double>&) { return {parameter(v, "density")}; }
   double small_strain_bulk() const { return 0; }
   double small_strain_shear() const { return 0; }
-  TACTUS_KERNEL_INLINE StressPoint evaluate(const Mat3&, const Mat3&, double, const double*) const {
-    StressPoint s;
-    s.P.setZero();
-    return s;
+  template <class T>
+  TACTUS_KERNEL_INLINE LawStress<T> evaluate(const M3<T>&, const M3<T>&, const T&, const T*) const {
+    const T zero = lanes::splat<T>(0.0);
+    return {lanes::identity_times(zero), zero, zero};
   }
 };
 

@@ -59,6 +59,7 @@ class HistoryWriter {
   std::ofstream out_;
   std::filesystem::path file_;
   std::size_t boundaries_ = 0, mass_scaled_bodies_ = 0, rigid_bodies_ = 0;
+  std::string line_;  // the row being written (its capacity kept: no allocation per step)
 };
 
 // The peaks over a run that run.json reports (contact over every step, von Mises at the outputs).

@@ -44,9 +44,9 @@ struct StressPassResult {
 // (0 at the other nodes), one entry per node; adding J_e V_e / 4 of tets [begin, end) at u to
 // the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial: for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
-// node_volume[n - node_offset] receives node n's share.
+// node_volume[n - node_offset] receives node n's share; vectorised as the stress pass.
 void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
-                              std::size_t node_offset = 0);
+                              std::size_t node_offset = 0, bool vectorised = true);
 std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& block, const double* u);
 
 // The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
@@ -78,11 +78,17 @@ class InternalForces {
   void enable_mass_scaling();
   const std::vector<double>& element_dt2() const { return element_dt2_; }
   std::vector<double>& mass_factor() { return mass_factor_; }
+  // The stress and J passes take lanes::kLanes tets at a time (default) or one at a time: the same
+  // formulas (kernels/lanes.hpp), kept selectable as the reference the vector kernels are tested
+  // and benched against.
+  void set_vectorised(bool on) { vectorised_ = on; }
+  static int lanes();  // tets per vector group
 
  private:
   const Model& model_;
   double beta_;
   int threads_;
+  bool vectorised_ = true;
   // A contiguous run of one block's tets, and the node range [node_lo, node_hi) they touch: its
   // forces go to partition_forces_ from force_offset (3 per node of the range), its current nodal
   // volumes (ANP blocks) to partition_volumes_ from volume_offset.

@@ -50,19 +50,6 @@ inline Mat3 cofactor(const Mat3& F) {
   return c;
 }
 
-// x^{-1/3} for x > 0, to 1e-15 relative (measured worst 6.7e-16 over 1e-6..1e6). libm's cbrt
-// (with its frexp/scalbn) took a quarter of a neo-Hookean update; this is a bit-level first guess
-// refined by four division-free Newton steps on 1/y^3 = x:  y <- y (4 - x y^3) / 3.
-inline double inv_cbrt(double x) {
-  std::uint64_t i;
-  std::memcpy(&i, &x, sizeof i);
-  i = 0x553ef0ff289dd796ULL - i / 3;
-  double y;
-  std::memcpy(&y, &i, sizeof y);
-  for (int k = 0; k < 4; ++k) y = y * (4.0 - x * y * y * y) * (1.0 / 3.0);
-  return y;
-}
-
 // The per-element material evaluation must inline into the force loop.
 #define TACTUS_KERNEL_INLINE [[gnu::always_inline]] inline
 
