@@ -33,8 +33,8 @@ ContactSolver::ContactSolver(const Model& model)
 
 ContactSolver::~ContactSolver() = default;
 
-void ContactSolver::detect(const double* u, double search_factor) {
-  rows_.clear();
+void ContactSolver::detect(const double* u, double search_factor, ContactRows& rows) {
+  rows.clear();
   // Current positions of the nodes the masters read (slave nodes, master triangles' vertices) only.
   const std::size_t n = contact_nodes_.size();
 #pragma omp parallel for num_threads(threads_) schedule(static) if (n > 30000)
@@ -45,8 +45,14 @@ void ContactSolver::detect(const double* u, double search_factor) {
     }
   for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
     const ContactPair& p = pairs_[pi];
-    p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, scratch_[pi], rows_, threads_);
+    p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, scratch_[pi], rows, threads_);
   }
+}
+
+void ContactSolver::detect_ahead(const double* u) {
+  if (pairs_.empty()) return;
+  detect(u, settings_.search_factor, ahead_rows_);
+  ahead_ = true;
 }
 
 ContactSolver::SearchCounts ContactSolver::search_counts() const {
@@ -57,7 +63,7 @@ ContactSolver::SearchCounts ContactSolver::search_counts() const {
 
 void ContactSolver::check_initial_overlap(const double* u) const {
   ContactSolver probe(model_);
-  probe.detect(u, std::max(settings_.search_factor, 2.0));
+  probe.detect(u, std::max(settings_.search_factor, 2.0), probe.rows_);
   const ContactRows& rows = probe.rows_;
   std::size_t worst = rows.size();
   double worst_h = 0;
@@ -79,7 +85,12 @@ void ContactSolver::check_initial_overlap(const double* u) const {
 ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass,
                                                     double velocity_per_force, double dt, double dt_prev, RigidRows* rigid) {
   if (pairs_.empty()) return {};
-  detect(u, settings_.search_factor);
+  if (ahead_) {
+    std::swap(rows_, ahead_rows_);
+    ahead_ = false;
+  } else {
+    detect(u, settings_.search_factor, rows_);
+  }
   ContactStepReport rep =
       solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid});
   update_windowed_pressure(rep, 0.5 * (dt + dt_prev));

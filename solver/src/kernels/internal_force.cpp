@@ -174,11 +174,15 @@ void InternalForces::anp_pass(const double* u) {
   }
 }
 
-StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out) {
+StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
   const bool viscous = beta_ > 0;
 #pragma omp parallel num_threads(threads_)
   {
     if (!anp_.empty()) anp_pass(u);
+    if (side.run) {
+#pragma omp single nowait
+      side.run(side.context);  // the partitions below are taken dynamically: this thread joins when done
+    }
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t p = 0; p < partitions_.size(); ++p) {
       const Partition& q = partitions_[p];

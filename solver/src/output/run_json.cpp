@@ -129,7 +129,9 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j[k::wall_time] = summary.wall_seconds;
   j[k::timing] = {{"stress_passes", solver.stress_seconds()},
                   {"contact", solver.contact_seconds()},
-                  {"rest", summary.wall_seconds - solver.stress_seconds() - solver.contact_seconds()}};
+                  {"rest", summary.wall_seconds - solver.stress_seconds() - solver.contact_seconds()},
+                  // of stress_passes: the next steps' contact detection, on one thread while the others computed forces
+                  {"contact_detection_during_stress_passes", solver.detection_ahead_seconds()}};
   j[k::energy] = {{"initial", en.initial},
                   {"kinetic", en.kinetic},
                   {"internal", en.internal},

@@ -45,6 +45,11 @@ void ContactSolver::checkpoint(StateArchive& a) {
   }
   a.io("contact.windowed_pressure", windowed_pressure_, windowed_pressure_.size());
   a.io("contact.pressure_window", pressure_window_);
+  a.io("contact.ahead", ahead_);
+  ContactRows& r = ahead_rows_;  // its geometry (the solve fills the rest)
+  a.io("contact.ahead.pair", r.pair), a.io("contact.ahead.slave_index", r.slave_index), a.io("contact.ahead.start", r.start);
+  a.io("contact.ahead.nodes", r.nodes), a.io("contact.ahead.weights", r.weights), a.io("contact.ahead.normal", r.normal);
+  a.io("contact.ahead.gap", r.gap), a.io("contact.ahead.area", r.area);
 }
 
 void ExplicitSolver::checkpoint(StateArchive& a) {
@@ -77,6 +82,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"pending_contact_friction", &pending_contact_friction_},
                          {"stress_seconds", &stress_seconds_},
                          {"contact_seconds", &contact_seconds_},
+                         {"detection_ahead_seconds", &detection_ahead_seconds_},
                          {"time", &time_},
                          {"dt_prev", &dt_prev_},
                          {"dt_next", &dt_next_},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <sstream>
 
@@ -98,10 +99,31 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
 
 ExplicitSolver::~ExplicitSolver() = default;
 
-void ExplicitSolver::stress_pass() {
+void ExplicitSolver::stress_pass(bool detect_ahead) {
   const auto t0 = std::chrono::steady_clock::now();
-  pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data());
+  // The side task must not throw out of the parallel region: its exception waits for the end.
+  struct Ahead {
+    ExplicitSolver* solver;
+    std::exception_ptr error;
+    double seconds = 0;
+  } ahead{this, nullptr};
+  StressSideTask side;
+  if (detect_ahead && !contact_.empty())
+    side = {[](void* context) {
+              auto& a = *static_cast<Ahead*>(context);
+              const auto start = std::chrono::steady_clock::now();
+              try {
+                a.solver->contact_.detect_ahead(a.solver->u_.data());
+              } catch (...) {
+                a.error = std::current_exception();
+              }
+              a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            },
+            &ahead};
+  pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data(), side);
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  detection_ahead_seconds_ += ahead.seconds;
+  if (ahead.error) std::rethrow_exception(ahead.error);
   if (!(pass_.min_jacobian > 0)) {
     std::ostringstream o;
     o << "inverted element at step " << step_ << ", t = " << time_ << " s: " << model_.describe_element(pass_.min_jacobian_element)
@@ -336,7 +358,7 @@ void ExplicitSolver::advance_position() {
   ++step_;
   dt_prev_ = dt;
   velocity_advanced_ = false;
-  stress_pass();
+  stress_pass(true);
   if (pass_.critical_step < 1e-3 * initial_critical_) {
     std::ostringstream o;
     o << "the stable time step collapsed to " << pass_.critical_step << " s at step " << step_ << ", t = " << time_

@@ -193,6 +193,10 @@ class ContactSolver {
   // rigid: free rigid bodies among the nodes (their velocities read and changed as bodies).
   ContactStepReport correct_velocities(const double* u, double* v, const double* v_old, const double* inv_mass, double velocity_per_force, double dt,
                                        double dt_prev, RigidRows* rigid = nullptr);
+  // The next correct_velocities' detection, done ahead at the displacement u it will be called
+  // with (the integrator runs it during the stress pass at that u, on one thread while the others
+  // compute forces): correct_velocities then takes these rows instead of searching.
+  void detect_ahead(const double* u);
 
   const ContactRows& rows() const { return rows_; }
   const std::vector<ContactPair>& pairs() const { return pairs_; }
@@ -225,17 +229,20 @@ class ContactSolver {
   };
   AveragedPressure averaged_peak_pressure(const double* u, double sensor_area) const;
 
-  // Saves or restores what the next step reads: the warm-start reactions, the windowed pressures
-  // and each pair's search state (Verlet lists, grid, mortar rows and where they were built).
+  // Saves or restores what the next step reads: the warm-start reactions, the windowed pressures,
+  // each pair's search state (Verlet lists, grid, mortar rows and where they were built) and the
+  // rows detected ahead for the next step.
   void checkpoint(StateArchive& archive);
 
  private:
-  void detect(const double* u, double search_factor);
+  void detect(const double* u, double search_factor, ContactRows& rows);
 
   const Model& model_;
   std::vector<ContactPair> pairs_;
   ContactSettings settings_;
   ContactRows rows_;
+  ContactRows ahead_rows_;  // detect_ahead's rows, for the next step (valid while ahead_)
+  bool ahead_ = false;
   std::vector<double> x_;                    // current positions, filled per step at contact_nodes_ only
   std::vector<std::int32_t> contact_nodes_;  // every pair's slave nodes and master vertices, once
   // Reactions of the previous step per pair and slave (3 each): the Uzawa iterations start from

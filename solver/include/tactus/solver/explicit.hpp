@@ -79,9 +79,11 @@ class ExplicitSolver {
   const ContactStepReport& contact_report() const { return contact_report_; }
   // The supports' reactions at t^n (after advance_velocity), one force and moment per boundary.
   const Reactions& reactions() const { return reactions_; }
-  // Wall time spent so far in the stress passes and in contact (detection + Uzawa), s.
+  // Wall time spent so far in the stress passes and in contact (detection + Uzawa, outside the passes), s.
   double stress_seconds() const { return stress_seconds_; }
   double contact_seconds() const { return contact_seconds_; }
+  // Of stress_seconds(): the next steps' contact detection, run on one thread during the passes.
+  double detection_ahead_seconds() const { return detection_ahead_seconds_; }
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
   void check_energy() const;
   // Describes the stable-step limit: "dt = ... (element ..., L_e = ..., c = ...)".
@@ -104,7 +106,9 @@ class ExplicitSolver {
   void checkpoint(StateArchive& archive);
 
  private:
-  void stress_pass();
+  // detect_ahead: the next step's contact detection runs on one thread during the pass (it reads
+  // the same u), off the step's critical path.
+  void stress_pass(bool detect_ahead = false);
   // Mass scaling after a stress pass: raises the mass of every tet whose step is below
   // run.minimum_time_step until it is met, updates the critical step, and stops the run (a
   // NumericalError naming the body) when a body's added mass exceeds run.added_mass_limit.
@@ -155,6 +159,7 @@ class ExplicitSolver {
   std::vector<double> contact_inv_mass_;  // 1/m per dof, 0 on prescribed dofs (their supports take the reaction)
   double pending_contact_normal_ = 0, pending_contact_friction_ = 0;
   double stress_seconds_ = 0, contact_seconds_ = 0;
+  double detection_ahead_seconds_ = 0;  // inside stress_seconds_: contact detection run during the stress passes
   double time_ = 0, dt_prev_ = 0, dt_next_ = 0, user_dt_ = 0;
   std::vector<double> schedule_;
   std::size_t next_target_ = 0;  // first scheduled time > time_

@@ -63,13 +63,20 @@ struct StressAccumulator {
   std::size_t min_J_element = 0;
 };
 
+struct StressSideTask {
+  void (*run)(void* context) = nullptr;
+  void* context = nullptr;
+};
+
 class InternalForces {
  public:
   static constexpr std::size_t kPartitionElements = 1024, kPartitions = 8, kNodeChunk = 2048;
   // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
   InternalForces(const Model& model, double beta, int threads);
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
-  StressPassResult compute(const double* u, const double* v, double* f_out);
+  // side: work that may run on one thread while the others take the stress partitions (the next
+  // step's contact detection, which reads the same u); that thread then joins them.
+  StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side = StressSideTask{});
   int threads() const { return threads_; }
   std::size_t memory_bytes() const;
   // Mass scaling: from now on every pass stores each tet's unscaled squared stable step (no beta)
