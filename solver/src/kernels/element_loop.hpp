@@ -278,6 +278,10 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
 
 }  // namespace kernel_detail
 
+// Tets ahead of the current group whose nodes' u and force entries are prefetched (a gather the
+// hardware prefetcher cannot see).
+inline constexpr std::size_t kPrefetchAhead = 16;
+
 template <class Law, bool kViscous, bool kAnp = false>
 void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
   using namespace kernel_detail;
@@ -286,7 +290,15 @@ void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
   std::size_t e = a.begin;
   if (a.vectorised) {
     LaneResults<Pack> packed;
-    for (; e + lanes::kLanes <= a.end; e += lanes::kLanes) element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);
+    for (; e + lanes::kLanes <= a.end; e += lanes::kLanes) {
+      if (e + kPrefetchAhead + lanes::kLanes <= a.end)
+        for (int k = 0; k < 4 * lanes::kLanes; ++k) {
+          const auto node = static_cast<std::size_t>(a.conn[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]);
+          __builtin_prefetch(a.u + 3 * node);
+          __builtin_prefetch(a.f + 3 * (node - a.f_node_offset), 1);
+        }
+      element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);
+    }
     packed.add_to(acc, kViscous);
   }
   for (; e < a.end; ++e) element_lanes<Law, kViscous, kAnp, double>(a, mat, e, scalar, scalar);
