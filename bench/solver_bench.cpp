@@ -3,7 +3,10 @@
 //              standard and as average-nodal-pressure tets, the J pass included) and
 //              linear_elastic, 1 and 2 threads, at ~10k, 100k and 1M tets, on meshes whose
 //              numbering is shuffled as a mesher without locality ordering could leave it,
-//              with and without tactus' Morton reordering; plus bytes per tet of solver state.
+//              with and without tactus' Morton reordering; the vector kernel (four tets per SIMD
+//              register) and the scalar one (one tet at a time, same formulas) timed alternately,
+//              medians of --rounds timings, and their ratio; lscpu's threads per core; plus bytes
+//              per tet of solver state.
 //  cube        the whole-run case: 0.1 m cube, 20^3 cells x 6 tets = 48,000 tets, neo_hookean
 //              mu = 3 kPa, bulk 50 kPa, rho 1000, bottom fixed, top pushed down 10 % over 2,000
 //              steps of dt = 1e-4 s, mass damping 50 /s, timed end to end (mesh file to results).
