@@ -175,7 +175,7 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
   for (int j = 0; j < 9; ++j) g[j] = load_strided<T>(a.grad + 9 * e + j, 9);
   M3<T> F = nodal_gradient_lanes(a.u, c, g);
   for (int i = 0; i < 3; ++i) F(i, i) += 1.0;
-  const M3<T> cof = lanes::cofactor(F);
+  const M3<T> cof = cofactor(F);
   const T J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
   if constexpr (L > 1) {
     if (!all_positive(J)) {  // an inverted tet: lane by lane, so it is recorded and skipped as alone

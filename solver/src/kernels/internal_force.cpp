@@ -37,7 +37,7 @@ void add_quarter_volumes(const Model& m, std::size_t e, const double* u, double*
   for (int j = 0; j < 9; ++j) g[j] = kernel_detail::load_strided<T>(&m.grad[9 * e + static_cast<std::size_t>(j)], 9);
   lanes::M3<T> F = kernel_detail::nodal_gradient_lanes(u, c, g);
   for (int i = 0; i < 3; ++i) F(i, i) += 1.0;
-  const lanes::M3<T> cof = lanes::cofactor(F);
+  const lanes::M3<T> cof = cofactor(F);
   const T quarter = 0.25 * (F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2)) * kernel_detail::load_strided<T>(&m.volume[e], 1);
   for (int l = 0; l < lanes::lanes_of<T>; ++l)
     for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[4 * l + k]) - node_offset] += lanes::lane(quarter, l);

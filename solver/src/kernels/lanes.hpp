@@ -108,22 +108,6 @@ template <class T>
   r.a[0] = r.a[4] = r.a[8] = s;
   return r;
 }
-// cof(F) = J F^{-T}: see cofactor() in material.hpp.
-template <class T>
-[[gnu::always_inline]] inline M3<T> cofactor(const M3<T>& F) {
-  M3<T> c;
-  c(0, 0) = F(1, 1) * F(2, 2) - F(1, 2) * F(2, 1);
-  c(0, 1) = F(1, 2) * F(2, 0) - F(1, 0) * F(2, 2);
-  c(0, 2) = F(1, 0) * F(2, 1) - F(1, 1) * F(2, 0);
-  c(1, 0) = F(0, 2) * F(2, 1) - F(0, 1) * F(2, 2);
-  c(1, 1) = F(0, 0) * F(2, 2) - F(0, 2) * F(2, 0);
-  c(1, 2) = F(0, 1) * F(2, 0) - F(0, 0) * F(2, 1);
-  c(2, 0) = F(0, 1) * F(1, 2) - F(0, 2) * F(1, 1);
-  c(2, 1) = F(0, 2) * F(1, 0) - F(0, 0) * F(1, 2);
-  c(2, 2) = F(0, 0) * F(1, 1) - F(0, 1) * F(1, 0);
-  return c;
-}
-
 // Lane access: a double is its own single lane.
 [[gnu::always_inline]] inline double lane(double x, int) { return x; }
 [[gnu::always_inline]] inline double lane(const Pack& x, int l) { return x[l]; }

@@ -96,11 +96,11 @@ struct Hgo {
 
   template <class T>
   T volumetric_energy(const T& J) const {
-    return 0.5 * k * (J - 1.0) * (J - 1.0);
+    return penalty_energy(k, J);
   }
   template <class T>
   T volumetric_pressure(const T& J) const {
-    return k * (J - 1.0);
+    return penalty_pressure(k, J);
   }
 
   // Everything but the volumetric term k/2 (J - 1)^2 (the fibre terms use J4bar: isochoric).

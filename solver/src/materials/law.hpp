@@ -47,6 +47,17 @@ inline StressPoint to_stress_point(const LawStress<double>& s) {
   return r;
 }
 
+// U(J) = K/2 (J - 1)^2 and U'(J) = K (J - 1): the volumetric penalty of neo_hookean,
+// mooney_rivlin and hgo (the paper's k/2 (J - 1)^2, eq. 20).
+template <class T>
+T penalty_energy(double K, const T& J) {
+  return 0.5 * K * (J - 1.0) * (J - 1.0);
+}
+template <class T>
+T penalty_pressure(double K, const T& J) {
+  return K * (J - 1.0);
+}
+
 template <class Law>
 MaterialType make_material_type() {
   MaterialType t;

@@ -34,11 +34,11 @@ struct NeoHookean {
   }
   template <class T>
   T volumetric_energy(const T& J) const {
-    return 0.5 * bulk * (J - 1.0) * (J - 1.0);
+    return penalty_energy(bulk, J);
   }
   template <class T>
   T volumetric_pressure(const T& J) const {
-    return bulk * (J - 1.0);
+    return penalty_pressure(bulk, J);
   }
 };
 

@@ -36,8 +36,10 @@ using Mat3 = Eigen::Matrix3d;
 using Vec3d = Eigen::Vector3d;
 
 // F^{-T} J = cof(F): the cofactor matrix, so F^{-T} = cof(F) / J without a division per entry.
-inline Mat3 cofactor(const Mat3& F) {
-  Mat3 c;
+// For any 3x3 matrix type indexed F(i, j): Eigen's, or the stress kernels' lanes::M3 of packs.
+template <class M>
+inline M cofactor(const M& F) {
+  M c;
   c(0, 0) = F(1, 1) * F(2, 2) - F(1, 2) * F(2, 1);
   c(0, 1) = F(1, 2) * F(2, 0) - F(1, 0) * F(2, 2);
   c(0, 2) = F(1, 0) * F(2, 1) - F(1, 1) * F(2, 0);
