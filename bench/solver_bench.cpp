@@ -181,20 +181,24 @@ void contact_scaling(const std::vector<int>& sizes) {
     std::size_t active = 0;
     int iterations = 0;
     const int steps = 20;
-    double contact0 = 0, stress0 = 0;
+    double contact0 = 0, stress0 = 0, ahead0 = 0;
     for (int k = 0; k < steps + 2; ++k) {
-      if (k == 2) contact0 = solver.contact_seconds(), stress0 = solver.stress_seconds();  // after warm-up
-      solver.advance_velocity();                                                           // free update + contact (detection + Uzawa)
-      solver.advance_position();                                                           // position update + stress pass
+      if (k == 2) contact0 = solver.contact_seconds(), stress0 = solver.stress_seconds(), ahead0 = solver.detection_ahead_seconds();  // after warm-up
+      solver.advance_velocity();  // free update + contact (detection + Uzawa)
+      solver.advance_position();  // position update + stress pass
       active = std::max(active, solver.contact_report().active);
       iterations = std::max(iterations, solver.contact_report().iterations);
     }
-    const double contact_s = solver.contact_seconds() - contact0, stress_s = solver.stress_seconds() - stress0;
+    // The next step's detection runs inside the stress pass (on one thread): counted as contact here.
+    const double ahead_s = solver.detection_ahead_seconds() - ahead0;
+    const double contact_s = solver.contact_seconds() - contact0 + ahead_s, stress_s = solver.stress_seconds() - stress0 - ahead_s;
     std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(), m.num_elements,
                 active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations);
     std::fflush(stdout);
   }
-  std::printf("per step: contact_ms = detection + Uzawa (Gauss-Seidel, sequential); stress_ms = stress pass (2 threads)\n");
+  std::printf(
+      "per step: contact_ms = detection (run on one thread during the stress pass) + Uzawa (Gauss-Seidel, sequential); stress_ms = stress "
+      "pass (2 threads) without that detection\n");
 }
 
 }  // namespace
