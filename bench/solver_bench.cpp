@@ -159,7 +159,8 @@ void cube(const std::filesystem::path& work) {
 }
 
 void contact_scaling(const std::vector<int>& sizes) {
-  std::printf("%9s %9s %11s %9s %12s %12s %8s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms", "ratio", "iterations");
+  std::printf("%9s %9s %11s %9s %12s %12s %8s %10s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms", "ratio",
+              "iterations", "step_ms");
   for (int n : sizes) {
     TetMesh lower = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01);
     const TetMesh upper = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01, {0, 0, 0.01});
@@ -189,16 +190,18 @@ void contact_scaling(const std::vector<int>& sizes) {
       active = std::max(active, solver.contact_report().active);
       iterations = std::max(iterations, solver.contact_report().iterations);
     }
-    // The next step's detection runs inside the stress pass (on one thread): counted as contact here.
+    // The next step's detection runs inside the stress pass (on one thread): counted as contact
+    // here, and the pass's wall time (which hides part of it) stays the stress time.
     const double ahead_s = solver.detection_ahead_seconds() - ahead0;
-    const double contact_s = solver.contact_seconds() - contact0 + ahead_s, stress_s = solver.stress_seconds() - stress0 - ahead_s;
-    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(), m.num_elements,
-                active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations);
+    const double contact_s = solver.contact_seconds() - contact0 + ahead_s, stress_s = solver.stress_seconds() - stress0;
+    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d %10.3f\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(),
+                m.num_elements, active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations,
+                1e3 * (contact_s - ahead_s + stress_s) / steps);
     std::fflush(stdout);
   }
   std::printf(
-      "per step: contact_ms = detection (run on one thread during the stress pass) + Uzawa (Gauss-Seidel, sequential); stress_ms = stress "
-      "pass (2 threads) without that detection\n");
+      "per step: contact_ms = detection (run on one thread during the stress pass) + Uzawa (Gauss-Seidel, sequential); stress_ms = the "
+      "stress pass's wall time (2 threads, the detection's overlap included); step_ms = the wall time of both\n");
 }
 
 }  // namespace
