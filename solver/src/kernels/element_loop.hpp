@@ -152,6 +152,25 @@ TACTUS_KERNEL_INLINE M3<T> nodal_gradient_lanes(const double* __restrict field, 
   return G;
 }
 
+// The lanes' deformation at u: their reference gradients (as lanes), F, cof F and J = det F
+// (row 0 of F against row 0 of cof F). The stress pass and the ANP J pass both start here.
+template <class T>
+struct LaneDeformation {
+  T g[9];
+  M3<T> F, cof;
+  T J;
+};
+template <class T>
+TACTUS_KERNEL_INLINE LaneDeformation<T> deformation_lanes(const double* grad, const std::int32_t* conn, const double* u, std::size_t e) {
+  LaneDeformation<T> d;
+  for (int j = 0; j < 9; ++j) d.g[j] = load_strided<T>(grad + 9 * e + static_cast<std::size_t>(j), 9);
+  d.F = nodal_gradient_lanes(u, conn + 4 * e, d.g);
+  for (int i = 0; i < 3; ++i) d.F(i, i) += 1.0;
+  d.cof = cofactor(d.F);
+  d.J = d.F(0, 0) * d.cof(0, 0) + d.F(0, 1) * d.cof(0, 1) + d.F(0, 2) * d.cof(0, 2);
+  return d;
+}
+
 template <class T>
 TACTUS_KERNEL_INLINE bool all_positive(const T& J) {
   for (int l = 0; l < lanes::lanes_of<T>; ++l)
@@ -171,12 +190,10 @@ template <class Law, bool kViscous, bool kAnp, class T>
 TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& mat, std::size_t e, LaneResults<T>& out, LaneResults<double>& scalar) {
   constexpr int L = lanes::lanes_of<T>;
   const std::int32_t* c = a.conn + 4 * e;
-  T g[9];
-  for (int j = 0; j < 9; ++j) g[j] = load_strided<T>(a.grad + 9 * e + j, 9);
-  M3<T> F = nodal_gradient_lanes(a.u, c, g);
-  for (int i = 0; i < 3; ++i) F(i, i) += 1.0;
-  const M3<T> cof = cofactor(F);
-  const T J = F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2);
+  const LaneDeformation<T> d = deformation_lanes<T>(a.grad, a.conn, a.u, e);
+  const T* g = d.g;
+  const M3<T>&F = d.F, &cof = d.cof;
+  const T& J = d.J;
   if constexpr (L > 1) {
     if (!all_positive(J)) {  // an inverted tet: lane by lane, so it is recorded and skipped as alone
       for (int l = 0; l < L; ++l) element_lanes<Law, kViscous, kAnp, double>(a, mat, e + static_cast<std::size_t>(l), scalar, scalar);

@@ -33,12 +33,8 @@ int default_threads(std::size_t elements) {
 template <class T>
 void add_quarter_volumes(const Model& m, std::size_t e, const double* u, double* node_volume, std::size_t node_offset) {
   const std::int32_t* c = &m.conn[4 * e];
-  T g[9];
-  for (int j = 0; j < 9; ++j) g[j] = kernel_detail::load_strided<T>(&m.grad[9 * e + static_cast<std::size_t>(j)], 9);
-  lanes::M3<T> F = kernel_detail::nodal_gradient_lanes(u, c, g);
-  for (int i = 0; i < 3; ++i) F(i, i) += 1.0;
-  const lanes::M3<T> cof = cofactor(F);
-  const T quarter = 0.25 * (F(0, 0) * cof(0, 0) + F(0, 1) * cof(0, 1) + F(0, 2) * cof(0, 2)) * kernel_detail::load_strided<T>(&m.volume[e], 1);
+  const T quarter =
+      0.25 * kernel_detail::deformation_lanes<T>(m.grad.data(), m.conn.data(), u, e).J * kernel_detail::load_strided<T>(&m.volume[e], 1);
   for (int l = 0; l < lanes::lanes_of<T>; ++l)
     for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[4 * l + k]) - node_offset] += lanes::lane(quarter, l);
 }

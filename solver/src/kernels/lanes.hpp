@@ -101,10 +101,18 @@ template <class T>
 [[gnu::always_inline]] inline T squared_norm(const V3<T>& x) {
   return x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
 }
+// A value of T with every lane v.
+template <class T>
+[[gnu::always_inline]] inline T splat(double v) {
+  if constexpr (std::is_same_v<T, Pack>)
+    return Pack{} + v;
+  else
+    return v;
+}
 template <class T>
 [[gnu::always_inline]] inline M3<T> identity_times(const T& s) {
   M3<T> r;
-  for (int k = 0; k < 9; ++k) r.a[k] = s - s;  // zero of T's lane type
+  for (int k = 0; k < 9; ++k) r.a[k] = splat<T>(0.0);
   r.a[0] = r.a[4] = r.a[8] = s;
   return r;
 }
@@ -129,21 +137,14 @@ template <class T, class Fn>
 
 // x^{-1/3} for x > 0, to 1e-15 relative: a bit-level first guess refined by four division-free
 // Newton steps on 1/y^3 = x, y <- y (4 - x y^3) / 3 (libm's cbrt, with its frexp/scalbn, took a
-// quarter of a neo-Hookean update). Lane for lane the same operations for double and Pack.
-[[gnu::always_inline]] inline double inv_cbrt(double x) {
-  std::uint64_t i;
+// quarter of a neo-Hookean update). The same operations for double and, lane by lane, for Pack.
+template <class T>
+[[gnu::always_inline]] inline T inv_cbrt(const T& x) {
+  using Bits = std::conditional_t<std::is_same_v<T, Pack>, PackBits, std::uint64_t>;
+  Bits i;
   std::memcpy(&i, &x, sizeof i);
   i = 0x553ef0ff289dd796ULL - i / 3;
-  double y;
-  std::memcpy(&y, &i, sizeof y);
-  for (int k = 0; k < 4; ++k) y = y * (4.0 - x * y * y * y) * (1.0 / 3.0);
-  return y;
-}
-[[gnu::always_inline]] inline Pack inv_cbrt(const Pack& x) {
-  PackBits i;
-  std::memcpy(&i, &x, sizeof i);
-  i = 0x553ef0ff289dd796ULL - i / 3;
-  Pack y;
+  T y;
   std::memcpy(&y, &i, sizeof y);
   for (int k = 0; k < 4; ++k) y = y * (4.0 - x * y * y * y) * (1.0 / 3.0);
   return y;
@@ -182,15 +183,6 @@ template <class T, class Fn>
 [[gnu::always_inline]] inline double sqrt_of(double x) { return std::sqrt(x); }
 [[gnu::always_inline]] inline Pack sqrt_of(const Pack& x) {
   return make_lanes<Pack>([&](int l) { return std::sqrt(x[l]); });
-}
-
-// A value of T with every lane v.
-template <class T>
-[[gnu::always_inline]] inline T splat(double v) {
-  if constexpr (std::is_same_v<T, Pack>)
-    return Pack{} + v;
-  else
-    return v;
 }
 
 }  // namespace tactus::solver::lanes

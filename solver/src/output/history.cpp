@@ -1,11 +1,9 @@
 // history.csv: one table of columns (names from core/contracts.hpp), which writes both the header
 // and every row, so the two can never drift apart.
-#include <Eigen/Geometry>
 #include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <iomanip>
 
 #include "results.hpp"
 #include "tactus/core/contracts.hpp"
@@ -76,7 +74,6 @@ HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vecto
     std::filesystem::resize_file(file, resume_at, ec);  // the rows after the checkpoint go: they are computed again
     if (ec) throw WriteError(file.string(), "cannot cut the history back to the checkpoint (" + ec.message() + ")");
     out_.open(file, std::ios::app);
-    out_ << std::setprecision(17);
     return;
   }
   out_.open(file);
@@ -106,7 +103,7 @@ void append_value(std::string& line, double v) {
 }  // namespace
 
 void HistoryWriter::write(const HistoryRow& row) {
-  std::string& line = line_;
+  std::string& line = line_;  // (a member: its capacity is kept between rows)
   line.clear();
   for (std::size_t k = 0; k < kColumns.size(); ++k) append_value(line, kColumns[k].value(row));  // (counts print as integers: "3")
   for (std::size_t b = 0; b < boundaries_; ++b) {                                                // in the order of h::per_boundary: reaction, moment
@@ -116,8 +113,7 @@ void HistoryWriter::write(const HistoryRow& row) {
   for (std::size_t b = 0; b < mass_scaled_bodies_; ++b) append_value(line, row.added_mass ? (*row.added_mass)[b] : 0.0);
   for (std::size_t b = 0; b < rigid_bodies_; ++b) {  // in the order of h::per_rigid_body
     const RigidBody& r = (*row.rigid)[b];
-    const Eigen::AngleAxisd turn(r.rotation);
-    const Vec3d values[6] = {r.centre,         r.momentum / r.mass, turn.angle() * turn.axis(), r.angular_velocity_of(r.angular_momentum),
+    const Vec3d values[6] = {r.centre,         r.momentum / r.mass, r.rotation_vector(), r.angular_velocity_of(r.angular_momentum),
                              r.reaction_force, r.reaction_moment};
     for (const Vec3d& v : values)
       for (int c = 0; c < 3; ++c) append_value(line, v[c]);

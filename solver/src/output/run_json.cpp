@@ -1,5 +1,4 @@
 // run.json: the run's facts and figures, with the keys of core/contracts.hpp.
-#include <Eigen/Geometry>
 #include <cmath>
 
 #include "results.hpp"
@@ -154,7 +153,6 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
     nlohmann::json rigid = nlohmann::json::array();
     auto vec = [](const Vec3d& v) { return std::vector<double>{v[0], v[1], v[2]}; };
     for (const RigidBody& b : solver.rigid_bodies()) {
-      const Eigen::AngleAxisd turn(b.rotation);
       nlohmann::json e = {{"name", b.name},
                           {"history_columns", rigid_column_name(b.name)},
                           {"nodes", b.nodes.size()},
@@ -163,7 +161,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
                           {"principal_moments", vec(b.principal)},
                           {"prescribed", b.prescribed},
                           {"final_centre", vec(b.centre)},
-                          {"final_rotation_vector", vec(turn.angle() * turn.axis())},
+                          {"final_rotation_vector", vec(b.rotation_vector())},
                           {"final_velocity", vec(b.momentum / b.mass)},
                           {"final_angular_velocity", vec(b.angular_velocity_of(b.angular_momentum))}};
       if (b.prescribed) e["final_reaction"] = {{"force", vec(b.reaction_force)}, {"moment", vec(b.reaction_moment)}};

@@ -2,6 +2,7 @@
 #include "tactus/solver/rigid.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -30,6 +31,11 @@ Mat3 axis_rotation(int i, double t) {
 }
 
 }  // namespace
+
+Vec3d RigidBody::rotation_vector() const {
+  const Eigen::AngleAxisd turn(rotation);
+  return turn.angle() * turn.axis();
+}
 
 Mat3 RigidBody::inverse_inertia() const {
   // I(t)^-1 = R A diag(1/I) A^T R^T (A the principal axes).

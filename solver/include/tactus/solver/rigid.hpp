@@ -59,6 +59,7 @@ struct RigidBody {
   Mat3 inertia() const { return rotation * inertia0 * rotation.transpose(); }
   Mat3 inverse_inertia() const;
   Vec3d angular_velocity_of(const Vec3d& L) const { return inverse_inertia() * L; }
+  Vec3d rotation_vector() const;  // the rotation from the reference as angle x axis (rad), for the outputs
   double kinetic_energy(const Vec3d& P, const Vec3d& L) const { return 0.5 * P.squaredNorm() / mass + 0.5 * L.dot(angular_velocity_of(L)); }
 };
 
