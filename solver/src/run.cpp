@@ -271,6 +271,7 @@ class RunLoop {
     a.io_record("loop.peaks.pressure_at", p.pressure_at);
     a.io("loop.peaks.pressure_node", p.pressure_node), a.io("loop.peaks.max_iterations", p.max_iterations);
     a.io("loop.peaks.unconverged_steps", p.unconverged_steps), a.io("loop.peaks.contact_steps", p.contact_steps);
+    a.io("loop.peaks.recovering_rows", p.recovering_rows);
     a.io("loop.peaks.von_mises", p.von_mises), a.io("loop.peaks.reaction_peak", p.reaction_peak);
     a.io("loop.peaks.reaction_peak_time", p.reaction_peak_time), a.io("loop.peaks.reaction_peak_force", p.reaction_peak_force);
     a.io_records("loop.peaks.pairs", p.pairs), a.io_records("loop.peaks.at_outputs", p.at_outputs);
@@ -308,6 +309,16 @@ class RunLoop {
       for (int c = 0; c < 3; ++c) peak_at[c] = model_.X[3 * cr.peak_node + c] + solver_.displacement()[3 * cr.peak_node + c];
     peaks_.add_contact_step(cr, t, peak_at, solver_.contact().pair_reports());
     peaks_.add_reactions(solver_.reactions(), t);
+    if (cr.recovering > 0 && peaks_.recovering_rows == cr.recovering) {  // the first step with one
+      const std::size_t node = model_.input_node(static_cast<std::size_t>(cr.deepest_node));
+      const BodyRange& body = model_.bodies[model_.body_of_node(node)];
+      std::ostringstream w;
+      w << "contact: node " << node - body.node_begin + 1 << " of body '" << body.name << "' found " << -cr.deepest_gap * 1e3
+        << " mm inside its master at step " << solver_.step_index() << ", t = " << t
+        << " s (a penetration the previous step did not make): pushed out at contact_solver.recovery_speed = " << sc_.contact_solver.recovery_speed
+        << " m/s rather than in one step (reported once; run.json contact.uzawa.recovering_rows counts such rows)";
+      log::warn(w.str());
+    }
     if (!cr.converged) {
       if (peaks_.unconverged_steps == 0) {
         std::ostringstream w;

@@ -206,7 +206,13 @@ const SectionSpec& contact_solver_section() {
                   "at each output the contact pressure field is also averaged over discs of this area on the slave surfaces, and the largest "
                   "average is reported (run.json contact.at_outputs), a peak that converges with the mesh",
                   0, true),
-           "25e-6")}};
+           "25e-6"),
+       opt(number("recovery_speed", "m/s",
+                  "a node found inside its master deeper than this speed times the step (a penetration the previous step did not make, "
+                  "e.g. a node sliding back over a master's edge) is pushed out at this speed rather than in one step, which would give it "
+                  "depth / dt (run.json contact.uzawa.recovering_rows counts them)",
+                  0, true),
+           "1.0")}};
   return s;
 }
 
@@ -780,6 +786,7 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     sc.contact_solver.pressure_window = r.number(t, *spec.find("pressure_window"), "contact_solver", 1e-5);
     sc.contact_solver.verlet_skin = r.number(t, *spec.find("verlet_skin"), "contact_solver", 0.5);
     sc.contact_solver.pressure_average_area = r.number(t, *spec.find("pressure_average_area"), "contact_solver", 25e-6);
+    sc.contact_solver.recovery_speed = r.number(t, *spec.find("recovery_speed"), "contact_solver", 1.0);
   }
 }
 

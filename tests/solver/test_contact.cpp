@@ -647,6 +647,99 @@ void sphere_over_a_corner(bool mortar) {
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlock) { sphere_over_a_corner(false); }
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlockMortar) { sphere_over_a_corner(true); }
 
+// A penetration the previous step did not make. Oracle: the Uzawa solve's own law: a row found
+// deeper than recovery_speed x dt leaves at exactly recovery_speed when it is pushed (frictionless,
+// master held; no slower when the cube's elasticity lifts it), every other row ends the step at
+// gap >= 0. A stiff cube (4 mm, E = 1 GPa) slides at 1 m/s
+// towards a held block's top face (the master: that face alone), 0.2 mm below its plane and 1 mm
+// beyond its edge: behind the plane's extension its nodes are held only from in front (no rows),
+// so the bottom nodes that come over the edge appear 0.2 mm deep. Closed in one step, as before
+// recovery_speed, that is 0.2 mm / dt, hundreds of m/s (printed for recovery_speed = 1e9: the hand
+// on a 149k-tet mesh blew up this way); at 1 m/s no node may exceed 5 m/s (the cube's 1 m/s, the
+// 1 m/s push and the ringing of the stiff cube it starts), the energy balance stays within 1 % of
+// the kinetic energy, and by the end no row is deeper than 1e-3 of an element.
+namespace {
+struct RecoveryRun {
+  double fastest = 0, deepest_start = 0, deepest_end = 0, worst_recovery_speed_error = 0, worst_other_gap = 0, balance = 0;
+  std::size_t recovering = 0;
+};
+RecoveryRun cube_back_over_an_edge(double recovery_speed) {
+  testkit::TempDir dir;
+  const double B = 0.02, Hb = 0.01, a = 0.004, depth = 2e-4, h = 1e-3, v0 = 1.0;
+  Scenario sc;
+  sc.file = dir.path() / "recovery.toml";
+  sc.run.end_time = 2.5e-3;
+  sc.run.threads = 1;
+  sc.materials["m"] = testkit::linear_elastic_instance("m", 1e9, 0.3, 1000);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "block", samples::make_box_mesh(10, 10, 5, B, B, Hb), "m"));
+  TetMesh cube = samples::make_box_mesh(4, 4, 4, a, a, a, {B + 1e-3, 0.008, Hb - depth});
+  cube.groups.push_back({2, 20, "surface"});
+  for (std::size_t t = 0, n = cube.triangles.size(); t < n; ++t) cube.triangles.push_back(cube.triangles[t]), cube.triangle_group.push_back(20);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "cube", cube, "m"));
+  sc.bodies.back().initial_velocity = {-v0, 0, 0};
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  ContactSpec c;
+  c.slave_body = "cube", c.slave_surface = "surface", c.master_body = "block", c.master_surface = "zmax";
+  sc.contacts.push_back(c);
+  sc.contact_solver.tolerance = 1e-10;
+  sc.contact_solver.max_iterations = 1000;
+  sc.contact_solver.recovery_speed = recovery_speed;
+  const Model m = build_model(sc);
+  ExplicitSolver solver(m, sc.run, sc.damping);
+  RecoveryRun r;
+  double scale = 0;
+  while (true) {
+    solver.advance_velocity();
+    const ContactRows& rows = solver.contact().rows();
+    const auto& v = solver.half_step_velocity();
+    const double dt = solver.time_step();
+    r.recovering += solver.contact_report().recovering;
+    double deepest = 0;
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const V3 n{rows.normal[3 * k], rows.normal[3 * k + 1], rows.normal[3 * k + 2]};
+      V3 u{0, 0, 0};
+      for (auto j = rows.start[k]; j < rows.start[k + 1]; ++j)
+        for (int d = 0; d < 3; ++d)
+          u[d] += rows.weights[static_cast<std::size_t>(j)] * v[3 * static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(j)]) + d];
+      deepest = std::min(deepest, rows.gap[k]);
+      const double rn = rows.reaction[3 * k] * n[0] + rows.reaction[3 * k + 1] * n[1] + rows.reaction[3 * k + 2] * n[2];
+      if (rows.gap[k] < -recovery_speed * dt)  // leaves at the recovery speed when pushed, faster when its neighbours lift it
+        r.worst_recovery_speed_error =
+            std::max(r.worst_recovery_speed_error, (rn > 0 ? std::abs(dot(u, n) - recovery_speed) : recovery_speed - dot(u, n)) / recovery_speed);
+      else
+        r.worst_other_gap = std::max(r.worst_other_gap, -(rows.gap[k] + dt * dot(u, n)) / h);
+    }
+    r.deepest_start = std::min(r.deepest_start, deepest);
+    r.deepest_end = deepest;
+    for (std::size_t i = 0; i < m.num_nodes; ++i) r.fastest = std::max(r.fastest, norm({v[3 * i], v[3 * i + 1], v[3 * i + 2]}));
+    const Energies& en = solver.energies();
+    scale = std::max(scale, en.kinetic);
+    r.balance = std::max(r.balance, std::abs(en.balance_error()) / scale);
+    if (solver.finished()) break;
+    solver.advance_position();
+  }
+  std::printf(
+      "cube back over an edge, 0.2 mm below the face, recovery_speed %.3g m/s: %zu recovering rows over the run, deepest row %.3f mm, "
+      "fastest node %.3f m/s, recovering rows' speed off by %.2e, other rows' gap after the step %.2e of an element, deepest row at the end "
+      "%.2e of an element, energy balance %.2e\n",
+      recovery_speed, r.recovering, -r.deepest_start * 1e3, r.fastest, r.worst_recovery_speed_error, r.worst_other_gap, -r.deepest_end / h,
+      r.balance);
+  return r;
+}
+}  // namespace
+TEST(Contact, NodeComingBackOverAMastersEdgeIsPushedOutAtTheRecoverySpeed) {
+  const RecoveryRun uncapped = cube_back_over_an_edge(1e9);  // as before: out in one step
+  const RecoveryRun r = cube_back_over_an_edge(1.0);
+  EXPECT_GT(r.recovering, 0u);
+  EXPECT_LT(r.deepest_start, -1.5e-4);            // the rows did appear about 0.2 mm deep
+  EXPECT_LE(r.worst_recovery_speed_error, 1e-6);  // and left at the recovery speed, or faster unpushed
+  EXPECT_LE(r.worst_other_gap, 1e-6);             // the others closed within the step
+  EXPECT_LE(r.fastest, 5.0);
+  EXPECT_GE(r.deepest_end, -1e-3 * 1e-3);  // recovered by the end
+  EXPECT_LE(r.balance, 0.01);
+  EXPECT_GT(uncapped.fastest, 10 * r.fastest);  // what the cap prevents
+}
+
 // Frictional sliding, deformable on deformable, non-matching. Oracle: Coulomb's law and
 // equilibrium. A 10 x 10 x 4 mm block (1 mm cells, slave, mortar) pressed by 10 kPa on its top
 // onto a coarser slab (2.5 mm cells, master, fixed at its base) and dragged 14 mm along x by its

@@ -157,6 +157,19 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
   }
   for (auto& l : last) std::fill(l.begin(), l.end(), 0.0);  // (sized by the surfaces, not per step)
 
+  // The gap folded into the normal velocity below closes a row's gap within the step. A gap the
+  // previous step's correction left is zero (to the Uzawa tolerance); one below -recovery_speed dt
+  // is a penetration that step did not make (a node that slid back over a master's edge, where it
+  // was held only from in front; a row that just appeared) and would be closed at depth / dt:
+  // 0.1 mm at dt = 4e-8 s is 2,500 m/s, an explosion. Such a row is pushed out at recovery_speed
+  // and cannot go deeper; the ordinary approach of a node within one step is unchanged.
+  const double deepest_allowed = -in.settings->recovery_speed * in.dt;
+  for (std::size_t k = 0; k < K; ++k)
+    if (rows.gap[k] < deepest_allowed) {
+      ++rep.recovering;
+      if (rows.gap[k] < rep.deepest_gap) rep.deepest_gap = rows.gap[k], rep.deepest_node = rows.slave(k);
+    }
+
   // Uzawa iterations, Gauss-Seidel over the rows (eqs. 11-12 with rho = 1/w: one iteration is
   // exact for an isolated frictionless node).
   const double inv_dt = in.dt > 0 ? 1.0 / in.dt : 0.0;
@@ -172,7 +185,7 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
       const Vec3 uu = relative_velocity(rows, k, v, rigid);
       const double un_vel = dot(uu, n);
       const Vec3 ut{uu[0] - un_vel * n[0], uu[1] - un_vel * n[1], uu[2] - un_vel * n[2]};
-      const double un = un_vel + rows.gap[k] * inv_dt;  // the gap folded in: no penetration after the step
+      const double un = un_vel + std::max(rows.gap[k], deepest_allowed) * inv_dt;  // the gap folded in (above)
       double* r = &rows.reaction[3 * k];
       const Vec3 rk{r[0], r[1], r[2]};
       const Vec3 next = coulomb_cone_projection(augmented_traction(rk, ut, un, n, mu, 1.0 / w), n, mu);

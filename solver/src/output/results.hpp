@@ -70,7 +70,8 @@ struct RunPeaks {
   std::size_t pressure_node = 0;
   int max_iterations = 0;
   std::size_t unconverged_steps = 0, contact_steps = 0;
-  std::vector<double> von_mises;  // per block
+  std::size_t recovering_rows = 0;  // contact rows pushed out at contact_solver.recovery_speed, summed over the steps
+  std::vector<double> von_mises;    // per block
   // Per boundary: the largest |reaction force|, when, and the force then.
   std::vector<double> reaction_peak, reaction_peak_time, reaction_peak_force;  // 1, 1, 3 per boundary
   // Per directed contact pair: the largest |force| on its slave nodes, area and pressure, and when.

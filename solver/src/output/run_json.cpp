@@ -33,23 +33,26 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
                           {"peak_pressure", o.peak_pressure},
                           {"averaged_peak_pressure", o.averaged_peak_pressure},
                           {"averaged_at", o.averaged_at}});
-  return {
-      {"pairs", pairs},
-      {"steps_in_contact", peaks.contact_steps},
-      {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},
-      {"peak_area", {{"value", peaks.area}, {"time", peaks.area_time}}},
-      {"peak_pressure",
-       {{"value", peaks.pressure},
-        {"time", peaks.pressure_time},
-        {"position", peaks.pressure_at},
-        {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
-      {"peak_step_pressure", {{"value", peaks.step_pressure}, {"time", peaks.step_pressure_time}}},
-      {"pressure_window", solver_window},
-      {"pressure_average_area", sc.contact_solver.pressure_average_area},
-      {"at_outputs", at_outputs},
-      {"search", {{"verlet_skin", sc.contact_solver.verlet_skin}, {"searches", search.searches}, {"list_builds", search.builds}}},
-      {"uzawa",
-       {{"tolerance", sc.contact_solver.tolerance}, {"max_iterations_used", peaks.max_iterations}, {"unconverged_steps", peaks.unconverged_steps}}}};
+  return {{"pairs", pairs},
+          {"steps_in_contact", peaks.contact_steps},
+          {"peak_force", {{"value", peaks.force}, {"time", peaks.force_time}}},
+          {"peak_area", {{"value", peaks.area}, {"time", peaks.area_time}}},
+          {"peak_pressure",
+           {{"value", peaks.pressure},
+            {"time", peaks.pressure_time},
+            {"position", peaks.pressure_at},
+            {"node", peaks.contact_steps ? nlohmann::json(peak_input_node + 1) : nlohmann::json(nullptr)}}},
+          {"peak_step_pressure", {{"value", peaks.step_pressure}, {"time", peaks.step_pressure_time}}},
+          {"pressure_window", solver_window},
+          {"pressure_average_area", sc.contact_solver.pressure_average_area},
+          {"at_outputs", at_outputs},
+          {"search", {{"verlet_skin", sc.contact_solver.verlet_skin}, {"searches", search.searches}, {"list_builds", search.builds}}},
+          {"uzawa",
+           {{"tolerance", sc.contact_solver.tolerance},
+            {"max_iterations_used", peaks.max_iterations},
+            {"unconverged_steps", peaks.unconverged_steps},
+            {"recovering_rows", peaks.recovering_rows},
+            {"recovery_speed", sc.contact_solver.recovery_speed}}}};
 }
 
 }  // namespace

@@ -169,6 +169,10 @@ struct ContactStepReport {
   double peak_pressure = 0;       // Pa, the largest windowed nodal pressure (ContactSolver::set_pressure_window)
   std::int32_t peak_node = -1;    // internal node of the peak pressure
   double peak_step_pressure = 0;  // Pa, the largest r_n / A of this step alone (first-touch impulses grow like 1/dt)
+  // Rows found deeper inside than recovery_speed x dt, pushed out at recovery_speed; the deepest's gap (m, < 0) and slave node.
+  std::size_t recovering = 0;
+  double deepest_gap = 0;
+  std::int32_t deepest_node = -1;
   // Work of the reactions over du^{n-1/2} and du^{n+1/2} (trapezoid halves), relative motion:
   double normal_work_back = 0, normal_work_forward = 0, friction_work_back = 0, friction_work_forward = 0;
   // Work of the supports that take the reaction shares landing on prescribed dofs (halves).

@@ -140,6 +140,10 @@ struct ContactSettings {
   // such average is reported. Unlike a node's value it does not grow when the mesh is refined at
   // an edge or corner load, m^2.
   double pressure_average_area = 25e-6;
+  // A row found deeper inside its master than this speed times the step (a penetration the last
+  // step did not make: a node that slid back over a master's edge, a row that just appeared) is
+  // pushed out at this speed instead of in one step, m/s.
+  double recovery_speed = 1.0;
 };
 
 struct Scenario {
