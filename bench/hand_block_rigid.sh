@@ -82,18 +82,21 @@ pct = lambda x, y: 100 * (y / x - 1) if x else float("nan")
 d = runs["hand_block"]["contact"]["at_outputs"]
 for other in cases[1:]:
     r = runs[other]["contact"]["at_outputs"]
-    print(f"\nhand_block (deformable, E as given) against {other}:")
-    print("t (ms)   force N: deformable  other  diff   |  area mm^2: deformable  other  diff   |  25 mm^2 peak MPa: deformable  other  diff")
+    print(f"\nhand_block (deformable, E as given) against {other}: the step's force and area, the same averaged over the")
+    print("pressure's window (run.json windowed_*), and the 25 mm^2 averaged peak pressure")
+    print("t (ms) |  force N: deformable  other   diff | windowed force         diff |  area mm^2            diff |"
+          " windowed area          diff |  peak MPa              diff")
     for a, b in zip(d, r):
-        print(f"{1e3 * a['time']:5.1f}   {a['normal_force']:10.1f} {b['normal_force']:8.1f} {pct(a['normal_force'], b['normal_force']):+6.1f} %"
-              f"  |  {1e6 * a['area']:10.1f} {1e6 * b['area']:8.1f} {pct(a['area'], b['area']):+6.1f} %"
-              f"  |  {a['averaged_peak_pressure'] / 1e6:10.3f} {b['averaged_peak_pressure'] / 1e6:8.3f} "
-              f"{pct(a['averaged_peak_pressure'], b['averaged_peak_pressure']):+6.1f} %")
+        cells = []
+        for key, scale in (("normal_force", 1), ("windowed_normal_force", 1), ("area", 1e6), ("windowed_area", 1e6), ("averaged_peak_pressure", 1e-6)):
+            cells.append(f"{scale * a[key]:9.2f} {scale * b[key]:9.2f} {pct(a[key], b[key]):+6.1f} %")
+        print(f"{1e3 * a['time']:5.1f}  | " + " | ".join(cells))
 if len(cases) > 2:
     stiff = [c for c in cases if c.startswith("hand_block_bones")]
     order = ["hand_block"] + stiff + ["hand_block_rigid"]
     print("\nrigid bones as the limit of stiff ones: force N, area mm^2, 25 mm^2 peak MPa at each output, and the stiffest against the rigid run")
-    for key, scale, name in (("normal_force", 1, "force"), ("area", 1e6, "area"), ("averaged_peak_pressure", 1e-6, "peak")):
+    for key, scale, name in (("normal_force", 1, "force"), ("windowed_normal_force", 1, "wforce"), ("area", 1e6, "area"),
+                             ("windowed_area", 1e6, "warea"), ("averaged_peak_pressure", 1e-6, "peak")):
         print(f"{name:6s} t (ms) " + " ".join(f"{c:>19s}" for c in order) + "   stiffest vs rigid")
         for k in range(len(d)):
             v = [scale * runs[c]["contact"]["at_outputs"][k][key] for c in order]

@@ -346,7 +346,7 @@ class RunLoop {
     if (!solver_.contact().empty()) {
       const ContactStepReport& cr = solver_.contact_report();
       const ContactSolver::AveragedPressure avg = solver_.contact().averaged_peak_pressure(u.data(), sc_.contact_solver.pressure_average_area);
-      peaks_.at_outputs.push_back({t, cr.normal_force, cr.area, cr.peak_pressure, avg.value, avg.at});
+      peaks_.at_outputs.push_back({t, cr.normal_force, cr.area, cr.peak_pressure, avg.value, avg.at, cr.windowed_normal_force, cr.windowed_area});
     }
     pvd_.emplace_back(t, "results/" + name);
     ++summary_.outputs;

@@ -430,10 +430,12 @@ TEST(Contact, HertzSphereOnRigidPlane) {
 // it over [0.2, 0.8] of the contact, and its peak must not depend on the step: with the same window
 // (10 initial critical steps, the same in both runs) it changes by <= 5 % when time_step_safety
 // goes from 0.9 to 0.3, where the one-step pressure r_n / A of the first touch grows like 1/dt
-// (printed). The second bar is a mortar master: the deformable-on-deformable pressure.
+// (printed). The same for the windowed normal force, against rho c v a^2. The second bar is a
+// mortar master: the deformable-on-deformable pressure.
 namespace {
 struct ImpactOutcome {
   double plateau = 0, peak = 0, step_peak = 0, window = 0, dt = 0;
+  double force_plateau = 0, force_peak = 0, step_force_peak = 0;  // the windowed normal force and one step's
 };
 ImpactOutcome bar_impact(double safety, bool second_bar) {
   const double E = 1e7, rho = 1000, L = 0.1, a = 0.01, v0 = 0.1, c = std::sqrt(E / rho), T = 2 * L / c;
@@ -464,11 +466,14 @@ ImpactOutcome bar_impact(double safety, bool second_bar) {
     const ContactStepReport& r = s.contact_report();
     if (r.normal_force > 0 && t_first < 0) t_first = s.time();
     o.peak = std::max(o.peak, r.peak_pressure), o.step_peak = std::max(o.step_peak, r.peak_step_pressure);
-    if (t_first >= 0 && s.time() > t_first + 0.2 * T && s.time() < t_first + 0.8 * T) sum += r.peak_pressure, ++n;
+    o.force_peak = std::max(o.force_peak, r.windowed_normal_force), o.step_force_peak = std::max(o.step_force_peak, r.normal_force);
+    if (t_first >= 0 && s.time() > t_first + 0.2 * T && s.time() < t_first + 0.8 * T)
+      sum += r.peak_pressure, o.force_plateau += r.windowed_normal_force, ++n;
     if (s.time() >= 1.5 * T * (1 - 1e-12)) break;
     s.advance_position();
   }
   o.plateau = sum / n;
+  o.force_plateau /= n;
   return o;
 }
 void impact_pressure_is_windowed(bool second_bar) {
@@ -483,6 +488,13 @@ void impact_pressure_is_windowed(bool second_bar) {
   EXPECT_NEAR(coarse.plateau / p_ref, 1.0, 0.05);
   EXPECT_NEAR(fine.plateau / p_ref, 1.0, 0.05);
   EXPECT_NEAR(fine.peak / coarse.peak, 1.0, 0.05);
+  // The windowed normal force (run.json at_outputs windowed_normal_force) the same way: rho c v a^2.
+  const double f_ref = p_ref * 0.01 * 0.01;
+  std::printf("  windowed force: plateau %.5f N at safety 0.9, %.5f N at 0.3 (rho c v a^2 %.5f N); peak %.5f vs %.5f N; one step's %.5f vs %.5f N\n",
+              coarse.force_plateau, fine.force_plateau, f_ref, coarse.force_peak, fine.force_peak, coarse.step_force_peak, fine.step_force_peak);
+  EXPECT_NEAR(coarse.force_plateau / f_ref, 1.0, 0.05);
+  EXPECT_NEAR(fine.force_plateau / f_ref, 1.0, 0.05);
+  EXPECT_NEAR(fine.force_peak / coarse.force_peak, 1.0, 0.05);
 }
 }  // namespace
 TEST(Contact, ImpactPressureIsWindowedNotPerStep) { impact_pressure_is_windowed(false); }

@@ -106,6 +106,9 @@ void ContactSolver::update_windowed_pressure(ContactStepReport& rep, double dtba
     step_pressure_[static_cast<std::size_t>(rows_.slave(k))] += (r[0] * n[0] + r[1] * n[1] + r[2] * n[2]) / rows_.area[k];
   }
   const double w = pressure_window_ > 0 ? std::min(1.0, dtbar / pressure_window_) : 1.0;
+  windowed_normal_force_ += w * (rep.normal_force - windowed_normal_force_);
+  windowed_area_ += w * (rep.area - windowed_area_);
+  rep.windowed_normal_force = windowed_normal_force_, rep.windowed_area = windowed_area_;
   rep.peak_step_pressure = rep.peak_pressure;
   rep.peak_pressure = 0;
   rep.peak_node = -1;

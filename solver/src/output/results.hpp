@@ -79,11 +79,13 @@ struct RunPeaks {
     double force = 0, force_time = 0, normal_force = 0, area = 0, area_time = 0, pressure = 0, pressure_time = 0;
   };
   std::vector<PairPeaks> pairs;
-  // At each output: the contact force and area, the largest nodal pressure and the largest
-  // average over the sensor area (ContactSolver::averaged_peak_pressure) with its centre.
+  // At each output: the contact force and area (the step's, and averaged over the pressure's
+  // window), the largest nodal pressure and the largest average over the sensor area
+  // (ContactSolver::averaged_peak_pressure) with its centre.
   struct AtOutput {
     double time = 0, normal_force = 0, area = 0, peak_pressure = 0, averaged_peak_pressure = 0;
     Vec3 averaged_at{0, 0, 0};
+    double windowed_normal_force = 0, windowed_area = 0;
   };
   std::vector<AtOutput> at_outputs;
   void add_contact_step(const ContactStepReport& c, double t, const Vec3& peak_at, const std::vector<PairStepReport>& per_pair);

@@ -30,6 +30,8 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
     at_outputs.push_back({{"time", o.time},
                           {"normal_force", o.normal_force},
                           {"area", o.area},
+                          {"windowed_normal_force", o.windowed_normal_force},
+                          {"windowed_area", o.windowed_area},
                           {"peak_pressure", o.peak_pressure},
                           {"averaged_peak_pressure", o.averaged_peak_pressure},
                           {"averaged_at", o.averaged_at}});

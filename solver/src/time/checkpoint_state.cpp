@@ -45,6 +45,7 @@ void ContactSolver::checkpoint(StateArchive& a) {
   }
   a.io("contact.windowed_pressure", windowed_pressure_, windowed_pressure_.size());
   a.io("contact.pressure_window", pressure_window_);
+  a.io("contact.windowed_normal_force", windowed_normal_force_), a.io("contact.windowed_area", windowed_area_);
   a.io("contact.ahead", ahead_);
   ContactRows& r = ahead_rows_;  // its geometry (the solve fills the rest)
   a.io("contact.ahead.pair", r.pair), a.io("contact.ahead.slave_index", r.slave_index), a.io("contact.ahead.start", r.start);

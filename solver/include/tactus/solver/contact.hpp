@@ -169,6 +169,9 @@ struct ContactStepReport {
   double peak_pressure = 0;       // Pa, the largest windowed nodal pressure (ContactSolver::set_pressure_window)
   std::int32_t peak_node = -1;    // internal node of the peak pressure
   double peak_step_pressure = 0;  // Pa, the largest r_n / A of this step alone (first-touch impulses grow like 1/dt)
+  // normal_force and area averaged over the pressure's window (set_pressure_window), N and m^2:
+  // one step's values carry the first-touch impulses, these converge as dt -> 0.
+  double windowed_normal_force = 0, windowed_area = 0;
   // Rows found deeper inside than recovery_speed x dt, pushed out at recovery_speed; the deepest's gap (m, < 0) and slave node.
   std::size_t recovering = 0;
   double deepest_gap = 0;
@@ -255,7 +258,8 @@ class ContactSolver {
   std::vector<PairStepReport> pair_reports_;
   double pressure_window_ = 0;
   std::vector<double> step_pressure_, windowed_pressure_;  // per node (slave nodes only used)
-  std::vector<std::int32_t> slave_union_;                  // every pair's slave nodes, once
+  double windowed_normal_force_ = 0, windowed_area_ = 0;
+  std::vector<std::int32_t> slave_union_;  // every pair's slave nodes, once
   void update_windowed_pressure(ContactStepReport& report, double dtbar);
   int threads_ = 1;
   std::vector<DetectionScratch> scratch_;  // one per pair (grids and Verlet lists)
