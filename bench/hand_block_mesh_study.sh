@@ -52,15 +52,15 @@ for name in "${names[@]}"; do
   echo "== $name mesh: solving $(basename "$SCENARIO")"
   "$B/solver/tactus-solve" "$SCENARIO" --meshes "$W/$name" -o "$W/$name/out" -q
 done
-/usr/bin/python3 - "$W" "${names[@]}" <<'PY'
-import csv, json, sys
-w, names = sys.argv[1], sys.argv[2:]
+/usr/bin/python3 - "$ROOT/bench" "$W" "${names[@]}" <<'PY'
+import json, sys
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, sys.argv[1])
+from history_kit import contact_impulse
+w, names = sys.argv[2], sys.argv[3:]
 runs = {n: json.load(open(f"{w}/{n}/out/run.json")) for n in names}
-def impulse(n):  # trapezoid rule over the history's rows
-    rows = list(csv.DictReader(open(f"{w}/{n}/out/history.csv")))
-    t = [float(r["time"]) for r in rows]
-    f = [float(r["contact_normal_force"]) for r in rows]
-    return sum(0.5 * (f[i] + f[i + 1]) * (t[i + 1] - t[i]) for i in range(len(t) - 1))
+def impulse(n):
+    return contact_impulse(f"{w}/{n}/out/history.csv")
 for n, j in runs.items():
     print(f"{n}: {j['tets']} tets, {j['contact']['pairs'][0]['slave_nodes']} skin nodes, {j['steps']} steps, {j['wall_time_s']:.0f} s, "
           f"contact impulse {impulse(n):.3f} N s")

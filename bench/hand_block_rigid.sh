@@ -55,21 +55,22 @@ fi
 for case in "${cases[@]}"; do
   rounds=$ROUNDS
   case $case in hand_block_bones*) rounds=1 ;; esac  # accuracy runs: timed once
+  rm -f "$W/$case.walls"
   for ((r = 1; r <= rounds; ++r)); do
     echo "== $case (run $r of $rounds)"
     "$B/solver/tactus-solve" "$W/$case.toml" --meshes "$W" -o "$W/$case.out" -q --force
     /usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["wall_time_s"])' "$W/$case.out/run.json" >>"$W/$case.walls"
   done
 done
-/usr/bin/python3 - "$W" "${cases[@]}" <<'PY'
-import csv, json, statistics, sys
-w, cases = sys.argv[1], sys.argv[2:]
+/usr/bin/python3 - "$ROOT/bench" "$W" "${cases[@]}" <<'PY'
+import json, statistics, sys
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, sys.argv[1])
+from history_kit import contact_impulse
+w, cases = sys.argv[2], sys.argv[3:]
 runs = {c: json.load(open(f"{w}/{c}.out/run.json")) for c in cases}
-def impulse(case):  # trapezoid rule over the history's rows
-    rows = list(csv.DictReader(open(f"{w}/{case}.out/history.csv")))
-    t = [float(r["time"]) for r in rows]
-    f = [float(r["contact_normal_force"]) for r in rows]
-    return sum(0.5 * (f[i] + f[i + 1]) * (t[i + 1] - t[i]) for i in range(len(t) - 1))
+def impulse(case):
+    return contact_impulse(f"{w}/{case}.out/history.csv")
 for c, j in runs.items():
     t = j["timing_s"]
     walls = [float(x) for x in open(f"{w}/{c}.walls")]

@@ -52,6 +52,12 @@ RunSpec run_until(double end_time) {
 
 std::vector<std::array<int, 3>> group_faces(const Model& m, int tag) { return surface_triangles(m, tag); }
 
+// Adds the box's whole boundary (its six face groups' triangles) as one more group, "surface" (20).
+void add_whole_boundary_group(TetMesh& box) {
+  box.groups.push_back({2, 20, "surface"});
+  for (std::size_t t = 0, n = box.triangles.size(); t < n; ++t) box.triangles.push_back(box.triangles[t]), box.triangle_group.push_back(20);
+}
+
 // Two box meshes as one; the second's group tags are shifted by 100.
 TetMesh merge(const TetMesh& a, const TetMesh& b) {
   TetMesh m = a;
@@ -598,8 +604,7 @@ void sphere_over_a_corner(bool mortar) {
   testkit::TempDir dir;
   const double R = 0.004, h = 1e-3, B = 0.02, Hb = 0.01, E = 1e6;
   TetMesh block = samples::make_box_mesh(10, 10, 5, B, B, Hb);
-  block.groups.push_back({2, 20, "surface"});  // the whole boundary as one master surface
-  for (std::size_t t = 0, n = block.triangles.size(); t < n; ++t) block.triangles.push_back(block.triangles[t]), block.triangle_group.push_back(20);
+  add_whole_boundary_group(block);  // one master surface
   Scenario sc;
   sc.file = dir.path() / "edge.toml";
   sc.run.end_time = 0.03;
@@ -685,8 +690,7 @@ RecoveryRun cube_back_over_an_edge(double recovery_speed) {
   sc.materials["m"] = testkit::linear_elastic_instance("m", 1e9, 0.3, 1000);
   sc.bodies.push_back(testkit::body_from_mesh(dir, "block", samples::make_box_mesh(10, 10, 5, B, B, Hb), "m"));
   TetMesh cube = samples::make_box_mesh(4, 4, 4, a, a, a, {B + 1e-3, 0.008, Hb - depth});
-  cube.groups.push_back({2, 20, "surface"});
-  for (std::size_t t = 0, n = cube.triangles.size(); t < n; ++t) cube.triangles.push_back(cube.triangles[t]), cube.triangle_group.push_back(20);
+  add_whole_boundary_group(cube);
   sc.bodies.push_back(testkit::body_from_mesh(dir, "cube", cube, "m"));
   sc.bodies.back().initial_velocity = {-v0, 0, 0};
   sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
