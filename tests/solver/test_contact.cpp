@@ -71,6 +71,14 @@ TetMesh merge(const TetMesh& a, const TetMesh& b) {
 struct SignoriniCheck {
   double adhesive = 0, open_with_reaction = 0, cone = 0, penetration = 0;
 };
+// Row k's relative velocity at velocities v: the sum of weight x velocity over its dofs.
+V3 row_velocity(const ContactRows& rows, std::size_t k, const std::vector<double>& v) {
+  V3 u{0, 0, 0};
+  for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a)
+    for (int d = 0; d < 3; ++d)
+      u[d] += rows.weights[static_cast<std::size_t>(a)] * v[3 * static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)]) + d];
+  return u;
+}
 void check_signorini(const ExplicitSolver& s, SignoriniCheck& worst, double element) {
   const ContactRows& st = s.contact().rows();
   const auto& v = s.half_step_velocity();
@@ -83,10 +91,7 @@ void check_signorini(const ExplicitSolver& s, SignoriniCheck& worst, double elem
     const double rn = dot(r, n);
     const double rt = norm(axpy(-rn, n, r));
     const ContactPair& p = pairs[static_cast<std::size_t>(st.pair[k])];
-    V3 u{0, 0, 0};  // the row's relative velocity: sum of weight x velocity over its dofs
-    for (auto a = st.start[k]; a < st.start[k + 1]; ++a)
-      for (int d = 0; d < 3; ++d)
-        u[d] += st.weights[static_cast<std::size_t>(a)] * v[3 * static_cast<std::size_t>(st.nodes[static_cast<std::size_t>(a)]) + d];
+    const V3 u = row_velocity(st, k, v);
     const double next_gap = st.gap[k] + s.time_step() * dot(u, n);
     worst.adhesive = std::max(worst.adhesive, -rn / rmax);
     if (next_gap > 1e-6 * element) worst.open_with_reaction = std::max(worst.open_with_reaction, std::abs(rn) / rmax);
@@ -713,12 +718,9 @@ RecoveryRun cube_back_over_an_edge(double recovery_speed) {
     double deepest = 0;
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const V3 n{rows.normal[3 * k], rows.normal[3 * k + 1], rows.normal[3 * k + 2]};
-      V3 u{0, 0, 0};
-      for (auto j = rows.start[k]; j < rows.start[k + 1]; ++j)
-        for (int d = 0; d < 3; ++d)
-          u[d] += rows.weights[static_cast<std::size_t>(j)] * v[3 * static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(j)]) + d];
+      const V3 u = row_velocity(rows, k, v);
       deepest = std::min(deepest, rows.gap[k]);
-      const double rn = rows.reaction[3 * k] * n[0] + rows.reaction[3 * k + 1] * n[1] + rows.reaction[3 * k + 2] * n[2];
+      const double rn = dot({rows.reaction[3 * k], rows.reaction[3 * k + 1], rows.reaction[3 * k + 2]}, n);
       if (rows.gap[k] < -recovery_speed * dt)  // leaves at the recovery speed when pushed, faster when its neighbours lift it
         r.worst_recovery_speed_error =
             std::max(r.worst_recovery_speed_error, (rn > 0 ? std::abs(dot(u, n) - recovery_speed) : recovery_speed - dot(u, n)) / recovery_speed);

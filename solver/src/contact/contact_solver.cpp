@@ -93,11 +93,11 @@ ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, 
   }
   ContactStepReport rep =
       solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid});
-  update_windowed_pressure(rep, 0.5 * (dt + dt_prev));
+  update_windows(rep, 0.5 * (dt + dt_prev));
   return rep;
 }
 
-void ContactSolver::update_windowed_pressure(ContactStepReport& rep, double dtbar) {
+void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
   for (std::int32_t s : slave_union_) step_pressure_[static_cast<std::size_t>(s)] = 0;
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     if (rows_.status[k] == ContactStatus::open) continue;

@@ -260,7 +260,8 @@ class ContactSolver {
   std::vector<double> step_pressure_, windowed_pressure_;  // per node (slave nodes only used)
   double windowed_normal_force_ = 0, windowed_area_ = 0;
   std::vector<std::int32_t> slave_union_;  // every pair's slave nodes, once
-  void update_windowed_pressure(ContactStepReport& report, double dtbar);
+  // The step's nodal pressures, normal force and area into their exponential windows (pressure_window_).
+  void update_windows(ContactStepReport& report, double dtbar);
   int threads_ = 1;
   std::vector<DetectionScratch> scratch_;  // one per pair (grids and Verlet lists)
 };
