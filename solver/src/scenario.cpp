@@ -5,6 +5,8 @@
 #include <toml++/toml.h>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -287,6 +289,14 @@ class Reader {
     return *v;
   }
 
+  std::int64_t integer(const toml::table& t, const ValueSpec& s, const std::string& path) const {
+    const toml::node* n = t.get(s.key);
+    const auto v = n ? n->value<std::int64_t>() : std::nullopt;
+    if (!v || !n->is_integer()) fail(join(path, s.key), std::string(type_name(ValueType::integer)), n ? describe(*n) : "missing");
+    check_range(static_cast<double>(*v), s, join(path, s.key));
+    return *v;
+  }
+
   void check_range(double v, const ValueSpec& s, const std::string& key) const {
     if (!s.in_range(v)) {
       std::ostringstream f;
@@ -502,6 +512,8 @@ void read_materials(const Reader& r, const toml::table& root, Scenario& sc, cons
           m.values.vectors[ps.key] = r.vec3_list(t, ps, path);
         else if (ps.type == ValueType::string && t.contains(ps.key))
           m.values.strings[ps.key] = r.string(t, ps, path);
+        else if (ps.type == ValueType::integer && t.contains(ps.key))
+          m.values.numbers[ps.key] = static_cast<double>(r.integer(t, ps, path));
       }
       m.values.source = fname;
       Material::make(m.type, m.values, path);  // the law's own checks (hgo: two non-zero fibre directions)

@@ -10,6 +10,7 @@
 #include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "gmsh_kit.hpp"
 #include "linear_reference.hpp"
@@ -25,11 +26,13 @@ using namespace tactus::solver;
 
 namespace {
 
-// neo_hookean from E and nu, in the given formulation.
-Material elastic(double E, double nu, const char* formulation, double density = 1000) {
+// neo_hookean from E and nu, in the given formulation: "standard", "anp" (the default pressure
+// smoothing) or "anp<s>" (s smoothing passes; "anp0" is plain ANP).
+Material elastic(double E, double nu, const std::string& formulation, double density = 1000) {
   MaterialValues v;
   v.numbers = {{"mu", E / (2 * (1 + nu))}, {"bulk", E / (3 * (1 - 2 * nu))}, {"density", density}};
-  v.strings["formulation"] = formulation;
+  v.strings["formulation"] = formulation.substr(0, formulation.starts_with("anp") ? 3 : std::string::npos);
+  if (formulation.starts_with("anp") && formulation.size() > 3) v.numbers["pressure_smoothing"] = std::stod(formulation.substr(3));
   return Material::make("neo_hookean", v);
 }
 
@@ -90,6 +93,48 @@ std::vector<double> static_solution(const Model& m, const Eigen::SparseMatrix<do
   return u;
 }
 
+// The same by conjugate gradients on the stress pass itself (K d = -f(s d) / s, s scaling d to
+// strains ~1e-9 where the pass is linear to ~1e-9), for meshes whose smoothed ANP stiffness is too
+// wide to factor: iterates until the residual is 1e-9 of the load.
+std::vector<double> static_solution_cg(const Model& m, const std::vector<double>& load) {
+  InternalForces forces(m, 0.0, 0);
+  const std::size_t n = 3 * m.num_nodes;
+  double size = 0;
+  for (std::size_t i = 0; i < n; ++i) size = std::max(size, std::abs(m.X[i]));
+  std::vector<double> zero(n, 0.0), f(n), x(n, 0.0), r(n), d(n), Kd(n), probe(n);
+  auto free_only = [&](std::vector<double>& v) {
+    for (std::size_t i = 0; i < n; ++i)
+      if (m.constrained[i]) v[i] = 0;
+  };
+  auto apply_K = [&](const std::vector<double>& in, std::vector<double>& out) {
+    double largest = 0;
+    for (double v : in) largest = std::max(largest, std::abs(v));
+    const double scale = 1e-9 * size / largest;
+    for (std::size_t i = 0; i < n; ++i) probe[i] = scale * in[i];
+    forces.compute(probe.data(), zero.data(), f.data());
+    for (std::size_t i = 0; i < n; ++i) out[i] = -f[i] / scale;
+    free_only(out);
+  };
+  r = load;
+  free_only(r);
+  d = r;
+  double rr = 0, bb = 0;
+  for (std::size_t i = 0; i < n; ++i) rr += r[i] * r[i];
+  bb = rr;
+  for (int it = 0; it < 100000 && rr > 1e-18 * bb; ++it) {
+    apply_K(d, Kd);
+    double dKd = 0;
+    for (std::size_t i = 0; i < n; ++i) dKd += d[i] * Kd[i];
+    const double alpha = rr / dKd;
+    double rr_new = 0;
+    for (std::size_t i = 0; i < n; ++i) x[i] += alpha * d[i], r[i] -= alpha * Kd[i], rr_new += r[i] * r[i];
+    for (std::size_t i = 0; i < n; ++i) d[i] = r[i] + rr_new / rr * d[i];
+    rr = rr_new;
+  }
+  EXPECT_LE(rr, 1e-18 * bb);
+  return x;
+}
+
 // Tip deflection of a clamped cantilever (L = 5 t, 20 x 4 x 4 cells, 6 tets each) under its own
 // weight (load = lumped mass x g, downwards): the mean z displacement of the free end.
 double cantilever_deflection(const Material& material) {
@@ -110,19 +155,22 @@ double cantilever_deflection(const Material& material) {
 
 // Oracle: the same mesh at nu = 0.3, where neither formulation locks volumetrically (linear tets
 // also lock in shear; comparing against the same mesh cancels that). At nu = 0.4999 (k/mu = 5,000)
-// the ANP cantilever must bend within 5 % of it, while standard tets are >= 30 % stiffer. Young's
-// modulus is the same in all runs (Euler-Bernoulli deflection does not depend on nu).
+// the ANP cantilever, with the default pressure smoothing and without it, must bend within 5 % of
+// it, while standard tets are >= 30 % stiffer. Young's modulus is the same in all runs
+// (Euler-Bernoulli deflection does not depend on nu).
 TEST(Anp, CantileverBendingDoesNotLockVolumetrically) {
   const double E = 1e6;
   const double ref = cantilever_deflection(elastic(E, 0.3, "standard"));
   const double anp_03 = cantilever_deflection(elastic(E, 0.3, "anp"));
   const double standard = cantilever_deflection(elastic(E, 0.4999, "standard"));
   const double anp = cantilever_deflection(elastic(E, 0.4999, "anp"));
+  const double plain = cantilever_deflection(elastic(E, 0.4999, "anp0"));
   std::printf(
       "cantilever tip deflection (m): nu = 0.3 standard %.5e, anp %.5e; nu = 0.4999 standard %.5e (%.2fx stiffer), anp %.5e "
-      "(%+.2f %% vs nu = 0.3 standard, %+.2f %% vs nu = 0.3 anp)\n",
-      ref, anp_03, standard, ref / standard, anp, 100 * (anp / ref - 1), 100 * (anp / anp_03 - 1));
+      "(%+.2f %% vs nu = 0.3 standard), plain anp %.5e (%+.2f %%)\n",
+      ref, anp_03, standard, ref / standard, anp, 100 * (anp / ref - 1), plain, 100 * (plain / ref - 1));
   EXPECT_NEAR(anp / ref, 1.0, 0.05);
+  EXPECT_NEAR(plain / ref, 1.0, 0.05);
   EXPECT_GE(ref / standard, 1.3);
 }
 
@@ -164,7 +212,7 @@ struct ShellResult {
 // The shell octant on rollers at its three symmetry planes under internal pressure p (loads on
 // the reference inner surface, linear): the volume-weighted RMS of each tet's pressure -tr(sigma)/3
 // against Lame's, relative to it, and the mean radial displacement of the inner surface.
-ShellResult pressurised_shell(const TetMesh& mesh, const Material& material, double p) {
+ShellResult pressurised_shell(const TetMesh& mesh, const Material& material, double p, bool iterative = false) {
   Model m = build_model(mesh, material);
   for (int axis = 0; axis < 3; ++axis) {
     std::array<bool, 3> normal{false, false, false};
@@ -182,7 +230,7 @@ ShellResult pressurised_shell(const TetMesh& mesh, const Material& material, dou
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c) load[3 * static_cast<std::size_t>(tri[3 * t + k]) + c] += f[c];
   }
-  const std::vector<double> u = static_solution(m, tangent_stiffness(m, 1e-10), load);
+  const std::vector<double> u = iterative ? static_solution_cg(m, load) : static_solution(m, tangent_stiffness(m, 1e-10), load);
   const std::vector<Mat3> sigma = element_cauchy_stress(m, u.data());
   double a = 1e300, b = 0;
   for (std::size_t i = 0; i < m.num_nodes; ++i) {
@@ -208,46 +256,85 @@ ShellResult pressurised_shell(const TetMesh& mesh, const Material& material, dou
   return r;
 }
 
+// Lame's radial displacement of the inner wall of a thick sphere a <= r <= b under internal pressure p.
+double lame_inner_wall(double a, double b, double E, double nu, double p) {
+  const double A = p * a * a * a / (b * b * b - a * a * a), B = p * a * a * a * b * b * b / (2 * (b * b * b - a * a * a));
+  return a * ((1 - 2 * nu) * A + (1 + nu) * B / (a * a * a)) / E;
+}
+
 }  // namespace
 
 // Oracle: Lame's thick sphere (a = 50 mm, b = 100 mm) under internal pressure p: the mean stress
 // sigma_m = p a^3 / (b^3 - a^3) is uniform through the wall, and the inner wall moves
 // u(a) = a ((1 - 2 nu) A + (1 + nu) B / a^3) / E, A = p a^3 / (b^3 - a^3), B = p a^3 b^3 / (2 (b^3 - a^3)).
 // At nu = 0.4999 the ANP inner wall must move within 10 % of Lame's (the faceted coarse mesh alone
-// costs a few %: printed at nu = 0.3) where standard tets lock, and its pressure field's RMS error
-// must be at least 20x below the standard tets'. The pressure is not yet a 5 % field: a nodal
-// pressure on linear tets is not inf-sup stable, so its oscillation, of the order of the
-// deviatoric stress, does not vanish as nu -> 0.5 (docs/design.md, "Average nodal pressure tets").
+// costs a few %: printed at nu = 0.3) where standard tets lock. The pressure: a plain nodal
+// pressure on linear tets is not inf-sup stable, and its oscillation, of the order of the
+// deviatoric stress, does not vanish as nu -> 0.5 (151 % RMS of sigma_m on this mesh); the
+// default two smoothing passes (docs/design.md, "Average nodal pressure tets") must bring it below
+// 40 % and at least 4x below plain ANP's, and plain ANP must stay 20x below standard tets'. The
+// error is relative to sigma_m = p / 7, small beside the deviatoric stress (up to 0.57 p at r = a):
+// compressible standard tets (nu = 0.3) are at 52 % here; the slow test below refines the mesh.
 // p is small (strains ~1e-8) so that the linear solution's second-order terms in J stay far below
 // its volumetric strain (~1e-12).
 TEST(Anp, ThickSphereUnderInternalPressureDoesNotLock) {
   const double a = 0.05, b = 0.1, E = 1e6, p = 0.01;
   const TetMesh mesh = shell_octant(a, b, 0.01);
-  auto lame = [&](double nu) {
-    const double A = p * a * a * a / (b * b * b - a * a * a), B = p * a * a * a * b * b * b / (2 * (b * b * b - a * a * a));
-    return a * ((1 - 2 * nu) * A + (1 + nu) * B / (a * a * a)) / E;
-  };
   const ShellResult compressible = pressurised_shell(mesh, elastic(E, 0.3, "standard"), p);
-  const ShellResult anp = pressurised_shell(mesh, elastic(E, 0.4999, "anp"), p);
+  const ShellResult plain = pressurised_shell(mesh, elastic(E, 0.4999, "anp0"), p);
+  const ShellResult smoothed = pressurised_shell(mesh, elastic(E, 0.4999, "anp"), p);
   const ShellResult standard = pressurised_shell(mesh, elastic(E, 0.4999, "standard"), p);
   std::printf(
-      "thick sphere, %zu tets: nu = 0.3 standard: pressure RMS error %.1f %%, inner wall %+.2f %% vs Lame; nu = 0.4999: anp %.1f %% and "
-      "%+.2f %%, standard %.1f %% and %+.2f %%\n",
-      mesh.tets.size(), 100 * compressible.pressure_rms, 100 * (compressible.inner_displacement / lame(0.3) - 1), 100 * anp.pressure_rms,
-      100 * (anp.inner_displacement / lame(0.4999) - 1), 100 * standard.pressure_rms, 100 * (standard.inner_displacement / lame(0.4999) - 1));
-  EXPECT_NEAR(anp.inner_displacement / lame(0.4999), 1.0, 0.10);
-  EXPECT_LE(20 * anp.pressure_rms, standard.pressure_rms);
+      "thick sphere, %zu tets: pressure RMS error and inner wall vs Lame: nu = 0.3 standard %.1f %% %+.2f %%; nu = 0.4999: anp (2 smoothing "
+      "passes) %.1f %% %+.2f %%, plain anp %.1f %% %+.2f %%, standard %.1f %% %+.2f %%\n",
+      mesh.tets.size(), 100 * compressible.pressure_rms, 100 * (compressible.inner_displacement / lame_inner_wall(a, b, E, 0.3, p) - 1),
+      100 * smoothed.pressure_rms, 100 * (smoothed.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p) - 1), 100 * plain.pressure_rms,
+      100 * (plain.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p) - 1), 100 * standard.pressure_rms,
+      100 * (standard.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p) - 1));
+  EXPECT_NEAR(smoothed.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p), 1.0, 0.10);
+  EXPECT_NEAR(plain.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p), 1.0, 0.10);
+  EXPECT_LE(smoothed.pressure_rms, 0.40);
+  EXPECT_LE(4 * smoothed.pressure_rms, plain.pressure_rms);
+  EXPECT_LE(20 * plain.pressure_rms, standard.pressure_rms);
+}
+
+// The same at about a third of the element size (h = 3.5 mm, 50,975 tets; slow; solved by
+// conjugate gradients on the stress pass): the smoothed pressure converges (the default two passes
+// at least 3x below their error on the 2,452-tet mesh), and three passes give a pressure field
+// within 5 % RMS of Lame's mean stress, the soft-tissue issue's criterion, while the cantilever
+// with three passes stays within 5 % of nu = 0.3 (printed with the default's).
+TEST(AnpSlow, ThickSpherePressureConvergesToLames) {
+  const double a = 0.05, b = 0.1, E = 1e6, p = 0.01;
+  const ShellResult coarse = pressurised_shell(shell_octant(a, b, 0.01), elastic(E, 0.4999, "anp"), p, true);
+  const TetMesh mesh = shell_octant(a, b, 0.0035);
+  const ShellResult two = pressurised_shell(mesh, elastic(E, 0.4999, "anp"), p, true);
+  const ShellResult three = pressurised_shell(mesh, elastic(E, 0.4999, "anp3"), p, true);
+  const double cantilever_ref = cantilever_deflection(elastic(1e6, 0.3, "standard"));
+  const double cantilever_three = cantilever_deflection(elastic(1e6, 0.4999, "anp3")) / cantilever_ref - 1;
+  std::printf(
+      "thick sphere, nu = 0.4999, pressure RMS error vs Lame: 2 smoothing passes %.2f %% (2,452 tets) -> %.2f %% (%zu tets), 3 passes "
+      "%.2f %%; inner wall %+.2f %% / %+.2f %%; cantilever with 3 passes %+.2f %% vs nu = 0.3\n",
+      100 * coarse.pressure_rms, 100 * two.pressure_rms, mesh.tets.size(), 100 * three.pressure_rms,
+      100 * (two.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p) - 1),
+      100 * (three.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p) - 1), 100 * cantilever_three);
+  EXPECT_LE(3 * two.pressure_rms, coarse.pressure_rms);
+  EXPECT_LE(three.pressure_rms, 0.05);
+  EXPECT_NEAR(three.inner_displacement / lame_inner_wall(a, b, E, 0.4999, p), 1.0, 0.01);
+  EXPECT_LE(std::abs(cantilever_three), 0.05);
 }
 
 // Oracle: the largest eigenfrequency of the same small mesh (dense generalized eigenproblem of
 // the finite-difference stiffness with the lumped mass). The element estimate (wave speed of
 // K + 4 mu / 3 over each tet's L_e) bounds the ANP operator too, since nodal averaging only lowers
-// the volumetric stiffness (Cauchy-Schwarz on the nodal sums): at nu = 0.4999 on a regular mesh the
-// computed step must lie between half and all of 2 / omega_max. On an irregular mesh (interior
-// nodes moved by up to 25 % of a cell) it must stay below; the ratios are printed, with standard tets'.
+// the volumetric stiffness (Cauchy-Schwarz on the nodal sums), and so does the smoothing (each
+// pass is a contraction): at nu = 0.4999 on a regular mesh the computed step must lie between half
+// and all of 2 / omega_max for plain ANP and standard tets. The smoothing lowers omega_max further
+// (by ~23 % with two passes), which the element estimate does not see: with it the step must
+// still be below 2 / omega_max and at least 0.35 of it. On an irregular mesh (interior nodes moved
+// by up to 25 % of a cell) every step must stay below; the ratios are printed.
 TEST(Anp, StableStepIsConservativeAndNotWasteful) {
   for (const double perturbation : {0.0, 0.25})
-    for (const char* formulation : {"anp", "standard"}) {
+    for (const char* formulation : {"anp", "anp0", "standard"}) {
       TetMesh mesh = samples::make_box_mesh(4, 4, 4, 0.04, 0.04, 0.04);
       if (perturbation > 0) samples::perturb_interior_nodes(mesh, 0.01, perturbation, 11);
       const Model m = build_model(mesh, elastic(1e6, 0.4999, formulation));
@@ -260,7 +347,7 @@ TEST(Anp, StableStepIsConservativeAndNotWasteful) {
                   formulation, 100 * perturbation, dt, 2 / omega_max, ratio);
       EXPECT_LE(ratio, 1.0);
       if (perturbation == 0.0) {
-        EXPECT_GE(ratio, 0.5);
+        EXPECT_GE(ratio, std::string(formulation) == "anp" ? 0.35 : 0.5);
       }
     }
 }

@@ -139,6 +139,11 @@ TEST_F(ScenarioFile, MaterialFormulationMustBeKnown) {
   expect_error(replace(kValid, "k2 = 882.847\n", "k2 = 882.847\nformulation = \"mixed\"\n"),
                {"materials.skin.formulation", "\"anp\" or \"standard\""});
 }
+TEST_F(ScenarioFile, PressureSmoothingMustBeASmallInteger) {
+  expect_error(replace(kValid, "k2 = 882.847\n", "k2 = 882.847\npressure_smoothing = 1.5\n"),
+               {"materials.skin.pressure_smoothing", "an integer", "1.5"});
+  expect_error(replace(kValid, "k2 = 882.847\n", "k2 = 882.847\npressure_smoothing = 9\n"), {"materials.skin.pressure_smoothing", "[0, 8]", "9"});
+}
 TEST_F(ScenarioFile, UnknownMaterialType) {
   expect_error(replace(kValid, "\"linear_elastic\"", "\"mooney\""), {"materials.bone.type", "hgo", "mooney"});
 }

@@ -39,6 +39,21 @@ void add_quarter_volumes(const Model& m, std::size_t e, const double* u, double*
     for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[4 * l + k]) - node_offset] += lanes::lane(quarter, l);
 }
 
+// Each tet of [begin, end) adds V_e / 4 times the mean of `field` over its four nodes to each of
+// them: a node's sum over its tets divided by its V_a is one averaging pass node -> tet -> node.
+void add_quarter_means(const Model& m, std::size_t begin, std::size_t end, const double* field, double* node_sum, std::size_t node_offset) {
+  for (std::size_t e = begin; e < end; ++e) {
+    const std::int32_t* c = &m.conn[4 * e];
+    const double share = 0.0625 * m.volume[e] * (field[c[0]] + field[c[1]] + field[c[2]] + field[c[3]]);
+    for (int k = 0; k < 4; ++k) node_sum[static_cast<std::size_t>(c[k]) - node_offset] += share;
+  }
+}
+
+// x[lo, hi) /= V (0 where the node has no tet of the block).
+void divide_by_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
+  for (std::size_t a = lo; a < hi; ++a) x[a] = V[a] > 0 ? x[a] / V[a] : 0.0;
+}
+
 }  // namespace
 
 std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlock& b) {
@@ -56,12 +71,24 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
   for (; e < end; ++e) add_quarter_volumes<double>(m, e, u, node_volume, node_offset);
 }
 
+// The serial form of InternalForces::anp_pass for one block (the reported stress, the tests).
 std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, const double* u) {
   const std::vector<double> V = anp_reference_node_volumes(m, b);
-  std::vector<double> p(m.num_nodes, 0.0);
-  add_current_node_volumes(m, b.begin, b.end, u, p.data());
-  b.material.type().anp_nodal_pressure(b.material.law(), V.data(), p.data(), 0, m.num_nodes);
-  return p;
+  const std::size_t n = m.num_nodes;
+  std::vector<double> x(n, 0.0), sum(n);
+  add_current_node_volumes(m, b.begin, b.end, u, x.data());
+  const int passes = b.material.pressure_smoothing();
+  auto smooth = [&](bool last_of_volume) {
+    std::fill(sum.begin(), sum.end(), 0.0);
+    add_quarter_means(m, b.begin, b.end, x.data(), sum.data(), 0);
+    x.swap(sum);
+    if (!last_of_volume) divide_by_volume(V.data(), x.data(), 0, n);
+  };
+  if (passes > 0) divide_by_volume(V.data(), x.data(), 0, n);
+  for (int i = 0; i < passes; ++i) smooth(i + 1 == passes);
+  b.material.type().anp_nodal_pressure(b.material.law(), V.data(), x.data(), 0, n);
+  for (int i = 0; i < passes; ++i) smooth(false);
+  return x;
 }
 
 std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
@@ -148,11 +175,24 @@ void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays,
 // partitions' current tet volumes to their own nodal arrays, then per node chunk their sum in
 // partition order, turned into pressures; chunk_anp_energy_ receives each chunk's part of the
 // volumetric energy sum_a V_a U(J_a).
+//
+// With pressure smoothing (s passes of the averaging S: node -> tet -> node, V-weighted), the
+// energy is sum_a V_a U((S^s J)_a): the nodal volume ratio is averaged s times before U' turns it
+// into pressures, and since S is symmetric in the V-weighted inner product the forces it implies
+// are those of the pressure averaged s times more (what the stress pass reads). S keeps a uniform
+// field and damps a node-to-node oscillating one: the oscillation of the plain nodal pressure,
+// which is not inf-sup stable and, when nearly incompressible, carries k times the tiny nodal
+// volume ratio's oscillation, is averaged away while a smooth pressure keeps its constraint. The
+// energy stays exactly conserved (a potential), and the volumetric stiffness only falls
+// (||S x|| <= ||x||), so the element step estimate stays conservative.
 void InternalForces::anp_pass(const double* u) {
 #pragma omp single
   std::fill(chunk_anp_energy_.begin(), chunk_anp_energy_.end(), 0.0);
   for (AnpBlock& a : anp_) {
     const MaterialBlock& b = model_.blocks[a.block];
+    const int passes = b.material.pressure_smoothing();
+    const double* V = a.reference_volume.data();
+    auto own = [&](const Partition& q) { return q.block == a.block; };
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t p = 0; p < partitions_.size(); ++p) {
       const Partition& q = partitions_[p];
@@ -161,11 +201,44 @@ void InternalForces::anp_pass(const double* u) {
       std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
       add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo, vectorised_);
     }
+    // Per node chunk: the partitions' sums; then `finish` on the chunk's nodes [lo, hi).
+    auto gather = [&](auto finish) {
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      sum_chunk(c, partition_volumes_, &Partition::volume_offset, 1, a.pressure.data(), [&](const Partition& q) { return q.block == a.block; });
-      const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
-      chunk_anp_energy_[c] += b.material.type().anp_nodal_pressure(b.material.law(), a.reference_volume.data(), a.pressure.data(), lo, hi);
+      for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
+        sum_chunk(c, partition_volumes_, &Partition::volume_offset, 1, a.pressure.data(), own);
+        finish(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
+      }
+    };
+    auto to_pressure = [&](std::size_t c, std::size_t lo, std::size_t hi) {
+      chunk_anp_energy_[c] += b.material.type().anp_nodal_pressure(b.material.law(), V, a.pressure.data(), lo, hi);
+    };
+    auto to_mean = [&](std::size_t, std::size_t lo, std::size_t hi) { divide_by_volume(V, a.pressure.data(), lo, hi); };
+    // One averaging pass of a.pressure (a nodal mean field) into the partitions' arrays.
+    auto average = [&]() {
+#pragma omp for schedule(dynamic, 1)
+      for (std::size_t p = 0; p < partitions_.size(); ++p) {
+        const Partition& q = partitions_[p];
+        if (q.block != a.block) continue;
+        double* mine = partition_volumes_.data() + q.volume_offset;
+        std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
+        add_quarter_means(model_, q.begin, q.end, a.pressure.data(), mine, q.node_lo);
+      }
+    };
+    if (passes == 0) {
+      gather(to_pressure);
+      continue;
+    }
+    gather(to_mean);  // the nodal volume ratio
+    for (int i = 0; i < passes; ++i) {
+      average();
+      if (i + 1 < passes)
+        gather(to_mean);
+      else
+        gather(to_pressure);  // the sums are V_a times the averaged ratio: nodal volumes, as U' takes them
+    }
+    for (int i = 0; i < passes; ++i) {
+      average();
+      gather(to_mean);
     }
   }
 }

@@ -110,6 +110,15 @@ MaterialType make_material_type() {
         "standard: one-point linear tets; anp: average nodal pressure tets (volumetric part from nodal volumes of this "
         "material's tets), which do not lock when nearly incompressible";
     t.parameters.keys.push_back(formulation);
+    ValueSpec smoothing;
+    smoothing.key = "pressure_smoothing";
+    smoothing.type = ValueType::integer;
+    smoothing.min = 0, smoothing.max = kAnpMaxPressureSmoothing;
+    smoothing.default_text = std::to_string(kAnpDefaultPressureSmoothing);
+    smoothing.doc =
+        "anp only: passes of node -> tet -> node averaging applied to the nodal volume ratio and to the nodal pressure; 0 is plain "
+        "ANP, whose nodal pressure oscillates when nearly incompressible, each pass about halves that oscillation";
+    t.parameters.keys.push_back(smoothing);
     t.evaluate_isochoric = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
       return to_stress_point(static_cast<const Law*>(law)->evaluate_isochoric(to_m3(F), to_m3(cof), J, data));
     };

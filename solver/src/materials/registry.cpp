@@ -60,6 +60,13 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
   } else if (m.type_->volumetric_split() && m.small_strain_bulk() > kAnpDefaultBulkToShear * m.small_strain_shear()) {
     m.formulation_ = Formulation::anp;
   }
+  if (auto it = values.numbers.find("pressure_smoothing"); it != values.numbers.end()) {
+    const double s = it->second;
+    if (!(s >= 0 && s <= kAnpMaxPressureSmoothing && s == std::floor(s)))
+      throw InputError(values.source, where + ".pressure_smoothing", "an integer from 0 to " + std::to_string(kAnpMaxPressureSmoothing),
+                       std::to_string(s));
+    m.pressure_smoothing_ = static_cast<int>(s);
+  }
   return m;
 }
 

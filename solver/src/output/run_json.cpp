@@ -110,6 +110,9 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   for (const auto& b : model.blocks) j[k::materials].push_back(b.name);
   j[k::formulations] = nlohmann::json::object();
   for (const auto& b : model.blocks) j[k::formulations][b.name] = b.material.anp() ? "anp" : "standard";
+  j[k::pressure_smoothing] = nlohmann::json::object();
+  for (const auto& b : model.blocks)
+    if (b.material.anp()) j[k::pressure_smoothing][b.name] = b.material.pressure_smoothing();
   j[k::bodies] = nlohmann::json::array();
   for (const auto& b : model.bodies) j[k::bodies].push_back(b.name);
   j[k::nodes] = model.num_nodes;

@@ -142,11 +142,12 @@ inline constexpr std::array<const ColumnFamily*, 6> per_rigid_body{&rigid_centre
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------
 namespace run_json {
-inline constexpr const char* status = "status";              // "completed" | "failed"
-inline constexpr const char* message = "message";            // why it failed, or null
-inline constexpr const char* materials = "materials";        // names behind the cell field "material"
-inline constexpr const char* bodies = "bodies";              // names behind the cell field "body"
-inline constexpr const char* formulations = "formulations";  // {material name: "standard" | "anp"}
+inline constexpr const char* status = "status";                          // "completed" | "failed"
+inline constexpr const char* message = "message";                        // why it failed, or null
+inline constexpr const char* materials = "materials";                    // names behind the cell field "material"
+inline constexpr const char* bodies = "bodies";                          // names behind the cell field "body"
+inline constexpr const char* formulations = "formulations";              // {material name: "standard" | "anp"}
+inline constexpr const char* pressure_smoothing = "pressure_smoothing";  // {ANP material name: smoothing passes}
 inline constexpr const char* steps = "steps";
 inline constexpr const char* nodes = "nodes";
 inline constexpr const char* tets = "tets";
@@ -169,8 +170,9 @@ inline constexpr const char* reactions = "reactions";  // [{name, moment_about, 
 // Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},
 // added_kinetic_energy, added_momentum}
 inline constexpr const char* mass_scaling = "mass_scaling";
-inline constexpr std::array<const char*, 18> all{status,       message, materials, formulations, bodies, steps,  nodes,          tets,    end_time,
-                                                 output_times, outputs, wall_time, time_step,    timing, energy, peak_von_mises, contact, reactions};
+inline constexpr std::array<const char*, 19> all{status,         message,  materials,    formulations, pressure_smoothing, bodies,    steps,  nodes,
+                                                 tets,           end_time, output_times, outputs,      wall_time,          time_step, timing, energy,
+                                                 peak_von_mises, contact,  reactions};
 }  // namespace run_json
 
 }  // namespace tactus::contracts

@@ -121,6 +121,10 @@ struct MaterialType {
 enum class Formulation { standard, anp };
 // The `formulation` key: bulk / shear above this makes ANP the default for a law that can use it.
 inline constexpr double kAnpDefaultBulkToShear = 100.0;
+// The `pressure_smoothing` key of ANP tets: node -> tet -> node averaging passes applied to the
+// nodal volume ratio and, by symmetry, to the nodal pressure (kernels/internal_force.cpp).
+inline constexpr int kAnpDefaultPressureSmoothing = 2;
+inline constexpr int kAnpMaxPressureSmoothing = 8;
 
 // Every registered law, in registration order.
 const std::vector<const MaterialType*>& material_types();
@@ -147,6 +151,8 @@ class Material {
   bool needs_element_data() const { return type_->element_data_size > 0 && constants_.empty(); }
   Formulation formulation() const { return formulation_; }
   bool anp() const { return formulation_ == Formulation::anp; }
+  // ANP tets: how many averaging passes smooth the nodal volume ratio and pressure (0: plain ANP).
+  int pressure_smoothing() const { return pressure_smoothing_; }
   bool rigid() const { return type_->rigid; }
 
   // P, W and modulus at F; `data`: this element's data (default: the constants).
@@ -159,6 +165,7 @@ class Material {
   std::shared_ptr<const void> law_;
   std::vector<double> constants_;
   Formulation formulation_ = Formulation::standard;
+  int pressure_smoothing_ = kAnpDefaultPressureSmoothing;
 };
 
 // Cauchy stress sigma = F S F^T / J = P F^T / J (paper eq. 18), and its von Mises value.
