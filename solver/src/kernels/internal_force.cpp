@@ -193,14 +193,17 @@ void InternalForces::anp_pass(const double* u) {
     const int passes = b.material.pressure_smoothing();
     const double* V = a.reference_volume.data();
     auto own = [&](const Partition& q) { return q.block == a.block; };
+    // Per partition of the block: `add` its tets' shares to its own nodal array.
+    auto scatter = [&](auto add) {
 #pragma omp for schedule(dynamic, 1)
-    for (std::size_t p = 0; p < partitions_.size(); ++p) {
-      const Partition& q = partitions_[p];
-      if (q.block != a.block) continue;
-      double* mine = partition_volumes_.data() + q.volume_offset;
-      std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo, vectorised_);
-    }
+      for (std::size_t p = 0; p < partitions_.size(); ++p) {
+        const Partition& q = partitions_[p];
+        if (q.block != a.block) continue;
+        double* mine = partition_volumes_.data() + q.volume_offset;
+        std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
+        add(q, mine);
+      }
+    };
     // Per node chunk: the partitions' sums; then `finish` on the chunk's nodes [lo, hi).
     auto gather = [&](auto finish) {
 #pragma omp for schedule(static)
@@ -215,15 +218,9 @@ void InternalForces::anp_pass(const double* u) {
     auto to_mean = [&](std::size_t, std::size_t lo, std::size_t hi) { divide_by_volume(V, a.pressure.data(), lo, hi); };
     // One averaging pass of a.pressure (a nodal mean field) into the partitions' arrays.
     auto average = [&]() {
-#pragma omp for schedule(dynamic, 1)
-      for (std::size_t p = 0; p < partitions_.size(); ++p) {
-        const Partition& q = partitions_[p];
-        if (q.block != a.block) continue;
-        double* mine = partition_volumes_.data() + q.volume_offset;
-        std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
-        add_quarter_means(model_, q.begin, q.end, a.pressure.data(), mine, q.node_lo);
-      }
+      scatter([&](const Partition& q, double* mine) { add_quarter_means(model_, q.begin, q.end, a.pressure.data(), mine, q.node_lo); });
     };
+    scatter([&](const Partition& q, double* mine) { add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo, vectorised_); });
     if (passes == 0) {
       gather(to_pressure);
       continue;
