@@ -12,7 +12,7 @@
 # block stays deformable, E = 3 GPa, in these runs and is rigid in hand_block_rigid.toml; about 3
 # more minutes).
 # Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder), ROUNDS
-# (default 1; the issue's timings are medians of 5). About 30 s per round on 2 cores; never time
+# (default 1; the issue's timings are medians of 5). About 50 s per round on 2 cores; never time
 # it while something else runs.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
