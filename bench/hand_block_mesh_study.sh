@@ -6,14 +6,13 @@
 # each run's contact impulse over the whole run (the time integral of the normal force).
 #   bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [labels.h5]
 #     labels.h5    default: the demo's out/pipeline/segment/labels.h5
-#     --scenario   default: pipeline/scenarios/hand_block.toml. With rigid bones the study is cheap
-#                  (pipeline/scenarios/hand_block_rigid.toml; drop its minimum_time_step, whose
-#                  added mass grows with refinement: 0.1 / 0.6 / > 1 % of the hand on the three
-#                  meshes), and a copy with `formulation = "anp"` compares the soft-tissue tets.
+#     --scenario   default: pipeline/scenarios/hand_block.toml. With rigid bones the study is
+#                  cheaper (pipeline/scenarios/hand_block_rigid.toml), and a copy with
+#                  `formulation = "standard"` or `pressure_smoothing = 0` compares the soft-tissue tets.
 #     --levels 3   also a mesh refined by 0.49x (about 150k tets).
 # Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder). On 2 cores
-# about 2 min for two levels of the rigid-bone case, 10 min with deformable bones; the third level
-# takes 4-6 min with rigid bones.
+# about 3 min for two levels of the rigid-bone case, 5 min with deformable bones (smoothed ANP);
+# the third level takes 5-10 min with rigid bones.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
