@@ -14,6 +14,7 @@
 
 #include "gmsh_kit.hpp"
 #include "linear_reference.hpp"
+#include "tactus/core/error.hpp"
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/contact.hpp"
@@ -387,4 +388,13 @@ TEST(Anp, FreeHgoBodyConservesEnergy) {
                 worst, 100 * peak_internal / E0);
     EXPECT_LE(worst, 1e-4);
   }
+}
+
+// Values that do not come through the scenario reader (tests, benchmarks) are checked by
+// Material::make against the same declaration: pressure_smoothing a whole number in [0, 8].
+TEST(Anp, PressureSmoothingIsCheckedOutsideTheReaderToo) {
+  EXPECT_EQ(elastic(1e6, 0.4999, "anp3").pressure_smoothing(), 3);
+  EXPECT_EQ(elastic(1e6, 0.4999, "anp").pressure_smoothing(), kAnpDefaultPressureSmoothing);
+  EXPECT_THROW(elastic(1e6, 0.4999, "anp1.5"), InputError);
+  EXPECT_THROW(elastic(1e6, 0.4999, "anp9"), InputError);
 }

@@ -38,12 +38,18 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
   Material m;
   m.type_ = &material_type(type, where + ".type");  // (an InputError naming "scenario" as the file)
   // Values that did not come through the scenario reader (tests, benchmarks) are checked here the
-  // same way: every declared number present (or defaulted) and in range.
+  // same way: every declared number present (or defaulted) and in range, every integer given a
+  // whole number in range.
   MaterialValues checked = values;
   for (const ValueSpec& s : m.type_->parameters.keys) {
-    if (s.type != ValueType::number) continue;
+    if (s.type != ValueType::number && s.type != ValueType::integer) continue;
     auto it = checked.numbers.find(s.key);
-    if (it == checked.numbers.end()) throw InputError(values.source, where + "." + s.key, s.doc, "missing");
+    if (it == checked.numbers.end()) {
+      if (s.type == ValueType::integer) continue;  // optional: the law's default
+      throw InputError(values.source, where + "." + s.key, s.doc, "missing");
+    }
+    if (s.type == ValueType::integer && it->second != std::floor(it->second))
+      throw InputError(values.source, where + "." + s.key, "an integer", std::to_string(it->second));
     if (!s.in_range(it->second))
       throw InputError(values.source, where + "." + s.key, "a value " + s.range_text() + (s.unit.empty() ? "" : " in " + s.unit),
                        std::to_string(it->second));
@@ -60,13 +66,8 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
   } else if (m.type_->volumetric_split() && m.small_strain_bulk() > kAnpDefaultBulkToShear * m.small_strain_shear()) {
     m.formulation_ = Formulation::anp;
   }
-  if (auto it = values.numbers.find("pressure_smoothing"); it != values.numbers.end()) {
-    const double s = it->second;
-    if (!(s >= 0 && s <= kAnpMaxPressureSmoothing && s == std::floor(s)))
-      throw InputError(values.source, where + ".pressure_smoothing", "an integer from 0 to " + std::to_string(kAnpMaxPressureSmoothing),
-                       std::to_string(s));
-    m.pressure_smoothing_ = static_cast<int>(s);
-  }
+  if (auto it = values.numbers.find("pressure_smoothing"); it != values.numbers.end() && m.type_->volumetric_split())
+    m.pressure_smoothing_ = static_cast<int>(it->second);  // checked above against the law's declaration
   return m;
 }
 
