@@ -24,6 +24,12 @@ inline solver::BodySpec body_from_mesh(const TempDir& dir, const std::string& na
   return b;
 }
 
+// Adds a box mesh's whole boundary (its six face groups' triangles) as one more group, "surface" (20).
+inline void add_whole_boundary_group(TetMesh& box) {
+  box.groups.push_back({2, 20, "surface"});
+  for (std::size_t t = 0, n = box.triangles.size(); t < n; ++t) box.triangles.push_back(box.triangles[t]), box.triangle_group.push_back(20);
+}
+
 // A [[boundary]] entry: `type` ("fixed", "velocity", "displacement") on `components` of a body's group.
 inline solver::BoundarySpec boundary(const std::string& body, const std::string& group, const std::string& type, std::array<bool, 3> components,
                                      const std::string& name) {

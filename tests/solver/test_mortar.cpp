@@ -152,3 +152,79 @@ TEST(Mortar, ContactPatchTestUnstructuredMeshesEqualFootprints) {
     EXPECT_GE(n.worst_gap, -1e-3 * std::min(h_lower, h_upper));
   }
 }
+
+// A slave triangle over a convex edge of the master, facing both faces (its normal within 60
+// degrees of each): where its projections onto the two faces overlap, each of its points belongs
+// to the face it is nearer to. Oracle: the weighted gaps G_j / D_j computed independently by a
+// fine quadrature over the triangle (full coverage, so psi_j = 4 lambda_j - 1 and D_j = A / 3),
+// with g the nearer face's signed height. Counting those points on both faces (as before) added
+// the far face's depth: on the hand, a skin node lying on the block's face 1.9 mm from its edge got
+// a gap of -0.3 mm, was pushed out at the recovery speed, and made the run's peak pressure.
+TEST(Mortar, SlaveTriangleOverAConvexEdgeIsMeasuredAgainstTheNearerFace) {
+  testkit::TempDir dir;
+  const double a = 0.01;  // the block [0, a]^3: its top face z = a and side face x = a meet at the edge x = z = a
+  TetMesh block = samples::make_box_mesh(2, 2, 2, a, a, a);
+  testkit::add_whole_boundary_group(block);
+  // One tet whose face P0 P1 P2 lies in the plane 0.6 x + 0.8 z = c (its normal within 60 degrees
+  // of both faces' opposites): P0, P1 on the side face's plane 1.04 mm below the top, P2 1.96 mm
+  // above the top; the part below the top is inside the block, at most 0.59 mm from a face.
+  const double c = 13.17e-3;
+  const Vec3 P0{a, 0.003, (c - 0.6 * a) / 0.8}, P1{a, 0.007, (c - 0.6 * a) / 0.8}, P2{0.006, 0.005, (c - 0.6 * 0.006) / 0.8};
+  const Vec3 toward_block{-0.6, 0, -0.8};
+  const Vec3 centroid = (1.0 / 3.0) * (P0 + P1 + P2);
+  TetMesh tet;
+  tet.nodes = {P0, P1, P2, centroid - 0.003 * toward_block};
+  tet.tets = {{0, 1, 2, 3}};
+  if (tet_volume(tet.nodes[0], tet.nodes[1], tet.nodes[2], tet.nodes[3]) < 0) tet.tets[0] = {1, 0, 2, 3};
+  tet.tet_group = {1};
+  std::array<int, 3> face{0, 1, 2};
+  if (dot(cross(P1 - P0, P2 - P0), toward_block) < 0) face = {1, 0, 2};  // outward: towards the block
+  tet.triangles = {face};
+  tet.triangle_group = {2};
+  tet.groups = {{3, 1, "tet"}, {2, 2, "face"}};
+  Scenario sc;
+  sc.file = dir.path() / "edge.toml";
+  sc.materials["m"] = testkit::linear_elastic_instance("m", 1e6, 0.3, 1000);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "slave", tet, "m"));
+  ContactSpec cs;
+  cs.slave_body = "slave", cs.slave_surface = "face", cs.master_body = "block", cs.master_surface = "surface";
+  sc.contacts.push_back(cs);
+  const Model m = build_model(sc);
+  ContactSolver contact(m);
+  const std::vector<double> u(3 * m.num_nodes, 0.0), v_old(3 * m.num_nodes, 0.0);
+  std::vector<double> v(3 * m.num_nodes, 0.0), inv_mass(3 * m.num_nodes);
+  for (std::size_t i = 0; i < inv_mass.size(); ++i) inv_mass[i] = 1.0 / m.mass[i / 3];
+  contact.correct_velocities(u.data(), v.data(), v_old.data(), inv_mass.data(), 1e-7, 1e-7, 1e-7);
+  const ContactRows& rows = contact.rows();
+
+  // The reference: midpoints of an n x n subdivision of the triangle.
+  const int n = 600;
+  const Vec3 P[3] = {P0, P1, P2};
+  double G[3] = {0, 0, 0}, deepest_far_face = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; i + j < n; ++j)
+      for (int up = 0; up < (i + j + 1 < n ? 2 : 1); ++up) {  // the n^2 small triangles, each by its centroid
+        const double l1 = up ? (i + 2.0 / 3.0) / n : (i + 1.0 / 3.0) / n, l2 = up ? (j + 2.0 / 3.0) / n : (j + 1.0 / 3.0) / n;
+        const double l[3] = {1 - l1 - l2, l1, l2};
+        const Vec3 x = l[0] * P[0] + l[1] * P[1] + l[2] * P[2];
+        const double h_top = x[2] - a, h_side = x[0] - a;  // over the top face everywhere; over the side face below the top
+        const double g = (x[2] <= a && std::abs(h_side) < std::abs(h_top)) ? h_side : h_top;
+        if (x[2] <= a) deepest_far_face = std::min(deepest_far_face, std::abs(h_side) < std::abs(h_top) ? h_top : h_side);
+        for (int k = 0; k < 3; ++k) G[k] += (4 * l[k] - 1) * g / (static_cast<double>(n) * n);  // / A, times A below
+      }
+  double worst = 0, largest = 0;
+  ASSERT_EQ(rows.size(), 3u);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const std::int32_t node = rows.slave(r);
+    int k = 0;
+    while (k < 3 && m.node_of_input[m.bodies[1].node_begin + static_cast<std::size_t>(k)] != node) ++k;
+    ASSERT_LT(k, 3);
+    const double reference = G[k] * 3;  // G_j / D_j with D_j = A / 3
+    std::printf("slave vertex %d: weighted gap %+.4f mm, reference %+.4f mm\n", k, rows.gap[r] * 1e3, reference * 1e3);
+    worst = std::max(worst, std::abs(rows.gap[r] - reference)), largest = std::max(largest, std::abs(reference));
+  }
+  std::printf("worst difference %.4f mm (%.2f %% of the largest gap %.4f mm); the far face's depth there reaches %.3f mm\n", worst * 1e3,
+              100 * worst / largest, largest * 1e3, -deepest_far_face * 1e3);
+  EXPECT_LE(worst, 0.01 * largest);
+}
