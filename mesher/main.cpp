@@ -176,6 +176,8 @@ int main(int argc, char** argv) {
   box->add_option("--size", size, "edge lengths, m")->capture_default_str();
   box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
   box->add_option("--element-size", h, "element size, m")->capture_default_str();
+  double edge_radius = 0;
+  box->add_option("--edge-radius", edge_radius, "round every edge with this radius, m (meshed at about half of it; 0: sharp)")->capture_default_str();
 
   auto* fib = app.add_subcommand("fibres", "rule-based hgo fibre directions of a mesh, as the .vtu bodies.fibres reads");
   std::string fib_mesh, fib_axis = "z";
@@ -203,7 +205,7 @@ int main(int argc, char** argv) {
     }
     if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
-      const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", p.max_elements);
+      const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", p.max_elements, edge_radius);
       output.write(mesh, wave_speeds(mesh, speed_args));
       return;
     }

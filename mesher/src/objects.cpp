@@ -18,9 +18,10 @@ namespace {
 
 constexpr int kSurfaceTag = 20;
 
-void mesh_volume(double element_size, const std::string& source) {
+// `fine_size` > 0: a background size field set by the caller goes down to it.
+void mesh_volume(double element_size, const std::string& source, double fine_size = 0) {
   gmsh::option::setNumber("Mesh.MeshSizeMax", element_size);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.3 * element_size);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", fine_size > 0 ? std::min(0.3 * element_size, fine_size) : 0.3 * element_size);
   gmsh::option::setNumber("Mesh.Algorithm3D", 1);  // Delaunay
   gmsh::option::setNumber("Mesh.Optimize", 1);
   gmsh::option::setNumber("Mesh.RandomSeed", 1);
@@ -48,7 +49,7 @@ void check_expected_tets(double volume, double h, double max_elements, const std
 
 }  // namespace
 
-TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::string& name, double max_elements) {
+TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::string& name, double max_elements, double edge_radius) {
   for (int a = 0; a < 3; ++a) {
     if (!(size[a] > 0) || !std::isfinite(size[a]) || size[a] > 1e3)
       throw InputError("box", "size", "edge lengths from 0 to 1000 m", std::to_string(size[a]));
@@ -57,16 +58,36 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
   }
   if (!(h > 0) || h > 2 * std::max({size[0], size[1], size[2]}))
     throw InputError("box", "element size", "a size > 0 m and not larger than the box", std::to_string(h));
+  if (!(edge_radius >= 0) || !(edge_radius < 0.5 * std::min({size[0], size[1], size[2]})))
+    throw InputError("box", "edge radius", "from 0 to less than half the shortest edge", std::to_string(edge_radius));
+  // The curved faces get elements of about half the radius (12 per 2 pi of arc): the expected
+  // count adds their strips, a band of that size along the 12 edges.
+  const double curved = 0.52 * edge_radius;
   check_expected_tets(size[0] * size[1] * size[2], h, max_elements, "box");
+  if (edge_radius > 0) check_expected_tets(4 * (size[0] + size[1] + size[2]) * h * h, curved, max_elements, "box");
   GmshSession session;
   gmsh::model::add(name);
-  const int vol = gmsh::model::occ::addBox(origin[0], origin[1], origin[2], size[0], size[1], size[2]);
+  int vol = gmsh::model::occ::addBox(origin[0], origin[1], origin[2], size[0], size[1], size[2]);
+  if (edge_radius > 0) {  // every edge rounded (a real tool's edges are not sharp; the contact pressure under a sharp one is singular)
+    gmsh::vectorpair edges, rounded;
+    gmsh::model::occ::getEntities(edges, 1);
+    std::vector<int> curves;
+    for (const auto& [dim, tag] : edges) curves.push_back(tag);
+    try {
+      gmsh::model::occ::fillet({vol}, curves, {edge_radius}, rounded, true);
+    } catch (...) {
+      rounded.clear();
+    }
+    if (rounded.size() != 1 || rounded[0].first != 3)
+      throw InputError("box", "edge radius", "edges gmsh can round", std::to_string(edge_radius) + " m: " + GmshSession::last_error());
+    vol = rounded[0].second;
+  }
   gmsh::model::occ::synchronize();
   gmsh::model::addPhysicalGroup(3, {vol}, 1);
   gmsh::model::setPhysicalName(3, 1, name);
   gmsh::vectorpair faces;
   gmsh::model::getBoundary({{3, vol}}, faces, false, false, false);
-  std::vector<int> all;
+  std::vector<int> all, rounded_faces;
   const char* names[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
   for (const auto& [dim, tag] : faces) {
     double b[6];
@@ -74,6 +95,9 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
     all.push_back(tag);
     // OCC pads bounding boxes by its tolerance (~1e-7): compare at 1e-4 of the box size.
     const double tol = 1e-4 * std::min({size[0], size[1], size[2]});
+    bool flat = false;
+    for (int axis = 0; axis < 3; ++axis) flat = flat || std::abs(b[axis + 3] - b[axis]) <= tol;
+    if (!flat) rounded_faces.push_back(tag);
     for (int axis = 0; axis < 3; ++axis) {
       if (std::abs(b[axis + 3] - b[axis]) > tol) continue;  // not flat along this axis
       const int side = std::abs(0.5 * (b[axis] + b[axis + 3]) - origin[axis]) < tol ? 0 : 1;
@@ -83,7 +107,24 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
   }
   gmsh::model::addPhysicalGroup(2, all, kSurfaceTag);
   gmsh::model::setPhysicalName(2, kSurfaceTag, "surface");
-  mesh_volume(h, "box");
+  if (edge_radius > 0) {
+    // Elements of `curved` on the rounded faces, growing linearly to h over 2 h from them (the
+    // flat faces' own sizes would otherwise spread the fine size over the whole block).
+    gmsh::model::mesh::field::add("Distance", 1);
+    gmsh::model::mesh::field::setNumbers(1, "SurfacesList", std::vector<double>(rounded_faces.begin(), rounded_faces.end()));
+    gmsh::model::mesh::field::setNumber(1, "NumPointsPerCurve", 20);
+    gmsh::model::mesh::field::add("Threshold", 2);
+    gmsh::model::mesh::field::setNumber(2, "InField", 1);
+    gmsh::model::mesh::field::setNumber(2, "SizeMin", curved);
+    gmsh::model::mesh::field::setNumber(2, "SizeMax", h);
+    gmsh::model::mesh::field::setNumber(2, "DistMin", 0);
+    gmsh::model::mesh::field::setNumber(2, "DistMax", 2 * h);
+    gmsh::model::mesh::field::setAsBackgroundMesh(2);
+    gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+    gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+    gmsh::option::setNumber("Mesh.OptimizeThreshold", 0.5);  // the corners, where three rounded edges meet, leave slivers otherwise
+  }
+  mesh_volume(h, "box", edge_radius > 0 ? curved : 0);
   return tet_mesh_from_gmsh_model("box");
 }
 

@@ -60,6 +60,7 @@ mkdir -p "$T/nostates" && cp "$T/res/run.json" "$T/res/history.csv" "$T/nostates
 expect 1 "at least one output state" -- "$B/postproc/tactus-post" "$T/nostates" -o "$T/rep" --no-pictures
 expect 1 "cannot" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.01 -o "$T/case/cube.msh/x.msh"
 expect 1 "--max-elements" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.0001 -o "$T/huge.msh"
+expect 1 "edge radius" -- "$B/mesher/tactus-mesh" box --size 0.1 0.1 0.02 --edge-radius 0.01 -o "$T/round.msh"
 expect 1 "did not write" -- "$B/data_samples/tactus-sample-mesh" -o "$T/mydata/thesis.tex"
 
 # 3. Interrupts: SIGINT and SIGTERM stop a run cleanly; a killed run's staging is removed next time.

@@ -12,8 +12,11 @@
 namespace tactus::mesher {
 
 // About this many tets for a volume V meshed at element size h: 6 V / h^3 (gmsh's Delaunay gives
-// 5-6); meshes expected above `max_elements` are refused before gmsh starts.
-TetMesh mesh_box(const Vec3& size, const Vec3& origin, double element_size, const std::string& name = "block", double max_elements = 1e7);
+// 5-6); meshes expected above `max_elements` are refused before gmsh starts. `edge_radius` > 0
+// rounds all twelve edges (and so the corners) with that radius, meshed at about half of it;
+// the face groups "xmin".."zmax" are then the flat parts.
+TetMesh mesh_box(const Vec3& size, const Vec3& origin, double element_size, const std::string& name = "block", double max_elements = 1e7,
+                 double edge_radius = 0);
 
 // A triangle surface read from STL (ASCII or binary) by tactus's own reader: vertices merged
 // where their coordinates are equal, every value checked.
