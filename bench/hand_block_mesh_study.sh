@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The hand-block case on the default hand mesh and on meshes refined by 0.7x in element size
-# (surface and cell sizes; the block's mesh unchanged): contact force, area and the 25 mm^2 peak
+# The hand-block case on the default meshes and on meshes refined by 0.7x in element size (the
+# hand's surface and cell sizes and the block's element size: with the block's mesh unchanged the
+# late contact area kept growing, 1,018 -> 1,414 mm^2 at 5 ms): contact force, area and the 25 mm^2 peak
 # pressure at each output, side by side, with the differences the contact issue asks for (force
 # and area within 10 %, 25 mm^2 peak within 15 %), the same for the windowed force and area, and
 # each run's contact impulse over the whole run (the time integral of the normal force).
@@ -12,7 +13,7 @@
 #     --levels 3   also a mesh refined by 0.49x (about 150k tets).
 # Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder). On 2 cores
 # about 3 min for two levels of the rigid-bone case, 5 min with deformable bones (smoothed ANP);
-# the third level takes 5-10 min with rigid bones.
+# the third level takes 5-10 min with rigid bones, 9 min with deformable ones.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
@@ -41,13 +42,13 @@ for name in "${names[@]}"; do
   fi
   mkdir -p "$W/$name/mesh" "$W/$name/object" && touch "$W/$name/.tactus_mesh_study"
   case $name in
-    default) sizes=() ;;
-    fine) sizes=(--facet-size 2.8 --bone-facet-size 2.1 --cell-size 4.9 --bone-cell-size 2.45 --facet-distance 0.42) ;;
-    finer) sizes=(--facet-size 1.96 --bone-facet-size 1.47 --cell-size 3.43 --bone-cell-size 1.715 --facet-distance 0.294) ;;
+    default) sizes=() block=0.008 ;;
+    fine) sizes=(--facet-size 2.8 --bone-facet-size 2.1 --cell-size 4.9 --bone-cell-size 2.45 --facet-distance 0.42) block=0.0056 ;;
+    finer) sizes=(--facet-size 1.96 --bone-facet-size 1.47 --cell-size 3.43 --bone-cell-size 1.715 --facet-distance 0.294) block=0.00392 ;;
   esac
   "$B/mesher/tactus-mesh" "$LABELS" "${sizes[@]}" -o "$W/$name/mesh/mesh.msh" -q
   "$B/mesher/tactus-mesh" fibres "$W/$name/mesh/mesh.msh" --angle 30 --axis z -o "$W/$name/mesh/fibres.vtu" -q
-  "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size 0.008 -o "$W/$name/object/block.msh" -q
+  "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size "$block" -o "$W/$name/object/block.msh" -q
   echo "== $name mesh: solving $(basename "$SCENARIO")"
   "$B/solver/tactus-solve" "$SCENARIO" --meshes "$W/$name" -o "$W/$name/out" -q
 done
