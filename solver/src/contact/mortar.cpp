@@ -316,18 +316,18 @@ void MortarSurface::segments_of(const ContactPair& p, const std::vector<std::siz
     }
     return false;
   };
+  auto height = [](const Candidate& c, const std::array<double, 3>& l) { return l[0] * c.h[0] + l[1] * c.h[1] + l[2] * c.h[2]; };
   auto belongs = [&](std::size_t ci, const P2& q) {  // the point of the slave triangle over q (in ci's plane) is ci's
-    const Candidate& c = candidates[ci];
-    const auto l = barycentric(q, c.sq);
-    return !nearer_elsewhere(ci, slave_point(l), std::abs(l[0] * c.h[0] + l[1] * c.h[1] + l[2] * c.h[2]));
+    const auto l = barycentric(q, candidates[ci].sq);
+    return !nearer_elsewhere(ci, slave_point(l), std::abs(height(candidates[ci], l)));
   };
-  auto mid = [](const P2& p, const P2& q) { return P2{0.5 * (p.u + q.u), 0.5 * (p.v + q.v)}; };
+  auto mid = [](const P2& x0, const P2& x1) { return P2{0.5 * (x0.u + x1.u), 0.5 * (x0.v + x1.v)}; };
   std::vector<QuadraturePoint>& points = w.points;
   points.clear();
   auto add_point = [&](const Candidate& c, const P2& q, double dA) {
     QuadraturePoint qpnt;
     qpnt.lambda = barycentric(q, c.sq), qpnt.mu = barycentric(q, c.mt);
-    qpnt.gap = qpnt.lambda[0] * c.h[0] + qpnt.lambda[1] * c.h[1] + qpnt.lambda[2] * c.h[2];  // (x_s(q) - x_m(q)) . n
+    qpnt.gap = height(c, qpnt.lambda);  // (x_s(q) - x_m(q)) . n
     qpnt.dA = dA;
     qpnt.n = c.n;
     std::copy(&triangles_[3 * c.t], &triangles_[3 * c.t] + 3, qpnt.master.begin());
@@ -347,31 +347,38 @@ void MortarSurface::segments_of(const ContactPair& p, const std::vector<std::siz
       // The fan's sub-triangles by the edge-midpoint rule (exact: the integrands are quadratic).
       // Where the boundary to a nearer face crosses one (its corners and edge midpoints disagree),
       // it is split in four, down to kNearerSplits levels, so the quadrature follows the boundary.
+      // A piece carries whether its corners are this candidate's: its children's corners are its
+      // corners and edge midpoints, so each split evaluates only the three new midpoints.
       struct Piece {
         P2 a, b, c;
+        std::array<bool, 3> in;
         int level;
       };
       std::array<Piece, 3 * kNearerSplits + 4> stack;
       int pending = 0;
-      stack[static_cast<std::size_t>(pending++)] = {poly[0], poly[static_cast<std::size_t>(f)], poly[static_cast<std::size_t>(f + 1)], 0};
+      const P2 &a0 = poly[0], &b0 = poly[static_cast<std::size_t>(f)], &c0 = poly[static_cast<std::size_t>(f + 1)];
+      stack[static_cast<std::size_t>(pending++)] = {
+          a0, b0, c0, contested ? std::array<bool, 3>{belongs(ci, a0), belongs(ci, b0), belongs(ci, c0)} : std::array<bool, 3>{true, true, true}, 0};
       while (pending > 0) {
-        const Piece p = stack[static_cast<std::size_t>(--pending)];
-        const double dA = 0.5 * std::abs(cross2(p.a, p.b, p.c)) / 3.0 * to_slave;
+        const Piece piece = stack[static_cast<std::size_t>(--pending)];
+        const double dA = 0.5 * std::abs(cross2(piece.a, piece.b, piece.c)) / 3.0 * to_slave;
         if (!(dA > 0)) continue;
-        const P2 m[3] = {mid(p.a, p.b), mid(p.b, p.c), mid(p.c, p.a)};
+        const P2 m[3] = {mid(piece.a, piece.b), mid(piece.b, piece.c), mid(piece.c, piece.a)};
         if (!contested) {
           for (const P2& q : m) add_point(cand, q, dA);
           continue;
         }
-        const bool in[3] = {belongs(ci, m[0]), belongs(ci, m[1]), belongs(ci, m[2])};
-        const bool same = in[0] == in[1] && in[1] == in[2] && belongs(ci, p.a) == in[0] && belongs(ci, p.b) == in[0] && belongs(ci, p.c) == in[0];
-        if (same || p.level == kNearerSplits) {
-          for (int k = 0; k < 3; ++k)
+        const std::array<bool, 3> in{belongs(ci, m[0]), belongs(ci, m[1]), belongs(ci, m[2])};
+        const bool same = in[0] == in[1] && in[1] == in[2] && piece.in[0] == in[0] && piece.in[1] == in[0] && piece.in[2] == in[0];
+        if (same || piece.level == kNearerSplits) {
+          for (std::size_t k = 0; k < 3; ++k)
             if (in[k]) add_point(cand, m[k], dA);
           continue;
         }
-        for (const Piece& child : {Piece{p.a, m[0], m[2], p.level + 1}, Piece{m[0], p.b, m[1], p.level + 1}, Piece{m[2], m[1], p.c, p.level + 1},
-                                   Piece{m[0], m[1], m[2], p.level + 1}})
+        const int next = piece.level + 1;
+        for (const Piece& child :
+             {Piece{piece.a, m[0], m[2], {piece.in[0], in[0], in[2]}, next}, Piece{m[0], piece.b, m[1], {in[0], piece.in[1], in[1]}, next},
+              Piece{m[2], m[1], piece.c, {in[2], in[1], piece.in[2]}, next}, Piece{m[0], m[1], m[2], in, next}})
           stack[static_cast<std::size_t>(pending++)] = child;
       }
     }
