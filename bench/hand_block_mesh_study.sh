@@ -56,11 +56,14 @@ done
 import json, sys
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, sys.argv[1])
-from history_kit import centred_mean, contact_impulse
+from history_kit import centred_mean, read_columns, time_integral
 w, names = sys.argv[2], sys.argv[3:]
 runs = {n: json.load(open(f"{w}/{n}/out/run.json")) for n in names}
+# Each history read once (the 0.49x run's is ~150 MB): time, normal force, area.
+histories = {n: read_columns(f"{w}/{n}/out/history.csv", "contact_normal_force", "contact_area") for n in names}
 def impulse(n):
-    return contact_impulse(f"{w}/{n}/out/history.csv")
+    t, force, _ = histories[n]
+    return time_integral(t, force)
 for n, j in runs.items():
     print(f"{n}: {j['tets']} tets, {j['contact']['pairs'][0]['slave_nodes']} skin nodes, {j['steps']} steps, {j['wall_time_s']:.0f} s, "
           f"contact impulse {impulse(n):.3f} N s")
@@ -81,8 +84,8 @@ for a_name, b_name in zip(names, names[1:]):
 # windowed values above average over the pressure window (10 us by default), which passes the
 # block's and the bones' ringing (tens of kHz) that differs from mesh to mesh.
 times = [o["time"] for o in runs[names[0]]["contact"]["at_outputs"]]
-low = {n: (centred_mean(f"{w}/{n}/out/history.csv", "contact_normal_force", times, 2.5e-4),
-           centred_mean(f"{w}/{n}/out/history.csv", "contact_area", times, 2.5e-4)) for n in names}
+low = {n: (centred_mean(histories[n][0], histories[n][1], times, 2.5e-4), centred_mean(histories[n][0], histories[n][2], times, 2.5e-4))
+       for n in names}
 print("\nforce and area averaged over +-0.25 ms about each output, " + " / ".join(names) + ":")
 print("| t (ms) | force (N) | diffs | area (mm^2) | diffs |")
 print("|---|---|---|---|---|")

@@ -29,9 +29,8 @@ def contact_impulse(history_csv):
     return time_integral(t, force)
 
 
-def centred_mean(history_csv, column, times, half_width):
-    """The mean of a column over [t - half_width, t + half_width] (clipped to the run) at each time."""
-    t, y = read_columns(history_csv, column)
+def centred_mean(t, y, times, half_width):
+    """The mean of y(t) over [c - half_width, c + half_width] (clipped to the run) at each time c."""
     out = []
     for c in times:
         lo, hi = max(c - half_width, t[0]), min(c + half_width, t[-1])
