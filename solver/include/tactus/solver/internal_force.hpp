@@ -41,13 +41,42 @@ struct StressPassResult {
 
 // Average nodal pressure tets (material.hpp, kernels/element_loop.hpp), for the blocks whose
 // material runs as ANP: the nodal reference volumes V_a = sum_e V_e / 4 over the block's tets
-// (0 at the other nodes), one entry per node; adding J_e V_e / 4 of tets [begin, end) at u to
-// the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial: for the outputs).
+// (0 at the other nodes), one entry per node; adding the current volume v_e / 4 of tets
+// [begin, end) at u to the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial:
+// for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
-// node_volume[n - node_offset] receives node n's share; vectorised as the stress pass.
+// node_volume[n - node_offset] receives node n's share.
 void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
-                              std::size_t node_offset = 0, bool vectorised = true);
+                              std::size_t node_offset = 0);
 std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& block, const double* u);
+
+// One pass of the pressure smoothing of an ANP block, node -> tet -> node and V-weighted, as a
+// node-to-node operator: (S x)_a = sum_b W_ab x_b, W_ab = sum_{e of the block containing a and b}
+// (V_e / 16) / V_a. The diagonal is 1/4 at every node of the block (V_a = sum_e V_e / 4), so the
+// rows hold only the neighbours b != a, ascending (each sum in the same order on any thread);
+// a node without a tet of the block gets 0.
+struct NodeAveraging {
+  std::vector<std::size_t> row;  // num_nodes + 1
+  std::vector<std::int32_t> column;
+  std::vector<double> weight;
+  NodeAveraging() = default;
+  NodeAveraging(const Model& model, const MaterialBlock& block, const std::vector<double>& node_reference_volume);
+  // y[a] = (S x)_a for the nodes a in [lo, hi) (y must not alias x).
+  void apply(const double* x, double* y, std::size_t lo, std::size_t hi) const {
+    for (std::size_t a = lo; a < hi; ++a) {
+      if (row[a] == row[a + 1]) {
+        y[a] = 0;
+        continue;
+      }
+      double sum = 0.25 * x[a];
+      for (std::size_t k = row[a]; k < row[a + 1]; ++k) sum += weight[k] * x[column[k]];
+      y[a] = sum;
+    }
+  }
+  std::size_t memory_bytes() const {
+    return row.capacity() * sizeof(std::size_t) + column.capacity() * sizeof(std::int32_t) + weight.capacity() * sizeof(double);
+  }
+};
 
 // The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
 // volumetric part is the average of its nodes' pressures.
@@ -70,7 +99,7 @@ struct StressSideTask {
 
 class InternalForces {
  public:
-  static constexpr std::size_t kPartitionElements = 1024, kPartitions = 8, kNodeChunk = 2048;
+  static constexpr std::size_t kPartitionElements = 1024, kPartitions = 8, kNodeChunk = 512;
   // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
   InternalForces(const Model& model, double beta, int threads);
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
@@ -85,9 +114,9 @@ class InternalForces {
   void enable_mass_scaling();
   const std::vector<double>& element_dt2() const { return element_dt2_; }
   std::vector<double>& mass_factor() { return mass_factor_; }
-  // The stress and J passes take lanes::kLanes tets at a time (default) or one at a time: the same
+  // The stress pass takes lanes::kLanes tets at a time (default) or one at a time: the same
   // formulas (kernels/lanes.hpp), kept selectable as the reference the vector kernels are tested
-  // and benched against.
+  // and benched against. (The ANP J pass is scalar either way: it is all gathers and scatters.)
   void set_vectorised(bool on) { vectorised_ = on; }
   static int lanes();  // tets per vector group
 
@@ -112,6 +141,8 @@ class InternalForces {
   struct AnpBlock {
     std::size_t block;
     std::vector<double> reference_volume, pressure;
+    NodeAveraging averaging;       // with pressure smoothing only
+    std::vector<double> smoothed;  // the other buffer of the smoothing passes (num_nodes; with smoothing only)
   };
   std::vector<AnpBlock> anp_;
   std::vector<const double*> block_pressure_;  // per block: its AnpBlock's pressure, or nullptr
