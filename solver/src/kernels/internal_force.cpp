@@ -75,20 +75,22 @@ NodeAveraging::NodeAveraging(const Model& m, const MaterialBlock& b, const std::
   for (std::size_t e = b.begin; e < b.end; ++e)
     for (int k = 0; k < 4; ++k) tets[fill[static_cast<std::size_t>(m.conn[4 * e + k])]++] = e;
   row.assign(n + 1, 0);
-  std::vector<std::pair<std::int32_t, double>> entries;
+  std::vector<double> sum(n, 0.0);  // a's row, summed over its tets in element order
+  std::vector<std::int32_t> neighbours;
   for (std::size_t a = 0; a < n; ++a) {
-    entries.clear();
+    neighbours.clear();
     for (std::size_t t = first[a]; t < first[a + 1]; ++t)
-      for (int k = 0; k < 4; ++k)
-        if (const std::int32_t b_node = m.conn[4 * tets[t] + k]; static_cast<std::size_t>(b_node) != a)
-          entries.emplace_back(b_node, m.volume[tets[t]] / 16.0);
-    std::stable_sort(entries.begin(), entries.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-    for (std::size_t i = 0; i < entries.size();) {
-      double w = 0;
-      const std::int32_t node = entries[i].first;
-      for (; i < entries.size() && entries[i].first == node; ++i) w += entries[i].second;
+      for (int k = 0; k < 4; ++k) {
+        const std::int32_t node = m.conn[4 * tets[t] + k];
+        if (static_cast<std::size_t>(node) == a) continue;
+        if (sum[static_cast<std::size_t>(node)] == 0.0) neighbours.push_back(node);
+        sum[static_cast<std::size_t>(node)] += m.volume[tets[t]] / 16.0;
+      }
+    std::sort(neighbours.begin(), neighbours.end());
+    for (const std::int32_t node : neighbours) {
       column.push_back(node);
-      weight.push_back(w / V[a]);
+      weight.push_back(sum[static_cast<std::size_t>(node)] / V[a]);
+      sum[static_cast<std::size_t>(node)] = 0.0;
     }
     row[a + 1] = column.size();
   }
