@@ -20,6 +20,7 @@
 #include <filesystem>
 
 #include "tactus/core/cli.hpp"
+#include "tactus/core/error.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
@@ -46,7 +47,10 @@ Material bench_material(const std::string& label) {
   if (label.find('/') != std::string::npos) {
     std::string formulation = label.substr(label.find('/') + 1);
     if (formulation.size() > 3 && formulation.starts_with("anp")) {
-      v.numbers["pressure_smoothing"] = std::stod(formulation.substr(3));
+      const std::string passes = formulation.substr(3);
+      if (passes.find_first_not_of("0123456789") != std::string::npos)
+        throw InputError("--materials", label, "<law>/anp<smoothing passes> (a whole number after \"anp\")", label);
+      v.numbers["pressure_smoothing"] = std::stod(passes);
       formulation = "anp";
     }
     v.strings["formulation"] = formulation;
