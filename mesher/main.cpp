@@ -32,7 +32,8 @@ std::vector<std::filesystem::path> output_files(const std::filesystem::path& out
 
 // Writes the mesh, its .vtu and the quality report into the staged output and commits it.
 template <class Output>
-void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, const std::map<int, double>& speeds, const nlohmann::json& extra) {
+void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, const std::map<int, double>& speeds, const nlohmann::json& extra,
+                   const tactus::mesher::QualityAdvice& advice) {
   const auto path = [&](std::size_t i) {
     if constexpr (std::is_same_v<Output, tactus::OutputFiles>)
       return out.staged(first + i);
@@ -41,7 +42,7 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
   };
   tactus::write_msh(path(0), mesh);
   tactus::write_vtu(path(1), mesh);
-  auto report = tactus::mesher::quality_report(mesh, speeds);
+  auto report = tactus::mesher::quality_report(mesh, speeds, 10.0, {}, advice);
   for (const auto& [key, value] : extra.items()) report[key] = value;
   std::ofstream(path(2)) << report.dump(2) << '\n';
   out.commit();
@@ -99,11 +100,13 @@ struct MeshOutput {
     else
       folder = std::make_unique<tactus::OutputFolder>(out, rules);
   }
-  void write(const tactus::TetMesh& mesh, const std::map<int, double>& speeds, const nlohmann::json& extra = nlohmann::json::object()) {
+  // advice: what an unmet guarantee's message suggests (the image mesher's options by default).
+  void write(const tactus::TetMesh& mesh, const std::map<int, double>& speeds, const nlohmann::json& extra = nlohmann::json::object(),
+             const tactus::mesher::QualityAdvice& advice = {}) {
     if (files)
-      write_outputs(mesh, *files, 0, speeds, extra);
+      write_outputs(mesh, *files, 0, speeds, extra, advice);
     else
-      write_outputs(mesh, *folder, 0, speeds, extra);
+      write_outputs(mesh, *folder, 0, speeds, extra, advice);
   }
 };
 
@@ -206,13 +209,13 @@ int main(int argc, char** argv) {
     if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
       const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", p.max_elements, edge_radius);
-      output.write(mesh, wave_speeds(mesh, speed_args));
+      output.write(mesh, wave_speeds(mesh, speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
       return;
     }
     if (stl->parsed()) {
       MeshOutput output(out, common.output_rules({stl_file}));
       const TetMesh mesh = mesher::mesh_stl_object(stl_file, h, stl_scale, "object", p.max_elements);
-      output.write(mesh, wave_speeds(mesh, speed_args));
+      output.write(mesh, wave_speeds(mesh, speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
       return;
     }
     if (labels_file.empty()) throw CLI::RequiredError("labels");

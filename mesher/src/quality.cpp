@@ -52,7 +52,20 @@ TetQuality tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
   return q;
 }
 
-nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg, const QualityGuarantees& goal) {
+QualityAdvice QualityAdvice::gmsh_object() {
+  QualityAdvice a;
+  a.surface_angle =
+      "its four nodes lie on the object's surface, which gmsh meshes first and keeps: a surface detail or a change of size finer than "
+      "--element-size (a smaller --element-size resolves it; for a box, an --edge-radius of at least about the element size)";
+  a.interior_angle = "gmsh's optimisation could not raise it (a smaller --element-size usually does)";
+  a.short_length =
+      "a tet much smaller or flatter than a typical one, where the sizes grade or the surface has fine detail (a smaller "
+      "--element-size evens the sizes), or accept the stable step it sets";
+  return a;
+}
+
+nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg, const QualityGuarantees& goal,
+                              const QualityAdvice& advice) {
   struct Acc {
     std::size_t tets = 0, slivers = 0, below10 = 0, inverted = 0, below_goal_angle = 0;
     std::size_t worst_angle_tet = 0, shortest_tet = 0;
@@ -126,27 +139,20 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
     if (a.min_dihedral < goal.min_dihedral_deg) {
       int surface = 0;
       for (int v : mesh.tets[a.worst_angle_tet]) surface += on_surface[static_cast<std::size_t>(v)];
-      unmet.push_back(
-          {{"group", name},
-           {"guarantee", "min_dihedral_deg"},
-           {"value", a.min_dihedral},
-           {"tets_below", a.below_goal_angle},
-           {"element", a.worst_angle_tet + 1},
-           {"at_m", centroid(a.worst_angle_tet)},
-           {"nodes_on_surfaces", surface},
-           {"why", surface == 4 ? "its four nodes lie on the skin or a bone interface, where nodes move only within the surface "
-                                  "approximation and only interior edges are split: a surface detail finer than the facet size "
-                                  "(a smaller --facet-size / --bone-facet-size resolves it, a larger --facet-distance smooths it)"
-                                : "node relocation and interior edge splits could not raise it without making a neighbour worse (a region "
-                                  "already below the length guarantee, or nodes pinned on surface creases)"}});
+      unmet.push_back({{"group", name},
+                       {"guarantee", "min_dihedral_deg"},
+                       {"value", a.min_dihedral},
+                       {"tets_below", a.below_goal_angle},
+                       {"element", a.worst_angle_tet + 1},
+                       {"at_m", centroid(a.worst_angle_tet)},
+                       {"nodes_on_surfaces", surface},
+                       {"why", surface == 4 ? advice.surface_angle : advice.interior_angle}});
     }
     const double median = a.lengths[a.lengths.size() / 2];
     if (a.min_length < goal.min_length_ratio * median) {
       const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median) - a.lengths.begin();
       std::ostringstream why;
-      why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3
-          << " mm: the label is thinner than its elements here (a narrow region or gap between two surfaces); absorb it "
-             "(--min-region-mm3), smooth the labels, or accept the stable step it sets";
+      why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3 << " mm: " << advice.short_length;
       unmet.push_back({{"group", name},
                        {"guarantee", "min_over_median_length"},
                        {"value", a.min_length / median},

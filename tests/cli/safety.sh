@@ -61,6 +61,10 @@ expect 1 "at least one output state" -- "$B/postproc/tactus-post" "$T/nostates" 
 expect 1 "cannot" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.01 -o "$T/case/cube.msh/x.msh"
 expect 1 "--max-elements" -- "$B/mesher/tactus-mesh" box --size 1 1 1 --element-size 0.0001 -o "$T/huge.msh"
 expect 1 "edge radius" -- "$B/mesher/tactus-mesh" box --size 0.1 0.1 0.02 --edge-radius 0.01 -o "$T/round.msh"
+# An unmet mesh guarantee of a gmsh object is explained in its own options (exit 0: a warning).
+expect 0 "a smaller --element-size" -- "$B/mesher/tactus-mesh" box --size 0.05 0.05 0.05 --element-size 0.01 --edge-radius 0.004 -o "$T/sliver.msh"
+sliver_err=$("$B/mesher/tactus-mesh" box --size 0.05 0.05 0.05 --element-size 0.01 --edge-radius 0.004 -o "$T/sliver2.msh" 2>&1 >/dev/null)
+if grep -qF -- "--facet-size" <<<"$sliver_err"; then bad "tactus-mesh box: the guarantee warning names the image mesher's --facet-size: $sliver_err"; fi
 expect 1 "did not write" -- "$B/data_samples/tactus-sample-mesh" -o "$T/mydata/thesis.tex"
 
 # 3. Interrupts: SIGINT and SIGTERM stop a run cleanly; a killed run's staging is removed next time.

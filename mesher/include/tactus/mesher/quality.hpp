@@ -23,10 +23,26 @@ struct QualityGuarantees {
   double min_length_ratio = 0.2;
 };
 
+// What an unmet guarantee's "why" advises, per mesher: the defaults speak of the image mesher's
+// surfaces and options; a gmsh object (box, STL) has its own.
+struct QualityAdvice {
+  std::string surface_angle =  // the worst tet's four nodes all on surfaces
+      "its four nodes lie on the skin or a bone interface, where nodes move only within the surface approximation and only interior "
+      "edges are split: a surface detail finer than the facet size (a smaller --facet-size / --bone-facet-size resolves it, a larger "
+      "--facet-distance smooths it)";
+  std::string interior_angle =
+      "node relocation and interior edge splits could not raise it without making a neighbour worse (a region already below the "
+      "length guarantee, or nodes pinned on surface creases)";
+  std::string short_length =  // after "L_e .. mm against the subdomain's median .. mm: "
+      "the label is thinner than its elements here (a narrow region or gap between two surfaces); absorb it (--min-region-mm3), smooth "
+      "the labels, or accept the stable step it sets";
+  static QualityAdvice gmsh_object();
+};
+
 // Report as JSON (written as quality.json). wave_speed(group tag) gives the dilatational speed
 // used for the critical step (<= 0: group skipped). "guarantees" says whether `goal` is met in
 // every subdomain and, for each unmet one, the worst tet, where it is and why.
 nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg = 10.0,
-                              const QualityGuarantees& goal = {});
+                              const QualityGuarantees& goal = {}, const QualityAdvice& advice = {});
 
 }  // namespace tactus::mesher
