@@ -180,6 +180,10 @@ const SectionSpec& contact_section() {
        typed("plane", ValueType::vec3_list, "m", "rigid plane master: [[point], [outward normal]] (instead of master_body)", false),
        opt(number("friction", "", "Coulomb friction coefficient mu", 0, false), "0"),
        typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false"),
+       typed("edge_pass", ValueType::boolean, "",
+             "mortar: also the master's convex edge and corner nodes (faces meeting at more than 30 deg) against the slave surface, "
+             "node to surface, so a sharp master edge cannot cut into the slave surface between its nodes",
+             false, "true"),
        typed("method", ValueType::string, "",
              "node_to_surface (each slave node on its closest master point) | mortar (segment-to-segment: each slave node's "
              "tributary surface integrated over the master triangles it overlaps, dual multipliers)",
@@ -750,6 +754,7 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
       }
       c.friction = r.number(t, *spec.find("friction"), path, 0);
       c.two_pass = r.boolean(t, *spec.find("two_pass"), path, false);
+      c.edge_pass = r.boolean(t, *spec.find("edge_pass"), path, true);
       c.method = r.string(t, *spec.find("method"), path, "");
       if (is_self_contact(c)) {
         const std::string what = "\"" + c.slave_body + "/" + c.slave_surface + "\" against itself (self-contact)";
@@ -762,6 +767,10 @@ void read_contacts(const Reader& r, const toml::table& root, Scenario& sc) {
         r.fail(path + ".method", "node_to_surface for a rigid plane (it has no surface to integrate over)", "mortar");
       if (c.two_pass && c.plane) r.fail(path + ".two_pass", "false for a rigid plane", "true");
       if (c.two_pass && c.method == "mortar") r.fail(path + ".two_pass", "false with mortar (its rows already weigh the master's nodes)", "true");
+      if (t.contains("edge_pass") && c.edge_pass && contact_method(c) != "mortar")
+        r.fail(path + ".edge_pass",
+               "true only with mortar (node to surface has two_pass; self-contact and a rigid plane have no master edges to add)",
+               "true with " + contact_method(c));
       sc.contacts.push_back(c);
     });
   }

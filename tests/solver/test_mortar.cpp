@@ -189,6 +189,7 @@ TEST(Mortar, SlaveTriangleOverAConvexEdgeIsMeasuredAgainstTheNearerFace) {
   sc.bodies.push_back(testkit::body_from_mesh(dir, "slave", tet, "m"));
   ContactSpec cs;
   cs.slave_body = "slave", cs.slave_surface = "face", cs.master_body = "block", cs.master_surface = "surface";
+  cs.edge_pass = false;  // the mortar rows alone (the block's edge nodes would add rows of their own)
   sc.contacts.push_back(cs);
   const Model m = build_model(sc);
   ContactSolver contact(m);

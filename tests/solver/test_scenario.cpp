@@ -303,6 +303,10 @@ TEST_F(ScenarioFile, ContactMethodDefaults) {
   const Model chosen = build_model(read_scenario(write(contact_scenario(0.0105, "master_surface = \"zmin\"\nmethod = \"node_to_surface\""))));
   EXPECT_EQ(chosen.contact_pairs[0].master->describe().rfind("deformable surface", 0), 0u) << chosen.contact_pairs[0].master->describe();
   expect_error(contact_scenario(0.0105, "master_surface = \"zmin\"\ntwo_pass = true\nmethod = \"mortar\""), {"contact[0].two_pass", "mortar"});
+  // The edge pass is mortar's (one face of a block has no edge between two of its faces: one pair above).
+  expect_error(contact_scenario(0.0105, "master_surface = \"zmin\"\nmethod = \"node_to_surface\"\nedge_pass = true"),
+               {"contact[0].edge_pass", "only with mortar", "node_to_surface"});
+  EXPECT_NO_THROW(read_scenario(write(contact_scenario(0.0105, "master_surface = \"zmin\"\nmethod = \"node_to_surface\"\nedge_pass = false"))));
 }
 
 // Silently accepted before: a duplicated node used by tets (a crack in the mesh).

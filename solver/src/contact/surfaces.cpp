@@ -103,6 +103,41 @@ std::vector<std::int32_t> outward_tet_faces(const Model& m, const std::vector<st
   return oriented;
 }
 
+// The nodes on the convex edges of an outward-oriented surface whose two faces' normals differ by
+// more than `angle_deg` (a block's edges and corners; not the gentle folds of a curved surface).
+std::vector<int> convex_edge_nodes(const Model& m, const std::vector<std::int32_t>& oriented, double angle_deg) {
+  const std::size_t n = oriented.size() / 3;
+  auto normal = [&](std::size_t t) {
+    const Vec3 a = at(m, oriented[3 * t]), b = at(m, oriented[3 * t + 1]), c = at(m, oriented[3 * t + 2]);
+    const Vec3 v = cross(b - a, c - a);
+    const double l = norm(v);
+    return Vec3{v[0] / l, v[1] / l, v[2] / l};
+  };
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> edges;
+  for (std::size_t t = 0; t < n; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const auto a = static_cast<std::uint64_t>(oriented[3 * t + k]), b = static_cast<std::uint64_t>(oriented[3 * t + (k + 1) % 3]);
+      edges[(std::min(a, b) << 32) | std::max(a, b)].push_back(t);
+    }
+  const double cos_limit = std::cos(angle_deg * M_PI / 180.0);
+  std::vector<char> feature(m.num_nodes, 0);
+  for (const auto& [key, tris] : edges) {
+    if (tris.size() != 2) continue;
+    const Vec3 n0 = normal(tris[0]), n1 = normal(tris[1]);
+    if (dot(n0, n1) > cos_limit) continue;
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    int opposite = -1;  // the second face's vertex off the edge
+    for (int k = 0; k < 3; ++k)
+      if (const int v = oriented[3 * tris[1] + k]; v != a && v != b) opposite = v;
+    if (dot(n0, at(m, opposite) - at(m, a)) >= 0) continue;  // concave: the second face rises in front of the first
+    feature[static_cast<std::size_t>(a)] = feature[static_cast<std::size_t>(b)] = 1;
+  }
+  std::vector<int> out;
+  for (std::size_t v = 0; v < m.num_nodes; ++v)
+    if (feature[v]) out.push_back(static_cast<int>(v));
+  return out;
+}
+
 }  // namespace
 
 void set_slave_surface(ContactPair& pair, const Model& m, const std::vector<std::array<int, 3>>& triangles) {
@@ -142,6 +177,37 @@ void set_rigid_plane(ContactPair& pair, const Vec3& point, const Vec3& outward_n
   const double len = norm(outward_normal);
   pair.master = rigid_plane_master(point, {outward_normal[0] / len, outward_normal[1] / len, outward_normal[2] / len});
 }
+
+namespace {
+
+// Mortar's edge pass: a one-pass slave-node method lets a sharp master edge through the slave
+// surface between its nodes (skin wrapping round a block's edge: the edge cuts the skin's straight
+// facets, and the skin nodes beyond it come round already inside). The master's convex edge and
+// corner nodes become node-to-surface slaves against the slave surface, in a second pair of the
+// same entry (counted reversed, area the mortar pass's). Their rows carry no slave triangles: the
+// sensor-averaged pressure samples the slave surface only.
+void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string& key, const std::vector<std::array<int, 3>>& slave_tris,
+                   const std::vector<std::array<int, 3>>& master_tris) {
+  ContactPair p;
+  p.name = key + " " + cs.master_body + "/" + cs.master_surface + " edges -> " + cs.slave_body + "/" + cs.slave_surface;
+  p.friction = cs.friction;
+  p.report_sign = -1.0;
+  p.entry = entry;
+  set_master_surface(p, m, slave_tris, key + ".slave_surface", false);
+  set_slave_surface(p, m, master_tris);
+  const std::vector<int> edge = convex_edge_nodes(m, outward_tet_faces(m, master_tris, key + ".master_surface"), kEdgePassAngleDeg);
+  std::vector<std::int32_t> nodes;
+  std::vector<double> area;
+  for (std::size_t i = 0; i < p.slave_nodes.size(); ++i)
+    if (std::binary_search(edge.begin(), edge.end(), p.slave_nodes[i])) nodes.push_back(p.slave_nodes[i]), area.push_back(p.slave_area[i]);
+  p.slave_nodes = std::move(nodes), p.slave_area = std::move(area);
+  p.slave_triangles.clear();
+  if (p.slave_nodes.empty()) return;  // a smooth master (or one face of a block): nothing to add
+  log::verbose() << p.name << ": " << p.slave_nodes.size() << " edge and corner nodes, " << p.master->describe();
+  m.contact_pairs.push_back(std::move(p));
+}
+
+}  // namespace
 
 void add_scenario_contacts(Model& m, const Scenario& sc) {
   const std::string file = sc.file.string();
@@ -193,6 +259,7 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
                      << p.search_scale * 1e3 << " mm";
       m.contact_pairs.push_back(std::move(p));
     }
+    if (cs.edge_pass && contact_method(cs) == "mortar") add_edge_pass(m, cs, static_cast<int>(k), key, slave_tris, master_tris);
   }
 }
 

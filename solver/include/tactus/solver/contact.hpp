@@ -38,6 +38,10 @@ struct DetectionScratch;  // contact/detection.hpp: per-step search storage, reu
 struct RigidRows;         // contact/bipotential.hpp: free rigid bodies among the rows' nodes
 class ContactMaster;
 
+// Mortar's edge pass (ContactSpec::edge_pass): master edges whose two faces' normals differ by
+// more than this are edges (a block's 90 deg; not a faceted curved surface's few degrees).
+inline constexpr double kEdgePassAngleDeg = 30;
+
 // One directed contact pair: the slave nodes of a surface against a master kind.
 struct ContactPair {
   std::string name;  // "contact[0] hand/skin -> block/surface", for messages and output

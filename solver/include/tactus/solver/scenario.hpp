@@ -113,7 +113,10 @@ struct ContactSpec {
   std::optional<std::array<Vec3, 2>> plane;  // point, outward normal (rigid plane master)
   double friction = 0;                       // Coulomb coefficient mu
   bool two_pass = false;                     // also the master's nodes against the slave surface
-  std::string method;                        // "node_to_surface", "mortar", or empty: contact_method() chooses
+  // Mortar only: also the master's convex edge and corner nodes (faces meeting at more than
+  // kEdgePassAngleDeg) against the slave surface, node to surface (surfaces.cpp).
+  bool edge_pass = true;
+  std::string method;  // "node_to_surface", "mortar", or empty: contact_method() chooses
 };
 
 // The method of a [[contact]] entry: its own, or by default mortar (segment-to-segment integrals of
