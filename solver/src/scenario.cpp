@@ -181,8 +181,8 @@ const SectionSpec& contact_section() {
        opt(number("friction", "", "Coulomb friction coefficient mu", 0, false), "0"),
        typed("two_pass", ValueType::boolean, "", "also the master's nodes against the slave surface", false, "false"),
        typed("edge_pass", ValueType::boolean, "",
-             "mortar: also the master's convex edge and corner nodes (faces meeting at more than 30 deg) against the slave surface, "
-             "node to surface, so a sharp master edge cannot cut into the slave surface between its nodes",
+             "mortar: also the master's convex edge and corner nodes (faces meeting at more than 30 deg; not those of rigid pieces) "
+             "against the slave surface, node to surface, so a sharp master edge cannot cut into the slave surface between its nodes",
              false, "true"),
        typed("method", ValueType::string, "",
              "node_to_surface (each slave node on its closest master point) | mortar (segment-to-segment: each slave node's "

@@ -124,12 +124,12 @@ std::vector<int> convex_edge_nodes(const Model& m, const std::vector<std::int32_
   for (const auto& [key, tris] : edges) {
     if (tris.size() != 2) continue;
     const Vec3 n0 = normal(tris[0]), n1 = normal(tris[1]);
-    if (dot(n0, n1) > cos_limit) continue;
+    if (!(dot(n0, n1) < cos_limit)) continue;  // (a degenerate face's NaN normal: not an edge)
     const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
     int opposite = -1;  // the second face's vertex off the edge
     for (int k = 0; k < 3; ++k)
       if (const int v = oriented[3 * tris[1] + k]; v != a && v != b) opposite = v;
-    if (dot(n0, at(m, opposite) - at(m, a)) >= 0) continue;  // concave: the second face rises in front of the first
+    if (!(dot(n0, at(m, opposite) - at(m, a)) < 0)) continue;  // concave: the second face rises in front of the first
     feature[static_cast<std::size_t>(a)] = feature[static_cast<std::size_t>(b)] = 1;
   }
   std::vector<int> out;
@@ -196,13 +196,22 @@ void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string
   set_master_surface(p, m, slave_tris, key + ".slave_surface", false);
   set_slave_surface(p, m, master_tris);
   const std::vector<int> edge = convex_edge_nodes(m, outward_tet_faces(m, master_tris, key + ".master_surface"), kEdgePassAngleDeg);
+  // Nodes of rigid pieces are left out: a rigid slave adds no compliance of its own, and the
+  // Gauss-Seidel sweep then creeps over the light master nodes neighbouring rows share (docs/design.md,
+  // "Choose the slave side"; with the hand_block_rigid block: 11 steps at the 200-iteration limit).
+  std::vector<char> rigid(m.num_nodes, 0);
+  for (const MaterialBlock& b : m.blocks)
+    if (b.material.rigid())
+      for (std::size_t e = b.begin; e < b.end; ++e)
+        for (int k = 0; k < 4; ++k) rigid[static_cast<std::size_t>(m.conn[4 * e + k])] = 1;
   std::vector<std::int32_t> nodes;
   std::vector<double> area;
   for (std::size_t i = 0; i < p.slave_nodes.size(); ++i)
-    if (std::binary_search(edge.begin(), edge.end(), p.slave_nodes[i])) nodes.push_back(p.slave_nodes[i]), area.push_back(p.slave_area[i]);
+    if (std::binary_search(edge.begin(), edge.end(), p.slave_nodes[i]) && !rigid[static_cast<std::size_t>(p.slave_nodes[i])])
+      nodes.push_back(p.slave_nodes[i]), area.push_back(p.slave_area[i]);
   p.slave_nodes = std::move(nodes), p.slave_area = std::move(area);
   p.slave_triangles.clear();
-  if (p.slave_nodes.empty()) return;  // a smooth master (or one face of a block): nothing to add
+  if (p.slave_nodes.empty()) return;  // a smooth or rigid master (or one face of a block): nothing to add
   log::verbose() << p.name << ": " << p.slave_nodes.size() << " edge and corner nodes, " << p.master->describe();
   m.contact_pairs.push_back(std::move(p));
 }
