@@ -715,6 +715,70 @@ void sphere_over_a_corner(bool mortar, bool edge_pass = true) {
 }
 }  // namespace
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlock) { sphere_over_a_corner(false); }
+// The edge pass's load is the slave surface's pressure. Oracle: force balance. A plate tilted at
+// 45 deg is driven onto a block's top edge, which meets its bottom face between the plate's nodes
+// (every plate node stays millimetres from the block's faces, so the mortar rows never press):
+// the whole contact force is the edge rows'. The windowed pressure reported on the plate's four
+// bottom nodes times their tributary areas must sum to the windowed normal force of the step
+// (the same exponential window), to rounding, at every step; before the edge rows' reactions
+// were reported on the slave surface that pressure was zero.
+TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
+  testkit::TempDir dir;
+  const double B = 0.02, Hb = 0.01, L = 0.012, t = 0.002, gap = 2e-5, v0 = 0.05;
+  TetMesh block = samples::make_box_mesh(4, 4, 2, B, B, Hb);
+  add_whole_boundary_group(block);
+  TetMesh plate = samples::make_box_mesh(1, 1, 1, L, B, t);
+  // Rotate 45 deg about y (its bottom face's normal -z turns to -(1, 0, 1)/sqrt 2, towards the
+  // edge) and put the bottom face's centre on the edge (x = B, z = Hb), `gap` away along the bisector.
+  const double c = std::sqrt(0.5);
+  for (auto& x : plate.nodes) {
+    const double px = x[0] - L / 2, pz = x[2];
+    x = Vec3{B + c * (px + pz) + c * gap, x[1], Hb + c * (pz - px) + c * gap};
+  }
+  Scenario sc;
+  sc.file = dir.path() / "edge.toml";
+  sc.run.end_time = 0.01;
+  sc.run.threads = 1;
+  sc.materials["m"] = testkit::linear_elastic_instance("m", 1e6, 0.3, 1000);
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
+  sc.bodies.push_back(testkit::body_from_mesh(dir, "plate", plate, "m"));
+  sc.bodies.back().initial_velocity = {-c * v0, 0, -c * v0};
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  ContactSpec cs;
+  cs.slave_body = "plate", cs.slave_surface = "zmin", cs.master_body = "block", cs.master_surface = "surface";
+  sc.contacts.push_back(cs);
+  const Model m = build_model(sc);
+  ASSERT_EQ(m.contact_pairs.size(), 2u);
+  ASSERT_TRUE(m.contact_pairs[1].edge_pass);
+  const ContactPair& mortar = m.contact_pairs[0];
+  ExplicitSolver solver(m, sc.run, sc.damping);
+  std::vector<double> pressure, traction, status, gaps;
+  double worst = 0, largest_force = 0;
+  std::size_t pressed = 0;
+  while (true) {
+    solver.advance_velocity();
+    const ContactStepReport& rep = solver.contact_report();
+    ASSERT_EQ(solver.contact().pair_reports()[0].normal_force, 0.0);  // the mortar rows never press
+    if (rep.windowed_normal_force > 0) {
+      solver.contact().node_fields(pressure, traction, status, gaps);
+      double field = 0;
+      for (std::size_t i = 0; i < mortar.slave_nodes.size(); ++i)
+        field += pressure[static_cast<std::size_t>(mortar.slave_nodes[i])] * mortar.slave_area[i];
+      worst = std::max(worst, std::abs(field - rep.windowed_normal_force) / rep.windowed_normal_force);
+      largest_force = std::max(largest_force, rep.windowed_normal_force);
+      pressed += rep.normal_force > 0;
+    }
+    if (solver.finished()) break;
+    solver.advance_position();
+  }
+  std::printf(
+      "plate on a block's edge: %zu steps pressed by the edge rows alone, windowed force up to %.3e N; the slave surface's "
+      "pressure x tributary area against it: largest relative difference %.2e\n",
+      pressed, largest_force, worst);
+  EXPECT_GE(pressed, 20u);  // the check ran while the edge carried the load (28 steps; the plate then rebounds)
+  EXPECT_LE(worst, 1e-10);
+}
+
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlockMortar) {
   sphere_over_a_corner(true);
   sphere_over_a_corner(true, false);

@@ -26,6 +26,13 @@ ContactSolver::ContactSolver(const Model& model)
   std::sort(slave_union_.begin(), slave_union_.end());
   slave_union_.erase(std::unique(slave_union_.begin(), slave_union_.end()), slave_union_.end());
   contact_nodes_ = slave_union_;
+  for (const ContactPair& e : pairs_)  // an edge pass reports its load on the nodes of its entry's mortar slave surface
+    if (e.edge_pass)
+      for (const ContactPair& q : pairs_)
+        if (q.entry == e.entry && !q.edge_pass) {
+          if (edge_share_area_.empty()) edge_share_area_.assign(model.num_nodes, 0.0);
+          for (std::size_t i = 0; i < q.slave_nodes.size(); ++i) edge_share_area_[static_cast<std::size_t>(q.slave_nodes[i])] = q.slave_area[i];
+        }
   for (const ContactPair& p : pairs_) contact_nodes_.insert(contact_nodes_.end(), p.master->triangles().begin(), p.master->triangles().end());
   std::sort(contact_nodes_.begin(), contact_nodes_.end());
   contact_nodes_.erase(std::unique(contact_nodes_.begin(), contact_nodes_.end()), contact_nodes_.end());
@@ -103,7 +110,17 @@ void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
     if (rows_.status[k] == ContactStatus::open) continue;
     const double* r = &rows_.reaction[3 * k];
     const double* n = &rows_.normal[3 * k];
-    step_pressure_[static_cast<std::size_t>(rows_.slave(k))] += (r[0] * n[0] + r[1] * n[1] + r[2] * n[2]) / rows_.area[k];
+    const double rn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
+    if (pairs_[static_cast<std::size_t>(rows_.pair[k])].edge_pass) {
+      // The reaction on the master side, -w_a r_n at each of its nodes (sum of -w_a = 1), is the
+      // slave surface's load there: its pressure over the node's tributary area.
+      for (auto a = rows_.start[k] + 1; a < rows_.start[k + 1]; ++a) {
+        const auto node = static_cast<std::size_t>(rows_.nodes[static_cast<std::size_t>(a)]);
+        if (edge_share_area_[node] > 0) step_pressure_[node] -= rows_.weights[static_cast<std::size_t>(a)] * rn / edge_share_area_[node];
+      }
+      continue;
+    }
+    step_pressure_[static_cast<std::size_t>(rows_.slave(k))] += rn / rows_.area[k];
   }
   const double w = pressure_window_ > 0 ? std::min(1.0, dtbar / pressure_window_) : 1.0;
   windowed_normal_force_ += w * (rep.normal_force - windowed_normal_force_);

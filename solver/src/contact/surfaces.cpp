@@ -185,7 +185,8 @@ namespace {
 // facets, and the skin nodes beyond it come round already inside). The master's convex edge and
 // corner nodes become node-to-surface slaves against the slave surface, in a second pair of the
 // same entry (counted reversed, area the mortar pass's). Their rows carry no slave triangles: the
-// sensor-averaged pressure samples the slave surface only.
+// sensor-averaged pressure samples the slave surface only, onto whose nodes their reactions are
+// reported (ContactSolver::update_windows).
 void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string& key, const std::vector<std::array<int, 3>>& slave_tris,
                    const std::vector<std::array<int, 3>>& master_tris) {
   ContactPair p;
@@ -193,6 +194,7 @@ void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string
   p.friction = cs.friction;
   p.report_sign = -1.0;
   p.entry = entry;
+  p.edge_pass = true;
   set_master_surface(p, m, slave_tris, key + ".slave_surface", false);
   set_slave_surface(p, m, master_tris);
   const std::vector<int> edge = convex_edge_nodes(m, outward_tet_faces(m, master_tris, key + ".master_surface"), kEdgePassAngleDeg);

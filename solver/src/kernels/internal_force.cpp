@@ -29,30 +29,6 @@ int default_threads(std::size_t elements) {
   return std::min(n, useful);
 }
 
-// Each tet of [begin, end) adds a quarter of its current volume v = J V0 to its four nodes, v from
-// its current edges from node 0, (X_k - X_0) + (u_k - u_0) (the reference and the displacement
-// differenced apart, so nothing cancels against the absolute coordinates): v = e1 . (e2 x e3) / 6,
-// positive for a tet that keeps its orientation (inverted input tets are refused in model.cpp).
-// Not through F = I + grad u and not in SIMD lanes: the pass is gathers and scatters around a few
-// flops, and the nine reference gradients are 72 bytes per tet more to stream (bench: one thread,
-// 10k tets, J pass ~6.2 ns per tet in lanes through F, ~4.5 ns like this).
-void add_quarter_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
-  const double* X = m.X.data();
-  for (std::size_t e = begin; e < end; ++e) {
-    const std::int32_t* c = &m.conn[4 * e];
-    const std::size_t n0 = 3 * static_cast<std::size_t>(c[0]);
-    double edge[3][3];  // edge[k]: from node 0 to node k + 1
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t n = 3 * static_cast<std::size_t>(c[k + 1]);
-      for (int i = 0; i < 3; ++i) edge[k][i] = (X[n + i] - X[n0 + i]) + (u[n + i] - u[n0 + i]);
-    }
-    const double quarter = (1.0 / 24.0) * (edge[0][0] * (edge[1][1] * edge[2][2] - edge[1][2] * edge[2][1]) +
-                                           edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
-                                           edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
-    for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
-  }
-}
-
 // x[lo, hi) /= V (0 where the node has no tet of the block).
 void divide_by_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
   for (std::size_t a = lo; a < hi; ++a) x[a] = V[a] > 0 ? x[a] / V[a] : 0.0;
@@ -105,8 +81,28 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
   return V;
 }
 
+// Each tet of [begin, end) adds a quarter of its current volume v = J V0 to its four nodes, v from
+// its current edges from node 0, (X_k - X_0) + (u_k - u_0) (the reference and the displacement
+// differenced apart, so nothing cancels against the absolute coordinates): v = e1 . (e2 x e3) / 6,
+// positive for a tet that keeps its orientation (inverted input tets are refused in model.cpp).
+// Not through F = I + grad u and not in SIMD lanes: the pass is gathers and scatters around a few
+// flops, and the nine reference gradients are 72 bytes per tet more to stream (bench: one thread,
+// 10k tets, J pass ~6.2 ns per tet in lanes through F, ~4.5 ns like this).
 void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
-  add_quarter_volumes(m, begin, end, u, node_volume, node_offset);
+  const double* X = m.X.data();
+  for (std::size_t e = begin; e < end; ++e) {
+    const std::int32_t* c = &m.conn[4 * e];
+    const std::size_t n0 = 3 * static_cast<std::size_t>(c[0]);
+    double edge[3][3];  // edge[k]: from node 0 to node k + 1
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t n = 3 * static_cast<std::size_t>(c[k + 1]);
+      for (int i = 0; i < 3; ++i) edge[k][i] = (X[n + i] - X[n0 + i]) + (u[n + i] - u[n0 + i]);
+    }
+    const double quarter = (1.0 / 24.0) * (edge[0][0] * (edge[1][1] * edge[2][2] - edge[1][2] * edge[2][1]) +
+                                           edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
+                                           edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
+    for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
+  }
 }
 
 namespace {

@@ -61,6 +61,11 @@ struct ContactPair {
   // the pair's area counts half of its pressing nodes' areas, and its force (internal to the
   // body) is not added to the step's resultant.
   bool self_contact = false;
+  // Mortar's edge pass (surfaces.cpp): its slaves are the master's edge nodes, and its rows' normal
+  // reactions are reported as pressure on the slave surface's nodes they act on (each node's
+  // share over its tributary area in the entry's mortar pass), so that surface's pressure field
+  // carries the edge's load too.
+  bool edge_pass = false;
 };
 
 // One directed pair's share of a step: force on its slave nodes, normal force, contact area
@@ -262,6 +267,7 @@ class ContactSolver {
   std::vector<PairStepReport> pair_reports_;
   double pressure_window_ = 0;
   std::vector<double> step_pressure_, windowed_pressure_;  // per node (slave nodes only used)
+  std::vector<double> edge_share_area_;                    // per node: its mortar-pass tributary area where an edge pass acts
   double windowed_normal_force_ = 0, windowed_area_ = 0;
   std::vector<std::int32_t> slave_union_;  // every pair's slave nodes, once
   // The step's nodal pressures, normal force and area into their exponential windows (pressure_window_).
