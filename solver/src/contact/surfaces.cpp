@@ -9,6 +9,7 @@
 #include "tactus/core/log.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/rigid.hpp"
 
 namespace tactus::solver {
 
@@ -187,8 +188,9 @@ namespace {
 // same entry (counted reversed, area the mortar pass's). Their rows carry no slave triangles: the
 // sensor-averaged pressure samples the slave surface only, onto whose nodes their reactions are
 // reported (ContactSolver::update_windows).
+// mortar_master: the entry's mortar pass's master triangles, already oriented out of their body.
 void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string& key, const std::vector<std::array<int, 3>>& slave_tris,
-                   const std::vector<std::array<int, 3>>& master_tris) {
+                   const std::vector<std::array<int, 3>>& master_tris, const std::vector<std::int32_t>& mortar_master) {
   ContactPair p;
   p.name = key + " " + cs.master_body + "/" + cs.master_surface + " edges -> " + cs.slave_body + "/" + cs.slave_surface;
   p.friction = cs.friction;
@@ -197,15 +199,11 @@ void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string
   p.edge_pass = true;
   set_master_surface(p, m, slave_tris, key + ".slave_surface", false);
   set_slave_surface(p, m, master_tris);
-  const std::vector<int> edge = convex_edge_nodes(m, outward_tet_faces(m, master_tris, key + ".master_surface"), kEdgePassAngleDeg);
+  const std::vector<int> edge = convex_edge_nodes(m, mortar_master, kEdgePassAngleDeg);
   // Nodes of rigid pieces are left out: a rigid slave adds no compliance of its own, and the
   // Gauss-Seidel sweep then creeps over the light master nodes neighbouring rows share (docs/design.md,
   // "Choose the slave side"; with the hand_block_rigid block: 11 steps at the 200-iteration limit).
-  std::vector<char> rigid(m.num_nodes, 0);
-  for (const MaterialBlock& b : m.blocks)
-    if (b.material.rigid())
-      for (std::size_t e = b.begin; e < b.end; ++e)
-        for (int k = 0; k < 4; ++k) rigid[static_cast<std::size_t>(m.conn[4 * e + k])] = 1;
+  const std::vector<char> rigid = rigid_nodes(m);
   std::vector<std::int32_t> nodes;
   std::vector<double> area;
   for (std::size_t i = 0; i < p.slave_nodes.size(); ++i)
@@ -270,7 +268,8 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
                      << p.search_scale * 1e3 << " mm";
       m.contact_pairs.push_back(std::move(p));
     }
-    if (cs.edge_pass && contact_method(cs) == "mortar") add_edge_pass(m, cs, static_cast<int>(k), key, slave_tris, master_tris);
+    if (cs.edge_pass && contact_method(cs) == "mortar")
+      add_edge_pass(m, cs, static_cast<int>(k), key, slave_tris, master_tris, m.contact_pairs.back().master->triangles());
   }
 }
 

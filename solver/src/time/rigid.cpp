@@ -43,11 +43,20 @@ Mat3 RigidBody::inverse_inertia() const {
   return frame * principal.cwiseInverse().asDiagonal() * frame.transpose();
 }
 
+std::vector<char> rigid_nodes(const Model& m) {
+  std::vector<char> rigid(m.num_nodes, 0);
+  for (const MaterialBlock& b : m.blocks)
+    if (b.material.rigid())
+      for (std::size_t e = b.begin; e < b.end; ++e)
+        for (int k = 0; k < 4; ++k) rigid[static_cast<std::size_t>(m.conn[4 * e + k])] = 1;
+  return rigid;
+}
+
 std::vector<RigidBody> find_rigid_bodies(const Model& m) {
   std::vector<RigidBody> out;
   std::vector<std::int32_t> parent(m.num_nodes);
   std::iota(parent.begin(), parent.end(), 0);
-  std::vector<char> rigid_node(m.num_nodes, 0);
+  const std::vector<char> rigid_node = rigid_nodes(m);
   std::vector<double> rigid_share(m.num_nodes, 0.0);  // the rigid tets' part of each node's lumped mass
   bool any = false;
   for (const MaterialBlock& b : m.blocks) {
@@ -56,7 +65,6 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
     for (std::size_t e = b.begin; e < b.end; ++e) {
       const std::int32_t* c = &m.conn[4 * e];
       for (int k = 0; k < 4; ++k) {
-        rigid_node[static_cast<std::size_t>(c[k])] = 1;
         rigid_share[static_cast<std::size_t>(c[k])] += 0.25 * b.material.density() * m.volume[e];
         const std::int32_t a = find_root(parent, c[0]), r = find_root(parent, c[k]);
         if (a != r) parent[static_cast<std::size_t>(std::max(a, r))] = std::min(a, r);

@@ -63,6 +63,9 @@ struct RigidBody {
   double kinetic_energy(const Vec3d& P, const Vec3d& L) const { return 0.5 * P.squaredNorm() / mass + 0.5 * L.dot(angular_velocity_of(L)); }
 };
 
+// Per node, 1 where a tet of a rigid material block holds it (the nodes the rigid bodies move).
+std::vector<char> rigid_nodes(const Model& model);
+
 // The rigid bodies of a model, found from its rigid material blocks and its bodies' rigid_* keys,
 // at rest in the reference placement. InputError when a [[boundary]] constrains a node of a rigid
 // body (give the body's rigid_velocity instead).
