@@ -71,13 +71,18 @@ std::vector<double> deformed_state(const Model& m) {
 }
 
 // Stress-pass rates (tet updates per second) of the vector and the scalar kernels on the same
-// model, each the median of `rounds` timings of >= 0.3 s taken alternately (side by side, so
-// that a noisy neighbour slows both).
-std::pair<double, double> updates_per_second(const Model& m, int threads, int rounds) {
+// model, and of the vector kernel with the element step estimate alone (no nodal step bound),
+// each the median of `rounds` timings of >= 0.3 s taken alternately (side by side, so that a
+// noisy neighbour slows all three).
+struct Rates {
+  double vector, scalar, element_only;
+};
+Rates updates_per_second(const Model& m, int threads, int rounds) {
   const auto u = deformed_state(m);
   std::vector<double> v(u.size(), 0.0), f(u.size());
-  InternalForces vector(m, 0.0, threads), scalar(m, 0.0, threads);
+  InternalForces vector(m, 0.0, threads), scalar(m, 0.0, threads), element_only(m, 0.0, threads);
   scalar.set_vectorised(false);
+  element_only.set_nodal_step_bound(nullptr);
   auto time = [&](InternalForces& forces) {
     forces.compute(u.data(), v.data(), f.data());  // warm-up
     std::size_t passes = 0;
@@ -90,13 +95,13 @@ std::pair<double, double> updates_per_second(const Model& m, int threads, int ro
     }
     return static_cast<double>(passes * m.num_elements) / elapsed;
   };
-  std::vector<double> rv, rs;
-  for (int k = 0; k < rounds; ++k) rv.push_back(time(vector)), rs.push_back(time(scalar));
+  std::vector<double> rv, rs, re;
+  for (int k = 0; k < rounds; ++k) rv.push_back(time(vector)), rs.push_back(time(scalar)), re.push_back(time(element_only));
   auto median = [](std::vector<double> x) {
     std::sort(x.begin(), x.end());
     return x[x.size() / 2];
   };
-  return {median(rv), median(rs)};
+  return {median(rv), median(rs), median(re)};
 }
 
 // lscpu's "Thread(s) per core" (2: the two threads may share one core's SIMD units).
@@ -114,7 +119,8 @@ std::string threads_per_core() {
 
 void throughput(const std::vector<int>& sizes, const std::vector<std::string>& materials, int rounds) {
   std::printf("lscpu threads per core: %s\n", threads_per_core().c_str());
-  std::printf("%-15s %9s %8s %7s %12s %12s %8s %14s\n", "material", "tets", "order", "threads", "vector M/s", "scalar M/s", "ratio", "ns/tet (vec)");
+  std::printf("%-15s %9s %8s %7s %12s %12s %8s %14s %18s\n", "material", "tets", "order", "threads", "vector M/s", "scalar M/s", "ratio",
+              "ns/tet (vec)", "ns/tet (no nodal)");
   for (int n : sizes) {
     TetMesh mesh = samples::make_box_mesh(n, n, n, 0.1, 0.1, 0.1);
     samples::perturb_interior_nodes(mesh, 0.1 / n, 0.2, 1);
@@ -124,9 +130,9 @@ void throughput(const std::vector<int>& sizes, const std::vector<std::string>& m
         if (!reorder && mat.find('/') != std::string::npos) continue;  // formulations: Morton order only
         const Model m = build_model(mesh, bench_material(mat), mat, {0, 0, 0}, reorder);
         for (int threads : {1, 2}) {
-          const auto [vec, sca] = updates_per_second(m, threads, rounds);
-          std::printf("%-15s %9zu %8s %7d %12.2f %12.2f %8.2f %14.2f\n", mat.c_str(), m.num_elements, reorder ? "morton" : "shuffled", threads,
-                      vec / 1e6, sca / 1e6, vec / sca, 1e9 / vec);
+          const auto [vec, sca, element_only] = updates_per_second(m, threads, rounds);
+          std::printf("%-15s %9zu %8s %7d %12.2f %12.2f %8.2f %14.2f %18.2f\n", mat.c_str(), m.num_elements, reorder ? "morton" : "shuffled", threads,
+                      vec / 1e6, sca / 1e6, vec / sca, 1e9 / vec, 1e9 / element_only);
           std::fflush(stdout);
         }
       }

@@ -45,6 +45,10 @@ const SectionSpec& run_section() {
        opt(number("time_step_safety", "", "fraction of the critical step actually used", 0, true, 1, false), "0.9"),
        opt(number("time_step", "s", "fixed user step; refused above the stable limit unless force_time_step", 0, false), "0 (automatic)"),
        typed("force_time_step", ValueType::boolean, "", "accept a user time_step above the stable limit", false, "false"),
+       typed("step_estimate", ValueType::string, "",
+             "the critical step: nodal (the larger of the element estimate and a bound from each node's whole mass, which a badly "
+             "shaped tet does not pull down) | element (the element-by-element estimate alone)",
+             false, "nodal"),
        typed("output_times", ValueType::number_list, "s", "times at which results are written, exactly (the state at end_time is always written too)",
              false, "[]"),
        opt(number("output_interval", "s", "also write results at every k * interval", 0, false), "0"),
@@ -449,6 +453,10 @@ void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
     run.time_step_safety = r.number(t, *spec.find("time_step_safety"), "run", 0.9);
     run.time_step = r.number(t, *spec.find("time_step"), "run", 0);
     run.force_time_step = r.boolean(t, *spec.find("force_time_step"), "run", false);
+    if (const std::string estimate = r.string(t, *spec.find("step_estimate"), "run"); !estimate.empty()) {
+      if (estimate != "nodal" && estimate != "element") r.fail("run.step_estimate", "\"nodal\" or \"element\"", "\"" + estimate + "\"");
+      run.nodal_step_bound = estimate == "nodal";
+    }
     run.output_times = r.number_list(t, *spec.find("output_times"), "run");
     run.output_interval = r.number(t, *spec.find("output_interval"), "run", 0);
     run.energy_tolerance = r.number(t, *spec.find("energy_tolerance"), "run", 0.25);

@@ -64,6 +64,40 @@ TEST(StableStep, CriticalStepBelowTrueLimit) {
   EXPECT_LE(s2.critical_step(), true_limit(box));
 }
 
+// Oracle: 2 / omega_max of the dense eigenproblem (free dofs, lumped mass), and with Rayleigh beta
+// the damped limit of that mode, 2 / omega (sqrt(1 + xi^2) - xi), xi = beta omega / 2. The nodal
+// bound (design.md, "The stable step": omega_max^2 <= max_b of b's rows summed over its whole
+// mass) must stay below it, like the element estimate, on regular and distorted meshes, free and
+// with a clamped face; on a distorted mesh, where the element estimate falls to a fraction of the
+// limit (its worst tet's own small share of mass), the step must stay at >= 0.45 of it.
+TEST(StableStep, NodalBoundStaysBelowTheTrueLimit) {
+  for (const double perturbation : {0.0, 0.25, 0.4})
+    for (const double nu : {0.3, 0.45})
+      for (const bool clamped : {false, true}) {
+        TetMesh mesh = samples::make_box_mesh(4, 3, 3, 0.04, 0.03, 0.03);
+        if (perturbation > 0) samples::perturb_interior_nodes(mesh, 0.01, perturbation, 5);
+        Model box = build_model(mesh, linear_elastic(kE, nu, kRho));
+        if (clamped) constrain_nodes(box, [](const double* X) { return X[0] < 1e-9; }, {true, true, true});
+        const double omega = std::sqrt(testkit::generalized_modes(box, testkit::linear_stiffness(box, kE, nu)).omega2.maxCoeff());
+        const double beta = 0.3 / omega, xi = 0.5 * beta * omega, damped_limit = 2 / omega * (std::sqrt(1 + xi * xi) - xi);
+        RunSpec run;
+        run.end_time = 1;
+        const ExplicitSolver nodal(box, run, DampingSpec{}), nodal_damped(box, run, DampingSpec{0, beta});
+        run.nodal_step_bound = false;
+        const ExplicitSolver element(box, run, DampingSpec{});
+        const double ratio = nodal.critical_step() * omega / 2;
+        std::printf(
+            "stable step, nu = %.2f, nodes moved by up to %2.0f %% of a cell, %s: element estimate %.3f, with the nodal bound %.3f of 2 / "
+            "omega_max; with beta (xi = %.2f) %.3f of the damped limit\n",
+            nu, 100 * perturbation, clamped ? "clamped" : "free   ", element.critical_step() * omega / 2, ratio, xi,
+            nodal_damped.critical_step() / damped_limit);
+        EXPECT_LE(ratio, 1.0);
+        EXPECT_LE(nodal_damped.critical_step(), damped_limit);
+        EXPECT_GE(nodal.critical_step(), element.critical_step());
+        if (perturbation > 0) EXPECT_GE(ratio, 0.45);
+      }
+}
+
 // One definition of the stable step: the solver's first stress pass (undeformed, so current and
 // reference gradients coincide) gives exactly core's critical_time_step with the P-wave speed.
 TEST(StableStep, SolverStepEqualsCoreFunction) {
@@ -73,6 +107,7 @@ TEST(StableStep, SolverStepEqualsCoreFunction) {
   const Model model = build_model(mesh, mat);
   RunSpec run;
   run.end_time = 1;
+  run.nodal_step_bound = false;  // the element estimate alone
   const ExplicitSolver s(model, run, DampingSpec{});
   // The P-wave modulus lambda + 2 mu = K + 4 mu / 3.
   const CriticalStep core =

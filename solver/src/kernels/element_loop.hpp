@@ -45,6 +45,13 @@ struct StressKernelArgs {
   std::size_t f_node_offset = 0;
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
+  // The nodal step bound (nullptr: off): each tet adds its rows' sums to its nodes here (node n at
+  // nodal_bound[n - f_node_offset]); ANP tets take their volumetric rows from the nodes' weights
+  // anp_bound_weight (k R_a / (16 V_a), model numbering) and their deviatoric ones from the
+  // P-wave modulus less anp_bulk.
+  double* nodal_bound = nullptr;
+  const double* anp_bound_weight = nullptr;
+  double anp_bulk = 0;
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
   // its step is computed with, and where its unscaled squared step (no beta) is stored.
   const double* mass_factor = nullptr;
@@ -232,14 +239,17 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
 
   // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J;
   // s = sum_a |grad_x N_a|^2 is accumulated unscaled (J^2 s) to keep divisions out of the loop.
-  T sJ2 = lanes::splat<T>(0.0), sum[3] = {sJ2, sJ2, sJ2};
+  // cg[b] = cof grad_X N_b = J grad_x N_b, node 0's as minus the others' sum.
+  T sJ2 = lanes::splat<T>(0.0), cg[4][3];
+  for (int i = 0; i < 3; ++i) cg[0][i] = sJ2;
   for (int k = 0; k < 3; ++k)
     for (int i = 0; i < 3; ++i) {
       const T h = cof(i, 0) * g[3 * k] + cof(i, 1) * g[3 * k + 1] + cof(i, 2) * g[3 * k + 2];
       sJ2 += h * h;
-      sum[i] += h;
+      cg[k + 1][i] = h;
+      cg[0][i] -= h;
     }
-  sJ2 += sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
+  sJ2 += cg[0][0] * cg[0][0] + cg[0][1] * cg[0][1] + cg[0][2] * cg[0][2];
   // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J):
   // dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M).
   T dt2 = mat.density * J / (sJ2 * sp.modulus);
@@ -277,6 +287,26 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     const auto smaller = dt2 < out.dt2;
     out.dt2 = smaller ? dt2 : out.dt2;
     out.dt_element = smaller ? index : out.dt_element;
+  }
+
+  if (a.nodal_bound) {
+    // The nodal step bound's row sums (design.md, "The stable step"): node b of the tet gets
+    // |d_b| (M t_e / v_e + Q_e), d_b = dv_e/dx_b = V0 cg[b], t_e = sum_b |d_b|, v_e = J V0; M the
+    // P-wave modulus (ANP: its deviatoric part) and Q_e the sum of the ANP weights of its nodes.
+    T n[4], t = lanes::splat<T>(0.0);
+    for (int k = 0; k < 4; ++k) n[k] = lanes::sqrt_of(cg[k][0] * cg[k][0] + cg[k][1] * cg[k][1] + cg[k][2] * cg[k][2]), t += n[k];
+    T row = (kAnp ? sp.modulus - a.anp_bulk : sp.modulus) * t / J;
+    if constexpr (kAnp) {
+      const double* w = a.anp_bound_weight;
+      row += lanes::make_lanes<T>([&](int l) {
+        const std::int32_t* cl = c + 4 * l;
+        return w[cl[0]] + w[cl[1]] + w[cl[2]] + w[cl[3]];
+      });
+    }
+    row *= V0;
+    for (int k = 0; k < 4; ++k) n[k] *= row;
+    for (int l = 0; l < L; ++l)  // in element order, node 1, 2, 3 then 0, as the forces
+      for (int k : {1, 2, 3, 0}) a.nodal_bound[static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset] += lanes::lane(n[k], l);
   }
 
   T h[4][3];

@@ -88,7 +88,8 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
 // Not through F = I + grad u and not in SIMD lanes: the pass is gathers and scatters around a few
 // flops, and the nine reference gradients are 72 bytes per tet more to stream (bench: one thread,
 // 10k tets, J pass ~6.2 ns per tet in lanes through F, ~4.5 ns like this).
-void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
+void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset,
+                              double* node_area) {
   const double* X = m.X.data();
   for (std::size_t e = begin; e < end; ++e) {
     const std::int32_t* c = &m.conn[4 * e];
@@ -102,6 +103,19 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
                                            edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
                                            edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
     for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
+    if (!node_area) continue;
+    // 6 dv/dx_k for k = 1, 2, 3: the edge products e2 x e3, e3 x e1, e1 x e2; node 0's is minus their sum.
+    double d[4][3];
+    for (int k = 0; k < 3; ++k) {
+      const double *p = edge[(k + 1) % 3], *q = edge[(k + 2) % 3];
+      d[k + 1][0] = p[1] * q[2] - p[2] * q[1], d[k + 1][1] = p[2] * q[0] - p[0] * q[2], d[k + 1][2] = p[0] * q[1] - p[1] * q[0];
+    }
+    for (int i = 0; i < 3; ++i) d[0][i] = -(d[1][i] + d[2][i] + d[3][i]);
+    lanes::Pack squared;  // the four norms in one vector square root
+    for (int k = 0; k < 4; ++k) squared[k] = d[k][0] * d[k][0] + d[k][1] * d[k][1] + d[k][2] * d[k][2];
+    const lanes::Pack norm = lanes::sqrt_of(squared);
+    const double t = (1.0 / 6.0) * (norm[0] + norm[1] + norm[2] + norm[3]);
+    for (int k = 0; k < 4; ++k) node_area[static_cast<std::size_t>(c[k]) - node_offset] += t;
   }
 }
 
@@ -172,7 +186,12 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   block_pressure_.assign(model.blocks.size(), nullptr);
   for (std::size_t k = 0; k < model.blocks.size(); ++k)
     if (model.blocks[k].material.anp()) {
-      AnpBlock a{k, anp_reference_node_volumes(model, model.blocks[k]), std::vector<double>(model.num_nodes, 0.0), {}, {}};
+      AnpBlock a{k,
+                 anp_reference_node_volumes(model, model.blocks[k]),
+                 std::vector<double>(model.num_nodes, 0.0),
+                 std::vector<double>(model.num_nodes, 0.0),
+                 {},
+                 {}};
       if (model.blocks[k].material.pressure_smoothing() > 0) {
         a.averaging = NodeAveraging(model, model.blocks[k], a.reference_volume);
         a.smoothed.assign(model.num_nodes, 0.0);
@@ -182,14 +201,14 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
   // Fixed partitions (independent of the thread count) and the node range each touches; the
   // Morton order of nodes and tets (model.cpp) keeps the ranges short.
-  std::size_t forces = 0, volumes = 0;
+  std::size_t forces = 0, volumes = 0, bounds = 0;
   for (std::size_t k = 0; k < model.blocks.size(); ++k) {
     const MaterialBlock& b = model.blocks[k];
     if (b.material.rigid()) continue;  // moved as rigid bodies (time/rigid.cpp): no stress, no step limit
     const std::size_t n = b.end - b.begin,
                       parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
     for (std::size_t p = 0; p < parts; ++p) {
-      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes};
+      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes, bounds};
       for (std::size_t e = q.begin; e < q.end; ++e)
         for (int a = 0; a < 4; ++a) {
           const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
@@ -197,17 +216,32 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
         }
       if (q.begin == q.end) q.node_lo = q.node_hi = 0;
       forces += 3 * (q.node_hi - q.node_lo);
+      bounds += q.node_hi - q.node_lo;
       if (b.material.anp()) volumes += q.node_hi - q.node_lo;
       partitions_.push_back(q);
     }
   }
   partition_forces_.assign(forces, 0.0);
   partition_volumes_.assign(volumes, 0.0);
+  partition_areas_.assign(volumes, 0.0);
+  partition_bound_.assign(bounds, 0.0);
   partition_acc_.resize(partitions_.size());
   chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
   for (std::size_t p = 0; p < partitions_.size(); ++p)
     for (std::size_t c = partitions_[p].node_lo / kNodeChunk; c * kNodeChunk < partitions_[p].node_hi; ++c) chunk_partitions_[c].push_back(p);
   chunk_anp_energy_.assign(chunk_partitions_.size(), 0.0);
+  set_nodal_step_bound(model.mass.data());
+}
+
+void InternalForces::set_nodal_step_bound(const double* nodal_mass) {
+  nodal_mass_ = nodal_mass;
+  if (!nodal_mass_ || !node_moves_.empty()) return;  // built once (the caller may re-point it every pass)
+  node_moves_.assign(model_.num_nodes, 0);
+  for (std::size_t a = 0; a < model_.num_nodes; ++a)
+    node_moves_[a] = !(model_.constrained[3 * a] && model_.constrained[3 * a + 1] && model_.constrained[3 * a + 2]);
+  nodal_bound_.assign(model_.num_nodes, 0.0);
+  chunk_bound_.assign(chunk_partitions_.size(), 0.0);
+  chunk_bound_node_.assign(chunk_partitions_.size(), 0);
 }
 
 int InternalForces::lanes() { return lanes::kLanes; }
@@ -218,11 +252,15 @@ void InternalForces::enable_mass_scaling() {
 }
 
 std::size_t InternalForces::memory_bytes() const {
-  std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity()) * sizeof(double);
+  std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity() +
+                   partition_areas_.capacity() + partition_bound_.capacity() + nodal_bound_.capacity() + chunk_bound_.capacity()) *
+                  sizeof(double);
+  b += node_moves_.capacity() + chunk_bound_node_.capacity() * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
   for (const auto& a : anp_)
-    b += (a.reference_volume.capacity() + a.pressure.capacity() + a.smoothed.capacity()) * sizeof(double) + a.averaging.memory_bytes();
+    b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_weight.capacity() + a.smoothed.capacity()) * sizeof(double) +
+         a.averaging.memory_bytes();
   return b;
 }
 
@@ -270,7 +308,9 @@ void InternalForces::anp_pass(const double* u) {
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.volume_offset;
       std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo);
+      double* areas = nodal_mass_ ? partition_areas_.data() + q.volume_offset : nullptr;
+      if (areas) std::fill(areas, areas + (q.node_hi - q.node_lo), 0.0);
+      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo, areas);
     }
     // Per node chunk: the partitions' sums, then the pressures (no smoothing) or the volume ratio.
     const bool smoothing = b.material.pressure_smoothing() > 0;
@@ -278,6 +318,12 @@ void InternalForces::anp_pass(const double* u) {
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
       sum_chunk(c, partition_volumes_, &Partition::volume_offset, 1, a.pressure.data(), own);
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
+      if (nodal_mass_) {  // the step bound's weights k R_a / (16 V_a)
+        double* w = a.bound_weight.data();
+        sum_chunk(c, partition_areas_, &Partition::volume_offset, 1, w, own);
+        const double k = b.material.small_strain_bulk() / 16;
+        for (std::size_t n = lo; n < hi; ++n) w[n] = V[n] > 0 ? k * w[n] / V[n] : 0.0;
+      }
       if (smoothing)
         divide_by_volume(V, a.pressure.data(), lo, hi);
       else
@@ -325,14 +371,29 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
                             q.node_lo,
                             viscous ? beta_ : 0.0};
       args.nodal_pressure = block_pressure_[q.block];
+      if (nodal_mass_) {
+        double* rows = partition_bound_.data() + q.bound_offset;
+        std::fill(rows, rows + (q.node_hi - q.node_lo), 0.0);
+        args.nodal_bound = rows;
+        for (const AnpBlock& an : anp_)
+          if (an.block == q.block) args.anp_bound_weight = an.bound_weight.data(), args.anp_bulk = b.material.small_strain_bulk();
+      }
       args.vectorised = vectorised_;
       if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
       b.material.type().stress_pass(args, acc);
       partition_acc_[p] = acc;
     }
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c)
+    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
       sum_chunk(c, partition_forces_, &Partition::force_offset, 3, f_out, [](const Partition&) { return true; });
+      if (!nodal_mass_) continue;
+      sum_chunk(c, partition_bound_, &Partition::bound_offset, 1, nodal_bound_.data(), [](const Partition&) { return true; });
+      double best = 0;
+      std::size_t at = 0;
+      for (std::size_t n = c * kNodeChunk; n < std::min(model_.num_nodes, (c + 1) * kNodeChunk); ++n)
+        if (node_moves_[n] && nodal_bound_[n] > best * nodal_mass_[n]) best = nodal_bound_[n] / nodal_mass_[n], at = n;
+      chunk_bound_[c] = best, chunk_bound_node_[c] = at;
+    }
   }
   // The partitions' sums in partition order; ties of the smallest step or Jacobian go to the first.
   StressAccumulator total;
@@ -351,8 +412,20 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
   StressPassResult r;
   r.strain_energy = total.energy;
   r.viscous_power = total.viscous_power;
-  r.critical_step = viscous ? total.dt : std::sqrt(total.dt2);
+  r.element_critical_step = r.critical_step = viscous ? total.dt : std::sqrt(total.dt2);
   r.limiting_element = total.dt_element;
+  r.nodal_critical_step = 0;  // no bound (off, or no moving node under a tet): the element estimate alone
+  if (nodal_mass_) {
+    // omega_max^2 <= the largest row sum / mass (design.md): the chunks' largest, ties to the first.
+    double omega2 = 0;
+    for (std::size_t c = 0; c < chunk_bound_.size(); ++c)
+      if (chunk_bound_[c] > omega2) omega2 = chunk_bound_[c], r.limiting_node = chunk_bound_node_[c];
+    if (omega2 > 0) {
+      const double omega = std::sqrt(omega2), xi = 0.5 * beta_ * omega;  // with beta: the damped mode's limit
+      r.nodal_critical_step = viscous ? 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi) : 2.0 / omega;
+    }
+    if (r.nodal_critical_step > r.critical_step) r.critical_step = r.nodal_critical_step, r.limited_by_node = true;
+  }
   r.min_jacobian = total.min_J;
   r.min_jacobian_element = total.min_J_element;
   return r;

@@ -6,6 +6,8 @@
 // vectorised by construction rather than by the auto-vectoriser's judgement. A comparison of
 // packs gives a lane mask and `mask ? a : b` selects per lane, which is how a law writes a
 // branch that must hold for both (hgo's fibre switch).
+#include <immintrin.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -181,8 +183,15 @@ template <class T>
   return x > kLogMax ? Pack{} + std::numeric_limits<double>::infinity() : (x < kLogMin ? Pack{} : e);
 }
 [[gnu::always_inline]] inline double sqrt_of(double x) { return std::sqrt(x); }
+// One vsqrtpd where AVX is on (correctly rounded, the same bits as std::sqrt per lane): lane by
+// lane, std::sqrt is a scalar sqrt and an errno check each.
 [[gnu::always_inline]] inline Pack sqrt_of(const Pack& x) {
+#if defined(__AVX__)
+  static_assert(sizeof(Pack) == sizeof(__m256d));
+  return reinterpret_cast<Pack>(_mm256_sqrt_pd(reinterpret_cast<__m256d>(x)));
+#else
   return make_lanes<Pack>([&](int l) { return std::sqrt(x[l]); });
+#endif
 }
 
 }  // namespace tactus::solver::lanes

@@ -120,6 +120,7 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
               a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             },
             &ahead};
+  forces_.set_nodal_step_bound(run_.nodal_step_bound ? mass_.data() : nullptr);  // the masses the run integrates with
   pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data(), side);
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   detection_ahead_seconds_ += ahead.seconds;
@@ -179,7 +180,10 @@ void ExplicitSolver::scale_mass() {
       }
       if (dt < best) best = dt, pass_.limiting_element = e;
     }
-  pass_.critical_step = best;
+  // The nodal bound of the pass holds a fortiori with the added mass.
+  pass_.element_critical_step = best;
+  pass_.limited_by_node = pass_.nodal_critical_step > best;
+  pass_.critical_step = std::max(best, pass_.nodal_critical_step);
   for (std::size_t b = 0; b < body_mass_.size(); ++b)
     if (added_mass_body_[b] > run_.added_mass_limit * body_mass_[b]) {
       std::ostringstream o;
@@ -210,7 +214,20 @@ void ExplicitSolver::choose_step() {
 std::string ExplicitSolver::describe_step_limit() const {
   std::ostringstream o;
   const std::size_t e = pass_.limiting_element;
-  o << "limited by " << model_.describe_element(e) << ", critical step " << pass_.critical_step << " s";
+  if (pass_.limited_by_node) {
+    const std::size_t in = model_.input_node(pass_.limiting_node);  // body-local and 1-based, as the tets
+    o << "limited by the nodal bound at node ";
+    if (model_.bodies.empty()) {
+      o << in + 1;
+    } else {
+      const BodyRange& body = model_.bodies[model_.body_of_node(in)];
+      o << in - body.node_begin + 1 << " of body '" << body.name << "'";
+    }
+    o << ", critical step " << pass_.critical_step << " s (the element estimate " << pass_.element_critical_step << " s, at "
+      << model_.describe_element(e) << ")";
+  } else {
+    o << "limited by " << model_.describe_element(e) << ", critical step " << pass_.critical_step << " s";
+  }
   return o.str();
 }
 
@@ -362,7 +379,8 @@ void ExplicitSolver::advance_position() {
   if (pass_.critical_step < 1e-3 * initial_critical_) {
     std::ostringstream o;
     o << "the stable time step collapsed to " << pass_.critical_step << " s at step " << step_ << ", t = " << time_
-      << " s, below 1e-3 of the initial " << initial_critical_ << " s: " << model_.describe_element(pass_.limiting_element)
+      << " s, below 1e-3 of the initial " << initial_critical_ << " s (" << describe_step_limit()
+      << "): " << model_.describe_element(pass_.limiting_element)
       << " is being crushed or its material stiffens without bound (fibres?); the run would not finish";
     throw NumericalError(o.str());
   }

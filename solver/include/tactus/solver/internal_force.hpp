@@ -33,7 +33,13 @@ namespace tactus::solver {
 struct StressPassResult {
   double strain_energy = 0;  // sum_e V_e W(F_e)
   double viscous_power = 0;  // sum_e V_e P_visc : Fdot (>= 0), Rayleigh beta part
-  double critical_step = 0;  // min_e dt_e (no safety factor)
+  // The stable step (no safety factor): the larger of two upper bounds on omega_max, each enough
+  // alone: the element estimate min_e dt_e (limiting_element) and, when on, the nodal bound
+  // (limiting_node; InternalForces::set_nodal_step_bound).
+  double critical_step = 0;
+  double element_critical_step = 0, nodal_critical_step = 0;  // nodal: 0 when off
+  bool limited_by_node = false;
+  std::size_t limiting_node = 0;
   std::size_t limiting_element = 0;
   double min_jacobian = 0;
   std::size_t min_jacobian_element = 0;
@@ -46,8 +52,10 @@ struct StressPassResult {
 // for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
 // node_volume[n - node_offset] receives node n's share.
+// With node_area, each tet also adds t_e = sum_b |d v_e / d x_b| (a third of its current surface
+// area) to each of its four nodes: the nodal step bound's weights (InternalForces).
 void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
-                              std::size_t node_offset = 0);
+                              std::size_t node_offset = 0, double* node_area = nullptr);
 std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& block, const double* u);
 
 // One pass of the pressure smoothing of an ANP block, node -> tet -> node and V-weighted, as a
@@ -114,6 +122,12 @@ class InternalForces {
   void enable_mass_scaling();
   const std::vector<double>& element_dt2() const { return element_dt2_; }
   std::vector<double>& mass_factor() { return mass_factor_; }
+  // The nodal step bound (on by default, with the model's lumped masses): a second upper bound on
+  // omega_max from the nodes' whole masses, where the element estimate sees only each tet's share
+  // of them (design.md, "The stable step"). nodal_mass: per node, the masses the run integrates
+  // with (which mass scaling raises); nullptr turns it off. Nodes with all three dofs prescribed
+  // do not move and are left out.
+  void set_nodal_step_bound(const double* nodal_mass);
   // The stress pass takes lanes::kLanes tets at a time (default) or one at a time: the same
   // formulas (kernels/lanes.hpp), kept selectable as the reference the vector kernels are tested
   // and benched against. (The ANP J pass is scalar either way: it is all gathers and scatters.)
@@ -128,19 +142,29 @@ class InternalForces {
   // A contiguous run of one block's tets, and the node range [node_lo, node_hi) they touch: its
   // forces go to partition_forces_ from force_offset (3 per node of the range), its current nodal
   // volumes (ANP blocks) to partition_volumes_ from volume_offset.
+  // Its nodal step bound's row sums go to partition_bound_ from bound_offset (1 per node of the
+  // range), and (ANP blocks) its tets' areas t_e to partition_areas_ from volume_offset.
   struct Partition {
-    std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
+    std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset, bound_offset;
   };
   std::vector<Partition> partitions_;
-  std::vector<double> partition_forces_, partition_volumes_;
+  std::vector<double> partition_forces_, partition_volumes_, partition_areas_, partition_bound_;
+  // Nodal step bound: the masses (nullptr: off), the free nodes, the summed row sums, and per node
+  // chunk the largest row sum / mass and its node.
+  const double* nodal_mass_ = nullptr;
+  std::vector<unsigned char> node_moves_;
+  std::vector<double> nodal_bound_, chunk_bound_;
+  std::vector<std::size_t> chunk_bound_node_;
   std::vector<StressAccumulator> partition_acc_;
   // Nodes in chunks of kNodeChunk: the partitions whose node range meets each chunk, ascending.
   std::vector<std::vector<std::size_t>> chunk_partitions_;
   // ANP blocks: their nodal reference volumes and, per step, the nodal pressures (which first
   // hold the current nodal volumes); per node chunk, that chunk's part of the volumetric energy.
+  // bound_weight: the nodal step bound's weight of each node, k R_a / (16 V_a) (R_a: the sum of
+  // the areas t_e of the block's tets at a).
   struct AnpBlock {
     std::size_t block;
-    std::vector<double> reference_volume, pressure;
+    std::vector<double> reference_volume, pressure, bound_weight;
     NodeAveraging averaging;       // with pressure smoothing only
     std::vector<double> smoothed;  // the other buffer of the smoothing passes (num_nodes; with smoothing only)
   };

@@ -20,6 +20,9 @@ struct RunSpec {
   double time_step_safety = 0.9;
   double time_step = 0;          // 0: automatic (safety x critical step)
   bool force_time_step = false;  // accept a user time_step above the stable limit
+  // The stable step: the larger of the element estimate and the nodal bound (true), or the element
+  // estimate alone (false; what explicit codes call element-by-element). design.md "The stable step".
+  bool nodal_step_bound = true;
   std::vector<double> output_times;
   double output_interval = 0;
   double energy_tolerance = 0.25;  // relative energy-balance error that stops a run as unstable
