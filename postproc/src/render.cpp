@@ -384,23 +384,32 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
   return true;
 }
 
-// The contact pressure on the body that carries it, seen from the side its contact faces.
-void pressure_picture(const Results& r, const Summary& s, const Views& v, const fs::path& report, const RenderOptions& opt) {
-  const std::size_t k = nearest_frame(r, s.peak_pressure_outputs.time);
+// The contact pressure of state k on body pb, seen along `view` (from the contact partner's side),
+// coloured from 0 to scale_max (unpressed surface grey), its largest value on the body marked.
+// Returns false when the body carries no pressure in that state (no picture written).
+bool pressure_picture(const Results& r, std::size_t k, int pb, const Vec3& view, double scale_max, const Views& v, const fs::path& file,
+                      const RenderOptions& opt) {
   const auto g = load(r.frames[k].file);
-  const int pb = std::max(0, pressure_body(r, s, opt));
   const auto body = surface(body_cells(g, pb));
+  vtkDataArray* p = body->GetPointData()->GetArray(cp::contact_pressure.name);
+  if (!p) return false;
+  vtkIdType peak = -1;
+  for (vtkIdType i = 0; i < body->GetNumberOfPoints(); ++i)
+    if (p->GetComponent(i, 0) > 0 && (peak < 0 || p->GetComponent(i, 0) > p->GetComponent(peak, 0))) peak = i;
+  if (peak < 0) return false;
+  Vec3 at;
+  body->GetPoint(peak, at.data());
   double hb[6];
   body->GetBounds(hb);
   auto window = offscreen(opt.width, opt.height);
   auto ren = white_renderer();
   window->AddRenderer(ren);
-  auto p_lut = rainbow(0, s.peak_pressure_outputs.value, false);
+  auto p_lut = rainbow(0, scale_max, false);
   p_lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
-  p_lut->SetTableRange(1e-9 * s.peak_pressure_outputs.value, s.peak_pressure_outputs.value);
+  p_lut->SetTableRange(1e-9 * scale_max, scale_max);  // exactly 0 (no contact) is below the range: grey
   ren->AddActor(colored(body, cp::contact_pressure.name, false, p_lut));
   vtkNew<vtkSphereSource> marker;
-  marker->SetCenter(s.peak_pressure_outputs.position.data());
+  marker->SetCenter(at.data());
   marker->SetRadius(0.012 * v.span);
   vtkNew<vtkPolyDataMapper> mm;
   mm->SetInputConnection(marker->GetOutputPort());
@@ -410,14 +419,40 @@ void pressure_picture(const Results& r, const Summary& s, const Views& v, const 
   ren->AddActor(ma);
   add_scalar_bar(ren, p_lut, "contact pressure (Pa)");
   std::ostringstream caption;
-  const std::string name = pb >= 0 && static_cast<std::size_t>(pb) < r.bodies.size() ? r.bodies[static_cast<std::size_t>(pb)] : "body";
+  const std::string name = static_cast<std::size_t>(pb) < r.bodies.size() ? r.bodies[static_cast<std::size_t>(pb)] : "body";
   caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   contact pressure on " << name << "; peak "
-          << s.peak_pressure_outputs.value / 1e6 << " MPa (black dot) at (" << ms(s.peak_pressure_outputs.position[0]) << ", "
-          << ms(s.peak_pressure_outputs.position[1]) << ", " << ms(s.peak_pressure_outputs.position[2]) << ") mm";
+          << p->GetComponent(peak, 0) / 1e6 << " MPa (black dot) at (" << ms(at[0]) << ", " << ms(at[1]) << ", " << ms(at[2]) << ") mm";
   add_text(ren, caption.str(), 20, opt.height - 40, 18);
   const auto axes = principal_axes(body->GetPoints());
-  look(ren, hb, 2 * v.span * pressed_side(body), axes[2], 1.2);
-  write_png(window, report / "pressure.png");
+  look(ren, hb, 2 * v.span * view, axes[2], 1.2);
+  write_png(window, file);
+  return true;
+}
+
+// The pressed side of body pb in state k: the pressure-weighted outward normal of its surface.
+Vec3 pressed_side_at(const Results& r, std::size_t k, int pb) { return pressed_side(surface(body_cells(load(r.frames[k].file), pb))); }
+
+// pressure.png: the state with the peak pressure at the outputs, seen from its own pressed side.
+// pressure_t<ms>ms.png: every chosen state with contact on that body, on one colour scale (0 to the
+// outputs' peak) and one view (the pressed side of the state with the most nodes in contact), so
+// the pictures side by side show how the pressure map changes in time.
+std::vector<std::string> pressure_pictures(const Results& r, const Summary& s, const std::vector<std::size_t>& chosen, const Views& v,
+                                           const fs::path& report, const RenderOptions& opt) {
+  std::vector<std::string> written;
+  const int pb = std::max(0, pressure_body(r, s, opt));
+  const double scale = s.peak_pressure_outputs.value;
+  const std::size_t peak_k = nearest_frame(r, s.peak_pressure_outputs.time);
+  if (pressure_picture(r, peak_k, pb, pressed_side_at(r, peak_k, pb), scale, v, report / "pressure.png", opt)) written.push_back("pressure.png");
+  std::size_t widest = chosen.front();
+  for (std::size_t k : chosen)
+    if (s.frames[k].contact_nodes > s.frames[widest].contact_nodes) widest = k;
+  const Vec3 view = pressed_side_at(r, widest, pb);
+  for (std::size_t k : chosen) {
+    if (s.frames[k].contact_nodes == 0) continue;
+    const std::string name = "pressure_t" + ms(r.frames[k].time) + "ms.png";
+    if (pressure_picture(r, k, pb, view, scale, v, report / name, opt)) written.push_back(name);
+  }
+  return written;
 }
 
 }  // namespace
@@ -444,10 +479,8 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
     const Views views = choose_views(load(r.frames[chosen.front()].file), opt);
     for (std::size_t k : chosen) written.push_back(von_mises_picture(r, k, views, vm_lut, report, opt));
     if (section_picture(r, s, views, vm_lut, report, opt)) written.push_back("section.png");
-    if (s.contact_occurred && s.peak_pressure_outputs.value > 0) {
-      pressure_picture(r, s, views, report, opt);
-      written.push_back("pressure.png");
-    }
+    if (s.contact_occurred && s.peak_pressure_outputs.value > 0)
+      for (std::string& name : pressure_pictures(r, s, chosen, views, report, opt)) written.push_back(std::move(name));
   }
   const History& h = r.history;
   const int pw = 900, ph = 600;

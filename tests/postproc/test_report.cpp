@@ -324,9 +324,10 @@ TEST(Pictures, ShowWhatTheDataSays) {
   ASSERT_EQ(run_post(d, tmp.path() / "report", ""), 0) << slurp(tmp.path() / "report.log");
   ASSERT_EQ(run_post(d, tmp.path() / "edge_on", "--view 1 0 0"), 0) << slurp(tmp.path() / "edge_on.log");
   const auto summary = nlohmann::json::parse(slurp(tmp.path() / "report" / "summary.json"));
-  std::vector<std::string> expected{"von_mises_t0.00ms.png",  "von_mises_t1.00ms.png",  "section.png",
-                                    "pressure.png",           "plot_contact_force.png", "plot_contact_area.png",
-                                    "plot_peak_pressure.png", "plot_energies.png",      "plot_reactions.png"};
+  std::vector<std::string> expected{"von_mises_t0.00ms.png",  "von_mises_t1.00ms.png", "section.png",
+                                    "pressure.png",           "pressure_t0.00ms.png",  "pressure_t1.00ms.png",
+                                    "plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png",
+                                    "plot_energies.png",      "plot_reactions.png"};
   EXPECT_EQ(summary["pictures"].get<std::vector<std::string>>(), expected);
 
   // The stress picture looks along the plate's thinnest axis (z), so the plate shows its 40 x 20
@@ -355,6 +356,24 @@ TEST(Pictures, ShowWhatTheDataSays) {
   EXPECT_GT(greys.size(), reds.size());
   EXPECT_LT(std::hypot(r[0] - b[0], r[1] - b[1]), 0.03 * pressure.width);
   EXPECT_GT(std::hypot(r[0] - 0.5 * pressure.width, r[1] - 0.5 * pressure.height), 0.1 * pressure.width);
+
+  // One pressure picture per output with contact, on one colour scale (0 to the outputs' peak) and
+  // one view: the 1 ms state is the peak state, so its picture is pressure.png pixel for pixel; at
+  // 0 ms the same node carries a quarter of the peak, so it shows cyan (hue 0.25 of the way up the
+  // rainbow), no red, and the dot at the same place.
+  const Picture last = read_png(tmp.path() / "report" / "pressure_t1.00ms.png");
+  const Picture first = read_png(tmp.path() / "report" / "pressure_t0.00ms.png");
+  EXPECT_EQ(last.rgb, pressure.rgb);
+  const auto cyan = [](const std::array<int, 3>& c) { return c[0] < 90 && c[1] > 160 && c[2] > 160; };
+  const auto first_reds = pixels(first, red), first_cyans = pixels(first, cyan), first_dots = pixels(first, black);
+  const auto c0 = mean(first_cyans), b0 = mean(first_dots);
+  std::cout << "pressure at 0 ms on the common scale: " << first_reds.size() << " red, " << first_cyans.size() << " cyan pixels around (" << c0[0]
+            << ", " << c0[1] << "), black dot at (" << b0[0] << ", " << b0[1] << ")\n";
+  EXPECT_TRUE(first_reds.empty());
+  ASSERT_FALSE(first_cyans.empty());
+  ASSERT_FALSE(first_dots.empty());
+  EXPECT_LT(std::hypot(c0[0] - b0[0], c0[1] - b0[1]), 0.03 * first.width);
+  EXPECT_LT(std::hypot(b0[0] - b[0], b0[1] - b[1]), 0.01 * first.width);
 
   // The force plot draws its one line in the first plot colour.
   const Picture plot = read_png(tmp.path() / "report" / "plot_contact_force.png");
