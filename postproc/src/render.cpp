@@ -417,7 +417,8 @@ bool pressure_picture(const Results& r, std::size_t k, int pb, const Vec3& view,
   ma->SetMapper(mm);
   ma->GetProperty()->SetColor(0, 0, 0);
   ren->AddActor(ma);
-  add_scalar_bar(ren, p_lut, "contact pressure (Pa)");
+  // The bar reads from 0: the same colours, without the grey floor's offset in its labels.
+  add_scalar_bar(ren, rainbow(0, scale_max, false), "contact pressure (Pa)");
   std::ostringstream caption;
   const std::string name = static_cast<std::size_t>(pb) < r.bodies.size() ? r.bodies[static_cast<std::size_t>(pb)] : "body";
   caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   contact pressure on " << name << "; peak "
