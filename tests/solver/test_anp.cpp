@@ -363,7 +363,9 @@ TEST(Anp, StableStepIsConservativeAndNotWasteful) {
             r.nodal_critical_step * omega_max / 2, 2 / omega_max, ratio);
         EXPECT_LE(ratio, 1.0);
         EXPECT_EQ(r.critical_step, std::max(r.element_critical_step, r.nodal_critical_step));
-        if (at_rest) EXPECT_GE(ratio, std::string(formulation) == "anp" ? 0.35 : (perturbation > 0 ? 0.45 : 0.5));
+        if (at_rest) {
+          EXPECT_GE(ratio, std::string(formulation) == "anp" ? 0.35 : (perturbation > 0 ? 0.45 : 0.5));
+        }
       }
     }
 }

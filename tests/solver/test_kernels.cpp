@@ -133,11 +133,11 @@ TEST(Kernels, VectorisedAndScalarPassesAgree) {
         const auto rel = [](double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); };
         std::printf(
             "%-30s beta %.0e mass scaling %d: %zu tets, max |f_vec - f_scalar| = %.2e of max_e |f_e| (%.3e N); energy %.1e, step %.1e, "
-            "viscous power %.1e relative; element steps %.1e; limiting tet %zu / %zu, min J tet %zu / %zu\n",
+            "viscous power %.1e relative; element steps %.1e; limiting tet %zu / %zu, min J tet %zu / %zu (J %.1e relative)\n",
             variant.name, beta, mass_scaling ? 1 : 0, c.model.num_elements, df / scale, scale,
             rel(vec.result.strain_energy, sca.result.strain_energy), rel(vec.result.critical_step, sca.result.critical_step),
             beta > 0 ? rel(vec.result.viscous_power, sca.result.viscous_power) : 0.0, ddt, vec.result.limiting_element, sca.result.limiting_element,
-            vec.result.min_jacobian_element, sca.result.min_jacobian_element);
+            vec.result.min_jacobian_element, sca.result.min_jacobian_element, rel(vec.result.min_jacobian, sca.result.min_jacobian));
         EXPECT_LE(df, 1e-12 * scale) << variant.name;
         EXPECT_LE(rel(vec.result.strain_energy, sca.result.strain_energy), 1e-12) << variant.name;
         EXPECT_LE(rel(vec.result.critical_step, sca.result.critical_step), 1e-12) << variant.name;
@@ -147,7 +147,9 @@ TEST(Kernels, VectorisedAndScalarPassesAgree) {
         EXPECT_LE(ddt, 1e-12) << variant.name;
         EXPECT_EQ(vec.result.limiting_element, sca.result.limiting_element) << variant.name;
         EXPECT_EQ(vec.result.min_jacobian_element, sca.result.min_jacobian_element) << variant.name;
-        EXPECT_EQ(vec.result.min_jacobian, sca.result.min_jacobian) << variant.name;
+        // The value to a few ulps, not bits: with contraction on (the default build) the compiler may
+        // fuse det F's products differently in the double and the Pack instantiation.
+        EXPECT_LE(rel(vec.result.min_jacobian, sca.result.min_jacobian), 1e-15) << variant.name;
       }
 }
 

@@ -94,7 +94,9 @@ TEST(StableStep, NodalBoundStaysBelowTheTrueLimit) {
         EXPECT_LE(ratio, 1.0);
         EXPECT_LE(nodal_damped.critical_step(), damped_limit);
         EXPECT_GE(nodal.critical_step(), element.critical_step());
-        if (perturbation > 0) EXPECT_GE(ratio, 0.45);
+        if (perturbation > 0) {
+          EXPECT_GE(ratio, 0.45);
+        }
       }
 }
 

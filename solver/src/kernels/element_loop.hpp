@@ -29,6 +29,10 @@
 
 namespace tactus::solver {
 
+// A partition's force buffer holds 4 doubles per node: the force, then the nodal step bound's row
+// sum (unused when the bound is off), so the two scatters of a tet's node touch one cache line.
+inline constexpr std::size_t kForceStride = 4;
+
 // One partition of one material block (internal_force.hpp).
 struct StressKernelArgs {
   const std::int32_t* conn;  // 4 per tet (model numbering)
@@ -41,15 +45,15 @@ struct StressKernelArgs {
   std::size_t begin, end;      // the elements of this call
   const double* u;
   const double* v;  // for the viscous part (beta > 0)
-  double* f;        // the force buffer of this call's partition: node n's force at f[3 (n - f_node_offset)]
+  double* f;        // the force buffer of this call's partition: node n's force at f[kForceStride (n - f_node_offset)]
   std::size_t f_node_offset = 0;
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
-  // The nodal step bound (nullptr: off): each tet adds its rows' sums to its nodes here (node n at
-  // nodal_bound[n - f_node_offset]); ANP tets take their volumetric rows from the nodes' weights
+  // The nodal step bound (false: off): each tet adds its rows' sums to its nodes, after their forces
+  // (f[kForceStride (n - f_node_offset) + 3]); ANP tets take their volumetric rows from the nodes' weights
   // anp_bound_weight (k R_a / (16 V_a), model numbering) and their deviatoric ones from the
   // P-wave modulus less anp_bulk.
-  double* nodal_bound = nullptr;
+  bool nodal_bound = false;
   const double* anp_bound_weight = nullptr;
   double anp_bulk = 0;
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
@@ -289,12 +293,13 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     out.dt_element = smaller ? index : out.dt_element;
   }
 
+  T bound[4]{};  // the nodal step bound's row sums at the tet's nodes, scattered with the forces
   if (a.nodal_bound) {
     // The nodal step bound's row sums (design.md, "The stable step"): node b of the tet gets
     // |d_b| (M t_e / v_e + Q_e), d_b = dv_e/dx_b = V0 cg[b], t_e = sum_b |d_b|, v_e = J V0; M the
     // P-wave modulus (ANP: its deviatoric part) and Q_e the sum of the ANP weights of its nodes.
-    T n[4], t = lanes::splat<T>(0.0);
-    for (int k = 0; k < 4; ++k) n[k] = lanes::sqrt_of(cg[k][0] * cg[k][0] + cg[k][1] * cg[k][1] + cg[k][2] * cg[k][2]), t += n[k];
+    T t = lanes::splat<T>(0.0);
+    for (int k = 0; k < 4; ++k) bound[k] = lanes::sqrt_of(cg[k][0] * cg[k][0] + cg[k][1] * cg[k][1] + cg[k][2] * cg[k][2]), t += bound[k];
     T row = (kAnp ? sp.modulus - a.anp_bulk : sp.modulus) * t / J;
     if constexpr (kAnp) {
       const double* w = a.anp_bound_weight;
@@ -304,9 +309,7 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
       });
     }
     row *= V0;
-    for (int k = 0; k < 4; ++k) n[k] *= row;
-    for (int l = 0; l < L; ++l)  // in element order, node 1, 2, 3 then 0, as the forces
-      for (int k : {1, 2, 3, 0}) a.nodal_bound[static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset] += lanes::lane(n[k], l);
+    for (int k = 0; k < 4; ++k) bound[k] *= row;
   }
 
   T h[4][3];
@@ -318,8 +321,9 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     }
   for (int l = 0; l < L; ++l)  // in element order, node 1, 2, 3 then 0, as the scalar loop always added them
     for (int k : {1, 2, 3, 0}) {
-      double* fa = a.f + 3 * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
+      double* fa = a.f + kForceStride * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
       for (int i = 0; i < 3; ++i) fa[i] += lanes::lane(h[k][i], l);
+      if (a.nodal_bound) fa[3] += lanes::lane(bound[k], l);
     }
 }
 
@@ -342,7 +346,7 @@ void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
         for (int k = 0; k < 4 * lanes::kLanes; ++k) {
           const auto node = static_cast<std::size_t>(a.conn[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]);
           __builtin_prefetch(a.u + 3 * node);
-          __builtin_prefetch(a.f + 3 * (node - a.f_node_offset), 1);
+          __builtin_prefetch(a.f + kForceStride * (node - a.f_node_offset), 1);
         }
       element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);
     }

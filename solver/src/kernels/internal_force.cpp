@@ -201,22 +201,21 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
   // Fixed partitions (independent of the thread count) and the node range each touches; the
   // Morton order of nodes and tets (model.cpp) keeps the ranges short.
-  std::size_t forces = 0, volumes = 0, bounds = 0;
+  std::size_t forces = 0, volumes = 0;
   for (std::size_t k = 0; k < model.blocks.size(); ++k) {
     const MaterialBlock& b = model.blocks[k];
     if (b.material.rigid()) continue;  // moved as rigid bodies (time/rigid.cpp): no stress, no step limit
     const std::size_t n = b.end - b.begin,
                       parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
     for (std::size_t p = 0; p < parts; ++p) {
-      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes, bounds};
+      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes};
       for (std::size_t e = q.begin; e < q.end; ++e)
         for (int a = 0; a < 4; ++a) {
           const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
           q.node_lo = std::min(q.node_lo, node), q.node_hi = std::max(q.node_hi, node + 1);
         }
       if (q.begin == q.end) q.node_lo = q.node_hi = 0;
-      forces += 3 * (q.node_hi - q.node_lo);
-      bounds += q.node_hi - q.node_lo;
+      forces += kForceStride * (q.node_hi - q.node_lo);
       if (b.material.anp()) volumes += q.node_hi - q.node_lo;
       partitions_.push_back(q);
     }
@@ -224,7 +223,6 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   partition_forces_.assign(forces, 0.0);
   partition_volumes_.assign(volumes, 0.0);
   partition_areas_.assign(volumes, 0.0);
-  partition_bound_.assign(bounds, 0.0);
   partition_acc_.resize(partitions_.size());
   chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
   for (std::size_t p = 0; p < partitions_.size(); ++p)
@@ -253,7 +251,7 @@ void InternalForces::enable_mass_scaling() {
 
 std::size_t InternalForces::memory_bytes() const {
   std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity() +
-                   partition_areas_.capacity() + partition_bound_.capacity() + nodal_bound_.capacity() + chunk_bound_.capacity()) *
+                   partition_areas_.capacity() + nodal_bound_.capacity() + chunk_bound_.capacity()) *
                   sizeof(double);
   b += node_moves_.capacity() + chunk_bound_node_.capacity() * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
@@ -354,7 +352,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       const Partition& q = partitions_[p];
       const MaterialBlock& b = model_.blocks[q.block];
       double* f = partition_forces_.data() + q.force_offset;
-      std::fill(f, f + 3 * (q.node_hi - q.node_lo), 0.0);
+      std::fill(f, f + kForceStride * (q.node_hi - q.node_lo), 0.0);
       StressAccumulator acc;
       StressKernelArgs args{model_.conn.data(),
                             model_.grad.data(),
@@ -372,9 +370,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
                             viscous ? beta_ : 0.0};
       args.nodal_pressure = block_pressure_[q.block];
       if (nodal_mass_) {
-        double* rows = partition_bound_.data() + q.bound_offset;
-        std::fill(rows, rows + (q.node_hi - q.node_lo), 0.0);
-        args.nodal_bound = rows;
+        args.nodal_bound = true;
         for (const AnpBlock& an : anp_)
           if (an.block == q.block) args.anp_bound_weight = an.bound_weight.data(), args.anp_bulk = b.material.small_strain_bulk();
       }
@@ -385,12 +381,24 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     }
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      sum_chunk(c, partition_forces_, &Partition::force_offset, 3, f_out, [](const Partition&) { return true; });
-      if (!nodal_mass_) continue;
-      sum_chunk(c, partition_bound_, &Partition::bound_offset, 1, nodal_bound_.data(), [](const Partition&) { return true; });
+      // Each node's force (and row sum) is the partitions' in partition order, whatever the threads.
+      const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
+      std::fill(f_out + 3 * lo, f_out + 3 * hi, 0.0);
+      double* rows = nodal_mass_ ? nodal_bound_.data() : nullptr;
+      if (rows) std::fill(rows + lo, rows + hi, 0.0);
+      for (std::size_t p : chunk_partitions_[c]) {
+        const Partition& q = partitions_[p];
+        const double* theirs = partition_forces_.data() + q.force_offset;
+        for (std::size_t n = std::max(lo, q.node_lo); n < std::min(hi, q.node_hi); ++n) {
+          const double* t = theirs + kForceStride * (n - q.node_lo);
+          for (int i = 0; i < 3; ++i) f_out[3 * n + i] += t[i];
+          if (rows) rows[n] += t[3];
+        }
+      }
+      if (!rows) continue;
       double best = 0;
       std::size_t at = 0;
-      for (std::size_t n = c * kNodeChunk; n < std::min(model_.num_nodes, (c + 1) * kNodeChunk); ++n)
+      for (std::size_t n = lo; n < hi; ++n)
         if (node_moves_[n] && nodal_bound_[n] > best * nodal_mass_[n]) best = nodal_bound_[n] / nodal_mass_[n], at = n;
       chunk_bound_[c] = best, chunk_bound_node_[c] = at;
     }

@@ -140,15 +140,15 @@ class InternalForces {
   int threads_;
   bool vectorised_ = true;
   // A contiguous run of one block's tets, and the node range [node_lo, node_hi) they touch: its
-  // forces go to partition_forces_ from force_offset (3 per node of the range), its current nodal
-  // volumes (ANP blocks) to partition_volumes_ from volume_offset.
-  // Its nodal step bound's row sums go to partition_bound_ from bound_offset (1 per node of the
-  // range), and (ANP blocks) its tets' areas t_e to partition_areas_ from volume_offset.
+  // forces go to partition_forces_ from force_offset, 4 per node of the range: the force and its
+  // nodal step bound's row sum, side by side so the two scatters share a cache line (kernels/
+  // element_loop.hpp); its current nodal volumes (ANP blocks) to partition_volumes_ from
+  // volume_offset, and (ANP blocks) its tets' areas t_e to partition_areas_ from volume_offset.
   struct Partition {
-    std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset, bound_offset;
+    std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
   };
   std::vector<Partition> partitions_;
-  std::vector<double> partition_forces_, partition_volumes_, partition_areas_, partition_bound_;
+  std::vector<double> partition_forces_, partition_volumes_, partition_areas_;
   // Nodal step bound: the masses (nullptr: off), the free nodes, the summed row sums, and per node
   // chunk the largest row sum / mass and its node.
   const double* nodal_mass_ = nullptr;
