@@ -262,16 +262,23 @@ std::size_t InternalForces::memory_bytes() const {
   return b;
 }
 
-template <class Use>
-void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, std::size_t width, double* out,
-                               Use use) const {
+template <std::size_t kStride, std::size_t kWidth, class Use>
+void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, double* out, Use use,
+                               double* extra) const {
+  static_assert(kWidth <= kStride);
   const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
-  std::fill(out + width * lo, out + width * hi, 0.0);
+  std::fill(out + kWidth * lo, out + kWidth * hi, 0.0);
+  if (extra) std::fill(extra + lo, extra + hi, 0.0);
   for (std::size_t p : chunk_partitions_[c]) {
     const Partition& q = partitions_[p];
     if (!use(q)) continue;
     const double* theirs = arrays.data() + q.*offset;
-    for (std::size_t i = width * std::max(lo, q.node_lo); i < width * std::min(hi, q.node_hi); ++i) out[i] += theirs[i - width * q.node_lo];
+    for (std::size_t n = std::max(lo, q.node_lo); n < std::min(hi, q.node_hi); ++n) {
+      const double* t = theirs + kStride * (n - q.node_lo);
+      for (std::size_t i = 0; i < kWidth; ++i) out[kWidth * n + i] += t[i];
+      if constexpr (kWidth < kStride)
+        if (extra) extra[n] += t[kWidth];
+    }
   }
 }
 
@@ -314,11 +321,11 @@ void InternalForces::anp_pass(const double* u) {
     const bool smoothing = b.material.pressure_smoothing() > 0;
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      sum_chunk(c, partition_volumes_, &Partition::volume_offset, 1, a.pressure.data(), own);
+      sum_chunk<1, 1>(c, partition_volumes_, &Partition::volume_offset, a.pressure.data(), own);
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
       if (nodal_mass_) {  // the step bound's weights k R_a / (16 V_a)
         double* w = a.bound_weight.data();
-        sum_chunk(c, partition_areas_, &Partition::volume_offset, 1, w, own);
+        sum_chunk<1, 1>(c, partition_areas_, &Partition::volume_offset, w, own);
         const double k = b.material.small_strain_bulk() / 16;
         for (std::size_t n = lo; n < hi; ++n) w[n] = V[n] > 0 ? k * w[n] / V[n] : 0.0;
       }
@@ -381,21 +388,11 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     }
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      // Each node's force (and row sum) is the partitions' in partition order, whatever the threads.
+      // Each node's force and row sum: the partitions' in partition order, whatever the threads.
+      sum_chunk<kForceStride, 3>(
+          c, partition_forces_, &Partition::force_offset, f_out, [](const Partition&) { return true; }, nodal_mass_ ? nodal_bound_.data() : nullptr);
+      if (!nodal_mass_) continue;
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
-      std::fill(f_out + 3 * lo, f_out + 3 * hi, 0.0);
-      double* rows = nodal_mass_ ? nodal_bound_.data() : nullptr;
-      if (rows) std::fill(rows + lo, rows + hi, 0.0);
-      for (std::size_t p : chunk_partitions_[c]) {
-        const Partition& q = partitions_[p];
-        const double* theirs = partition_forces_.data() + q.force_offset;
-        for (std::size_t n = std::max(lo, q.node_lo); n < std::min(hi, q.node_hi); ++n) {
-          const double* t = theirs + kForceStride * (n - q.node_lo);
-          for (int i = 0; i < 3; ++i) f_out[3 * n + i] += t[i];
-          if (rows) rows[n] += t[3];
-        }
-      }
-      if (!rows) continue;
       double best = 0;
       std::size_t at = 0;
       for (std::size_t n = lo; n < hi; ++n)

@@ -173,10 +173,12 @@ class InternalForces {
   std::vector<double> chunk_anp_energy_;
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);
-  // Node chunk c of `out` (`width` values per node) = the arrays of the partitions meeting it that
-  // `use` accepts (each from its `offset` in `arrays`), summed in partition order.
-  template <class Use>
-  void sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, std::size_t width, double* out, Use use) const;
+  // Node chunk c of `out` (kWidth values per node) = the arrays of the partitions meeting it that
+  // `use` accepts (each from its `offset` in `arrays`, kStride values per node: the first kWidth
+  // to `out`, and value kWidth to `extra` when given), summed in partition order.
+  template <std::size_t kStride, std::size_t kWidth, class Use>
+  void sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, double* out, Use use,
+                 double* extra = nullptr) const;
 };
 
 }  // namespace tactus::solver
