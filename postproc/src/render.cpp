@@ -40,6 +40,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "tactus/core/contracts.hpp"
@@ -384,13 +385,12 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
   return true;
 }
 
-// The contact pressure of state k on body pb, seen along `view` (from the contact partner's side),
-// coloured from 0 to scale_max (unpressed surface grey), its largest value on the body marked.
-// Returns false when the body carries no pressure in that state (no picture written).
-bool pressure_picture(const Results& r, std::size_t k, int pb, const Vec3& view, double scale_max, const Views& v, const fs::path& file,
-                      const RenderOptions& opt) {
-  const auto g = load(r.frames[k].file);
-  const auto body = surface(body_cells(g, pb));
+// The contact pressure of state k on body pb (`body`: its surface in that state), seen along `view`
+// (from the contact partner's side), coloured from 0 to scale_max (unpressed surface grey), its
+// largest value on the body marked. Returns false when the body carries no pressure in that state
+// (no picture written).
+bool pressure_picture(const Results& r, std::size_t k, int pb, vtkPolyData* body, const Vec3& view, double scale_max, const Views& v,
+                      const fs::path& file, const RenderOptions& opt) {
   vtkDataArray* p = body->GetPointData()->GetArray(cp::contact_pressure.name);
   if (!p) return false;
   vtkIdType peak = -1;
@@ -430,9 +430,6 @@ bool pressure_picture(const Results& r, std::size_t k, int pb, const Vec3& view,
   return true;
 }
 
-// The pressed side of body pb in state k: the pressure-weighted outward normal of its surface.
-Vec3 pressed_side_at(const Results& r, std::size_t k, int pb) { return pressed_side(surface(body_cells(load(r.frames[k].file), pb))); }
-
 // pressure.png: the state with the peak pressure at the outputs, seen from its own pressed side.
 // pressure_t<ms>ms.png: every chosen state with contact on that body, on one colour scale (0 to the
 // outputs' peak) and one view (the pressed side of the state with the most nodes in contact), so
@@ -442,16 +439,23 @@ std::vector<std::string> pressure_pictures(const Results& r, const Summary& s, c
   std::vector<std::string> written;
   const int pb = std::max(0, pressure_body(r, s, opt));
   const double scale = s.peak_pressure_outputs.value;
+  std::map<std::size_t, vtkSmartPointer<vtkPolyData>> bodies;  // each state read once
+  const auto body_at = [&](std::size_t k) -> vtkPolyData* {
+    auto& b = bodies[k];
+    if (!b) b = surface(body_cells(load(r.frames[k].file), pb));
+    return b;
+  };
   const std::size_t peak_k = nearest_frame(r, s.peak_pressure_outputs.time);
-  if (pressure_picture(r, peak_k, pb, pressed_side_at(r, peak_k, pb), scale, v, report / "pressure.png", opt)) written.push_back("pressure.png");
+  if (pressure_picture(r, peak_k, pb, body_at(peak_k), pressed_side(body_at(peak_k)), scale, v, report / "pressure.png", opt))
+    written.push_back("pressure.png");
   std::size_t widest = chosen.front();
   for (std::size_t k : chosen)
     if (s.frames[k].contact_nodes > s.frames[widest].contact_nodes) widest = k;
-  const Vec3 view = pressed_side_at(r, widest, pb);
+  const Vec3 view = pressed_side(body_at(widest));
   for (std::size_t k : chosen) {
     if (s.frames[k].contact_nodes == 0) continue;
     const std::string name = "pressure_t" + ms(r.frames[k].time) + "ms.png";
-    if (pressure_picture(r, k, pb, view, scale, v, report / name, opt)) written.push_back(name);
+    if (pressure_picture(r, k, pb, body_at(k), view, scale, v, report / name, opt)) written.push_back(name);
   }
   return written;
 }
