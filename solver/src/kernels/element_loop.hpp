@@ -50,11 +50,11 @@ struct StressKernelArgs {
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
   // The nodal step bound (false: off): each tet adds its rows' sums to its nodes, after their forces
-  // (f[kForceStride (n - f_node_offset) + 3]); ANP tets take their volumetric rows from the nodes' weights
-  // anp_bound_weight (k R_a / (16 V_a), model numbering) and their deviatoric ones from the
-  // P-wave modulus less anp_bulk.
+  // (f[kForceStride (n - f_node_offset) + 3]); ANP tets take their volumetric rows from their constant
+  // factors anp_bound_factor (per tet from block_begin; anp_step_bound_factors) and their
+  // deviatoric ones from the P-wave modulus less anp_bulk.
   bool nodal_bound = false;
-  const double* anp_bound_weight = nullptr;
+  const double* anp_bound_factor = nullptr;
   double anp_bulk = 0;
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
   // its step is computed with, and where its unscaled squared step (no beta) is stored.
@@ -295,19 +295,13 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
 
   T bound[4]{};  // the nodal step bound's row sums at the tet's nodes, scattered with the forces
   if (a.nodal_bound) {
-    // The nodal step bound's row sums (design.md, "The stable step"): node b of the tet gets
-    // |d_b| (M t_e / v_e + Q_e), d_b = dv_e/dx_b = V0 cg[b], t_e = sum_b |d_b|, v_e = J V0; M the
-    // P-wave modulus (ANP: its deviatoric part) and Q_e the sum of the ANP weights of its nodes.
+    // The nodal step bound's row sums (design.md, "Stable step"): node b of the tet gets
+    // |d_b| (M / J + q_e) t_e / V0, d_b = dv_e/dx_b = V0 cg[b], t_e = sum_b |d_b|; M the P-wave
+    // modulus (ANP: its deviatoric part) and q_e the ANP tet's constant volumetric factor (else 0).
     T t = lanes::splat<T>(0.0);
     for (int k = 0; k < 4; ++k) bound[k] = lanes::sqrt_of(cg[k][0] * cg[k][0] + cg[k][1] * cg[k][1] + cg[k][2] * cg[k][2]), t += bound[k];
     T row = (kAnp ? sp.modulus - a.anp_bulk : sp.modulus) * t / J;
-    if constexpr (kAnp) {
-      const double* w = a.anp_bound_weight;
-      row += lanes::make_lanes<T>([&](int l) {
-        const std::int32_t* cl = c + 4 * l;
-        return w[cl[0]] + w[cl[1]] + w[cl[2]] + w[cl[3]];
-      });
-    }
+    if constexpr (kAnp) row += load_strided<T>(a.anp_bound_factor + (e - a.block_begin), 1) * t;
     row *= V0;
     for (int k = 0; k < 4; ++k) bound[k] *= row;
   }

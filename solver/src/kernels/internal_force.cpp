@@ -81,6 +81,33 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
   return V;
 }
 
+// The ANP volumetric part of the nodal step bound (design.md, "Stable step"), per tet of the
+// block: q_e = V0_e Q0_e / t0_e with t0_e = V0_e sum_b |grad_X N_b| (a third of the tet's reference
+// surface area), Q0_e = sum_{a of e} k R0_a / (16 V_a) and R0_a = sum_{e at a} t0_e. The stress
+// pass adds |d_b| q_e t_e / V0_e to node b's row (t_e the current area, from the same norms as the
+// rest of the row): Cauchy-Schwarz on each nodal volume ratio with the reference areas as weights,
+// so nothing of the current state but the tet's own gradients is needed.
+std::vector<double> anp_step_bound_factors(const Model& m, const MaterialBlock& b, const std::vector<double>& V) {
+  std::vector<double> t0(b.end - b.begin), R0(m.num_nodes, 0.0), q(b.end - b.begin);
+  for (std::size_t e = b.begin; e < b.end; ++e) {
+    const double* g = &m.grad[9 * e];
+    double t = std::sqrt(std::pow(g[0] + g[3] + g[6], 2) + std::pow(g[1] + g[4] + g[7], 2) + std::pow(g[2] + g[5] + g[8], 2));
+    for (int k = 0; k < 3; ++k) t += std::sqrt(g[3 * k] * g[3 * k] + g[3 * k + 1] * g[3 * k + 1] + g[3 * k + 2] * g[3 * k + 2]);
+    t0[e - b.begin] = m.volume[e] * t;
+    for (int k = 0; k < 4; ++k) R0[static_cast<std::size_t>(m.conn[4 * e + k])] += t0[e - b.begin];
+  }
+  const double k16 = b.material.small_strain_bulk() / 16;
+  for (std::size_t e = b.begin; e < b.end; ++e) {
+    double Q0 = 0;
+    for (int k = 0; k < 4; ++k) {
+      const auto a = static_cast<std::size_t>(m.conn[4 * e + k]);
+      Q0 += k16 * R0[a] / V[a];
+    }
+    q[e - b.begin] = m.volume[e] * Q0 / t0[e - b.begin];
+  }
+  return q;
+}
+
 // Each tet of [begin, end) adds a quarter of its current volume v = J V0 to its four nodes, v from
 // its current edges from node 0, (X_k - X_0) + (u_k - u_0) (the reference and the displacement
 // differenced apart, so nothing cancels against the absolute coordinates): v = e1 . (e2 x e3) / 6,
@@ -88,8 +115,7 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
 // Not through F = I + grad u and not in SIMD lanes: the pass is gathers and scatters around a few
 // flops, and the nine reference gradients are 72 bytes per tet more to stream (bench: one thread,
 // 10k tets, J pass ~6.2 ns per tet in lanes through F, ~4.5 ns like this).
-void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset,
-                              double* node_area) {
+void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
   const double* X = m.X.data();
   for (std::size_t e = begin; e < end; ++e) {
     const std::int32_t* c = &m.conn[4 * e];
@@ -103,19 +129,6 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
                                            edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
                                            edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
     for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
-    if (!node_area) continue;
-    // 6 dv/dx_k for k = 1, 2, 3: the edge products e2 x e3, e3 x e1, e1 x e2; node 0's is minus their sum.
-    double d[4][3];
-    for (int k = 0; k < 3; ++k) {
-      const double *p = edge[(k + 1) % 3], *q = edge[(k + 2) % 3];
-      d[k + 1][0] = p[1] * q[2] - p[2] * q[1], d[k + 1][1] = p[2] * q[0] - p[0] * q[2], d[k + 1][2] = p[0] * q[1] - p[1] * q[0];
-    }
-    for (int i = 0; i < 3; ++i) d[0][i] = -(d[1][i] + d[2][i] + d[3][i]);
-    lanes::Pack squared;  // the four norms in one vector square root
-    for (int k = 0; k < 4; ++k) squared[k] = d[k][0] * d[k][0] + d[k][1] * d[k][1] + d[k][2] * d[k][2];
-    const lanes::Pack norm = lanes::sqrt_of(squared);
-    const double t = (1.0 / 6.0) * (norm[0] + norm[1] + norm[2] + norm[3]);
-    for (int k = 0; k < 4; ++k) node_area[static_cast<std::size_t>(c[k]) - node_offset] += t;
   }
 }
 
@@ -186,12 +199,8 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   block_pressure_.assign(model.blocks.size(), nullptr);
   for (std::size_t k = 0; k < model.blocks.size(); ++k)
     if (model.blocks[k].material.anp()) {
-      AnpBlock a{k,
-                 anp_reference_node_volumes(model, model.blocks[k]),
-                 std::vector<double>(model.num_nodes, 0.0),
-                 std::vector<double>(model.num_nodes, 0.0),
-                 {},
-                 {}};
+      AnpBlock a{k, anp_reference_node_volumes(model, model.blocks[k]), std::vector<double>(model.num_nodes, 0.0), {}, {}, {}};
+      a.bound_factor = anp_step_bound_factors(model, model.blocks[k], a.reference_volume);
       if (model.blocks[k].material.pressure_smoothing() > 0) {
         a.averaging = NodeAveraging(model, model.blocks[k], a.reference_volume);
         a.smoothed.assign(model.num_nodes, 0.0);
@@ -222,7 +231,6 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   }
   partition_forces_.assign(forces, 0.0);
   partition_volumes_.assign(volumes, 0.0);
-  partition_areas_.assign(volumes, 0.0);
   partition_acc_.resize(partitions_.size());
   chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
   for (std::size_t p = 0; p < partitions_.size(); ++p)
@@ -251,13 +259,13 @@ void InternalForces::enable_mass_scaling() {
 
 std::size_t InternalForces::memory_bytes() const {
   std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity() +
-                   partition_areas_.capacity() + nodal_bound_.capacity() + chunk_bound_.capacity()) *
+                   nodal_bound_.capacity() + chunk_bound_.capacity()) *
                   sizeof(double);
   b += node_moves_.capacity() + chunk_bound_node_.capacity() * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
   for (const auto& a : anp_)
-    b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_weight.capacity() + a.smoothed.capacity()) * sizeof(double) +
+    b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_factor.capacity() + a.smoothed.capacity()) * sizeof(double) +
          a.averaging.memory_bytes();
   return b;
 }
@@ -313,9 +321,7 @@ void InternalForces::anp_pass(const double* u) {
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.volume_offset;
       std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
-      double* areas = nodal_mass_ ? partition_areas_.data() + q.volume_offset : nullptr;
-      if (areas) std::fill(areas, areas + (q.node_hi - q.node_lo), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo, areas);
+      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo);
     }
     // Per node chunk: the partitions' sums, then the pressures (no smoothing) or the volume ratio.
     const bool smoothing = b.material.pressure_smoothing() > 0;
@@ -323,12 +329,6 @@ void InternalForces::anp_pass(const double* u) {
     for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
       sum_chunk<1, 1>(c, partition_volumes_, &Partition::volume_offset, a.pressure.data(), own);
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
-      if (nodal_mass_) {  // the step bound's weights k R_a / (16 V_a)
-        double* w = a.bound_weight.data();
-        sum_chunk<1, 1>(c, partition_areas_, &Partition::volume_offset, w, own);
-        const double k = b.material.small_strain_bulk() / 16;
-        for (std::size_t n = lo; n < hi; ++n) w[n] = V[n] > 0 ? k * w[n] / V[n] : 0.0;
-      }
       if (smoothing)
         divide_by_volume(V, a.pressure.data(), lo, hi);
       else
@@ -379,7 +379,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       if (nodal_mass_) {
         args.nodal_bound = true;
         for (const AnpBlock& an : anp_)
-          if (an.block == q.block) args.anp_bound_weight = an.bound_weight.data(), args.anp_bulk = b.material.small_strain_bulk();
+          if (an.block == q.block) args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
       }
       args.vectorised = vectorised_;
       if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();

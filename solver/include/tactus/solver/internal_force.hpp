@@ -52,10 +52,11 @@ struct StressPassResult {
 // for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
 // node_volume[n - node_offset] receives node n's share.
-// With node_area, each tet also adds t_e = sum_b |d v_e / d x_b| (a third of its current surface
-// area) to each of its four nodes: the nodal step bound's weights (InternalForces).
 void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
-                              std::size_t node_offset = 0, double* node_area = nullptr);
+                              std::size_t node_offset = 0);
+// Per tet of the block (from its first): the constant factor of its ANP volumetric rows in the
+// nodal step bound (InternalForces; design.md, "Stable step").
+std::vector<double> anp_step_bound_factors(const Model& model, const MaterialBlock& block, const std::vector<double>& node_reference_volume);
 std::vector<double> anp_nodal_pressure(const Model& model, const MaterialBlock& block, const double* u);
 
 // One pass of the pressure smoothing of an ANP block, node -> tet -> node and V-weighted, as a
@@ -143,12 +144,12 @@ class InternalForces {
   // forces go to partition_forces_ from force_offset, 4 per node of the range: the force and its
   // nodal step bound's row sum, side by side so the two scatters share a cache line (kernels/
   // element_loop.hpp); its current nodal volumes (ANP blocks) to partition_volumes_ from
-  // volume_offset, and (ANP blocks) its tets' areas t_e to partition_areas_ from volume_offset.
+  // volume_offset.
   struct Partition {
     std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
   };
   std::vector<Partition> partitions_;
-  std::vector<double> partition_forces_, partition_volumes_, partition_areas_;
+  std::vector<double> partition_forces_, partition_volumes_;
   // Nodal step bound: the masses (nullptr: off), the free nodes, the summed row sums, and per node
   // chunk the largest row sum / mass and its node.
   const double* nodal_mass_ = nullptr;
@@ -160,13 +161,14 @@ class InternalForces {
   std::vector<std::vector<std::size_t>> chunk_partitions_;
   // ANP blocks: their nodal reference volumes and, per step, the nodal pressures (which first
   // hold the current nodal volumes); per node chunk, that chunk's part of the volumetric energy.
-  // bound_weight: the nodal step bound's weight of each node, k R_a / (16 V_a) (R_a: the sum of
-  // the areas t_e of the block's tets at a).
+  // bound_factor: per tet of the block, the constant factor of its volumetric rows in the nodal
+  // step bound (anp_step_bound_factors).
   struct AnpBlock {
     std::size_t block;
-    std::vector<double> reference_volume, pressure, bound_weight;
+    std::vector<double> reference_volume, pressure;
     NodeAveraging averaging;       // with pressure smoothing only
     std::vector<double> smoothed;  // the other buffer of the smoothing passes (num_nodes; with smoothing only)
+    std::vector<double> bound_factor;
   };
   std::vector<AnpBlock> anp_;
   std::vector<const double*> block_pressure_;  // per block: its AnpBlock's pressure, or nullptr
