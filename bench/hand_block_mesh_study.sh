@@ -5,12 +5,18 @@
 # pressure at each output, side by side, with the differences the contact issue asks for (force
 # and area within 10 %, 25 mm^2 peak within 15 %), the same for the windowed force and area, and
 # each run's contact impulse over the whole run (the time integral of the normal force).
-#   bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [labels.h5]
+#   bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [labels.h5]
 #     labels.h5    default: the demo's out/pipeline/segment/labels.h5
 #     --scenario   default: pipeline/scenarios/hand_block.toml. With rigid bones the study is
 #                  cheaper (pipeline/scenarios/hand_block_rigid.toml), and a copy with
 #                  `formulation = "standard"` or `pressure_smoothing = 0` compares the soft-tissue tets.
 #     --levels 3   also a mesh refined by 0.49x (about 150k tets).
+#     --ensemble N N runs per mesh, the first as given, the others with the bodies' initial
+#                  velocities scaled by 1 + k 1e-6 (k = 1 .. N-1): a change of the input far below
+#                  anything physical, so the spread of the results over the N runs is how much the
+#                  impact amplifies a last-bit difference (the step's, the summation order's). Prints
+#                  each figure's mean and spread per mesh and the meshes' difference of means beside
+#                  the spread: a difference between meshes below the spread cannot be told from it.
 # Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder). On 2 cores
 # about 3 min for two levels of the rigid-bone case, 5 min with deformable bones (smoothed ANP);
 # the third level takes 5-10 min with rigid bones, 9 min with deformable ones.
@@ -19,16 +25,19 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
 SCENARIO=$ROOT/pipeline/scenarios/hand_block.toml
 LEVELS=2
+ENSEMBLE=1
 LABELS=$ROOT/out/pipeline/segment/labels.h5
 while [ $# -gt 0 ]; do
   case "$1" in
     --scenario) SCENARIO=$(cd "$(dirname "$2")" && pwd)/$(basename "$2"); shift 2 ;;
     --levels) LEVELS=$2; shift 2 ;;
-    -*) echo "usage: bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [labels.h5]" >&2; exit 2 ;;
+    --ensemble) ENSEMBLE=$2; shift 2 ;;
+    -*) echo "usage: bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [labels.h5]" >&2; exit 2 ;;
     *) LABELS=$1; shift ;;
   esac
 done
 [ "$LEVELS" = 2 ] || [ "$LEVELS" = 3 ] || { echo "--levels: 2 or 3" >&2; exit 2; }
+[[ "$ENSEMBLE" =~ ^[1-9]$ ]] || { echo "--ensemble: 1 to 9 runs per mesh" >&2; exit 2; }
 [ -f "$SCENARIO" ] || { echo "no scenario $SCENARIO" >&2; exit 2; }
 [ -f "$LABELS" ] || { echo "no $LABELS: run scripts/demo.sh first, or pass a labels.h5" >&2; exit 2; }
 W=${WORK:-$(mktemp -d)}
@@ -51,13 +60,29 @@ for name in "${names[@]}"; do
   "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size "$block" -o "$W/$name/object/block.msh" -q
   echo "== $name mesh: solving $(basename "$SCENARIO")"
   "$B/solver/tactus-solve" "$SCENARIO" --meshes "$W/$name" -o "$W/$name/out" -q
+  for ((k = 1; k < ENSEMBLE; k++)); do
+    # The same scenario with every initial_velocity scaled by 1 + k 1e-6 (mesh paths resolve from --meshes).
+    /usr/bin/python3 - "$SCENARIO" "$W/$name/scenario_$k.toml" "$k" <<'PY'
+import re, sys
+text, k = open(sys.argv[1]).read(), int(sys.argv[3])
+def scaled(m):
+    values = [float(v) * (1 + k * 1e-6) for v in m.group(2).split(",")]
+    return m.group(1) + ", ".join(repr(v) for v in values) + "]"
+text, n = re.subn(r"^(\s*initial_velocity\s*=\s*\[)([^\]]*)\]", scaled, text, flags=re.M)
+if n == 0:
+    sys.exit(f"{sys.argv[1]}: no initial_velocity to perturb for --ensemble")
+open(sys.argv[2], "w").write(text)
+PY
+    echo "== $name mesh: ensemble run $((k + 1)) of $ENSEMBLE (initial velocities x (1 + $k e-6))"
+    "$B/solver/tactus-solve" "$W/$name/scenario_$k.toml" --meshes "$W/$name" -o "$W/$name/out_$k" -q
+  done
 done
-/usr/bin/python3 - "$ROOT/bench" "$W" "${names[@]}" <<'PY'
+/usr/bin/python3 - "$ROOT/bench" "$W" "$ENSEMBLE" "${names[@]}" <<'PY'
 import json, sys
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, sys.argv[1])
 from history_kit import centred_mean, read_columns, time_integral
-w, names = sys.argv[2], sys.argv[3:]
+w, ensemble, names = sys.argv[2], int(sys.argv[3]), sys.argv[4:]
 runs = {n: json.load(open(f"{w}/{n}/out/run.json")) for n in names}
 # Each history read once (the 0.49x run's is ~150 MB): time, normal force, area.
 histories = {n: read_columns(f"{w}/{n}/out/history.csv", "contact_normal_force", "contact_area") for n in names}
@@ -94,4 +119,37 @@ for i, t in enumerate(times):
     area = [low[n][1][i] * 1e6 for n in names]
     print(f"| {t * 1e3:.0f} | " + " / ".join(f"{x:.0f}" for x in force) + " | " + ", ".join(rel(x, y) for x, y in zip(force, force[1:])) +
           " | " + " / ".join(f"{x:.0f}" for x in area) + " | " + ", ".join(rel(x, y) for x, y in zip(area, area[1:])) + " |")
+if ensemble > 1:
+    # Each figure per member of each mesh's ensemble: +-0.25 ms force and area, windowed force and
+    # area, 25 mm^2 peak; its mean and spread (max - min) per mesh, then the difference of the
+    # meshes' means beside the larger of their spreads (both relative to the first mesh's mean).
+    def member_dirs(n):
+        return [f"{w}/{n}/out"] + [f"{w}/{n}/out_{k}" for k in range(1, ensemble)]
+    figures = {}
+    for n in names:
+        rows = []
+        for d in member_dirs(n):
+            t, force, area = read_columns(f"{d}/history.csv", "contact_normal_force", "contact_area")
+            outs = json.load(open(f"{d}/run.json"))["contact"]["at_outputs"]
+            fl, al = centred_mean(t, force, times, 2.5e-4), centred_mean(t, area, times, 2.5e-4)
+            rows.append([(fl[i], 1e6 * al[i], o["windowed_normal_force"], 1e6 * o["windowed_area"], 1e-6 * o["averaged_peak_pressure"])
+                         for i, o in enumerate(outs)])
+            print(f"{n} member {len(rows)}: {json.load(open(f'{d}/run.json'))['steps']} steps, contact impulse {time_integral(t, force):.4f} N s")
+        figures[n] = rows
+    labels = ("force +-0.25 ms (N)", "area +-0.25 ms (mm^2)", "windowed force (N)", "windowed area (mm^2)", "25 mm^2 peak (MPa)")
+    print(f"\nensembles of {ensemble} runs per mesh (initial velocities x (1 + k 1e-6)): mean [min, max] per mesh; "
+          "between meshes the difference of means and the larger ensemble spread, both relative to the first mesh's mean")
+    for q, label in enumerate(labels):
+        print(f"\n{label}:")
+        print("| t (ms) | " + " | ".join(names) + " | " + " | ".join(f"{a} / {b}: diff, spread" for a, b in zip(names, names[1:])) + " |")
+        print("|---|" + "---|" * (2 * len(names) - 1))
+        for i, t in enumerate(times):
+            stats = []
+            for n in names:
+                v = [rows[i][q] for rows in figures[n]]
+                stats.append((sum(v) / len(v), min(v), max(v)))
+            cells = [f"{1e3 * t:.0f}"] + [f"{m:.3g} [{lo:.3g}, {hi:.3g}]" for m, lo, hi in stats]
+            for (ma, la, ha), (mb, lb, hb) in zip(stats, stats[1:]):
+                cells.append(f"{100 * (mb / ma - 1):+.1f} %, {100 * max(ha - la, hb - lb) / ma:.1f} %" if ma else "-")
+            print("| " + " | ".join(cells) + " |")
 PY
