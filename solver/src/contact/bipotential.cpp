@@ -201,8 +201,9 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
   // below the tolerance; the full sweeps then go on. A step converged within kFocusEvery sweeps is
   // unchanged by this.
   constexpr int kFocusEvery = 30, kFocusSweeps = 2000;
-  std::vector<std::size_t> creeping;
-  std::vector<double> change(K, 0.0);
+  std::vector<std::size_t>& creeping = rows.creeping;
+  std::vector<double>& change = rows.change;
+  change.assign(K, 0.0);
   double residual = 0;
   int it = 0;
   for (it = 1; it <= in.settings->max_iterations; ++it) {

@@ -93,6 +93,10 @@ struct ContactRows {
   std::vector<double> reaction;    // 3 per row, N (force at t^n)
   std::vector<double> compliance;  // w
   std::vector<ContactStatus> status;
+  // Scratch of the solve, kept so that no step allocates: each row's change in the last sweep,
+  // and the rows swept alone when the sweep creeps (contact/bipotential.cpp).
+  std::vector<double> change;
+  std::vector<std::size_t> creeping;
 
   void clear();
   std::size_t size() const { return pair.size(); }
