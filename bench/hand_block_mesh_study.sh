@@ -123,18 +123,20 @@ if ensemble > 1:
     # Each figure per member of each mesh's ensemble: +-0.25 ms force and area, windowed force and
     # area, 25 mm^2 peak; its mean and spread (max - min) per mesh, then the difference of the
     # meshes' means beside the larger of their spreads (both relative to the first mesh's mean).
-    def member_dirs(n):
-        return [f"{w}/{n}/out"] + [f"{w}/{n}/out_{k}" for k in range(1, ensemble)]
+    # The first member is the run above (its history and run.json already read); each file once.
+    def members(n):
+        yield runs[n], histories[n]
+        for k in range(1, ensemble):
+            d = f"{w}/{n}/out_{k}"
+            yield json.load(open(f"{d}/run.json")), read_columns(f"{d}/history.csv", "contact_normal_force", "contact_area")
     figures = {}
     for n in names:
         rows = []
-        for d in member_dirs(n):
-            t, force, area = read_columns(f"{d}/history.csv", "contact_normal_force", "contact_area")
-            outs = json.load(open(f"{d}/run.json"))["contact"]["at_outputs"]
+        for run, (t, force, area) in members(n):
             fl, al = centred_mean(t, force, times, 2.5e-4), centred_mean(t, area, times, 2.5e-4)
             rows.append([(fl[i], 1e6 * al[i], o["windowed_normal_force"], 1e6 * o["windowed_area"], 1e-6 * o["averaged_peak_pressure"])
-                         for i, o in enumerate(outs)])
-            print(f"{n} member {len(rows)}: {json.load(open(f'{d}/run.json'))['steps']} steps, contact impulse {time_integral(t, force):.4f} N s")
+                         for i, o in enumerate(run["contact"]["at_outputs"])])
+            print(f"{n} member {len(rows)}: {run['steps']} steps, contact impulse {time_integral(t, force):.4f} N s")
         figures[n] = rows
     labels = ("force +-0.25 ms (N)", "area +-0.25 ms (mm^2)", "windowed force (N)", "windowed area (mm^2)", "25 mm^2 peak (MPa)")
     print(f"\nensembles of {ensemble} runs per mesh (initial velocities x (1 + k 1e-6)): mean [min, max] per mesh; "
