@@ -105,6 +105,16 @@ for a_name, b_name in zip(names, names[1:]):
                                    ("averaged_peak_pressure", 1e-6, 2)):
             cells += [f"{scale * a[key]:.{digits}f} / {scale * b[key]:.{digits}f}", rel(a[key], b[key])]
         print("| " + " | ".join(cells) + " |")
+# Where each mesh's 25 mm^2 peak sits (current coordinates, run.json's averaged_at) and how far apart
+# the meshes' sites are: a peak that moves between meshes is a different contact, not a converging one.
+print("\nwhere the 25 mm^2 peak is (current position, mm), " + " / ".join(names) + ", and the distance between sites:")
+print("| t (ms) | " + " | ".join(names) + " | distances (mm) |")
+print("|---|" + "---|" * len(names) + "---|")
+for i, o in enumerate(runs[names[0]]["contact"]["at_outputs"]):
+    sites = [runs[n]["contact"]["at_outputs"][i]["averaged_at"] for n in names]
+    gaps = [sum((1e3 * (p - q)) ** 2 for p, q in zip(a, b)) ** 0.5 for a, b in zip(sites, sites[1:])]
+    print(f"| {o['time'] * 1e3:.0f} | " + " | ".join("(" + ", ".join(f"{1e3 * c:.1f}" for c in s) + ")" for s in sites) + " | " +
+          ", ".join(f"{g:.1f}" for g in gaps) + " |")
 # The same at a lower bandwidth: force and area averaged over +-0.25 ms about each output. The
 # windowed values above average over the pressure window (10 us by default), which passes the
 # block's and the bones' ringing (tens of kHz) that differs from mesh to mesh.

@@ -150,6 +150,10 @@ int main(int argc, char** argv) {
   app.add_option("--facet-size", p.facet_size_mm, "max surface triangle size, mm")->capture_default_str();
   app.add_option("--bone-facet-size", p.bone_facet_size_mm, "max triangle size on bone surfaces, mm")->capture_default_str();
   app.add_option("--facet-distance", p.facet_distance_mm, "surface approximation error, mm")->capture_default_str();
+  app.add_option("--smooth-boundaries", p.boundary_smoothing_voxels,
+                 "Gaussian sigma (voxels, 0-3) of the label indicators: boundaries between voxel centres instead of the voxels' staircase "
+                 "(0: off)")
+      ->capture_default_str();
   app.add_option("--radius-edge", p.cell_radius_edge, "max cell radius-edge ratio")->capture_default_str();
   app.add_option("--cell-size", p.cell_size_mm, "soft-tissue cell size, mm")->capture_default_str();
   app.add_option("--bone-cell-size", p.bone_cell_size_mm, "bone cell size, mm")->capture_default_str();

@@ -12,6 +12,7 @@
 #include <CGAL/refine_mesh_3.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -67,6 +68,8 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
   check(p.cell_size_mm > 0, "cell_size", "a size > 0 mm", p.cell_size_mm);
   check(p.bone_cell_size_mm > 0, "bone_cell_size", "a size > 0 mm", p.bone_cell_size_mm);
   check(p.bone_facet_size_mm > 0, "bone_facet_size", "a size > 0 mm", p.bone_facet_size_mm);
+  check(p.boundary_smoothing_voxels >= 0 && p.boundary_smoothing_voxels <= 3, "boundary_smoothing", "a sigma in [0, 3] voxels",
+        p.boundary_smoothing_voxels);
   validate_volume_geometry(labels.dims, labels.spacing, labels.origin, 1, "labels", "/labels");
   std::size_t tissue = 0, nonzero = 0;
   for (auto v : labels.data) tissue += v == contracts::kSoftTissueLabel, nonzero += v != 0;
@@ -97,6 +100,72 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
   }
 }
 
+// Smoothed boundaries between labels: per voxel, the Gaussian-weighted share (sigma in voxels,
+// truncated at 3 sigma) of its neighbourhood that has its own label, as 0-255. CGAL's weighted
+// labelled-image domain interpolates, for each label, w at the voxels of that label and 255 - w
+// at the others, and a point takes the label that interpolates highest: the boundaries follow the
+// smoothed indicators' crossing between voxel centres instead of the voxels' faces. Without it a
+// surface at a shallow angle to the grid is a staircase of one-voxel terraces, which a fine
+// facet distance follows; contact then starts on the terraces' edges (README, the hand-block mesh
+// study). (CGAL's own generate_label_weights needs ITK.) Each label's indicator is blurred in its
+// bounding box grown by the kernel, axis by axis; the voxels away from any boundary get 255.
+CGAL::Image_3 boundary_weights(const Volume<std::uint8_t>& labels, double sigma) {
+  const std::size_t nx = static_cast<std::size_t>(labels.dims[0]), ny = static_cast<std::size_t>(labels.dims[1]),
+                    nz = static_cast<std::size_t>(labels.dims[2]);
+  _image* im = _createImage(nx, ny, nz, 1, labels.spacing[0] * 1e3, labels.spacing[1] * 1e3, labels.spacing[2] * 1e3, 1, WK_FIXED, SGN_UNSIGNED);
+  auto* w = static_cast<std::uint8_t*>(im->data);
+  std::fill(w, w + labels.size(), std::uint8_t{255});
+  const int r = static_cast<int>(std::ceil(3 * sigma));
+  std::vector<double> kernel(static_cast<std::size_t>(2 * r + 1));
+  double sum = 0;
+  for (int i = -r; i <= r; ++i) sum += kernel[static_cast<std::size_t>(i + r)] = std::exp(-0.5 * i * i / (sigma * sigma));
+  for (double& k : kernel) k /= sum;
+  // Bounding boxes of the labels (voxel index ranges).
+  std::map<int, std::array<std::size_t, 6>> box;
+  for (std::size_t z = 0, at = 0; z < nz; ++z)
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x, ++at) {
+        auto [it, fresh] = box.try_emplace(labels.data[at], std::array<std::size_t, 6>{x, y, z, x, y, z});
+        auto& b = it->second;
+        if (!fresh) b = {std::min(b[0], x), std::min(b[1], y), std::min(b[2], z), std::max(b[3], x), std::max(b[4], y), std::max(b[5], z)};
+      }
+  std::vector<float> f, g;
+  for (const auto& [label, b] : box) {
+    const std::size_t lo[3] = {b[0] > static_cast<std::size_t>(r) ? b[0] - r : 0, b[1] > static_cast<std::size_t>(r) ? b[1] - r : 0,
+                               b[2] > static_cast<std::size_t>(r) ? b[2] - r : 0};
+    const std::size_t hi[3] = {std::min(nx, b[3] + r + 1), std::min(ny, b[4] + r + 1), std::min(nz, b[5] + r + 1)};
+    const std::size_t n[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    f.assign(n[0] * n[1] * n[2], 0.0f);
+    for (std::size_t z = 0; z < n[2]; ++z)
+      for (std::size_t y = 0; y < n[1]; ++y)
+        for (std::size_t x = 0; x < n[0]; ++x)
+          f[(z * n[1] + y) * n[0] + x] = labels.data[((z + lo[2]) * ny + y + lo[1]) * nx + x + lo[0]] == label ? 1.0f : 0.0f;
+    // Axis by axis; outside the image the indicator is its edge voxel's (clamped).
+    const std::size_t stride[3] = {1, n[0], n[0] * n[1]};
+    for (int axis = 0; axis < 3; ++axis) {
+      g.assign(f.size(), 0.0f);
+      const std::size_t len = n[axis], s = stride[axis];
+      for (std::size_t at = 0; at < f.size(); ++at) {
+        const std::size_t i = (at / s) % len, base = at - i * s;
+        double v = 0;
+        for (int k = -r; k <= r; ++k) {
+          const auto j = static_cast<std::size_t>(std::clamp<long>(static_cast<long>(i) + k, 0, static_cast<long>(len) - 1));
+          v += kernel[static_cast<std::size_t>(k + r)] * f[base + j * s];
+        }
+        g[at] = static_cast<float>(v);
+      }
+      f.swap(g);
+    }
+    for (std::size_t z = 0; z < n[2]; ++z)
+      for (std::size_t y = 0; y < n[1]; ++y)
+        for (std::size_t x = 0; x < n[0]; ++x) {
+          const std::size_t at = ((z + lo[2]) * ny + y + lo[1]) * nx + x + lo[0];
+          if (labels.data[at] == label) w[at] = static_cast<std::uint8_t>(std::lround(255 * std::clamp(f[(z * n[1] + y) * n[0] + x], 0.0f, 1.0f)));
+        }
+  }
+  return CGAL::Image_3(im);
+}
+
 // CGAL's labelled-image mesher on the labels (in millimetres: CGAL's criteria are absolute
 // lengths), the steps of mesh_label_volume.
 class CgalImageMesher {
@@ -106,8 +175,10 @@ class CgalImageMesher {
         table_(table),
         p_(p),
         image_(make_image(labels)),
+        weights_(p.boundary_smoothing_voxels > 0 ? boundary_weights(labels, p.boundary_smoothing_voxels) : CGAL::Image_3()),
         seed_(reseed(p.seed)),
-        domain_(Domain::create_labeled_image_mesh_domain(image_, CGAL::parameters::relative_error_bound = 1e-6, CGAL::parameters::value_outside = 0)),
+        domain_(Domain::create_labeled_image_mesh_domain(image_, CGAL::parameters::relative_error_bound = 1e-6, CGAL::parameters::weights = weights_,
+                                                         CGAL::parameters::value_outside = 0)),
         size_(p.cell_size_mm),
         facet_size_(p.facet_size_mm) {
     // Finer cells in bone, and finer facets on the bone surfaces: facets are chords of the
@@ -272,6 +343,7 @@ class CgalImageMesher {
   const LabelTable& table_;
   const ImageMeshParams& p_;
   CGAL::Image_3 image_;
+  CGAL::Image_3 weights_;  // invalid unless boundary_smoothing_voxels > 0; the domain reads it (declared before it)
   unsigned seed_;
   Domain domain_;
   SizeField size_, facet_size_;

@@ -314,3 +314,48 @@ TEST(ImageMesher, SmallRegionsAreAbsorbedIntoTheirSurroundings) {
   EXPECT_EQ(bone, 27u);
   EXPECT_EQ(speck, 0u);
 }
+
+// Smoothed label boundaries (ImageMeshParams::boundary_smoothing_voxels): a ball of radius 9.3
+// voxels (1 mm voxels, centre off the lattice) meshed with a facet distance well below a voxel
+// follows the voxels' staircase without smoothing; with the indicators smoothed (sigma = 1 voxel)
+// the skin lies on a sphere. Oracle: each skin node's distance from the centre against the radius
+// of the sphere with the voxels' volume (the mesher restores the label volume either way).
+TEST(ImageMesher, SmoothedBoundariesLieOnTheSphereTheVoxelsSample) {
+  Volume<std::uint8_t> v({26, 26, 26}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 0);
+  const double c[3] = {12.37, 12.61, 12.83}, R = 9.3;
+  std::size_t inside = 0;
+  for (int z = 0; z < 26; ++z)
+    for (int y = 0; y < 26; ++y)
+      for (int x = 0; x < 26; ++x)
+        if (std::hypot(x - c[0], y - c[1], z - c[2]) <= R) v.at(x, y, z) = 1, ++inside;
+  const double r_equal = std::cbrt(3.0 * static_cast<double>(inside) / (4.0 * M_PI));  // voxels = mm
+  auto deviation = [&](double sigma) {
+    mesher::ImageMeshParams p;
+    p.facet_size_mm = 1.5, p.facet_distance_mm = 0.1, p.cell_size_mm = 3.0, p.boundary_smoothing_voxels = sigma;
+    const TetMesh m = mesher::mesh_label_volume(v, {}, p);
+    std::set<int> skin;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+      if (m.triangle_group[t] == mesher::kSkinTag) skin.insert(m.triangles[t].begin(), m.triangles[t].end());
+    double sum2 = 0, worst = 0;
+    for (int n : skin) {
+      const auto& x = m.nodes[static_cast<std::size_t>(n)];
+      const double d = std::hypot(1e3 * x[0] - c[0], 1e3 * x[1] - c[1], 1e3 * x[2] - c[2]) - r_equal;
+      sum2 += d * d, worst = std::max(worst, std::abs(d));
+    }
+    const double rms = std::sqrt(sum2 / static_cast<double>(skin.size()));
+    std::printf("sigma %.1f voxel: %zu skin nodes, distance to the %.3f mm sphere RMS %.3f mm, largest %.3f mm\n", sigma, skin.size(), r_equal, rms,
+                worst);
+    return std::make_pair(rms, worst);
+  };
+  const auto [staircase_rms, staircase_worst] = deviation(0);
+  const auto [smooth_rms, smooth_worst] = deviation(1.0);
+  EXPECT_GT(staircase_rms, 0.1);
+  EXPECT_LT(smooth_rms, 0.5 * staircase_rms);
+  EXPECT_LT(smooth_worst, staircase_worst);
+}
+
+TEST(ImageMesherErrors, BoundarySmoothingOutOfRange) {
+  mesher::ImageMeshParams p;
+  p.boundary_smoothing_voxels = 4;
+  expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"boundary_smoothing", "[0, 3] voxels"});
+}

@@ -16,6 +16,9 @@ struct ImageMeshParams {
   double facet_size_mm = 4.0;       // upper bound on surface triangle circumradius (skin)
   double bone_facet_size_mm = 3.0;  // the same on the bone / soft-tissue interfaces
   double facet_distance_mm = 0.6;   // surface approximation error bound
+  // Gaussian sigma, in voxels, of the label indicators that place the boundaries (0: each point
+  // takes its nearest voxel's label, and surfaces follow the voxels' staircase; see image_mesher.cpp).
+  double boundary_smoothing_voxels = 0;
   double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
   double cell_size_mm = 7.0;        // soft tissue cell circumradius bound
   double bone_cell_size_mm = 3.5;   // the same in bones (finer)
