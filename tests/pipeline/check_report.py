@@ -4,7 +4,8 @@
     check_report.py <solve folder> <report folder> [--expect-contact | --expect-no-contact]
 
 Oracles: the peak von Mises per material and the peak contact pressure over the output states are
-recomputed here from the .vtu files with VTK's own reader (not tactus' code); the peak contact
+recomputed here from the .vtu files with VTK's own reader (not tactus' code), and so is the
+pressure averaged over 25 mm^2 at each output (bench/pressure_sites.py, in numpy); the peak contact
 force and largest area from history.csv / run.json; the energy balance error must stay within
 2 % of the initial kinetic energy, and the run must have completed (no inverted element).
 """
@@ -17,7 +18,10 @@ import xml.etree.ElementTree as ET
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "bench"))
+from pressure_sites import Field  # noqa: E402
 from tactus_contracts import cell_field, history_column, point_field, run_key  # noqa: E402
 
 
@@ -84,6 +88,18 @@ elif expect == "--expect-contact":
         fail(f"peak force {contact['peak_force']['value']} below the history's {force}")
     close(contact["peak_force"]["value"], run[run_key("contact")]["peak_force"]["value"], what="peak contact force (every step)")
     close(contact["largest_area"]["value"], run["contact"]["peak_area"]["value"], what="largest contact area")
+    # The 25 mm^2 sensor average at each output: the largest over the pressed skin nodes, and where.
+    states = {round(float(ds.get("timestep")), 9): os.path.join(solve, ds.get("file"))
+              for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet")}
+    for o in run["contact"]["at_outputs"]:
+        field = Field(states[round(o["time"], 9)], run["contact"]["pressure_average_area"])
+        best = field.sites(count=1)
+        value = best[0][1] if best else 0.0
+        close(o["averaged_peak_pressure"], value, rel=1e-6, what=f"25 mm^2 peak pressure at {1e3 * o['time']:g} ms")
+        if best:
+            at = field.state["x"][best[0][0]]
+            if max(abs(a - b) for a, b in zip(o["averaged_at"], at)) > 1e-9:
+                fail(f"25 mm^2 peak at {1e3 * o['time']:g} ms: run.json says {o['averaged_at']}, recomputed {list(at)}")
 for pic in summary["pictures"]:
     path = os.path.join(report, pic)
     if not os.path.exists(path) or os.path.getsize(path) < 2000:
