@@ -106,7 +106,7 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
 // at the others, and a point takes the label that interpolates highest: the boundaries follow the
 // smoothed indicators' crossing between voxel centres instead of the voxels' faces. Without it a
 // surface at a shallow angle to the grid is a staircase of one-voxel terraces, which a fine
-// facet distance follows; contact then starts on the terraces' edges (README, the hand-block mesh
+// facet distance follows; contact then concentrates on the terraces (README, the hand-block mesh
 // study). (CGAL's own generate_label_weights needs ITK.) Each label's indicator is blurred in its
 // bounding box grown by the kernel, axis by axis; the voxels away from any boundary get 255.
 CGAL::Image_3 boundary_weights(const Volume<std::uint8_t>& labels, double sigma) {
