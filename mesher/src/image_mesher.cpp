@@ -120,7 +120,6 @@ CGAL::Image_3 boundary_weights(const Volume<std::uint8_t>& labels, double sigma)
   double sum = 0;
   for (int i = -r; i <= r; ++i) sum += kernel[static_cast<std::size_t>(i + r)] = std::exp(-0.5 * i * i / (sigma * sigma));
   for (double& k : kernel) k /= sum;
-  log::verbose() << "mesher: label boundaries on Gaussian-smoothed indicators (sigma " << sigma << " voxel, kernel radius " << r << ")";
   // Bounding boxes of the labels (voxel index ranges).
   std::map<int, std::array<std::size_t, 6>> box;
   for (std::size_t z = 0, at = 0; z < nz; ++z)
