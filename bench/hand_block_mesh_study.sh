@@ -123,12 +123,8 @@ for i, o in enumerate(runs[names[0]]["contact"]["at_outputs"]):
 # sites (at least 10 mm apart), each taken on the other meshes about the skin node nearest to it
 # in the reference configuration (bench/pressure_sites.py, the solver's average recomputed from the
 # state files). The largest average above is a maximum over sites; this compares the field.
-import re
-from pressure_sites import Field
-def state_files(n):
-    text = open(f"{w}/{n}/out/results.pvd").read()
-    return {round(float(t), 9): f"{w}/{n}/out/{f}" for t, f in re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', text)}
-files = {n: state_files(n) for n in names}
+from pressure_sites import Field, state_files
+files = {n: state_files(f"{w}/{n}/out") for n in names}
 print("\n25 mm^2 averages (MPa) at the " + names[-1] + " mesh's three highest sites, on each mesh (" + " / ".join(names) + "):")
 print("| t (ms) | site (x, y, z at " + names[-1] + ", mm) | " + " / ".join(names) + " | diffs |")
 print("|---|---|---|---|")

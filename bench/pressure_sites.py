@@ -8,11 +8,20 @@ so that two meshes can be compared at the same material points rather than each 
 the largest average is a maximum over sites, and when several sites are nearly tied each mesh may
 report a different one.
 """
+import os
+import xml.etree.ElementTree as ET
+
 import numpy as np
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
 CUTS = 8
+
+
+def state_files(solve):
+    """A solve folder's output states from its results.pvd: {time (s, rounded to 1e-9): .vtu path}, in time order."""
+    return {round(float(ds.get("timestep")), 9): os.path.join(solve, ds.get("file"))
+            for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet")}
 
 
 def read_state(path):

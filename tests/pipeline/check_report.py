@@ -13,7 +13,6 @@ import csv
 import json
 import os
 import sys
-import xml.etree.ElementTree as ET
 
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
@@ -21,7 +20,7 @@ from vtk.util.numpy_support import vtk_to_numpy
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "bench"))
-from pressure_sites import Field  # noqa: E402
+from pressure_sites import Field, state_files  # noqa: E402
 from tactus_contracts import cell_field, history_column, point_field, run_key  # noqa: E402
 
 
@@ -46,9 +45,10 @@ if run[run_key("status")] != "completed":
 materials = run[run_key("materials")]
 vm_peak = {m: 0.0 for m in materials}
 p_peak = 0.0
-for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet"):
+states = state_files(solve)
+for path in states.values():
     r = vtk.vtkXMLUnstructuredGridReader()
-    r.SetFileName(os.path.join(solve, ds.get("file")))
+    r.SetFileName(path)
     r.Update()
     g = r.GetOutput()
     vm = vtk_to_numpy(g.GetCellData().GetArray(cell_field("von_mises")))
@@ -89,8 +89,6 @@ elif expect == "--expect-contact":
     close(contact["peak_force"]["value"], run[run_key("contact")]["peak_force"]["value"], what="peak contact force (every step)")
     close(contact["largest_area"]["value"], run["contact"]["peak_area"]["value"], what="largest contact area")
     # The 25 mm^2 sensor average at each output: the largest over the pressed skin nodes, and where.
-    states = {round(float(ds.get("timestep")), 9): os.path.join(solve, ds.get("file"))
-              for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet")}
     for o in run["contact"]["at_outputs"]:
         field = Field(states[round(o["time"], 9)], run["contact"]["pressure_average_area"])
         best = field.sites(count=1)
