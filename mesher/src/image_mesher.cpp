@@ -120,17 +120,23 @@ CGAL::Image_3 boundary_weights(const Volume<std::uint8_t>& labels, double sigma)
   double sum = 0;
   for (int i = -r; i <= r; ++i) sum += kernel[static_cast<std::size_t>(i + r)] = std::exp(-0.5 * i * i / (sigma * sigma));
   for (double& k : kernel) k /= sum;
-  // Bounding boxes of the labels (voxel index ranges).
-  std::map<int, std::array<std::size_t, 6>> box;
+  // Bounding boxes of the labels (voxel index ranges), indexed by the 8-bit label.
+  std::array<std::array<std::size_t, 6>, 256> box;
+  std::array<bool, 256> present{};
   for (std::size_t z = 0, at = 0; z < nz; ++z)
     for (std::size_t y = 0; y < ny; ++y)
       for (std::size_t x = 0; x < nx; ++x, ++at) {
-        auto [it, fresh] = box.try_emplace(labels.data[at], std::array<std::size_t, 6>{x, y, z, x, y, z});
-        auto& b = it->second;
-        if (!fresh) b = {std::min(b[0], x), std::min(b[1], y), std::min(b[2], z), std::max(b[3], x), std::max(b[4], y), std::max(b[5], z)};
+        const std::uint8_t v = labels.data[at];
+        auto& b = box[v];
+        if (!present[v])
+          b = {x, y, z, x, y, z}, present[v] = true;
+        else
+          b = {std::min(b[0], x), std::min(b[1], y), std::min(b[2], z), std::max(b[3], x), std::max(b[4], y), std::max(b[5], z)};
       }
   std::vector<float> f, g;
-  for (const auto& [label, b] : box) {
+  for (int label = 0; label < 256; ++label) {
+    if (!present[static_cast<std::size_t>(label)]) continue;
+    const auto& b = box[static_cast<std::size_t>(label)];
     const std::size_t lo[3] = {b[0] > static_cast<std::size_t>(r) ? b[0] - r : 0, b[1] > static_cast<std::size_t>(r) ? b[1] - r : 0,
                                b[2] > static_cast<std::size_t>(r) ? b[2] - r : 0};
     const std::size_t hi[3] = {std::min(nx, b[3] + r + 1), std::min(ny, b[4] + r + 1), std::min(nz, b[5] + r + 1)};
@@ -451,6 +457,11 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
       log::verbose() << "mesher: " << left << " tets below the guarantees; " << merged << " surface edges collapsed";
       if (merged == 0) break;
       left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+    }
+    if (left > 0) {
+      const std::size_t flipped = flip_poor_tets(mesh, post);
+      log::verbose() << "mesher: " << left << " tets below the guarantees; " << flipped << " flips (2-3 and edge removal)";
+      if (flipped > 0) left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
     }
     if (left > 0) {
       const std::size_t given = give_wedges_to_bone(mesh, post);

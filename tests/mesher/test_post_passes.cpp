@@ -227,3 +227,95 @@ TEST(PostPasses, PeelingLeavesARegularMeshAlone) {
   EXPECT_EQ(peel_skin_slivers(mesh), 0u);
   EXPECT_EQ(mesh.tets.size(), 48u);
 }
+
+// A flat soft-tissue tet (a, b, c, q), q 0.05 mm above the middle of an equilateral 1 mm face
+// (a, b, c), on a good tet (a, b, c, p) with p 0.8 mm below: relocation cannot lift q if it lies
+// on a surface, but a 2-3 flip makes three tets around the new edge pq. Nine unit tets of soft
+// tissue elsewhere set the subdomain's median L_e. Oracles: the pair's volume (kept exactly), the
+// three tets' orientation, the worst L_e over the median before and after; and across an
+// interface (the lower tet bone) nothing may flip.
+TEST(PostPasses, FaceFlipLiftsAFlatTetAndKeepsInterfaces) {
+  const auto make = [](int lower_group) {
+    TetMesh mesh;
+    const double h = std::sqrt(3.0) / 2;
+    mesh.nodes = {{0, 0, 0},
+                  {kCell, 0, 0},
+                  {0.5 * kCell, h * kCell, 0},
+                  {0.5 * kCell, h / 3 * kCell, 0.05 * kCell},
+                  {0.5 * kCell, h / 3 * kCell, -0.8 * kCell}};
+    mesh.tets = {{0, 1, 2, 3}, {0, 2, 1, 4}};
+    mesh.tet_group = {contracts::kSoftTissueLabel, lower_group};
+    for (int k = 0; k < 9; ++k) {  // regular unit tets, apart from the pair and each other
+      const int n = static_cast<int>(mesh.nodes.size());
+      const double x = 5 * kCell * (k + 1), s = kCell;
+      mesh.nodes.push_back({x, 0, 0}), mesh.nodes.push_back({x + s, 0, 0}), mesh.nodes.push_back({x + s / 2, h * s, 0});
+      mesh.nodes.push_back({x + s / 2, h / 3 * s, std::sqrt(2.0 / 3.0) * s});
+      mesh.tets.push_back({n, n + 1, n + 2, n + 3});
+      mesh.tet_group.push_back(contracts::kSoftTissueLabel);
+    }
+    rebuild_boundary_triangles(mesh);
+    return mesh;
+  };
+  TetMesh mesh = make(contracts::kSoftTissueLabel);
+  ASSERT_GT(min_volume(mesh), 0);
+  const double regular = length(mesh, 2), volume = mesh_volume(mesh), before = shortest_length(mesh) / regular;
+  const std::size_t tets = mesh.tets.size();
+  const std::size_t flipped = flip_poor_tets(mesh);
+  const double after = shortest_length(mesh) / regular;
+  std::cout << "face flip: " << flipped << " flip(s), " << tets << " -> " << mesh.tets.size() << " tets; worst L_e / median " << before << " -> "
+            << after << " (guarantee 0.2); volume " << volume << " -> " << mesh_volume(mesh) << " m^3\n";
+  EXPECT_EQ(flipped, 1u);
+  EXPECT_EQ(mesh.tets.size(), tets + 1);
+  EXPECT_LT(before, 0.2);
+  EXPECT_GE(after, 0.2 * 1.1);
+  EXPECT_GT(min_volume(mesh), 0);
+  EXPECT_NEAR(mesh_volume(mesh), volume, 1e-12 * volume);
+
+  TetMesh across = make(contracts::kFirstBoneLabel);
+  const std::size_t interface_flips = flip_poor_tets(across);
+  std::cout << "face flip across a tissue-bone interface: " << interface_flips << " flip(s)\n";
+  EXPECT_EQ(interface_flips, 0u);
+  EXPECT_EQ(across.tets.size(), tets);
+}
+
+// A sliver (p0, p1, p2, p3): the diagonals of a unit square, p0 p1 0.05 mm above p2 p3, crossing,
+// under a tip 1.5 mm up joined to both faces above p0 p1: three tets around the edge p0 p1 (every
+// face flip would make an edge that exists). Edge removal (a 3-2 flip) leaves two tets around the
+// upright triangle (p2, p3, tip), one on each side. Oracles as above: the volume kept, positive
+// tets, the worst L_e over the median before and after, one tet fewer.
+TEST(PostPasses, EdgeRemovalTakesOutASliver) {
+  TetMesh mesh;
+  const double d = 0.05 * kCell, h = std::sqrt(3.0) / 2;
+  mesh.nodes = {{-kCell, 0, d}, {kCell, 0, d}, {0, -kCell, -d}, {0, kCell, -d}, {0, 0, 1.5 * kCell}};
+  mesh.tets = {{0, 1, 2, 3}, {0, 1, 3, 4}, {0, 1, 4, 2}};
+  for (auto& t : mesh.tets) {
+    const auto x = [&](int v) { return mesh.nodes[static_cast<std::size_t>(v)]; };
+    if (tet_volume(x(t[0]), x(t[1]), x(t[2]), x(t[3])) < 0) std::swap(t[2], t[3]);
+  }
+  mesh.tet_group.assign(3, contracts::kSoftTissueLabel);
+  for (int k = 0; k < 9; ++k) {  // regular 1.4 mm tets elsewhere: the subdomain's median L_e
+    const int n = static_cast<int>(mesh.nodes.size());
+    const double x = 5 * kCell * (k + 1), s = 1.4 * kCell;
+    mesh.nodes.push_back({x, 0, 0}), mesh.nodes.push_back({x + s, 0, 0}), mesh.nodes.push_back({x + s / 2, h * s, 0});
+    mesh.nodes.push_back({x + s / 2, h / 3 * s, std::sqrt(2.0 / 3.0) * s});
+    mesh.tets.push_back({n, n + 1, n + 2, n + 3});
+    mesh.tet_group.push_back(contracts::kSoftTissueLabel);
+  }
+  rebuild_boundary_triangles(mesh);
+  ASSERT_GT(min_volume(mesh), 0);
+  const double regular = length(mesh, 3), volume = mesh_volume(mesh), before = shortest_length(mesh) / regular;
+  const std::size_t tets = mesh.tets.size(), triangles = mesh.triangles.size();
+  const std::size_t flipped = flip_poor_tets(mesh);
+  const double after = shortest_length(mesh) / regular;
+  rebuild_boundary_triangles(mesh);
+  std::cout << "edge removal: " << flipped << " flip(s), " << tets << " -> " << mesh.tets.size() << " tets; worst L_e / median " << before << " -> "
+            << after << " (guarantee 0.2); volume " << volume << " -> " << mesh_volume(mesh) << " m^3; " << triangles << " -> "
+            << mesh.triangles.size() << " boundary triangles\n";
+  EXPECT_EQ(flipped, 1u);
+  EXPECT_EQ(mesh.tets.size(), tets - 1);
+  EXPECT_LT(before, 0.2);
+  EXPECT_GE(after, 0.2 * 1.1);
+  EXPECT_GT(min_volume(mesh), 0);
+  EXPECT_NEAR(mesh_volume(mesh), volume, 1e-12 * volume);
+  EXPECT_EQ(mesh.triangles.size(), triangles);  // the outer faces stay
+}

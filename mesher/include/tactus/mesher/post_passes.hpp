@@ -47,6 +47,10 @@ std::size_t relocate_poor_tets(TetMesh& mesh, double max_surface_move, const Pos
 // Merges a node into its neighbour across a short surface edge of a tet below the guarantees,
 // where that raises the worst measure around them (edge_collapse.cpp); returns the number merged.
 std::size_t collapse_poor_surface_edges(TetMesh& mesh, double max_surface_move, const PostPassParams& p = {});
+// 2-3 face flips inside one subdomain where they raise the worst guarantee measure of the tets
+// below the guarantees (flips.cpp: slivers flat on a surface, which relocation cannot lift);
+// returns how many. Surfaces, interfaces and nodes are unchanged.
+std::size_t flip_poor_tets(TetMesh& mesh, const PostPassParams& p = {});
 // Gives each soft-tissue tet below the guarantees that has two faces on one bone to that bone, if
 // it meets them there (wedges.cpp); returns how many. The boundary triangles are rebuilt.
 std::size_t give_wedges_to_bone(TetMesh& mesh, const PostPassParams& p = {});
