@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The hand-block mesh study's figures on a smooth body: a ball of soft tissue (radius 15 mm) with a
+# bone core (6 mm), at 2 m/s into the block, rigid bones and block (pipeline/scenarios/
+# hand_block_rigid.toml: the same materials, contact pairs and outputs as the hand). Its label
+# volume is written here (0.25 mm voxels) and meshed with smoothed boundaries, so the skin is a
+# sphere at every level and the peak sits at the pole on every mesh: what the contact pressure at
+# the 25 mm^2 sensor scale does under refinement without the segmented hand's voxel steps and
+# near-tied sites (bench/hand_block_mesh_study.sh). Levels: surface facets 2, 1.4, 0.98 and
+# (--levels 4) 0.69 mm, cells 2.5 mm and 0.7x each level, facet distance 0.15 mm x 0.7 each level.
+#   bench/ball_block_study.sh [--levels 3|4]
+# Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder). On 2 cores
+# about 1 min for three levels; the fourth (132k tets, 28,712 steps) adds a few minutes.
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+B=${TACTUS_BUILD_DIR:-$ROOT/build}
+LEVELS=3
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --levels) LEVELS=$2; shift 2 ;;
+    *) echo "usage: bench/ball_block_study.sh [--levels 3|4]" >&2; exit 2 ;;
+  esac
+done
+[ "$LEVELS" = 3 ] || [ "$LEVELS" = 4 ] || { echo "--levels: 3 or 4" >&2; exit 2; }
+W=${WORK:-$(mktemp -d)}
+[ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
+mkdir -p "$W"
+# The ball's labels: 0 background, 1 soft tissue (r <= 15 mm), 2 bone (r <= 6 mm), centred at
+# (0, -20, 120) mm inside the block's footprint, in the HDF5 layout tactus-segment writes.
+/usr/bin/python3 - "$W/labels.h5" <<'PY'
+import json, sys
+import h5py
+import numpy as np
+h, radius, core = 0.25e-3, 15e-3, 6e-3
+centre = np.array([0.0, -20e-3, 120e-3])
+n = int(round(2 * (radius + 2e-3) / h))
+origin = centre - (n - 1) / 2 * h
+axis = h * np.arange(n)
+x, y, z = (origin[0] + axis)[None, None, :], (origin[1] + axis)[None, :, None], (origin[2] + axis)[:, None, None]
+r = np.sqrt((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2)
+labels = np.zeros((n, n, n), np.uint8)  # z, y, x
+labels[r <= radius] = 1
+labels[r <= core] = 2
+with h5py.File(sys.argv[1], "w") as f:
+    d = f.create_dataset("labels", data=labels, chunks=(1, n, n), compression="gzip")
+    d.attrs["axes"] = np.bytes_("z,y,x (attributes are x,y,z)")
+    d.attrs["direction"] = np.eye(3).ravel()
+    d.attrs["label_table"] = np.bytes_(json.dumps({"0": "background", "1": "soft_tissue", "2": "bone_02"}))
+    d.attrs["origin"] = origin
+    d.attrs["spacing"] = np.array([h, h, h])
+    d.attrs["units"] = np.bytes_("m")
+PY
+names=(default fine finer)
+[ "$LEVELS" = 4 ] && names+=(finest)
+scale=1
+for name in "${names[@]}"; do
+  if [ -e "$W/$name" ]; then  # only a folder this script made is replaced
+    [ -f "$W/$name/.tactus_mesh_study" ] || { echo "$W/$name exists and was not made by this script; not replaced" >&2; exit 2; }
+    rm -rf "${W:?}/$name"
+  fi
+  mkdir -p "$W/$name/mesh" "$W/$name/object" && touch "$W/$name/.tactus_mesh_study"
+  size() { /usr/bin/python3 -c "print(f'{$1 * $scale:.6g}')"; }
+  "$B/mesher/tactus-mesh" "$W/labels.h5" --smooth-boundaries 1 --facet-size "$(size 2.0)" --bone-facet-size "$(size 1.5)" \
+    --cell-size "$(size 2.5)" --bone-cell-size "$(size 1.5)" --facet-distance "$(size 0.15)" -o "$W/$name/mesh/mesh.msh" -q
+  "$B/mesher/tactus-mesh" fibres "$W/$name/mesh/mesh.msh" --angle 30 --axis z -o "$W/$name/mesh/fibres.vtu" -q
+  "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size 0.008 -o "$W/$name/object/block.msh" -q
+  echo "== $name mesh (sizes x $(/usr/bin/python3 -c "print(f'{$scale:.3g}')")): solving hand_block_rigid.toml"
+  "$B/solver/tactus-solve" "$ROOT/pipeline/scenarios/hand_block_rigid.toml" --meshes "$W/$name" -o "$W/$name/out" -q
+  scale=$(/usr/bin/python3 -c "print($scale * 0.7)")
+done
+/usr/bin/python3 "$ROOT/bench/mesh_study_report.py" "$ROOT/bench" "$W" 1 "${names[@]}"
