@@ -7,23 +7,34 @@
 # the 25 mm^2 sensor scale does under refinement without the segmented hand's voxel steps and
 # near-tied sites (bench/hand_block_mesh_study.sh). Levels: surface facets 2, 1.4, 0.98 and
 # (--levels 4) 0.69 mm, cells 2.5 mm and 0.7x each level, facet distance 0.15 mm x 0.7 each level.
-#   bench/ball_block_study.sh [--levels 3|4]
+#   bench/ball_block_study.sh [--levels 3|4] [--pressure-window TAU]
+#     --pressure-window TAU  the scenario's contact_solver.pressure_window set to TAU seconds (e.g.
+#                  2.5e-4, a sensor's time constant; default 1e-5)
 # Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder). On 2 cores
 # about 1 min for three levels; the fourth (132k tets, 28,712 steps) adds a few minutes.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
 LEVELS=3
+WINDOW=
 while [ $# -gt 0 ]; do
   case "$1" in
     --levels) LEVELS=$2; shift 2 ;;
-    *) echo "usage: bench/ball_block_study.sh [--levels 3|4]" >&2; exit 2 ;;
+    --pressure-window) WINDOW=$2; shift 2 ;;
+    *) echo "usage: bench/ball_block_study.sh [--levels 3|4] [--pressure-window TAU]" >&2; exit 2 ;;
   esac
 done
 [ "$LEVELS" = 3 ] || [ "$LEVELS" = 4 ] || { echo "--levels: 3 or 4" >&2; exit 2; }
 W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
 mkdir -p "$W"
+SCENARIO=$ROOT/pipeline/scenarios/hand_block_rigid.toml
+if [ -n "$WINDOW" ]; then  # the rigid scenario has no [contact_solver] table: one is appended
+  [[ "$WINDOW" =~ ^[0-9.]+([eE][-+]?[0-9]+)?$ ]] && /usr/bin/python3 -c "import sys; sys.exit(float(sys.argv[1]) <= 0)" "$WINDOW" 2>/dev/null ||
+    { echo "--pressure-window: a time > 0 in seconds, not '$WINDOW'" >&2; exit 2; }
+  { cat "$SCENARIO"; printf '\n[contact_solver]\npressure_window = %s\n' "$WINDOW"; } > "$W/scenario_window.toml"
+  SCENARIO=$W/scenario_window.toml
+fi
 # The ball's labels: 0 background, 1 soft tissue (r <= 15 mm), 2 bone (r <= 6 mm), centred at
 # (0, -20, 120) mm inside the block's footprint, in the HDF5 layout tactus-segment writes.
 /usr/bin/python3 - "$W/labels.h5" <<'PY'
@@ -64,7 +75,7 @@ for name in "${names[@]}"; do
   "$B/mesher/tactus-mesh" fibres "$W/$name/mesh/mesh.msh" --angle 30 --axis z -o "$W/$name/mesh/fibres.vtu" -q
   "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size 0.008 -o "$W/$name/object/block.msh" -q
   echo "== $name mesh (sizes x $(/usr/bin/python3 -c "print(f'{$scale:.3g}')")): solving hand_block_rigid.toml"
-  "$B/solver/tactus-solve" "$ROOT/pipeline/scenarios/hand_block_rigid.toml" --meshes "$W/$name" -o "$W/$name/out" -q
+  "$B/solver/tactus-solve" "$SCENARIO" --meshes "$W/$name" -o "$W/$name/out" -q
   scale=$(/usr/bin/python3 -c "print($scale * 0.7)")
 done
 /usr/bin/python3 "$ROOT/bench/mesh_study_report.py" "$ROOT/bench" "$W" 1 "${names[@]}"
