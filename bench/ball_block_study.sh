@@ -29,10 +29,8 @@ W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
 mkdir -p "$W"
 SCENARIO=$ROOT/pipeline/scenarios/hand_block_rigid.toml
-if [ -n "$WINDOW" ]; then  # the rigid scenario has no [contact_solver] table: one is appended
-  [[ "$WINDOW" =~ ^[0-9.]+([eE][-+]?[0-9]+)?$ ]] && /usr/bin/python3 -c "import sys; sys.exit(float(sys.argv[1]) <= 0)" "$WINDOW" 2>/dev/null ||
-    { echo "--pressure-window: a time > 0 in seconds, not '$WINDOW'" >&2; exit 2; }
-  { cat "$SCENARIO"; printf '\n[contact_solver]\npressure_window = %s\n' "$WINDOW"; } > "$W/scenario_window.toml"
+if [ -n "$WINDOW" ]; then
+  /usr/bin/python3 "$ROOT/bench/set_pressure_window.py" "$SCENARIO" "$W/scenario_window.toml" "$WINDOW"
   SCENARIO=$W/scenario_window.toml
 fi
 # The ball's labels: 0 background, 1 soft tissue (r <= 15 mm), 2 bone (r <= 6 mm), centred at

@@ -56,22 +56,7 @@ W=${WORK:-$(mktemp -d)}
 if [ -n "$WINDOW" ]; then
   # The scenario with its pressure window replaced (mesh paths resolve from --meshes, so the copy
   # may live in the work folder).
-  /usr/bin/python3 - "$SCENARIO" "$W/scenario_window.toml" "$WINDOW" <<'PY'
-import re, sys
-text, tau = open(sys.argv[1]).read(), sys.argv[3]
-try:
-    if not float(tau) > 0:
-        raise ValueError
-except ValueError:
-    sys.exit(f"--pressure-window: a time > 0 in seconds, not {tau!r}")
-if re.search(r"^\s*pressure_window\s*=", text, flags=re.M):
-    sys.exit(f"{sys.argv[1]} sets pressure_window itself: edit it there instead of --pressure-window")
-if re.search(r"^\s*\[contact_solver\]", text, flags=re.M):
-    text = re.sub(r"^(\s*\[contact_solver\][^\n]*\n)", lambda m: m.group(1) + f"pressure_window = {tau}\n", text, count=1, flags=re.M)
-else:
-    text += f"\n[contact_solver]\npressure_window = {tau}\n"
-open(sys.argv[2], "w").write(text)
-PY
+  /usr/bin/python3 "$ROOT/bench/set_pressure_window.py" "$SCENARIO" "$W/scenario_window.toml" "$WINDOW"
   SCENARIO=$W/scenario_window.toml
 fi
 names=(default fine)
