@@ -154,6 +154,13 @@ int main(int argc, char** argv) {
                  "Gaussian sigma (voxels, 0-3) of the label indicators: boundaries between voxel centres instead of the voxels' staircase "
                  "(0: off)")
       ->capture_default_str();
+  std::vector<double> refine_box_mm;
+  app.add_option("--refine-box", refine_box_mm,
+                 "X0 Y0 Z0 X1 Y1 Z1: a world box (mm) meshed finer, e.g. where the skin will touch (with --refine-size)")
+      ->expected(6);
+  app.add_option("--refine-size", p.refine_size_mm, "max facet size inside --refine-box, mm (cells there: twice it)")->check(CLI::PositiveNumber);
+  app.add_option("--refine-distance", p.refine_distance_mm, "surface approximation error inside --refine-box, mm (default: --facet-distance)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--radius-edge", p.cell_radius_edge, "max cell radius-edge ratio")->capture_default_str();
   app.add_option("--cell-size", p.cell_size_mm, "soft-tissue cell size, mm")->capture_default_str();
   app.add_option("--bone-cell-size", p.bone_cell_size_mm, "bone cell size, mm")->capture_default_str();
@@ -225,6 +232,9 @@ int main(int argc, char** argv) {
     if (labels_file.empty()) throw CLI::RequiredError("labels");
     MeshOutput output(out, common.output_rules({labels_file}));
     p.restore_volumes = !keep_surfaces;
+    if (!refine_box_mm.empty() && !(p.refine_size_mm > 0)) throw InputError("command line", "--refine-box", "a --refine-size for the box", "none");
+    if (p.refine_size_mm > 0 && refine_box_mm.empty()) throw InputError("command line", "--refine-size", "a --refine-box to refine", "none");
+    for (std::size_t i = 0; i < refine_box_mm.size(); ++i) p.refine_box_m[i] = refine_box_mm[i] * 1e-3;
     LabelTable table;
     auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
     nlohmann::json absorbed = nlohmann::json::array();

@@ -20,6 +20,7 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
@@ -39,6 +40,33 @@ using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
 using Criteria = CGAL::Mesh_criteria_3<Tr>;
 using SizeField = CGAL::Mesh_constant_domain_field_3<Domain::R, Domain::Index>;
 
+// Whether a world point (m) is inside the refined region (none while refine_size_mm is 0).
+bool in_refine_box(const ImageMeshParams& p, const std::array<double, 3>& x) {
+  const auto& b = p.refine_box_m;
+  return p.refine_size_mm > 0 && x[0] >= b[0] && x[1] >= b[1] && x[2] >= b[2] && x[0] <= b[3] && x[1] <= b[4] && x[2] <= b[5];
+}
+
+// A CGAL sizing field: `outer` (a size per subdomain or surface patch, or one number) outside the
+// refined box, at most `inner` (mm) inside it. CGAL's points are millimetres from the labels'
+// origin in their axis-aligned frame (extract() below), turned to world metres for the test.
+template <class Outer>
+struct RefinedField {
+  const Outer* outer = nullptr;
+  const Volume<std::uint8_t>* labels = nullptr;
+  const ImageMeshParams* p = nullptr;
+  double inner = 0;
+  double operator()(const Domain::Point_3& q, int dim, const Domain::Index& index) const {
+    double o;
+    if constexpr (std::is_arithmetic_v<Outer>)
+      o = *outer;
+    else
+      o = (*outer)(q, dim, index);
+    if (!(inner > 0) || o <= inner) return o;
+    const auto& g = labels->origin;
+    return in_refine_box(*p, labels->to_world({g[0] + q.x() * 1e-3, g[1] + q.y() * 1e-3, g[2] + q.z() * 1e-3})) ? inner : o;
+  }
+};
+
 void check(bool ok, const std::string& field, const std::string& expected, double value) {
   if (!ok) {
     std::ostringstream f;
@@ -50,11 +78,22 @@ void check(bool ok, const std::string& field, const std::string& expected, doubl
 }  // namespace
 
 double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
-  std::size_t soft = 0, bone = 0;
-  for (auto v : labels.data) soft += v == contracts::kSoftTissueLabel, bone += v >= contracts::kFirstBoneLabel;
   const double voxel_mm3 = labels.voxel_volume() * 1e9;
-  auto tets = [](double volume_mm3, double size_mm) { return volume_mm3 / (0.1 * size_mm * size_mm * size_mm); };
-  return tets(static_cast<double>(soft) * voxel_mm3, p.cell_size_mm) + tets(static_cast<double>(bone) * voxel_mm3, p.bone_cell_size_mm);
+  auto tets = [&](double size_mm) { return voxel_mm3 / (0.1 * size_mm * size_mm * size_mm); };
+  const double soft = tets(p.cell_size_mm), bone = tets(p.bone_cell_size_mm);
+  const double refined = p.refine_size_mm > 0 ? tets(2 * p.refine_size_mm) : 0;  // the box's cells: twice its facet size
+  double n = 0;
+  for (int k = 0; k < labels.dims[2]; ++k)
+    for (int j = 0; j < labels.dims[1]; ++j)
+      for (int i = 0; i < labels.dims[0]; ++i) {
+        const auto v = labels.at(i, j, k);
+        if (v == 0) continue;
+        const double own = v == contracts::kSoftTissueLabel ? soft : v >= contracts::kFirstBoneLabel ? bone : 0.0;
+        const std::array<double, 3> aligned{labels.origin[0] + i * labels.spacing[0], labels.origin[1] + j * labels.spacing[1],
+                                            labels.origin[2] + k * labels.spacing[2]};
+        n += refined > own && in_refine_box(p, labels.to_world(aligned)) ? refined : own;
+      }
+  return n;
 }
 
 namespace {
@@ -70,6 +109,13 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
   check(p.bone_facet_size_mm > 0, "bone_facet_size", "a size > 0 mm", p.bone_facet_size_mm);
   check(p.boundary_smoothing_voxels >= 0 && p.boundary_smoothing_voxels <= 3, "boundary_smoothing", "a sigma in [0, 3] voxels",
         p.boundary_smoothing_voxels);
+  check(p.refine_size_mm >= 0, "refine_size", "a size >= 0 mm (0: no refined region)", p.refine_size_mm);
+  check(p.refine_distance_mm >= 0, "refine_distance", "a distance >= 0 mm (0: the facet distance)", p.refine_distance_mm);
+  if (p.refine_size_mm > 0)
+    for (int a = 0; a < 3; ++a)
+      check(p.refine_box_m[static_cast<std::size_t>(a)] < p.refine_box_m[static_cast<std::size_t>(a + 3)], std::string("refine_box ") + "xyz"[a],
+            "a box whose lower corner is below its upper one",
+            p.refine_box_m[static_cast<std::size_t>(a + 3)] - p.refine_box_m[static_cast<std::size_t>(a)]);
   validate_volume_geometry(labels.dims, labels.spacing, labels.origin, 1, "labels", "/labels");
   std::size_t tissue = 0, nonzero = 0;
   for (auto v : labels.data) tissue += v == contracts::kSoftTissueLabel, nonzero += v != 0;
@@ -194,9 +240,19 @@ class CgalImageMesher {
         size_.set_size(p.bone_cell_size_mm, 3, domain_.index_from_subdomain_index(id));
         facet_size_.set_size(p.bone_facet_size_mm, 2, domain_.index_from_surface_patch_index(Domain::Surface_patch_index(1, id)));
       }
-    criteria_ = std::make_unique<Criteria>(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = facet_size_,
-                                           CGAL::parameters::facet_distance = p.facet_distance_mm,
-                                           CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge, CGAL::parameters::cell_size = size_);
+    if (p.refine_size_mm > 0) {  // the refined region's fields (RefinedField); CGAL keeps references to them
+      refined_facet_size_ = {&facet_size_, &labels_, &p_, p.refine_size_mm};
+      refined_cell_size_ = {&size_, &labels_, &p_, 2 * p.refine_size_mm};  // graded inward from the finer surface
+      refined_distance_ = {&p_.facet_distance_mm, &labels_, &p_, p.refine_distance_mm};
+      criteria_ =
+          std::make_unique<Criteria>(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = refined_facet_size_,
+                                     CGAL::parameters::facet_distance = refined_distance_,
+                                     CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge, CGAL::parameters::cell_size = refined_cell_size_);
+    } else {
+      criteria_ = std::make_unique<Criteria>(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = facet_size_,
+                                             CGAL::parameters::facet_distance = p.facet_distance_mm,
+                                             CGAL::parameters::cell_radius_edge_ratio = p.cell_radius_edge, CGAL::parameters::cell_size = size_);
+    }
     for (auto v : labels.data)
       if (v) wanted_.insert(v);
   }
@@ -353,6 +409,8 @@ class CgalImageMesher {
   unsigned seed_;
   Domain domain_;
   SizeField size_, facet_size_;
+  RefinedField<SizeField> refined_facet_size_, refined_cell_size_;  // with refine_size_mm > 0: the fields above, finer in the box
+  RefinedField<double> refined_distance_;
   std::unique_ptr<Criteria> criteria_;
   std::set<int> wanted_;
   C3t3 c3t3_;
@@ -434,9 +492,13 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   TetMesh mesh = cgal.extract(triangle_inner, per_label);
   // The post-passes (post_passes.hpp), CGAL-free.
   PostPassParams post = p.post;
+  // How far a post-pass may move a surface node: the facet distance, the refined region's where
+  // there is one (one bound for the whole mesh: the finer surface keeps its accuracy).
+  const double surface_move =
+      1e-3 * (p.refine_size_mm > 0 && p.refine_distance_mm > 0 ? std::min(p.facet_distance_mm, p.refine_distance_mm) : p.facet_distance_mm);
   post.relocate_passes = p.relocate_passes;
   if (p.restore_volumes) restore_volumes(mesh, labels, triangle_inner, post);
-  if (p.relocate_passes > 0) relocate_short_tets(mesh, p.facet_distance_mm * 1e-3, post);
+  if (p.relocate_passes > 0) relocate_short_tets(mesh, surface_move, post);
   if (p.peel_skin_slivers) {
     // Sweeps until nothing changes: peeling one sliver can put its neighbour flat on the skin.
     std::size_t peeled = 0;
@@ -446,27 +508,27 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
       if (n == 0) break;
     }
     log::verbose() << "mesher: peeled " << peeled << " soft-tissue slivers lying on the skin";
-    if (peeled > 0 && p.relocate_passes > 0) relocate_short_tets(mesh, p.facet_distance_mm * 1e-3, post);
+    if (peeled > 0 && p.relocate_passes > 0) relocate_short_tets(mesh, surface_move, post);
   }
   if (p.relocate_passes > 0) {
     // The guarantees: relocation and interior edge splits, then short surface edges collapsed
     // where those could not help, and relocation again around them.
-    std::size_t left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+    std::size_t left = relocate_poor_tets(mesh, surface_move, post);
     for (int round = 0; round < post.split_rounds && left > 0; ++round) {
-      const std::size_t merged = collapse_poor_surface_edges(mesh, p.facet_distance_mm * 1e-3, post);
+      const std::size_t merged = collapse_poor_surface_edges(mesh, surface_move, post);
       log::verbose() << "mesher: " << left << " tets below the guarantees; " << merged << " surface edges collapsed";
       if (merged == 0) break;
-      left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+      left = relocate_poor_tets(mesh, surface_move, post);
     }
     if (left > 0) {
       const std::size_t flipped = flip_poor_tets(mesh, post);
       log::verbose() << "mesher: " << left << " tets below the guarantees; " << flipped << " flips (2-3 and edge removal)";
-      if (flipped > 0) left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+      if (flipped > 0) left = relocate_poor_tets(mesh, surface_move, post);
     }
     if (left > 0) {
       const std::size_t given = give_wedges_to_bone(mesh, post);
       log::verbose() << "mesher: " << given << " soft-tissue wedges between bone faces given to the bone";
-      if (given > 0) left = relocate_poor_tets(mesh, p.facet_distance_mm * 1e-3, post);
+      if (given > 0) left = relocate_poor_tets(mesh, surface_move, post);
     }
     log::verbose() << "mesher: " << left << " tets below the guarantees after the post-passes";
   }

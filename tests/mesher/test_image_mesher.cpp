@@ -359,3 +359,66 @@ TEST(ImageMesherErrors, BoundarySmoothingOutOfRange) {
   p.boundary_smoothing_voxels = 4;
   expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"boundary_smoothing", "[0, 3] voxels"});
 }
+
+// A refined region: the voxel ball above (smoothed boundaries) with 3 mm facets and 4 mm cells,
+// and a box over the part of it beyond x = c + 3 mm meshed with 1 mm facets (2 mm cells). Oracles:
+// CGAL's facet size bounds a surface triangle's circumradius, so its edges are at most sqrt(3)
+// times it (the post-passes then move, peel and merge a few): the skin triangles inside the box
+// have a median longest edge <= sqrt(3) mm (1.73), the ones outside one above 1.5 times that
+// inside (about 1 without the box; the facet sizes are 3 to 1, the box's coarser cells pull its
+// surface triangles up towards the bound);
+// the expected tet count (the runaway guard) counts the box's voxels at the finer size.
+TEST(ImageMesher, RefinedBoxGetsItsFacetSize) {
+  Volume<std::uint8_t> v({26, 26, 26}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 0);
+  const double c[3] = {12.37, 12.61, 12.83}, R = 9.3;
+  for (int z = 0; z < 26; ++z)
+    for (int y = 0; y < 26; ++y)
+      for (int x = 0; x < 26; ++x)
+        if (std::hypot(x - c[0], y - c[1], z - c[2]) <= R) v.at(x, y, z) = 1;
+  mesher::ImageMeshParams p;
+  p.facet_size_mm = 3, p.facet_distance_mm = 0.2, p.cell_size_mm = 4, p.boundary_smoothing_voxels = 1;
+  const double coarse_estimate = mesher::expected_tets(v, p);
+  p.refine_box_m = {1e-3 * (c[0] + 3), -1, -1, 1, 1, 1};
+  p.refine_size_mm = 1, p.refine_distance_mm = 0.1;
+  const double refined_estimate = mesher::expected_tets(v, p);
+  const TetMesh m = mesher::mesh_label_volume(v, {}, p);
+  std::vector<double> inside, outside;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    if (m.triangle_group[t] != mesher::kSkinTag) continue;
+    const auto& f = m.triangles[t];
+    double cx = 0, longest = 0;
+    for (int k = 0; k < 3; ++k) {
+      const auto& a = m.nodes[static_cast<std::size_t>(f[static_cast<std::size_t>(k)])];
+      const auto& b = m.nodes[static_cast<std::size_t>(f[static_cast<std::size_t>((k + 1) % 3)])];
+      cx += 1e3 * a[0] / 3, longest = std::max(longest, 1e3 * std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]));
+    }
+    // Triangles wholly on one side (the box's face cuts the others).
+    bool all_in = true, all_out = true;
+    for (int n : f) {
+      const bool in = 1e3 * m.nodes[static_cast<std::size_t>(n)][0] >= c[0] + 3;
+      all_in = all_in && in, all_out = all_out && !in;
+    }
+    if (all_in) inside.push_back(longest);
+    if (all_out) outside.push_back(longest);
+  }
+  ASSERT_FALSE(inside.empty());
+  ASSERT_FALSE(outside.empty());
+  const double worst_inside = *std::max_element(inside.begin(), inside.end());
+  std::nth_element(inside.begin(), inside.begin() + static_cast<std::ptrdiff_t>(inside.size() / 2), inside.end());
+  std::nth_element(outside.begin(), outside.begin() + static_cast<std::ptrdiff_t>(outside.size() / 2), outside.end());
+  const double median_inside = inside[inside.size() / 2], median_outside = outside[outside.size() / 2];
+  std::printf(
+      "refined box: %zu skin triangles inside (longest edge median %.2f, largest %.2f mm; bound %.2f), %zu outside (median %.2f mm); "
+      "expected tets %.0f -> %.0f, meshed %zu\n",
+      inside.size(), median_inside, worst_inside, std::sqrt(3.0), outside.size(), median_outside, coarse_estimate, refined_estimate, m.tets.size());
+  EXPECT_LE(median_inside, std::sqrt(3.0));
+  EXPECT_GT(median_outside, 1.5 * median_inside);
+  EXPECT_GT(refined_estimate, coarse_estimate);
+}
+
+TEST(ImageMesherErrors, RefineBoxUpsideDown) {
+  mesher::ImageMeshParams p;
+  p.refine_size_mm = 1;
+  p.refine_box_m = {0.01, 0, 0, 0.0, 0.01, 0.01};
+  expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"refine_box x", "lower corner"});
+}

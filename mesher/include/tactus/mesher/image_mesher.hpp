@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 // A conforming multi-material tetrahedral mesh of a label volume with CGAL's 3-D mesher
 // (labelled-image domain, paper §3.1: one continuous mesh of bones and soft tissue "without
 // interfaces"): one subdomain per label, nodes shared across every interface.
@@ -19,6 +20,13 @@ struct ImageMeshParams {
   // Gaussian sigma, in voxels, of the label indicators that place the boundaries (0: each point
   // takes its nearest voxel's label, and surfaces follow the voxels' staircase; see image_mesher.cpp).
   double boundary_smoothing_voxels = 0;
+  // A refined region (e.g. where the skin will touch): inside the world box refine_box_m (x0, y0,
+  // z0, x1, y1, z1, m) the facet size is at most refine_size_mm, the cell size at most twice that
+  // (the cells grade inward from the finer surface) and the facet distance at most
+  // refine_distance_mm (0: the facet distance outside). Off while refine_size_mm is 0.
+  std::array<double, 6> refine_box_m{};
+  double refine_size_mm = 0;
+  double refine_distance_mm = 0;
   double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
   double cell_size_mm = 7.0;        // soft tissue cell circumradius bound
   double bone_cell_size_mm = 3.5;   // the same in bones (finer)
