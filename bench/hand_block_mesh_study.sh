@@ -6,7 +6,7 @@
 # and area within 10 %, 25 mm^2 peak within 15 %), the same for the windowed force and area, and
 # each run's contact impulse over the whole run (the time integral of the normal force).
 #   bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA]
-#                                  [--pressure-window TAU] [labels.h5]
+#                                  [--pressure-window TAU] [--refine-box "X0 Y0 Z0 X1 Y1 Z1" --refine-size S] [labels.h5]
 #     labels.h5    default: the demo's out/pipeline/segment/labels.h5
 #     --scenario   default: pipeline/scenarios/hand_block.toml. With rigid bones the study is
 #                  cheaper (pipeline/scenarios/hand_block_rigid.toml), and a copy with
@@ -20,6 +20,10 @@
 #                  the spread: a difference between meshes below the spread cannot be told from it.
 #     --smooth-boundaries SIGMA  the hand meshed with tactus-mesh --smooth-boundaries SIGMA (voxels):
 #                  boundaries on Gaussian-smoothed label indicators instead of the voxels' staircase.
+#     --refine-box "X0 Y0 Z0 X1 Y1 Z1" --refine-size S  the hand's contact zone (world mm) meshed with
+#                  facets of S mm on the default mesh, 0.7 S and 0.49 S on the finer ones (tactus-mesh
+#                  --refine-box; facet distance 0.1 S there), e.g. "38 -40 30 49 5 200" and 1 for the
+#                  demo hand's ulnar edge.
 #     --pressure-window TAU  the scenario's contact_solver.pressure_window set to TAU seconds: the reported
 #                  pressure (and with it the 25 mm^2 peak) and the windowed force and area become
 #                  exponential averages over TAU, like a sensor of that time constant (e.g. 2.5e-4, the
@@ -35,6 +39,8 @@ LEVELS=2
 ENSEMBLE=1
 SMOOTH=()
 WINDOW=
+REFINE_BOX=
+REFINE_SIZE=
 LABELS=$ROOT/out/pipeline/segment/labels.h5
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -43,16 +49,23 @@ while [ $# -gt 0 ]; do
     --ensemble) ENSEMBLE=$2; shift 2 ;;
     --smooth-boundaries) SMOOTH=(--smooth-boundaries "$2"); shift 2 ;;
     --pressure-window) WINDOW=$2; shift 2 ;;
-    -*) echo "usage: bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA] [--pressure-window TAU] [labels.h5]" >&2; exit 2 ;;
+    --refine-box) REFINE_BOX=$2; shift 2 ;;
+    --refine-size) REFINE_SIZE=$2; shift 2 ;;
+    -*) echo "usage: bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA] [--pressure-window TAU] [--refine-box \"X0 Y0 Z0 X1 Y1 Z1\" --refine-size S] [labels.h5]" >&2; exit 2 ;;
     *) LABELS=$1; shift ;;
   esac
 done
 [ "$LEVELS" = 2 ] || [ "$LEVELS" = 3 ] || { echo "--levels: 2 or 3" >&2; exit 2; }
 [[ "$ENSEMBLE" =~ ^[1-9]$ ]] || { echo "--ensemble: 1 to 9 runs per mesh" >&2; exit 2; }
 [ -f "$SCENARIO" ] || { echo "no scenario $SCENARIO" >&2; exit 2; }
+if [ -n "$REFINE_BOX$REFINE_SIZE" ] && { [ -z "$REFINE_BOX" ] || [ -z "$REFINE_SIZE" ]; }; then
+  echo "--refine-box and --refine-size go together" >&2
+  exit 2
+fi
 [ -f "$LABELS" ] || { echo "no $LABELS: run scripts/demo.sh first, or pass a labels.h5" >&2; exit 2; }
 W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
+mkdir -p "$W"
 if [ -n "$WINDOW" ]; then
   # The scenario with its pressure window replaced (mesh paths resolve from --meshes, so the copy
   # may live in the work folder).
@@ -72,7 +85,14 @@ for name in "${names[@]}"; do
     fine) sizes=(--facet-size 2.8 --bone-facet-size 2.1 --cell-size 4.9 --bone-cell-size 2.45 --facet-distance 0.42) block=0.0056 ;;
     finer) sizes=(--facet-size 1.96 --bone-facet-size 1.47 --cell-size 3.43 --bone-cell-size 1.715 --facet-distance 0.294) block=0.00392 ;;
   esac
-  "$B/mesher/tactus-mesh" "$LABELS" "${sizes[@]}" "${SMOOTH[@]}" -o "$W/$name/mesh/mesh.msh" -q
+  refine=()
+  if [ -n "$REFINE_SIZE" ]; then
+    case $name in default) f=1 ;; fine) f=0.7 ;; finer) f=0.49 ;; esac
+    read -r -a corners <<<"$REFINE_BOX"
+    refine=(--refine-box "${corners[@]}" --refine-size "$(/usr/bin/python3 -c "print(f'{$REFINE_SIZE * $f:.6g}')")"
+      --refine-distance "$(/usr/bin/python3 -c "print(f'{0.1 * $REFINE_SIZE * $f:.6g}')")")
+  fi
+  "$B/mesher/tactus-mesh" "$LABELS" "${sizes[@]}" "${SMOOTH[@]}" "${refine[@]}" -o "$W/$name/mesh/mesh.msh" -q
   "$B/mesher/tactus-mesh" fibres "$W/$name/mesh/mesh.msh" --angle 30 --axis z -o "$W/$name/mesh/fibres.vtu" -q
   "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size "$block" -o "$W/$name/object/block.msh" -q
   echo "== $name mesh: solving $(basename "$SCENARIO")"
