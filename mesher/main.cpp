@@ -235,6 +235,7 @@ int main(int argc, char** argv) {
     if (!refine_box_mm.empty() && !(p.refine_size_mm > 0)) throw InputError("command line", "--refine-box", "a --refine-size for the box", "none");
     if (p.refine_size_mm > 0 && refine_box_mm.empty()) throw InputError("command line", "--refine-size", "a --refine-box to refine", "none");
     for (std::size_t i = 0; i < refine_box_mm.size(); ++i) p.refine_box_m[i] = refine_box_mm[i] * 1e-3;
+    p.refine_cell_size_mm = 2 * p.refine_size_mm;  // the box's cells grade inward from its finer surface
     LabelTable table;
     auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
     nlohmann::json absorbed = nlohmann::json::array();

@@ -55,7 +55,7 @@ struct RefinedField {
   const Volume<std::uint8_t>* labels = nullptr;
   const ImageMeshParams* p = nullptr;
   double inner = 0;
-  double operator()(const Domain::Point_3& q, int dim, const Domain::Index& index) const {
+  [[gnu::noinline]] double operator()(const Domain::Point_3& q, int dim, const Domain::Index& index) const {
     double o;
     if constexpr (std::is_arithmetic_v<Outer>)
       o = *outer;
@@ -81,7 +81,7 @@ double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& 
   const double voxel_mm3 = labels.voxel_volume() * 1e9;
   auto tets = [&](double size_mm) { return voxel_mm3 / (0.1 * size_mm * size_mm * size_mm); };
   const double soft = tets(p.cell_size_mm), bone = tets(p.bone_cell_size_mm);
-  const double refined = p.refine_size_mm > 0 ? tets(2 * p.refine_size_mm) : 0;  // the box's cells: twice its facet size
+  const double refined = p.refine_cell_size_mm > 0 ? tets(p.refine_cell_size_mm) : 0;
   double n = 0;
   for (int k = 0; k < labels.dims[2]; ++k)
     for (int j = 0; j < labels.dims[1]; ++j)
@@ -242,7 +242,7 @@ class CgalImageMesher {
       }
     if (p.refine_size_mm > 0) {  // the refined region's fields (RefinedField); CGAL keeps references to them
       refined_facet_size_ = {&facet_size_, &labels_, &p_, p.refine_size_mm};
-      refined_cell_size_ = {&size_, &labels_, &p_, 2 * p.refine_size_mm};  // graded inward from the finer surface
+      refined_cell_size_ = {&size_, &labels_, &p_, p.refine_cell_size_mm};
       refined_distance_ = {&p_.facet_distance_mm, &labels_, &p_, p.refine_distance_mm};
       criteria_ =
           std::make_unique<Criteria>(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = refined_facet_size_,

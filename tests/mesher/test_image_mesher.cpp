@@ -379,7 +379,7 @@ TEST(ImageMesher, RefinedBoxGetsItsFacetSize) {
   p.facet_size_mm = 3, p.facet_distance_mm = 0.2, p.cell_size_mm = 4, p.boundary_smoothing_voxels = 1;
   const double coarse_estimate = mesher::expected_tets(v, p);
   p.refine_box_m = {1e-3 * (c[0] + 3), -1, -1, 1, 1, 1};
-  p.refine_size_mm = 1, p.refine_distance_mm = 0.1;
+  p.refine_size_mm = 1, p.refine_cell_size_mm = 2, p.refine_distance_mm = 0.1;
   const double refined_estimate = mesher::expected_tets(v, p);
   const TetMesh m = mesher::mesh_label_volume(v, {}, p);
   std::vector<double> inside, outside;

@@ -21,11 +21,13 @@ struct ImageMeshParams {
   // takes its nearest voxel's label, and surfaces follow the voxels' staircase; see image_mesher.cpp).
   double boundary_smoothing_voxels = 0;
   // A refined region (e.g. where the skin will touch): inside the world box refine_box_m (x0, y0,
-  // z0, x1, y1, z1, m) the facet size is at most refine_size_mm, the cell size at most twice that
-  // (the cells grade inward from the finer surface) and the facet distance at most
-  // refine_distance_mm (0: the facet distance outside). Off while refine_size_mm is 0.
+  // z0, x1, y1, z1, m) the facet size is at most refine_size_mm, the cell size at most
+  // refine_cell_size_mm (0: the cell sizes outside; tactus-mesh passes twice the facet size, the
+  // cells grading inward from the finer surface) and the facet distance at most refine_distance_mm
+  // (0: the facet distance outside). Off while refine_size_mm is 0.
   std::array<double, 6> refine_box_m{};
   double refine_size_mm = 0;
+  double refine_cell_size_mm = 0;
   double refine_distance_mm = 0;
   double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
   double cell_size_mm = 7.0;        // soft tissue cell circumradius bound
