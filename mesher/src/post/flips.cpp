@@ -33,9 +33,7 @@ constexpr int kDead = -1;  // the group of a slot a 3-2 flip emptied
 
 class Flipper {
  public:
-  Flipper(TetMesh& mesh, const PostPassParams& p) : mesh_(mesh), measure_(mesh, p), tets_of_(tets_around_nodes(mesh)) {
-    for (std::size_t e = 0; e < mesh.tets.size(); ++e) add_faces(e);
-  }
+  Flipper(TetMesh& mesh, const PostPassParams& p) : mesh_(mesh), measure_(mesh, p), tets_of_(tets_around_nodes(mesh)), owners_(face_owners(mesh)) {}
 
   // Sweeps over the tets below the guarantees until a sweep flips nothing (at most `sweeps`).
   std::size_t run(int sweeps) {
@@ -46,7 +44,7 @@ class Flipper {
         if (mesh_.tet_group[e] == kDead || measure(e) >= 1) continue;
         bool done = false;
         for (const auto& f : kFaces)
-          if ((done = try_flip(e, sorted_face(mesh_.tets[e][f[0]], mesh_.tets[e][f[1]], mesh_.tets[e][f[2]])))) break;
+          if ((done = try_flip(e, tet_face(mesh_.tets[e], f)))) break;
         for (std::size_t i = 0; i < 4 && !done; ++i)
           for (std::size_t j = i + 1; j < 4 && !done; ++j) done = try_remove_edge(mesh_.tets[e][i], mesh_.tets[e][j]);
         now += done;
@@ -65,11 +63,11 @@ class Flipper {
   }
 
   void add_faces(std::size_t e) {
-    for (const auto& f : kFaces) owners_[sorted_face(mesh_.tets[e][f[0]], mesh_.tets[e][f[1]], mesh_.tets[e][f[2]])].push_back(e);
+    for (const auto& f : kFaces) owners_[tet_face(mesh_.tets[e], f)].push_back(e);
   }
   void remove_faces(std::size_t e) {
     for (const auto& f : kFaces) {
-      auto it = owners_.find(sorted_face(mesh_.tets[e][f[0]], mesh_.tets[e][f[1]], mesh_.tets[e][f[2]]));
+      auto it = owners_.find(tet_face(mesh_.tets[e], f));
       it->second.erase(std::find(it->second.begin(), it->second.end(), e));
       if (it->second.empty()) owners_.erase(it);
     }
@@ -242,7 +240,7 @@ class Flipper {
   TetMesh& mesh_;
   GuaranteeMeasure measure_;
   std::vector<std::vector<std::size_t>> tets_of_;
-  std::map<std::array<int, 3>, std::vector<std::size_t>> owners_;
+  FaceOwners owners_;
   std::vector<std::size_t> dead_;  // slots emptied by 3-2 flips
 };
 

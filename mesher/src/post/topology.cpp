@@ -69,6 +69,13 @@ double GuaranteeMeasure::operator()(const TetMesh& mesh, const std::array<int, 4
   return std::min({1.0, tet_min_dihedral(mesh, t) / dihedral_goal_, ratio / ratio_goal_});
 }
 
+FaceOwners face_owners(const TetMesh& mesh) {
+  FaceOwners owners;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    for (const auto& f : kFaces) owners[tet_face(mesh.tets[e], f)].push_back(e);
+  return owners;
+}
+
 std::array<int, 3> sorted_face(int a, int b, int c) {
   std::array<int, 3> f{a, b, c};
   std::sort(f.begin(), f.end());
@@ -79,9 +86,7 @@ std::array<int, 3> sorted_face(int a, int b, int c) {
 // skin where one side is outside, bone interface otherwise; oriented out of the higher label
 // (soft tissue under the skin, the bone at an interface), as CGAL's facets are above.
 void rebuild_boundary_triangles(TetMesh& mesh) {
-  std::map<std::array<int, 3>, std::vector<std::size_t>> owners;
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
-    for (const auto& f : kFaces) owners[sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]])].push_back(e);
+  const FaceOwners owners = face_owners(mesh);
   mesh.triangles.clear();
   mesh.triangle_group.clear();
   for (const auto& [key, tets] : owners) {

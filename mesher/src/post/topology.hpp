@@ -14,6 +14,11 @@ namespace tactus::mesher {
 
 std::array<int, 3> sorted_face(int a, int b, int c);
 inline constexpr int kFaces[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};  // face nodes, then the opposite
+// The key of face f (a row of kFaces) of tet t.
+inline std::array<int, 3> tet_face(const std::array<int, 4>& t, const int (&f)[4]) { return sorted_face(t[f[0]], t[f[1]], t[f[2]]); }
+// The tets on each face, by key.
+using FaceOwners = std::map<std::array<int, 3>, std::vector<std::size_t>>;
+FaceOwners face_owners(const TetMesh& mesh);
 
 inline double dot3(const std::array<double, 3>& a, const std::array<double, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 

@@ -16,15 +16,13 @@ namespace tactus::mesher {
 
 std::size_t give_wedges_to_bone(TetMesh& mesh, const PostPassParams& p) {
   const GuaranteeMeasure measure(mesh, p);
-  std::map<std::array<int, 3>, std::vector<std::size_t>> owners;
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
-    for (const auto& f : kFaces) owners[sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]])].push_back(e);
+  FaceOwners owners = face_owners(mesh);
   std::size_t given = 0;
   for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
     if (mesh.tet_group[e] != contracts::kSoftTissueLabel || measure(mesh, mesh.tets[e], mesh.tet_group[e]) >= 1) continue;
     std::map<int, int> bone_faces;  // bone label -> faces of e shared with it
     for (const auto& f : kFaces)
-      for (std::size_t o : owners[sorted_face(mesh.tets[e][f[0]], mesh.tets[e][f[1]], mesh.tets[e][f[2]])])
+      for (std::size_t o : owners[tet_face(mesh.tets[e], f)])
         if (o != e && mesh.tet_group[o] >= contracts::kFirstBoneLabel) ++bone_faces[mesh.tet_group[o]];
     for (const auto& [bone, faces] : bone_faces)
       if (faces >= 2 && measure(mesh, mesh.tets[e], bone) >= 1.0 / p.guarantee_margin) {  // the guarantees themselves, without the margin
