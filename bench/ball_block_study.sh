@@ -29,10 +29,8 @@ W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
 mkdir -p "$W"
 SCENARIO=$ROOT/pipeline/scenarios/hand_block_rigid.toml
-if [ -n "$WINDOW" ]; then
-  /usr/bin/python3 "$ROOT/bench/set_pressure_window.py" "$SCENARIO" "$W/scenario_window.toml" "$WINDOW"
-  SCENARIO=$W/scenario_window.toml
-fi
+source "$ROOT/bench/study_common.sh"
+SCENARIO=$(study_scenario_with_window "$SCENARIO" "$WINDOW")
 # The ball's labels: 0 background, 1 soft tissue (r <= 15 mm), 2 bone (r <= 6 mm), centred at
 # (0, -20, 120) mm inside the block's footprint, in the HDF5 layout tactus-segment writes.
 /usr/bin/python3 - "$W/labels.h5" <<'PY'
@@ -62,18 +60,12 @@ names=(default fine finer)
 [ "$LEVELS" = 4 ] && names+=(finest)
 scale=1
 for name in "${names[@]}"; do
-  if [ -e "$W/$name" ]; then  # only a folder this script made is replaced
-    [ -f "$W/$name/.tactus_mesh_study" ] || { echo "$W/$name exists and was not made by this script; not replaced" >&2; exit 2; }
-    rm -rf "${W:?}/$name"
-  fi
-  mkdir -p "$W/$name/mesh" "$W/$name/object" && touch "$W/$name/.tactus_mesh_study"
+  study_level_folder "$name"
   size() { /usr/bin/python3 -c "print(f'{$1 * $scale:.6g}')"; }
   "$B/mesher/tactus-mesh" "$W/labels.h5" --smooth-boundaries 1 --facet-size "$(size 2.0)" --bone-facet-size "$(size 1.5)" \
     --cell-size "$(size 2.5)" --bone-cell-size "$(size 1.5)" --facet-distance "$(size 0.15)" -o "$W/$name/mesh/mesh.msh" -q
-  "$B/mesher/tactus-mesh" fibres "$W/$name/mesh/mesh.msh" --angle 30 --axis z -o "$W/$name/mesh/fibres.vtu" -q
-  "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size 0.008 -o "$W/$name/object/block.msh" -q
-  echo "== $name mesh (sizes x $(/usr/bin/python3 -c "print(f'{$scale:.3g}')")): solving hand_block_rigid.toml"
-  "$B/solver/tactus-solve" "$SCENARIO" --meshes "$W/$name" -o "$W/$name/out" -q
+  echo "== $name mesh (sizes x $(/usr/bin/python3 -c "print(f'{$scale:.3g}')"))"
+  study_fibres_block_solve "$name" 0.008 "$SCENARIO"
   scale=$(/usr/bin/python3 -c "print($scale * 0.7)")
 done
 /usr/bin/python3 "$ROOT/bench/mesh_study_report.py" "$ROOT/bench" "$W" 1 "${names[@]}"

@@ -66,20 +66,12 @@ fi
 W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
 mkdir -p "$W"
-if [ -n "$WINDOW" ]; then
-  # The scenario with its pressure window replaced (mesh paths resolve from --meshes, so the copy
-  # may live in the work folder).
-  /usr/bin/python3 "$ROOT/bench/set_pressure_window.py" "$SCENARIO" "$W/scenario_window.toml" "$WINDOW"
-  SCENARIO=$W/scenario_window.toml
-fi
+source "$ROOT/bench/study_common.sh"
+SCENARIO=$(study_scenario_with_window "$SCENARIO" "$WINDOW")
 names=(default fine)
 [ "$LEVELS" = 3 ] && names+=(finer)
 for name in "${names[@]}"; do
-  if [ -e "$W/$name" ]; then  # only a folder this script made is replaced
-    [ -f "$W/$name/.tactus_mesh_study" ] || { echo "$W/$name exists and was not made by this script; not replaced" >&2; exit 2; }
-    rm -rf "${W:?}/$name"
-  fi
-  mkdir -p "$W/$name/mesh" "$W/$name/object" && touch "$W/$name/.tactus_mesh_study"
+  study_level_folder "$name"
   case $name in
     default) sizes=() block=0.008 ;;
     fine) sizes=(--facet-size 2.8 --bone-facet-size 2.1 --cell-size 4.9 --bone-cell-size 2.45 --facet-distance 0.42) block=0.0056 ;;
@@ -93,10 +85,7 @@ for name in "${names[@]}"; do
       --refine-distance "$(/usr/bin/python3 -c "print(f'{0.1 * $REFINE_SIZE * $f:.6g}')")")
   fi
   "$B/mesher/tactus-mesh" "$LABELS" "${sizes[@]}" "${SMOOTH[@]}" "${refine[@]}" -o "$W/$name/mesh/mesh.msh" -q
-  "$B/mesher/tactus-mesh" fibres "$W/$name/mesh/mesh.msh" --angle 30 --axis z -o "$W/$name/mesh/fibres.vtu" -q
-  "$B/mesher/tactus-mesh" box --size 0.04 0.08 0.16 --origin 0 -0.06 0.04 --element-size "$block" -o "$W/$name/object/block.msh" -q
-  echo "== $name mesh: solving $(basename "$SCENARIO")"
-  "$B/solver/tactus-solve" "$SCENARIO" --meshes "$W/$name" -o "$W/$name/out" -q
+  study_fibres_block_solve "$name" "$block" "$SCENARIO"
   for ((k = 1; k < ENSEMBLE; k++)); do
     # The same scenario with every initial_velocity scaled by 1 + k 1e-6 (mesh paths resolve from --meshes).
     /usr/bin/python3 - "$SCENARIO" "$W/$name/scenario_$k.toml" "$k" <<'PY'
