@@ -6,7 +6,8 @@
 # and area within 10 %, 25 mm^2 peak within 15 %), the same for the windowed force and area, and
 # each run's contact impulse over the whole run (the time integral of the normal force).
 #   bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA]
-#                                  [--pressure-window TAU] [--refine-box "X0 Y0 Z0 X1 Y1 Z1" --refine-size S] [labels.h5]
+#                                  [--pressure-window TAU] [--refine-box "X0 Y0 Z0 X1 Y1 Z1" --refine-size S]
+#                                  [--cell-scale C] [labels.h5]
 #     labels.h5    default: the demo's out/pipeline/segment/labels.h5
 #     --scenario   default: pipeline/scenarios/hand_block.toml. With rigid bones the study is
 #                  cheaper (pipeline/scenarios/hand_block_rigid.toml), and a copy with
@@ -24,6 +25,9 @@
 #                  facets of S mm on the default mesh, 0.7 S and 0.49 S on the finer ones (tactus-mesh
 #                  --refine-box; facet distance 0.1 S there), e.g. "38 -40 30 49 5 200" and 1 for the
 #                  demo hand's ulnar edge.
+#     --cell-scale C  every level's soft-tissue and bone cell sizes (the mesh's inside) times C,
+#                  the surface sizes kept: with C = 0.7 the default level has the 0.7x mesh's cells
+#                  (4.9 / 2.45 mm) under its own 4 / 3 mm facets.
 #     --pressure-window TAU  the scenario's contact_solver.pressure_window set to TAU seconds: the reported
 #                  pressure (and with it the 25 mm^2 peak) and the windowed force and area become
 #                  exponential averages over TAU, like a sensor of that time constant (e.g. 2.5e-4, the
@@ -36,6 +40,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
 SCENARIO=$ROOT/pipeline/scenarios/hand_block.toml
 LEVELS=2
+CELL_SCALE=1
 ENSEMBLE=1
 SMOOTH=()
 WINDOW=
@@ -46,16 +51,18 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --scenario) SCENARIO=$(cd "$(dirname "$2")" && pwd)/$(basename "$2"); shift 2 ;;
     --levels) LEVELS=$2; shift 2 ;;
+    --cell-scale) CELL_SCALE=$2; shift 2 ;;
     --ensemble) ENSEMBLE=$2; shift 2 ;;
     --smooth-boundaries) SMOOTH=(--smooth-boundaries "$2"); shift 2 ;;
     --pressure-window) WINDOW=$2; shift 2 ;;
     --refine-box) REFINE_BOX=$2; shift 2 ;;
     --refine-size) REFINE_SIZE=$2; shift 2 ;;
-    -*) echo "usage: bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA] [--pressure-window TAU] [--refine-box \"X0 Y0 Z0 X1 Y1 Z1\" --refine-size S] [labels.h5]" >&2; exit 2 ;;
+    -*) echo "usage: bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA] [--pressure-window TAU] [--refine-box \"X0 Y0 Z0 X1 Y1 Z1\" --refine-size S] [--cell-scale C] [labels.h5]" >&2; exit 2 ;;
     *) LABELS=$1; shift ;;
   esac
 done
 [ "$LEVELS" = 2 ] || [ "$LEVELS" = 3 ] || { echo "--levels: 2 or 3" >&2; exit 2; }
+/usr/bin/python3 -c "import sys; sys.exit(0 if 0 < float('$CELL_SCALE') <= 1 else 1)" 2>/dev/null || { echo "--cell-scale: a number in (0, 1]" >&2; exit 2; }
 [[ "$ENSEMBLE" =~ ^[1-9]$ ]] || { echo "--ensemble: 1 to 9 runs per mesh" >&2; exit 2; }
 [ -f "$SCENARIO" ] || { echo "no scenario $SCENARIO" >&2; exit 2; }
 if [ -n "$REFINE_BOX$REFINE_SIZE" ] && { [ -z "$REFINE_BOX" ] || [ -z "$REFINE_SIZE" ]; }; then
@@ -72,17 +79,16 @@ names=(default fine)
 [ "$LEVELS" = 3 ] && names+=(finer)
 for name in "${names[@]}"; do
   study_level_folder "$name"
-  case $name in
-    default) sizes=() block=0.008 ;;
-    fine) sizes=(--facet-size 2.8 --bone-facet-size 2.1 --cell-size 4.9 --bone-cell-size 2.45 --facet-distance 0.42) block=0.0056 ;;
-    finer) sizes=(--facet-size 1.96 --bone-facet-size 1.47 --cell-size 3.43 --bone-cell-size 1.715 --facet-distance 0.294) block=0.00392 ;;
-  esac
+  case $name in default) f=1 block=0.008 ;; fine) f=0.7 block=0.0056 ;; finer) f=0.49 block=0.00392 ;; esac
+  # tactus-mesh's default sizes (facets 4 mm, bone 3 mm, cells 7 mm, bone 3.5 mm, facet distance
+  # 0.6 mm) times the level's factor, the cells also times --cell-scale.
+  size() { /usr/bin/python3 -c "print(f'{$1 * $f:.6g}')"; }
+  sizes=(--facet-size "$(size 4)" --bone-facet-size "$(size 3)" --cell-size "$(size "7 * $CELL_SCALE")"
+    --bone-cell-size "$(size "3.5 * $CELL_SCALE")" --facet-distance "$(size 0.6)")
   refine=()
   if [ -n "$REFINE_SIZE" ]; then
-    case $name in default) f=1 ;; fine) f=0.7 ;; finer) f=0.49 ;; esac
     read -r -a corners <<<"$REFINE_BOX"
-    refine=(--refine-box "${corners[@]}" --refine-size "$(/usr/bin/python3 -c "print(f'{$REFINE_SIZE * $f:.6g}')")"
-      --refine-distance "$(/usr/bin/python3 -c "print(f'{0.1 * $REFINE_SIZE * $f:.6g}')")")
+    refine=(--refine-box "${corners[@]}" --refine-size "$(size "$REFINE_SIZE")" --refine-distance "$(size "0.1 * $REFINE_SIZE")")
   fi
   "$B/mesher/tactus-mesh" "$LABELS" "${sizes[@]}" "${SMOOTH[@]}" "${refine[@]}" -o "$W/$name/mesh/mesh.msh" -q
   study_fibres_block_solve "$name" "$block" "$SCENARIO"
