@@ -341,6 +341,7 @@ void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
           const auto node = static_cast<std::size_t>(a.conn[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]);
           __builtin_prefetch(a.u + 3 * node);
           __builtin_prefetch(a.f + kForceStride * (node - a.f_node_offset), 1);
+          if constexpr (kAnp) __builtin_prefetch(a.nodal_pressure + node);
         }
       element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);
     }
