@@ -61,9 +61,9 @@ names=(default fine finer)
 scale=1
 for name in "${names[@]}"; do
   study_level_folder "$name"
-  size() { /usr/bin/python3 -c "print(f'{$1 * $scale:.6g}')"; }
-  "$B/mesher/tactus-mesh" "$W/labels.h5" --smooth-boundaries 1 --facet-size "$(size 2.0)" --bone-facet-size "$(size 1.5)" \
-    --cell-size "$(size 2.5)" --bone-cell-size "$(size 1.5)" --facet-distance "$(size 0.15)" -o "$W/$name/mesh/mesh.msh" -q
+  "$B/mesher/tactus-mesh" "$W/labels.h5" --smooth-boundaries 1 --facet-size "$(study_scaled 2.0 "$scale")" \
+    --bone-facet-size "$(study_scaled 1.5 "$scale")" --cell-size "$(study_scaled 2.5 "$scale")" \
+    --bone-cell-size "$(study_scaled 1.5 "$scale")" --facet-distance "$(study_scaled 0.15 "$scale")" -o "$W/$name/mesh/mesh.msh" -q
   echo "== $name mesh (sizes x $(/usr/bin/python3 -c "print(f'{$scale:.3g}')"))"
   study_fibres_block_solve "$name" 0.008 "$SCENARIO"
   scale=$(/usr/bin/python3 -c "print($scale * 0.7)")

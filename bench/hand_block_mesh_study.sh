@@ -82,13 +82,13 @@ for name in "${names[@]}"; do
   case $name in default) f=1 block=0.008 ;; fine) f=0.7 block=0.0056 ;; finer) f=0.49 block=0.00392 ;; esac
   # tactus-mesh's default sizes (facets 4 mm, bone 3 mm, cells 7 mm, bone 3.5 mm, facet distance
   # 0.6 mm) times the level's factor, the cells also times --cell-scale.
-  size() { /usr/bin/python3 -c "print(f'{$1 * $f:.6g}')"; }
-  sizes=(--facet-size "$(size 4)" --bone-facet-size "$(size 3)" --cell-size "$(size "7 * $CELL_SCALE")"
-    --bone-cell-size "$(size "3.5 * $CELL_SCALE")" --facet-distance "$(size 0.6)")
+  sizes=(--facet-size "$(study_scaled 4 "$f")" --bone-facet-size "$(study_scaled 3 "$f")" --cell-size "$(study_scaled "7 * $CELL_SCALE" "$f")"
+    --bone-cell-size "$(study_scaled "3.5 * $CELL_SCALE" "$f")" --facet-distance "$(study_scaled 0.6 "$f")")
   refine=()
   if [ -n "$REFINE_SIZE" ]; then
     read -r -a corners <<<"$REFINE_BOX"
-    refine=(--refine-box "${corners[@]}" --refine-size "$(size "$REFINE_SIZE")" --refine-distance "$(size "0.1 * $REFINE_SIZE")")
+    refine=(--refine-box "${corners[@]}" --refine-size "$(study_scaled "$REFINE_SIZE" "$f")"
+      --refine-distance "$(study_scaled "0.1 * $REFINE_SIZE" "$f")")
   fi
   "$B/mesher/tactus-mesh" "$LABELS" "${sizes[@]}" "${SMOOTH[@]}" "${refine[@]}" -o "$W/$name/mesh/mesh.msh" -q
   study_fibres_block_solve "$name" "$block" "$SCENARIO"

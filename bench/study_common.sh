@@ -1,6 +1,12 @@
 # Shared steps of the mesh studies (bench/hand_block_mesh_study.sh, bench/ball_block_study.sh);
 # sourced, with ROOT, B (the build folder) and W (the work folder) set by the study.
 
+# A size of the level: $1 (a number or a product, e.g. "7 * 0.7") times the level's factor $2,
+# printed with 6 significant digits (the mesher's options).
+study_scaled() {
+  /usr/bin/python3 -c "print(f'{($1) * $2:.6g}')"
+}
+
 # The scenario with its contact_solver.pressure_window set to $2 seconds, written into the work
 # folder (mesh paths resolve from --meshes, so the copy may live there); prints its path, or the
 # scenario itself when $2 is empty.
