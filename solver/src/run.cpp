@@ -272,6 +272,7 @@ class RunLoop {
     a.io("loop.peaks.pressure_node", p.pressure_node), a.io("loop.peaks.max_iterations", p.max_iterations);
     a.io("loop.peaks.unconverged_steps", p.unconverged_steps), a.io("loop.peaks.contact_steps", p.contact_steps);
     a.io("loop.peaks.recovering_rows", p.recovering_rows);
+    a.io("loop.peaks.rows_swept", p.rows_swept), a.io("loop.peaks.rows_in_order", p.rows_in_order);
     a.io("loop.peaks.von_mises", p.von_mises), a.io("loop.peaks.reaction_peak", p.reaction_peak);
     a.io("loop.peaks.reaction_peak_time", p.reaction_peak_time), a.io("loop.peaks.reaction_peak_force", p.reaction_peak_force);
     a.io_records("loop.peaks.pairs", p.pairs), a.io_records("loop.peaks.at_outputs", p.at_outputs);

@@ -222,7 +222,12 @@ const SectionSpec& contact_solver_section() {
                   "e.g. a node sliding back over a master's edge) is pushed out at this speed rather than in one step, which would give it "
                   "depth / dt (run.json contact.uzawa.recovering_rows counts them)",
                   0, true),
-           "1.0")}};
+           "1.0"),
+       opt(number("sweep_blocks", "",
+                  "the Uzawa sweep is cut into this many spatial blocks (at most one per 64 rows) swept in parallel, then the rows "
+                  "between blocks in order; the same bits on any thread count; 1: one Gauss-Seidel sweep in row order",
+                  1, false, 4096, false),
+           "16")}};
   return s;
 }
 
@@ -816,6 +821,7 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     sc.contact_solver.verlet_skin = r.number(t, *spec.find("verlet_skin"), "contact_solver", 0.5);
     sc.contact_solver.pressure_average_area = r.number(t, *spec.find("pressure_average_area"), "contact_solver", 25e-6);
     sc.contact_solver.recovery_speed = r.number(t, *spec.find("recovery_speed"), "contact_solver", 1.0);
+    sc.contact_solver.sweep_blocks = static_cast<int>(r.number(t, *spec.find("sweep_blocks"), "contact_solver", 16));
   }
 }
 

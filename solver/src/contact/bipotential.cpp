@@ -78,6 +78,92 @@ double row_compliance(const ContactRows& rows, std::size_t k, const double* n, c
   return w;
 }
 
+// Cuts the rows into at most `blocks` slabs for the parallel sweep (rows.block_start, block_rows)
+// and the rows left to sweep in order after them (rows.between_blocks); returns the number of
+// slabs, or 1 when the rows are swept in one sequence (few rows, a contact too narrow for slabs
+// thicker than the rows' reach, or a free rigid body among them: its rows are coupled through the
+// body). The slabs hold equal row counts (from a histogram, O(rows)) along the slave nodes' longest
+// extent and are at least 2.5 rows' reaches thick, so that the even slabs' rows share no node with
+// one another, nor the odd slabs'; a row that still does (a thin slab) is left to the ordered
+// sweep. Depends on the rows and positions alone, never on the thread count.
+int cut_sweep_blocks(ContactRows& rows, const double* X, const double* u, int blocks, const RigidRows* rigid) {
+  const std::size_t K = rows.size();
+  blocks = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(blocks, 1)), K / ContactSettings::kMinRowsPerSweepBlock));
+  if (blocks <= 1 || !X || !u) return 1;
+  std::int32_t top = -1;
+  for (const std::int32_t node : rows.nodes) {
+    if (rigid && rigid->body(node) >= 0) return 1;
+    top = std::max(top, node);
+  }
+  auto at = [&](std::int32_t node, std::size_t d) {
+    const std::size_t i = 3 * static_cast<std::size_t>(node) + d;
+    return X[i] + u[i];
+  };
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t k = 0; k < K; ++k)
+    for (std::size_t d = 0; d < 3; ++d) lo[d] = std::min(lo[d], at(rows.slave(k), d)), hi[d] = std::max(hi[d], at(rows.slave(k), d));
+  std::size_t axis = 0;
+  for (std::size_t d = 1; d < 3; ++d)
+    if (hi[d] - lo[d] > hi[axis] - lo[axis]) axis = d;
+  double reach = 0;  // how far along the axis a row's nodes lie from its slave node
+  for (std::size_t k = 0; k < K; ++k)
+    for (auto a = rows.start[k] + 1; a < rows.start[k + 1]; ++a)
+      reach = std::max(reach, std::abs(at(rows.nodes[static_cast<std::size_t>(a)], axis) - at(rows.slave(k), axis)));
+  const double extent = hi[axis] - lo[axis];
+  if (!(extent > 0)) return 1;
+  if (reach > 0) blocks = static_cast<int>(std::min<double>(blocks, std::floor(extent / (2.5 * reach))));
+  if (blocks <= 1) return 1;
+  // Equal-count slabs: a histogram of 64 bins per slab, each bin given to the slab its first row
+  // falls in by rank.
+  const std::size_t bins = 64 * static_cast<std::size_t>(blocks);
+  const double per_length = static_cast<double>(bins) / extent;
+  auto bin_of = [&](std::size_t k) { return std::min(bins - 1, static_cast<std::size_t>((at(rows.slave(k), axis) - lo[axis]) * per_length)); };
+  std::vector<std::int32_t>& row_block = rows.row_block;
+  row_block.assign(bins, 0);
+  for (std::size_t k = 0; k < K; ++k) ++row_block[bin_of(k)];
+  std::size_t before = 0;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t count = static_cast<std::size_t>(row_block[b]);
+    row_block[b] = static_cast<std::int32_t>(before * static_cast<std::size_t>(blocks) / K);
+    before += count;
+  }
+  row_block.resize(bins + K);  // then each row's slab after the bins'
+  for (std::size_t k = 0; k < K; ++k) row_block[bins + k] = row_block[bin_of(k)];
+  // Per parity, each node's slab: the one slab of that parity whose rows touch it, or -2 when rows
+  // of two such slabs do; those rows go to the ordered sweep.
+  std::vector<std::int32_t>& node_block = rows.node_block;
+  if (node_block.size() <= static_cast<std::size_t>(top)) node_block.resize(static_cast<std::size_t>(top) + 1, -1);
+  auto nodes_of = [&](std::size_t k, auto&& f) {
+    for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a) f(node_block[static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)])]);
+  };
+  for (std::int32_t parity = 0; parity < 2; ++parity) {
+    for (std::size_t k = 0; k < K; ++k)
+      if (const std::int32_t b = row_block[bins + k]; b % 2 == parity)
+        nodes_of(k, [b](std::int32_t& owner) { owner = owner == -1 || owner == b ? b : -2; });
+    for (std::size_t k = 0; k < K; ++k) {
+      bool shared = false;
+      if (row_block[bins + k] % 2 == parity) nodes_of(k, [&shared](std::int32_t& owner) { shared = shared || owner == -2; });
+      if (shared) row_block[bins + k] = -1;
+    }
+    for (const std::int32_t node : rows.nodes) node_block[static_cast<std::size_t>(node)] = -1;
+  }
+  rows.block_start.assign(static_cast<std::size_t>(blocks) + 1, 0);
+  rows.between_blocks.clear();
+  for (std::size_t k = 0; k < K; ++k) {
+    if (row_block[bins + k] < 0)
+      rows.between_blocks.push_back(static_cast<std::int32_t>(k));
+    else
+      ++rows.block_start[static_cast<std::size_t>(row_block[bins + k]) + 1];
+  }
+  for (int b = 0; b < blocks; ++b) rows.block_start[static_cast<std::size_t>(b) + 1] += rows.block_start[static_cast<std::size_t>(b)];
+  rows.block_rows.resize(static_cast<std::size_t>(rows.block_start.back()));
+  std::copy(rows.block_start.begin(), rows.block_start.end() - 1, row_block.begin());  // the bins' slots, free now: fill cursors
+  for (std::size_t k = 0; k < K; ++k)
+    if (const std::int32_t b = row_block[bins + k]; b >= 0)
+      rows.block_rows[static_cast<std::size_t>(row_block[static_cast<std::size_t>(b)]++)] = static_cast<std::int32_t>(k);
+  return blocks;
+}
+
 }  // namespace
 
 Vec3 RigidRows::arm(std::int32_t node, int b) const {
@@ -204,15 +290,42 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vect
   std::vector<std::size_t>& creeping = rows.creeping;
   std::vector<double>& change = rows.change;
   change.assign(K, 0.0);
-  double residual = 0;
-  int it = 0;
-  for (it = 1; it <= in.settings->max_iterations; ++it) {
-    double max_dr = 0, max_r = 0;
-    for (std::size_t k = 0; k < K; ++k) {
+  // The sweep: in row order, or slab by slab in parallel, the even slabs then the odd ones (slabs
+  // of one parity share no node, so each is its own Gauss-Seidel sweep and the result does not
+  // depend on which thread took which), then the rows left over in order.
+  const int blocks = cut_sweep_blocks(rows, in.X, in.u, in.settings->sweep_blocks, rigid);
+  rep.sweep_blocks = blocks;
+  rep.rows_between_blocks = blocks > 1 ? rows.between_blocks.size() : 0;
+  rows.block_change.assign(2 * static_cast<std::size_t>(blocks), 0.0);
+  auto sweep_rows = [&](const std::int32_t* order, std::size_t n, double& max_dr, double& max_r) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(order ? order[i] : static_cast<std::int32_t>(i));
       const auto [drn, rn] = update(k);
       change[k] = drn;
       max_dr = std::max(max_dr, drn);
       max_r = std::max(max_r, rn);
+    }
+  };
+  double residual = 0;
+  int it = 0;
+  for (it = 1; it <= in.settings->max_iterations; ++it) {
+    double max_dr = 0, max_r = 0;
+    if (blocks == 1) {
+      sweep_rows(nullptr, K, max_dr, max_r);
+    } else {
+      double* block_change = rows.block_change.data();
+      for (int parity = 0; parity < 2; ++parity) {  // the even slabs, then the odd ones
+#pragma omp parallel for num_threads(in.threads) schedule(dynamic, 1)
+        for (int b = parity; b < blocks; b += 2) {
+          const auto first = static_cast<std::size_t>(rows.block_start[static_cast<std::size_t>(b)]);
+          const auto last_row = static_cast<std::size_t>(rows.block_start[static_cast<std::size_t>(b) + 1]);
+          double dr = 0, r = 0;
+          sweep_rows(rows.block_rows.data() + first, last_row - first, dr, r);
+          block_change[2 * b] = dr, block_change[2 * b + 1] = r;
+        }
+      }
+      for (int b = 0; b < blocks; ++b) max_dr = std::max(max_dr, block_change[2 * b]), max_r = std::max(max_r, block_change[2 * b + 1]);
+      sweep_rows(rows.between_blocks.data(), rows.between_blocks.size(), max_dr, max_r);
     }
     residual = max_r > 0 ? max_dr / max_r : 0.0;
     if (residual <= in.settings->tolerance) break;

@@ -36,6 +36,8 @@ struct RowSolveInput {
   double dt, dt_prev;
   std::vector<PairStepReport>* per_pair = nullptr;  // one per pair, overwritten (or none)
   RigidRows* rigid = nullptr;                       // free rigid bodies (or none)
+  const double *X = nullptr, *u = nullptr;          // reference positions and displacements at t^n, to cut the sweep in blocks
+  int threads = 1;                                  // for the blocked sweep
 };
 
 // Solves for rows.reaction, correcting v (free half-step velocities) in place; `last` holds the

@@ -99,7 +99,8 @@ ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, 
     detect(u, settings_.search_factor, rows_);
   }
   ContactStepReport rep =
-      solve_rows(rows_, v, last_reaction_, {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid});
+      solve_rows(rows_, v, last_reaction_,
+                 {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid, model_.X.data(), u, threads_});
   update_windows(rep, 0.5 * (dt + dt_prev));
   return rep;
 }

@@ -71,7 +71,9 @@ struct RunPeaks {
   int max_iterations = 0;
   std::size_t unconverged_steps = 0, contact_steps = 0;
   std::size_t recovering_rows = 0;  // contact rows pushed out at contact_solver.recovery_speed, summed over the steps
-  std::vector<double> von_mises;    // per block
+  // Contact rows swept, and of them those swept in order (between the blocks, or all of a step not cut), summed over the steps.
+  std::size_t rows_swept = 0, rows_in_order = 0;
+  std::vector<double> von_mises;  // per block
   // Per boundary: the largest |reaction force|, when, and the force then.
   std::vector<double> reaction_peak, reaction_peak_time, reaction_peak_force;  // 1, 1, 3 per boundary
   // Per directed contact pair: the largest |force| on its slave nodes, area and pressure, and when.

@@ -54,6 +54,9 @@ nlohmann::json contact_json(const Scenario& sc, const Model& model, const RunPea
             {"max_iterations_used", peaks.max_iterations},
             {"unconverged_steps", peaks.unconverged_steps},
             {"recovering_rows", peaks.recovering_rows},
+            {"sweep_blocks", sc.contact_solver.sweep_blocks},
+            // the share of the rows swept in order (between the blocks, or in steps with too few rows to cut)
+            {"rows_in_order", peaks.rows_swept ? static_cast<double>(peaks.rows_in_order) / static_cast<double>(peaks.rows_swept) : 0.0},
             {"recovery_speed", sc.contact_solver.recovery_speed}}}};
 }
 

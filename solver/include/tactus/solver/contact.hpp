@@ -97,6 +97,11 @@ struct ContactRows {
   // and the rows swept alone when the sweep creeps (contact/bipotential.cpp).
   std::vector<double> change;
   std::vector<std::size_t> creeping;
+  // The blocked sweep's (contact/bipotential.cpp): the rows of block b are
+  // block_rows[block_start[b] .. block_start[b + 1]), then those between blocks; per node its
+  // block while they are cut (-1 after); per block its largest change and reaction in a sweep.
+  std::vector<std::int32_t> block_start, block_rows, between_blocks, node_block, row_block;
+  std::vector<double> block_change;
 
   void clear();
   std::size_t size() const { return pair.size(); }
@@ -189,6 +194,9 @@ struct ContactStepReport {
   std::size_t recovering = 0;
   double deepest_gap = 0;
   std::int32_t deepest_node = -1;
+  // The sweep's blocks (1: one sweep in row order) and the rows between them, swept in order after.
+  int sweep_blocks = 1;
+  std::size_t rows_between_blocks = 0;
   // Work of the reactions over du^{n-1/2} and du^{n+1/2} (trapezoid halves), relative motion:
   double normal_work_back = 0, normal_work_forward = 0, friction_work_back = 0, friction_work_forward = 0;
   // Work of the supports that take the reaction shares landing on prescribed dofs (halves).

@@ -150,6 +150,13 @@ struct ContactSettings {
   // step did not make: a node that slid back over a master's edge, a row that just appeared) is
   // pushed out at this speed instead of in one step, m/s.
   double recovery_speed = 1.0;
+  // The Uzawa sweep in spatial blocks: the rows are cut into this many slabs along the contact's
+  // longest extent; the rows of one slab that share no node with another slab's are swept
+  // (Gauss-Seidel, in row order) in parallel with the other slabs', then the rows between slabs
+  // in order. The blocks do not depend on the thread count (the same bits on any number of
+  // threads); at most one block per kMinRowsPerSweepBlock rows; 1: one sweep in row order.
+  int sweep_blocks = 16;
+  static constexpr std::size_t kMinRowsPerSweepBlock = 64;
 };
 
 struct Scenario {
