@@ -265,7 +265,7 @@ TEST(Contact, RowsSharingALightNodeConverge) {
   const std::vector<ContactPair> pairs(2);                             // frictionless
   ContactSettings settings;
   settings.tolerance = 1e-10;
-  std::vector<std::vector<double>> last(2, std::vector<double>(3, 0.0));
+  WarmStart last{{std::vector<double>(3, 0.0), std::vector<double>(3, 0.0)}, {}};
   const RowSolveInput in{&pairs, &settings, v_old.data(), inv_mass.data(), dt, dt, dt};
   const ContactStepReport rep = solve_rows(rows, v.data(), last, in);
   const double r_exact = M * v0 / dt;

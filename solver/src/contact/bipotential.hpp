@@ -36,12 +36,12 @@ struct RowSolveInput {
   double dt, dt_prev;
   std::vector<PairStepReport>* per_pair = nullptr;  // one per pair, overwritten (or none)
   RigidRows* rigid = nullptr;                       // free rigid bodies (or none)
-  const double *X = nullptr, *u = nullptr;          // reference positions and displacements at t^n, to cut the sweep in blocks
+  const double* X = nullptr;                        // reference positions (3 per node), to cut the sweep in slabs
   int threads = 1;                                  // for the blocked sweep
 };
 
 // Solves for rows.reaction, correcting v (free half-step velocities) in place; `last` holds the
-// previous step's reactions per pair and slave (warm start, updated here).
-ContactStepReport solve_rows(ContactRows& rows, double* v, std::vector<std::vector<double>>& last, const RowSolveInput& in);
+// previous step's reactions per pair and slave (warm start, replaced here by this step's).
+ContactStepReport solve_rows(ContactRows& rows, double* v, WarmStart& last, const RowSolveInput& in);
 
 }  // namespace tactus::solver

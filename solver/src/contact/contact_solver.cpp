@@ -18,10 +18,11 @@ ContactSolver::ContactSolver(const Model& model)
     : model_(model), pairs_(model.contact_pairs), settings_(model.contact_settings), scratch_(pairs_.size()) {
   for (std::size_t p = 0; p < pairs_.size(); ++p) scratch_[p].skin = settings_.verlet_skin * pairs_[p].search_scale;
   x_.resize(3 * model.num_nodes);
-  for (const auto& p : pairs_) last_reaction_.emplace_back(3 * p.slave_nodes.size(), 0.0);
+  for (const auto& p : pairs_) last_reaction_.reaction.emplace_back(3 * p.slave_nodes.size(), 0.0);
   pair_reports_.resize(pairs_.size());
   step_pressure_.assign(model.num_nodes, 0.0);
   windowed_pressure_.assign(model.num_nodes, 0.0);
+  is_pressed_.assign(model.num_nodes, 0);
   for (const ContactPair& p : pairs_) slave_union_.insert(slave_union_.end(), p.slave_nodes.begin(), p.slave_nodes.end());
   std::sort(slave_union_.begin(), slave_union_.end());
   slave_union_.erase(std::unique(slave_union_.begin(), slave_union_.end()), slave_union_.end());
@@ -100,13 +101,18 @@ ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, 
   }
   ContactStepReport rep =
       solve_rows(rows_, v, last_reaction_,
-                 {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid, model_.X.data(), u, threads_});
+                 {&pairs_, &settings_, v_old, inv_mass, velocity_per_force, dt, dt_prev, &pair_reports_, rigid, model_.X.data(), threads_});
   update_windows(rep, 0.5 * (dt + dt_prev));
   return rep;
 }
 
 void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
-  for (std::int32_t s : slave_union_) step_pressure_[static_cast<std::size_t>(s)] = 0;
+  for (std::int32_t s : step_nodes_) step_pressure_[static_cast<std::size_t>(s)] = 0;
+  step_nodes_.clear();
+  auto add_pressure = [&](std::size_t node, double p) {
+    if (step_pressure_[node] == 0) step_nodes_.push_back(static_cast<std::int32_t>(node));
+    step_pressure_[node] += p;
+  };
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     if (rows_.status[k] == ContactStatus::open) continue;
     const double* r = &rows_.reaction[3 * k];
@@ -117,12 +123,17 @@ void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
       // slave surface's load there: its pressure over the node's tributary area.
       for (auto a = rows_.start[k] + 1; a < rows_.start[k + 1]; ++a) {
         const auto node = static_cast<std::size_t>(rows_.nodes[static_cast<std::size_t>(a)]);
-        if (edge_share_area_[node] > 0) step_pressure_[node] -= rows_.weights[static_cast<std::size_t>(a)] * rn / edge_share_area_[node];
+        if (edge_share_area_[node] > 0) add_pressure(node, -rows_.weights[static_cast<std::size_t>(a)] * rn / edge_share_area_[node]);
       }
       continue;
     }
-    step_pressure_[static_cast<std::size_t>(rows_.slave(k))] += rn / rows_.area[k];
+    add_pressure(static_cast<std::size_t>(rows_.slave(k)), rn / rows_.area[k]);
   }
+  // The windows move at the pressed nodes only: a node outside them has p = 0 and no load, so stays 0.
+  bool grown = false;
+  for (std::int32_t s : step_nodes_)
+    if (!is_pressed_[static_cast<std::size_t>(s)]) is_pressed_[static_cast<std::size_t>(s)] = 1, pressed_.push_back(s), grown = true;
+  if (grown) std::sort(pressed_.begin(), pressed_.end());  // ascending, as the peak's ties were always taken
   const double w = pressure_window_ > 0 ? std::min(1.0, dtbar / pressure_window_) : 1.0;
   windowed_normal_force_ += w * (rep.normal_force - windowed_normal_force_);
   windowed_area_ += w * (rep.area - windowed_area_);
@@ -130,11 +141,24 @@ void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
   rep.peak_step_pressure = rep.peak_pressure;
   rep.peak_pressure = 0;
   rep.peak_node = -1;
-  for (std::int32_t s : slave_union_) {
+  std::size_t kept = 0;
+  for (std::int32_t s : pressed_) {
     double& q = windowed_pressure_[static_cast<std::size_t>(s)];
     q += w * (step_pressure_[static_cast<std::size_t>(s)] - q);
     if (q > rep.peak_pressure) rep.peak_pressure = q, rep.peak_node = s;
+    if (q != 0)
+      pressed_[kept++] = s;
+    else
+      is_pressed_[static_cast<std::size_t>(s)] = 0;
   }
+  pressed_.resize(kept);
+}
+
+void ContactSolver::find_pressed() {
+  pressed_.clear();
+  std::fill(is_pressed_.begin(), is_pressed_.end(), 0);
+  for (std::int32_t s : slave_union_)
+    if (windowed_pressure_[static_cast<std::size_t>(s)] != 0) pressed_.push_back(s), is_pressed_[static_cast<std::size_t>(s)] = 1;
 }
 
 void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status,

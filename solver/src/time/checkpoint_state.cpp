@@ -40,10 +40,11 @@ void checkpoint_search(StateArchive& a, const std::string& p, DetectionScratch& 
 void ContactSolver::checkpoint(StateArchive& a) {
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
     const std::string prefix = "contact.pair" + std::to_string(p) + ".";
-    a.io(prefix + "last_reaction", last_reaction_[p], last_reaction_[p].size());
+    a.io(prefix + "last_reaction", last_reaction_.reaction[p], last_reaction_.reaction[p].size());
     checkpoint_search(a, prefix, scratch_[p]);
   }
   a.io("contact.windowed_pressure", windowed_pressure_, windowed_pressure_.size());
+  if (a.loading()) last_reaction_.find_written(), find_pressed();
   a.io("contact.pressure_window", pressure_window_);
   a.io("contact.windowed_normal_force", windowed_normal_force_), a.io("contact.windowed_area", windowed_area_);
   a.io("contact.ahead", ahead_);

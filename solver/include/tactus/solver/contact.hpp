@@ -102,6 +102,13 @@ struct ContactRows {
   // block while they are cut (-1 after); per block its largest change and reaction in a sweep.
   std::vector<std::int32_t> block_start, block_rows, between_blocks, node_block, row_block;
   std::vector<double> block_change;
+  // The rows the slabs were last cut for (their starts and nodes), the slabs asked for and made.
+  std::vector<std::int32_t> cut_start, cut_nodes;
+  int cut_asked = 0, cut_blocks = 1;
+  // When each node's velocity last changed and each row was last updated, in the sweep's order,
+  // and whether that update changed nothing: such a row whose nodes did not move since is skipped.
+  std::vector<std::int64_t> node_time, row_time;
+  std::vector<char> quiet;
 
   void clear();
   std::size_t size() const { return pair.size(); }
@@ -203,6 +210,16 @@ struct ContactStepReport {
   double support_work_back = 0, support_work_forward = 0;
 };
 
+// Reactions of the previous step per pair and slave node (3 each): the Uzawa iterations start from
+// them (projected on the new cone), so a lasting contact converges in one or two sweeps. `written`
+// lists the (pair, slave index) entries the last step set, so that the next clears them in
+// O(rows) instead of O(surface) (a self-contact pair's slaves are the whole skin).
+struct WarmStart {
+  std::vector<std::vector<double>> reaction;
+  std::vector<std::int32_t> written;  // pair, slave index, ...
+  void find_written();                // from the non-zero entries (a checkpoint read back)
+};
+
 // The integrator's view of contact: one velocity correction per step.
 class ContactSolver {
  public:
@@ -273,13 +290,16 @@ class ContactSolver {
   bool ahead_ = false;
   std::vector<double> x_;                    // current positions, filled per step at contact_nodes_ only
   std::vector<std::int32_t> contact_nodes_;  // every pair's slave nodes and master vertices, once
-  // Reactions of the previous step per pair and slave (3 each): the Uzawa iterations start from
-  // them (projected on the new cone), so a lasting contact converges in one or two sweeps.
-  std::vector<std::vector<double>> last_reaction_;
+  WarmStart last_reaction_;
   std::vector<PairStepReport> pair_reports_;
   double pressure_window_ = 0;
   std::vector<double> step_pressure_, windowed_pressure_;  // per node (slave nodes only used)
-  std::vector<double> edge_share_area_;                    // per node: its mortar-pass tributary area where an edge pass acts
+  // The slave nodes whose step_pressure_ this step set, and those whose windowed pressure is not 0
+  // (ascending; flagged in is_pressed_): the windows are updated there only, not over the whole skin.
+  std::vector<std::int32_t> step_nodes_, pressed_;
+  std::vector<char> is_pressed_;
+  void find_pressed();                   // from the non-zero windowed pressures (a checkpoint read back)
+  std::vector<double> edge_share_area_;  // per node: its mortar-pass tributary area where an edge pass acts
   double windowed_normal_force_ = 0, windowed_area_ = 0;
   std::vector<std::int32_t> slave_union_;  // every pair's slave nodes, once
   // The step's nodal pressures, normal force and area into their exponential windows (pressure_window_).
