@@ -12,7 +12,8 @@
 //              steps of dt = 1e-4 s, mass damping 50 /s, timed end to end (mesh file to results).
 //  contact     contact time per step against surface size: two slabs (n x n x 1 cells each)
 //              pressed face to face, every slave node in contact, mu = 0.3; detection + Uzawa
-//              per step against the stress pass of the same model, 2 threads.
+//              per step against the stress pass of the same model, 2 threads; each size with
+//              each --sweep-blocks setting (the ordered sweep, 1, and parallel slabs), side by side.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -175,49 +176,54 @@ void cube(const std::filesystem::path& work) {
               48000.0 * static_cast<double>(s.steps) / wall / 1e6, s.max_relative_balance_error);
 }
 
-void contact_scaling(const std::vector<int>& sizes) {
-  std::printf("%9s %9s %11s %9s %12s %12s %8s %10s %10s\n", "master_tri", "slave_nod", "tets", "active", "contact_ms", "stress_ms", "ratio",
-              "iterations", "step_ms");
-  for (int n : sizes) {
-    TetMesh lower = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01);
-    const TetMesh upper = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01, {0, 0, 0.01});
-    samples::append_mesh(lower, upper, 100, "_upper");
-    Model m = build_model(lower, bench_material("linear_elastic"));
-    ContactPair pair;
-    pair.name = "slabs";
-    pair.friction = 0.3;
-    set_master_surface(pair, m, surface_triangles(m, 16), "lower zmax");
-    set_slave_surface(pair, m, surface_triangles(m, 115));  // upper zmin
-    m.contact_pairs.push_back(pair);
-    if (const char* it = std::getenv("TACTUS_BENCH_UZAWA_ITERATIONS")) m.contact_settings.max_iterations = std::atoi(it);
-    for (std::size_t i = 0; i < m.num_nodes; ++i)
-      if (m.X[3 * i + 2] > 0.01 - 1e-9) m.initial_velocity[3 * i + 2] = -0.5, m.initial_velocity[3 * i] = 0.2;
-    RunSpec run;
-    run.end_time = 1;
-    run.threads = 2;
-    ExplicitSolver solver(m, run, DampingSpec{});
-    std::size_t active = 0;
-    int iterations = 0;
-    const int steps = 20;
-    double contact0 = 0, stress0 = 0, ahead0 = 0;
-    for (int k = 0; k < steps + 2; ++k) {
-      if (k == 2) contact0 = solver.contact_seconds(), stress0 = solver.stress_seconds(), ahead0 = solver.detection_ahead_seconds();  // after warm-up
-      solver.advance_velocity();  // free update + contact (detection + Uzawa)
-      solver.advance_position();  // position update + stress pass
-      active = std::max(active, solver.contact_report().active);
-      iterations = std::max(iterations, solver.contact_report().iterations);
+void contact_scaling(const std::vector<int>& sizes, const std::vector<int>& sweep_blocks) {
+  std::printf("%9s %9s %11s %9s %7s %12s %12s %8s %10s %10s\n", "master_tri", "slave_nod", "tets", "active", "slabs", "contact_ms", "stress_ms",
+              "ratio", "iterations", "step_ms");
+  for (int n : sizes)
+    for (int blocks : sweep_blocks) {
+      TetMesh lower = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01);
+      const TetMesh upper = samples::make_box_mesh(n, n, 1, 0.1, 0.1, 0.01, {0, 0, 0.01});
+      samples::append_mesh(lower, upper, 100, "_upper");
+      Model m = build_model(lower, bench_material("linear_elastic"));
+      ContactPair pair;
+      pair.name = "slabs";
+      pair.friction = 0.3;
+      set_master_surface(pair, m, surface_triangles(m, 16), "lower zmax");
+      set_slave_surface(pair, m, surface_triangles(m, 115));  // upper zmin
+      m.contact_pairs.push_back(pair);
+      if (const char* it = std::getenv("TACTUS_BENCH_UZAWA_ITERATIONS")) m.contact_settings.max_iterations = std::atoi(it);
+      m.contact_settings.sweep_blocks = blocks;
+      for (std::size_t i = 0; i < m.num_nodes; ++i)
+        if (m.X[3 * i + 2] > 0.01 - 1e-9) m.initial_velocity[3 * i + 2] = -0.5, m.initial_velocity[3 * i] = 0.2;
+      RunSpec run;
+      run.end_time = 1;
+      run.threads = 2;
+      ExplicitSolver solver(m, run, DampingSpec{});
+      std::size_t active = 0;
+      int iterations = 0, slabs = 1;
+      const int steps = 20;
+      double contact0 = 0, stress0 = 0, ahead0 = 0;
+      for (int k = 0; k < steps + 2; ++k) {
+        if (k == 2)
+          contact0 = solver.contact_seconds(), stress0 = solver.stress_seconds(), ahead0 = solver.detection_ahead_seconds();  // after warm-up
+        solver.advance_velocity();  // free update + contact (detection + Uzawa)
+        solver.advance_position();  // position update + stress pass
+        active = std::max(active, solver.contact_report().active);
+        iterations = std::max(iterations, solver.contact_report().iterations);
+        slabs = solver.contact_report().sweep_blocks;
+      }
+      // The next step's detection runs inside the stress pass (on one thread): counted as contact
+      // here, and the pass's wall time (which hides part of it) stays the stress time.
+      const double ahead_s = solver.detection_ahead_seconds() - ahead0;
+      const double contact_s = solver.contact_seconds() - contact0 + ahead_s, stress_s = solver.stress_seconds() - stress0;
+      std::printf("%9zu %9zu %11zu %9zu %7d %12.3f %12.3f %8.3f %10d %10.3f\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(),
+                  m.num_elements, active, slabs, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations,
+                  1e3 * (contact_s - ahead_s + stress_s) / steps);
+      std::fflush(stdout);
     }
-    // The next step's detection runs inside the stress pass (on one thread): counted as contact
-    // here, and the pass's wall time (which hides part of it) stays the stress time.
-    const double ahead_s = solver.detection_ahead_seconds() - ahead0;
-    const double contact_s = solver.contact_seconds() - contact0 + ahead_s, stress_s = solver.stress_seconds() - stress0;
-    std::printf("%9zu %9zu %11zu %9zu %12.3f %12.3f %8.3f %10d %10.3f\n", pair.master->triangles().size() / 3, pair.slave_nodes.size(),
-                m.num_elements, active, 1e3 * contact_s / steps, 1e3 * stress_s / steps, contact_s / stress_s, iterations,
-                1e3 * (contact_s - ahead_s + stress_s) / steps);
-    std::fflush(stdout);
-  }
   std::printf(
-      "per step: contact_ms = detection (run on one thread during the stress pass) + Uzawa (Gauss-Seidel, sequential); stress_ms = the "
+      "per step: contact_ms = detection (run on one thread during the stress pass) + Uzawa (Gauss-Seidel, in row order or in parallel slabs: "
+      "slabs, from --sweep-blocks); stress_ms = the "
       "stress pass's wall time (2 threads, the detection's overlap included); step_ms = the wall time of both\n");
 }
 
@@ -240,10 +246,13 @@ int main(int argc, char** argv) {
   std::vector<int> contact_sizes{16, 32, 64, 128, 224};  // 2 n^2 master triangles: 512 ... 100,352
   auto* ct = app.add_subcommand("contact", "contact time per step against contact surface size");
   ct->add_option("--cells", contact_sizes, "cells per slab edge (2 n^2 triangles per contact face)")->capture_default_str();
+  std::vector<int> sweep_blocks{1, 16};
+  ct->add_option("--sweep-blocks", sweep_blocks, "contact_solver.sweep_blocks settings, each run at every size (side by side)")
+      ->capture_default_str();
   app.require_subcommand(1);
   return cli::run(app, argc, argv, common, [&] {
     if (tp->parsed()) throughput(sizes, materials, rounds);
     if (cb->parsed()) cube(work);
-    if (ct->parsed()) contact_scaling(contact_sizes);
+    if (ct->parsed()) contact_scaling(contact_sizes, sweep_blocks);
   });
 }

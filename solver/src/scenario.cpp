@@ -224,8 +224,9 @@ const SectionSpec& contact_solver_section() {
                   0, true),
            "1.0"),
        opt(number("sweep_blocks", "",
-                  "the Uzawa sweep is cut into this many spatial blocks (at most one per 64 rows) swept in parallel, then the rows "
-                  "between blocks in order; the same bits on any thread count; 1: one Gauss-Seidel sweep in row order",
+                  "the Uzawa sweep is cut into at most this many slabs along the contact (at most one per 256 rows), the even ones swept "
+                  "in parallel, then the odd ones, then the rows they share in order; the same bits on any thread count; 1: one "
+                  "Gauss-Seidel sweep in row order",
                   1, false, 4096, false),
            "16")}};
   return s;
