@@ -9,6 +9,10 @@
 #                                  [--pressure-window TAU] [--refine-box "X0 Y0 Z0 X1 Y1 Z1" --refine-size S]
 #                                  [--cell-scale C] [labels.h5]
 #     labels.h5    default: the demo's out/pipeline/segment/labels.h5
+#   Without options the default level is tactus-mesh's defaults (the coarse mesh); the demo's mesh
+#   (hand_block.toml's [[pipeline.meshes]] args) is the default level of
+#     --cell-scale 0.7 --refine-box "36 -40 30 49 20 200" --refine-size 1 --smooth-boundaries 1
+#   (README's table; hand_block.toml sets the 0.25 ms pressure window itself).
 #     --scenario   default: pipeline/scenarios/hand_block.toml. With rigid bones the study is
 #                  cheaper (pipeline/scenarios/hand_block_rigid.toml), and a copy with
 #                  `formulation = "standard"` or `pressure_smoothing = 0` compares the soft-tissue tets.

@@ -281,12 +281,15 @@ std::string summary_markdown(const Summary& s) {
       << mm(s.peak_pressure_outputs.position) << " |\n";
     o << "| peak pressure, any step | " << s.peak_pressure_steps.value / 1e6 << " MPa | " << s.peak_pressure_steps.time * 1e3 << " | node "
       << s.peak_pressure_steps.index << ", " << mm(s.peak_pressure_steps.position) << " |\n";
-    o << "| largest contact area | " << s.largest_area.value * 1e6 << " mm^2 | " << s.largest_area.time * 1e3 << " | |\n";
-    o << "| peak contact force | " << s.peak_force.value << " N | " << s.peak_force.time * 1e3 << " | |\n";
+    o << "| largest contact area, one step | " << s.largest_area.value * 1e6 << " mm^2 | " << s.largest_area.time * 1e3 << " | |\n";
+    o << "| peak contact force, one step | " << s.peak_force.value << " N | " << s.peak_force.time * 1e3 << " | |\n";
     o << "\nPressures are averaged over the run's pressure window (run.json contact.pressure_window), so a node's first-touch "
-         "impulse shows as impulse / window rather than impulse / step; the output-state peak is what the pressure picture shows.\n";
+         "impulse shows as impulse / window rather than impulse / step; the output-state peak is what the pressure picture shows. "
+         "The force and area above, and the pairs' figures below, are single steps' and carry those impulses (run.json "
+         "contact.at_outputs has the force and area through the window at each output).\n";
     if (!s.contact_pairs.empty()) {
-      o << "\n| contact pair | peak force on its slave nodes (N) | at (ms) | largest area (mm^2) | peak pressure (MPa) |\n|---|---|---|---|---|\n";
+      o << "\n| contact pair | peak force on its slave nodes, one step (N) | at (ms) | largest area, one step (mm^2) | peak r_n / A, one "
+           "step (MPa) |\n|---|---|---|---|---|\n";
       for (const auto& p : s.contact_pairs)
         o << "| " << p.name << " | " << p.force << " | " << p.force_time * 1e3 << " | " << p.area * 1e6 << " | " << p.pressure / 1e6 << " |\n";
     }
