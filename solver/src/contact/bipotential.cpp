@@ -87,7 +87,8 @@ double row_compliance(const ContactRows& rows, std::size_t k, const double* n, c
 // even slabs' rows share no node with one another, nor the odd slabs'; a row that still does (a
 // thin slab) is left to the ordered sweep. A function of the rows alone (never of the thread
 // count or the motion): kept while the rows stay the same, and the same after a restart.
-int cut_sweep_blocks(ContactRows& rows, const double* X, int blocks, const RigidRows* rigid) {
+// `top` is the largest node id in the rows.
+int cut_sweep_blocks(ContactRows& rows, const double* X, int blocks, const RigidRows* rigid, std::int32_t top) {
   const std::size_t K = rows.size();
   blocks = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(blocks, 1)), K / ContactSettings::kMinRowsPerSweepBlock));
   if (blocks <= 1 || !X) return 1;
@@ -95,11 +96,9 @@ int cut_sweep_blocks(ContactRows& rows, const double* X, int blocks, const Rigid
   // of slabs: the same cut, kept (most steps; the rows change when the search is rebuilt).
   if (blocks == rows.cut_asked && rows.start == rows.cut_start && rows.nodes == rows.cut_nodes) return rows.cut_blocks;
   rows.cut_asked = blocks, rows.cut_start = rows.start, rows.cut_nodes = rows.nodes, rows.cut_blocks = 1;
-  std::int32_t top = -1;
-  for (const std::int32_t node : rows.nodes) {
-    if (rigid && rigid->body(node) >= 0) return 1;
-    top = std::max(top, node);
-  }
+  if (rigid)
+    for (const std::int32_t node : rows.nodes)
+      if (rigid->body(node) >= 0) return 1;
   auto at = [&](std::int32_t node, std::size_t d) { return X[3 * static_cast<std::size_t>(node) + d]; };
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   for (std::size_t k = 0; k < K; ++k)
@@ -307,9 +306,11 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, WarmStart& last, cons
   // The sweep: in row order, or slab by slab in parallel, the even slabs then the odd ones (slabs
   // of one parity share no node, so each is its own Gauss-Seidel sweep and the result does not
   // depend on which thread took which), then the rows left over in order.
-  const int blocks = cut_sweep_blocks(rows, in.X, in.settings->sweep_blocks, rigid);
+  std::int32_t top = -1;  // the largest node id in the rows: the size of the per-node tables below
+  for (const std::int32_t node : rows.nodes) top = std::max(top, node);
+  const int blocks = cut_sweep_blocks(rows, in.X, in.settings->sweep_blocks, rigid, top);
   rep.sweep_blocks = blocks;
-  rep.rows_between_blocks = blocks > 1 ? rows.between_blocks.size() : 0;
+  rep.rows_in_order = blocks > 1 ? rows.between_blocks.size() : K;
   rows.block_change.assign(2 * static_cast<std::size_t>(blocks), 0.0);
   // A row whose last update changed nothing and none of whose nodes' velocities changed since
   // would change nothing again (update is a function of its reaction and those velocities): it
@@ -324,8 +325,6 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, WarmStart& last, cons
   std::vector<char>& quiet = rows.quiet;
   const bool skip_unchanged = rigid == nullptr;
   if (skip_unchanged) {
-    std::int32_t top = -1;
-    for (const std::int32_t node : rows.nodes) top = std::max(top, node);
     if (node_time.size() <= static_cast<std::size_t>(top)) node_time.resize(static_cast<std::size_t>(top) + 1);
     for (const std::int32_t node : rows.nodes) node_time[static_cast<std::size_t>(node)] = -1;
     row_time.assign(K, -1);

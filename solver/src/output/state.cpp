@@ -106,7 +106,7 @@ void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::st
 void RunPeaks::add_contact_step(const ContactStepReport& cr, double t, const Vec3& peak_at, const std::vector<PairStepReport>& per_pair) {
   max_iterations = std::max(max_iterations, cr.iterations);
   recovering_rows += cr.recovering;
-  rows_swept += cr.candidates, rows_in_order += cr.sweep_blocks > 1 ? cr.rows_between_blocks : cr.candidates;
+  rows_swept += cr.candidates, rows_in_order += cr.rows_in_order;
   if (pairs.size() != per_pair.size()) pairs.resize(per_pair.size());
   for (std::size_t k = 0; k < per_pair.size(); ++k) {
     const PairStepReport& p = per_pair[k];

@@ -201,9 +201,10 @@ struct ContactStepReport {
   std::size_t recovering = 0;
   double deepest_gap = 0;
   std::int32_t deepest_node = -1;
-  // The sweep's blocks (1: one sweep in row order) and the rows between them, swept in order after.
+  // The sweep's blocks (1: one sweep in row order) and the rows swept in order: those between the
+  // blocks, swept after them, or every row when there is one block.
   int sweep_blocks = 1;
-  std::size_t rows_between_blocks = 0;
+  std::size_t rows_in_order = 0;
   // Work of the reactions over du^{n-1/2} and du^{n+1/2} (trapezoid halves), relative motion:
   double normal_work_back = 0, normal_work_forward = 0, friction_work_back = 0, friction_work_forward = 0;
   // Work of the supports that take the reaction shares landing on prescribed dofs (halves).
