@@ -168,8 +168,7 @@ TEST(Mortar, BlockedUzawaSweepMatchesTheSequentialOneOnAnyThreadCount) {
   const SweepRun sequential = press_and_slide(1, 1, steps), blocked = press_and_slide(16, 1, steps);
   const ContactStepReport& b = blocked.last;
   std::printf("blocked sweep: %d blocks, %zu of %zu rows between them, %zu active (%zu sticking, %zu slipping); most iterations %d (in order: %d)\n",
-              b.sweep_blocks, b.rows_in_order, b.candidates, b.active, b.sticking, b.slipping, blocked.most_iterations,
-              sequential.most_iterations);
+              b.sweep_blocks, b.rows_in_order, b.candidates, b.active, b.sticking, b.slipping, blocked.most_iterations, sequential.most_iterations);
   // At most one slab per 256 rows (961 rows: 3), each at least 2.5 rows' reaches thick (a row
   // reaches a slave and a master element, 0.67 + 1 mm, of 20 mm: 4 would fit).
   EXPECT_EQ(b.sweep_blocks, 3);
