@@ -4,7 +4,8 @@
 # late contact area kept growing, 1,018 -> 1,414 mm^2 at 5 ms): contact force, area and the 25 mm^2 peak
 # pressure at each output, side by side, with the differences the contact issue asks for (force
 # and area within 10 %, 25 mm^2 peak within 15 %), the same for the windowed force and area, and
-# each run's contact impulse over the whole run (the time integral of the normal force).
+# each run's contact impulse over the whole run and between outputs (the time integral of the
+# normal force: on this case it settles with the mesh where the instantaneous figures scatter).
 #   bench/hand_block_mesh_study.sh [--scenario FILE] [--levels 2|3] [--ensemble N] [--smooth-boundaries SIGMA]
 #                                  [--pressure-window TAU] [--refine-box "X0 Y0 Z0 X1 Y1 Z1" --refine-size S]
 #                                  [--cell-scale C] [labels.h5]
