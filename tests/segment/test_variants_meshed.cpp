@@ -19,7 +19,8 @@ using namespace tactus;
 namespace {
 
 // Segments and meshes; returns how the bones map onto the truth.
-testkit::BoneOverlap segment_and_mesh(const char* name, const samples::PhantomParams& params, double length_ratio_floor = 0.2) {
+testkit::BoneOverlap segment_and_mesh(const char* name, const samples::PhantomParams& params,
+                                      double length_ratio_floor = mesher::QualityGuarantees{}.min_length_ratio) {
   testkit::TempDir dir;
   const samples::Phantom phantom = samples::make_hand_phantom(params);
   samples::write_slice_stack(phantom.ct, dir / "stack");

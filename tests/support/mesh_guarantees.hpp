@@ -61,20 +61,22 @@ inline std::pair<TetMesh, std::size_t> mesh_like_tactus_mesh(Volume<std::uint8_t
   return {mesher::mesh_label_volume(labels, table, p), absorbed.size()};
 }
 
-// Prints each group's numbers against the guarantees and expects them met, and the mesher's
-// quality report to say so. `length_ratio_floor` below the guarantee's 0.2 is for a scan whose
-// mesh may hold the known unfixed sliver class (design.md, the mesher's post-passes: a soft-tissue
-// tet flat on a bone with all four nodes on its surfaces, where no flip is valid); the report's
-// "met" is then not required, and the floor still bounds how far below the guarantee it may be.
-inline void expect_mesh_guarantees(const char* name, const TetMesh& mesh, double length_ratio_floor = 0.2) {
+// Prints each group's numbers against the mesher's guarantees (QualityGuarantees) and expects
+// them met, and the mesher's quality report to say so. `length_ratio_floor` below the guarantee's
+// L_e ratio is for a scan whose mesh may hold the known unfixed sliver class (design.md, the
+// mesher's post-passes: a soft-tissue tet flat on a bone with all four nodes on its surfaces, where
+// no flip is valid); the report's "met" is then not required, and the floor still bounds how far
+// below the guarantee it may be.
+inline void expect_mesh_guarantees(const char* name, const TetMesh& mesh, double length_ratio_floor = mesher::QualityGuarantees{}.min_length_ratio) {
+  const mesher::QualityGuarantees guarantee;
   for (const auto& [label, w] : recomputed_quality(mesh)) {
-    std::printf("  %s, label %d: min dihedral %.2f deg (>= 10), L_e min/median %.3f (>= %.2f)\n", name, label, w.min_dihedral_deg, w.length_ratio,
-                length_ratio_floor);
-    EXPECT_GE(w.min_dihedral_deg, 10.0) << name << " label " << label;
+    std::printf("  %s, label %d: min dihedral %.2f deg (>= %.0f), L_e min/median %.3f (>= %.2f)\n", name, label, w.min_dihedral_deg,
+                guarantee.min_dihedral_deg, w.length_ratio, length_ratio_floor);
+    EXPECT_GE(w.min_dihedral_deg, guarantee.min_dihedral_deg) << name << " label " << label;
     EXPECT_GE(w.length_ratio, length_ratio_floor) << name << " label " << label;
   }
   const auto report = mesher::quality_report(mesh, {});
-  if (length_ratio_floor >= 0.2) {
+  if (length_ratio_floor >= guarantee.min_length_ratio) {
     EXPECT_TRUE(report["guarantees"]["met"].get<bool>()) << report["guarantees"].dump(1);
   } else {
     std::printf("  %s: mesher's report says the guarantees are %s\n", name, report["guarantees"]["met"].get<bool>() ? "met" : "not met");
