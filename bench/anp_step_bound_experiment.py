@@ -84,12 +84,19 @@ for e, t in enumerate(tets):
     dofs = np.array([[3 * a, 3 * a + 1, 3 * a + 2] for a in t]).ravel()
     Kdev[np.ix_(dofs, dofs)] += ke
 
-# G: nodal velocity -> nodal Jdot (plain ANP): (G x)_a = (1/V_a) sum_{e at a} (1/4) sum_b d_b . x_b
-G = np.zeros((N, ndof))
-for e, t in enumerate(tets):
-    for a in t:
-        for bi, b in enumerate(t):
-            G[a, 3 * b:3 * b + 3] += vols[e] * grads[e, bi] / 4 / Vn[a]
+# G: nodal velocity -> nodal Jdot (plain ANP): (G x)_a = (1/V_a) sum_{e at a} (1/4) sum_b d_b . x_b,
+# for the volume-rate vectors dd of every tet's nodes (d_b = V0 cof F grad N_b).
+def volume_rate_map(dd):
+    Gm = np.zeros((N, ndof))
+    for e, t in enumerate(tets):
+        for a in t:
+            for bi, b in enumerate(t):
+                Gm[a, 3 * b:3 * b + 3] += dd[e, bi] / 4 / Vn[a]
+    return Gm
+
+
+d = vols[:, None, None] * grads  # d_b = V0 grad N_b at rest
+G = volume_rate_map(d)
 S = np.zeros((N, N))
 for e, t in enumerate(tets):
     for a in t:
@@ -108,20 +115,32 @@ def block_gershgorin(K):
 
 
 # The solver's absolute-value rows (design.md section 5).
-d = vols[:, None, None] * grads  # d_b = V0 grad N_b at rest
 dn = np.linalg.norm(d, axis=2)
 t_e = dn.sum(axis=1)
 Mdev = 4 * mu / 3
 R0 = np.zeros(N)
 for e, t in enumerate(tets):
     R0[t] += t_e[e]
+
+
+# The solver's volumetric rows for volume-rate vectors dd (d_b at the current state, or a change
+# of them): k R0_a / (16 V_a) per node of each tet, times the tet's t / t0 and each |dd_b|.
+def abs_vol_rows(dd):
+    nn = np.linalg.norm(dd, axis=2)
+    te = nn.sum(axis=1)
+    rows = np.zeros(N)
+    for e, t in enumerate(tets):
+        Q = (te[e] / t_e[e]) * sum(k * R0[a] / (16 * Vn[a]) for a in t)
+        for bi, b in enumerate(t):
+            rows[b] += nn[e, bi] * Q
+    return rows
+
+
 beta_dev = np.zeros(N)
-beta_vol = np.zeros(N)
 for e, t in enumerate(tets):
-    Q = sum(k * R0[a] / (16 * Vn[a]) for a in t)
     for bi, b in enumerate(t):
         beta_dev[b] += dn[e, bi] * Mdev * t_e[e] / vols[e]
-        beta_vol[b] += dn[e, bi] * Q
+beta_vol = abs_vol_rows(d)
 
 Minv = np.repeat(1 / mass, 3)
 rdev_assembled = block_gershgorin(Kdev)
@@ -147,27 +166,13 @@ for s in (0, 1, 2):
 # the second term with the solver's absolute-value rows on |d_b - d0_b| (rigorous for any eta).
 u = np.column_stack([0.15 * X[:, 2] + 0.002 * np.sin(400 * X[:, 1]), 0.05 * X[:, 0], -0.2 * X[:, 2]])
 x = X + u
-Gc = np.zeros((N, ndof))
 dc = np.zeros((T, 4, 3))
 for e, t in enumerate(tets):
     F = (x[t[1:]] - x[t[0]]).T @ np.linalg.inv((X[t[1:]] - X[t[0]]).T)
     cof = np.linalg.det(F) * np.linalg.inv(F).T
     for bi in range(4):
         dc[e, bi] = vols[e] * cof @ grads[e, bi]
-    for a in t:
-        for bi, b in enumerate(t):
-            Gc[a, 3 * b:3 * b + 3] += dc[e, bi] / 4 / Vn[a]
-
-
-def abs_vol_rows(dd):
-    nn = np.linalg.norm(dd, axis=2)
-    te = nn.sum(axis=1)
-    rows = np.zeros(N)
-    for e, t in enumerate(tets):
-        Q = (te[e] / t_e[e]) * sum(k * R0[a] / (16 * Vn[a]) for a in t)
-        for bi, b in enumerate(t):
-            rows[b] += nn[e, bi] * Q
-    return rows
+Gc = volume_rate_map(dc)
 
 
 rA = abs_vol_rows(dc)
