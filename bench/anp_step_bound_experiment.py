@@ -5,6 +5,8 @@ Compares, as fractions of 2/omega_max (dense eigenproblem):
   A  the solver's nodal bound (absolute-value rows, deviatoric + volumetric)
   B  deviatoric absolute rows + block-Gershgorin rows of the assembled volumetric operator
   C  block-Gershgorin rows of the whole assembled stiffness
+  D  deviatoric absolute rows + the rest operator's rows weighted by V^(-1/2) (what the solver
+     now computes as its ANP blocks' second form, with a perturbation term at a deformed state)
 for plain ANP (s = 0) and s = 1, 2 smoothing passes.
 
 Why B can be much tighter than A: the volumetric rows of A bound each tet's volume rate by
@@ -188,3 +190,32 @@ for s in (0, 2):
     wp = min(((1 + eta) * r0 / mass + (1 + 1 / eta) * rD / mass).max() for eta in np.geomspace(1e-3, 1e3, 121))
     print(f"s = {s}: assembled at x {np.sqrt(wA / wc):.3f}, perturbation of the rest assembly {np.sqrt(wA / wp):.3f} "
           f"(|d - d0| / |d| = {np.linalg.norm(dc - d) / np.linalg.norm(dc):.3f})")
+
+# D: the rest operator's weighted rows plus a perturbation, computable from what the stress pass
+# has.  |(S^s G x)_a| <= (S^s |G| |x|)_a entrywise (S >= 0, |G| the norms of the 3-vector blocks),
+# so the volumetric form is <= |x|^T k Z^T V Z |x| with Z = S^s |G| (which keeps the cancellation
+# inside each vector block: |G_aa| = 0 at an interior node); a nonnegative symmetric K^ then gives
+# rows (K^ p)_b / p_b for any p > 0 (AM-GM; Collatz-Wielandt), here p = V_b^(-1/2), and
+# Z^T V Z p = |G|^T V S^2s |G| p (S is V-self-adjoint).  At the rest state those rows are constants;
+# at x the change dG enters as (1 + eta) rest rows + (1 + 1/eta) absolute rows on |d_b - d0_b|.
+def weighted_rest_rows(s):
+    Gn0 = np.linalg.norm(G.reshape(N, N, 3), axis=2)
+    p = Vn ** -0.5
+    w = np.linalg.matrix_power(S, 2 * s) @ (Gn0 @ p)
+    return k * (Gn0.T @ (Vn * w)) / p
+
+
+print("D: rest rows weighted by V^(-1/2) (+ perturbation at x), the larger step of D and A:")
+for s in (0, 1, 2):
+    Ss = np.linalg.matrix_power(S, s)
+    Kvol = k * G.T @ Ss.T @ np.diag(Vn) @ Ss @ G
+    exact = 2 / np.sqrt(np.linalg.eigvals((Minv[:, None] * (Kdev + Kvol))).real.max())
+    c = weighted_rest_rows(s)
+    D_rest = 2 / np.sqrt(((beta_dev + c) / mass).max())
+    A_rest = 2 / np.sqrt(((beta_dev + beta_vol) / mass).max())
+    line = f"s = {s}: at rest D {D_rest / exact:.3f} of 2/omega_max (A {A_rest / exact:.3f})"
+    if s in (0, 2):
+        wA = (rA / mass).max()
+        wD = min(((1 + eta) * c / mass + (1 + 1 / eta) * rD / mass).max() for eta in np.geomspace(1e-3, 1e3, 121))
+        line += f"; deformed, volumetric rows, D's step relative to A' {np.sqrt(wA / wD):.3f}"
+    print(line)

@@ -330,10 +330,12 @@ TEST(AnpSlow, ThickSpherePressureConvergesToLames) {
 // omega_max (design.md, "The stable step"): the element one (nodal averaging and smoothing only
 // lower the volumetric stiffness) and the nodal one (each node's whole mass against the rows of
 // the tets and, for ANP, the nodal volumes around it); the step is the larger. At nu = 0.4999 on
-// a regular mesh it must lie between half and all of 2 / omega_max for plain ANP and standard tets
-// (the smoothing lowers omega_max a further ~23 %, which neither estimate sees: at least 0.35). With
-// interior nodes moved by up to 25 % of a cell the element estimate collapses (its worst tet's
-// own share of mass) while the nodal bound keeps the same ratios, and so must the step; and at a
+// a regular mesh it must lie between half and all of 2 / omega_max for ANP, plain or smoothed, and
+// standard tets (the smoothing lowers omega_max a further ~23 %: the ANP rows' second form, built on
+// the rest operator whose vector sums cancel at interior nodes, sees it; the absolute-value rows
+// alone gave 0.39). With interior nodes moved by up to 25 % of a cell the element estimate
+// collapses (its worst tet's own share of mass) while the nodal bound keeps the ratios, and so must
+// the step (standard tets: 0.45); and at a
 // deformed state of that mesh (20 % compression, 15 % shear; tangent with its stress terms) the
 // step must still be below 2 / omega_max.
 TEST(Anp, StableStepIsConservativeAndNotWasteful) {
@@ -364,7 +366,9 @@ TEST(Anp, StableStepIsConservativeAndNotWasteful) {
         EXPECT_LE(ratio, 1.0);
         EXPECT_EQ(r.critical_step, std::max(r.element_critical_step, r.nodal_critical_step));
         if (at_rest) {
-          EXPECT_GE(ratio, std::string(formulation) == "anp" ? 0.35 : (perturbation > 0 ? 0.45 : 0.5));
+          // The soft-tissue issue's floor 0.5 for ANP with and without smoothing, on the regular and the
+          // perturbed mesh (the ANP rows' second form, the rest operator's weighted rows: design.md).
+          EXPECT_GE(ratio, std::string(formulation) == "standard" && perturbation > 0 ? 0.45 : 0.5);
         }
       }
     }

@@ -56,6 +56,11 @@ struct StressKernelArgs {
   bool nodal_bound = false;
   const double* anp_bound_factor = nullptr;
   double anp_bulk = 0;
+  // ANP tets with the bound on: the partition's second row buffer, 2 per node of its range (node n
+  // at anp_rows[2 (n - f_node_offset)]): the volumetric rows above alone, then the same rows on the
+  // change of the volume-rate vectors since the reference state, |d_b - d0_b| (design.md, "Stable
+  // step": the rest operator's weighted rows plus a perturbation, InternalForces).
+  double* anp_rows = nullptr;
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
   // its step is computed with, and where its unscaled squared step (no beta) is stored.
   const double* mass_factor = nullptr;
@@ -301,7 +306,31 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     T t = lanes::splat<T>(0.0);
     for (int k = 0; k < 4; ++k) bound[k] = lanes::sqrt_of(cg[k][0] * cg[k][0] + cg[k][1] * cg[k][1] + cg[k][2] * cg[k][2]), t += bound[k];
     T row = (kAnp ? sp.modulus - a.anp_bulk : sp.modulus) * t / J;
-    if constexpr (kAnp) row += load_strided<T>(a.anp_bound_factor + (e - a.block_begin), 1) * t;
+    if constexpr (kAnp) {
+      const T q = load_strided<T>(a.anp_bound_factor + (e - a.block_begin), 1);
+      row += q * t;
+      if (a.anp_rows) {
+        // |d_b - d0_b| / V0 = |cof F grad_X N_b - grad_X N_b| (node 0's gradient minus the others'),
+        // and the rows of the volumetric part and of its change since the reference state.
+        T change[4], t_change = lanes::splat<T>(0.0);
+        for (int k = 0; k < 4; ++k) {
+          T d2 = lanes::splat<T>(0.0);
+          for (int i = 0; i < 3; ++i) {
+            const T g_ref = k == 0 ? -(g[i] + g[3 + i] + g[6 + i]) : g[3 * (k - 1) + i];
+            const T diff = cg[k][i] - g_ref;
+            d2 += diff * diff;
+          }
+          change[k] = lanes::sqrt_of(d2), t_change += change[k];
+        }
+        const T volumetric = V0 * q * t, changed = V0 * q * t_change;
+        for (int l = 0; l < L; ++l)
+          for (int k : {1, 2, 3, 0}) {
+            double* r = a.anp_rows + 2 * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
+            r[0] += lanes::lane(bound[k] * volumetric, l);
+            r[1] += lanes::lane(change[k] * changed, l);
+          }
+      }
+    }
     row *= V0;
     for (int k = 0; k < 4; ++k) bound[k] *= row;
   }

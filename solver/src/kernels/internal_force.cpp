@@ -8,6 +8,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -28,6 +29,9 @@ int default_threads(std::size_t elements) {
   const int useful = static_cast<int>(std::max<std::size_t>(1, elements / 4000));
   return std::min(n, useful);
 }
+
+// The splitting weights of the ANP blocks' second step-bound form: 2^-6 ... 2^6.
+double eta_of(int j) { return std::ldexp(1.0, j - 6); }
 
 // x[lo, hi) /= V (0 where the node has no tet of the block).
 void divide_by_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
@@ -106,6 +110,56 @@ std::vector<double> anp_step_bound_factors(const Model& m, const MaterialBlock& 
     q[e - b.begin] = m.volume[e] * Q0 / t0[e - b.begin];
   }
   return q;
+}
+
+std::vector<double> anp_rest_rows(const Model& m, const MaterialBlock& b, const std::vector<double>& V, const NodeAveraging* S) {
+  const std::size_t n = m.num_nodes;
+  std::vector<std::size_t> first(n + 1, 0);  // the block's tets at each node
+  for (std::size_t e = b.begin; e < b.end; ++e)
+    for (int k = 0; k < 4; ++k) ++first[static_cast<std::size_t>(m.conn[4 * e + k]) + 1];
+  for (std::size_t a = 0; a < n; ++a) first[a + 1] += first[a];
+  std::vector<std::size_t> tets(first[n]), fill(first.begin(), first.end() - 1);
+  for (std::size_t e = b.begin; e < b.end; ++e)
+    for (int k = 0; k < 4; ++k) tets[fill[static_cast<std::size_t>(m.conn[4 * e + k])]++] = e;
+  // |G0| row by row: the vector sums over a's tets, per node b of them (a itself included).
+  std::vector<std::size_t> row(n + 1, 0);
+  std::vector<std::int32_t> column;
+  std::vector<double> norm;
+  std::vector<std::array<double, 3>> sum(n, {0.0, 0.0, 0.0});
+  std::vector<unsigned char> seen(n, 0);
+  std::vector<std::int32_t> nodes;
+  for (std::size_t a = 0; a < n; ++a) {
+    nodes.clear();
+    for (std::size_t t = first[a]; t < first[a + 1]; ++t) {
+      const std::size_t e = tets[t];
+      const double* g = &m.grad[9 * e];
+      for (int k = 0; k < 4; ++k) {
+        const std::int32_t node = m.conn[4 * e + k];
+        if (!seen[static_cast<std::size_t>(node)]) seen[static_cast<std::size_t>(node)] = 1, nodes.push_back(node);
+        for (int i = 0; i < 3; ++i)
+          sum[static_cast<std::size_t>(node)][static_cast<std::size_t>(i)] +=
+              m.volume[e] * (k == 0 ? -(g[i] + g[3 + i] + g[6 + i]) : g[3 * (k - 1) + i]);
+      }
+    }
+    std::sort(nodes.begin(), nodes.end());
+    for (const std::int32_t node : nodes) {
+      auto& v = sum[static_cast<std::size_t>(node)];
+      column.push_back(node);
+      norm.push_back(std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) / (4 * V[a]));
+      v = {0.0, 0.0, 0.0}, seen[static_cast<std::size_t>(node)] = 0;
+    }
+    row[a + 1] = column.size();
+  }
+  std::vector<double> p(n, 0.0), w(n, 0.0), y(n, 0.0), rows(n, 0.0);
+  for (std::size_t a = 0; a < n; ++a) p[a] = V[a] > 0 ? 1 / std::sqrt(V[a]) : 0.0;
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t j = row[a]; j < row[a + 1]; ++j) w[a] += norm[j] * p[static_cast<std::size_t>(column[j])];
+  for (int pass = 0; S && pass < 2 * b.material.pressure_smoothing(); ++pass) S->apply(w.data(), y.data(), 0, n), std::swap(w, y);
+  const double k = b.material.small_strain_bulk();
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t j = row[a]; j < row[a + 1]; ++j) rows[static_cast<std::size_t>(column[j])] += k * norm[j] * V[a] * w[a];
+  for (std::size_t a = 0; a < n; ++a) rows[a] = p[a] > 0 ? rows[a] / p[a] : 0.0;
+  return rows;
 }
 
 // Each tet of [begin, end) adds a quarter of its current volume v = J V0 to its four nodes, v from
@@ -212,6 +266,10 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
         a.averaging = NodeAveraging(model, model.blocks[k], a.reference_volume);
         a.smoothed.assign(model.num_nodes, 0.0);
       }
+      const std::vector<double> rest =
+          anp_rest_rows(model, model.blocks[k], a.reference_volume, model.blocks[k].material.pressure_smoothing() > 0 ? &a.averaging : nullptr);
+      anp_rest_rows_.resize(model.num_nodes, 0.0);
+      for (std::size_t n = 0; n < model.num_nodes; ++n) anp_rest_rows_[n] += rest[n];
       anp_.push_back(std::move(a));
     }
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
@@ -224,7 +282,7 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
     const std::size_t n = b.end - b.begin,
                       parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
     for (std::size_t p = 0; p < parts; ++p) {
-      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes};
+      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes, 2 * volumes};
       for (std::size_t e = q.begin; e < q.end; ++e)
         for (int a = 0; a < 4; ++a) {
           const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
@@ -238,6 +296,7 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   }
   partition_forces_.assign(forces, 0.0);
   partition_volumes_.assign(volumes, 0.0);
+  partition_anp_rows_.assign(2 * volumes, 0.0);
   partition_acc_.resize(partitions_.size());
   chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
   for (std::size_t p = 0; p < partitions_.size(); ++p)
@@ -255,6 +314,11 @@ void InternalForces::set_nodal_step_bound(const double* nodal_mass) {
   nodal_bound_.assign(model_.num_nodes, 0.0);
   chunk_bound_.assign(chunk_partitions_.size(), 0.0);
   chunk_bound_node_.assign(chunk_partitions_.size(), 0);
+  if (!anp_.empty()) {
+    anp_rows_.assign(2 * model_.num_nodes, 0.0);
+    chunk_eta_bound_.assign(kEtas * chunk_partitions_.size(), 0.0);
+    chunk_eta_node_.assign(kEtas * chunk_partitions_.size(), 0);
+  }
 }
 
 int InternalForces::lanes() { return lanes::kLanes; }
@@ -268,7 +332,8 @@ std::size_t InternalForces::memory_bytes() const {
   std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity() +
                    nodal_bound_.capacity() + chunk_bound_.capacity()) *
                   sizeof(double);
-  b += node_moves_.capacity() + chunk_bound_node_.capacity() * sizeof(std::size_t);
+  b += (partition_anp_rows_.capacity() + anp_rows_.capacity() + anp_rest_rows_.capacity() + chunk_eta_bound_.capacity()) * sizeof(double);
+  b += node_moves_.capacity() + (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
   for (const auto& a : anp_)
@@ -386,7 +451,11 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       if (nodal_mass_) {
         args.nodal_bound = true;
         for (const AnpBlock& an : anp_)
-          if (an.block == q.block) args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
+          if (an.block == q.block) {
+            args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
+            args.anp_rows = partition_anp_rows_.data() + q.anp_rows_offset;
+            std::fill(args.anp_rows, args.anp_rows + 2 * (q.node_hi - q.node_lo), 0.0);
+          }
       }
       args.vectorised = vectorised_;
       if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
@@ -405,6 +474,24 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       for (std::size_t n = lo; n < hi; ++n)
         if (node_moves_[n] && nodal_bound_[n] > best * nodal_mass_[n]) best = nodal_bound_[n] / nodal_mass_[n], at = n;
       chunk_bound_[c] = best, chunk_bound_node_[c] = at;
+      if (anp_rows_.empty()) continue;
+      // The second form (design.md, "Stable step"): the ANP volumetric rows replaced by
+      // (1 + eta) times the rest operator's plus (1 + 1/eta) times those of the change since the
+      // rest state, for each eta of a fixed grid (any eta > 0 gives a bound).
+      sum_chunk<2, 2>(c, partition_anp_rows_, &Partition::anp_rows_offset, anp_rows_.data(),
+                      [&](const Partition& q) { return block_pressure_[q.block] != nullptr; });
+      double* eta_best = &chunk_eta_bound_[kEtas * c];
+      std::size_t* eta_at = &chunk_eta_node_[kEtas * c];
+      std::fill(eta_best, eta_best + kEtas, 0.0);
+      std::fill(eta_at, eta_at + kEtas, lo);
+      for (std::size_t n = lo; n < hi; ++n) {
+        if (!node_moves_[n]) continue;
+        const double others = nodal_bound_[n] - anp_rows_[2 * n], changed = anp_rows_[2 * n + 1], rest = anp_rest_rows_[n];
+        for (int j = 0; j < kEtas; ++j) {
+          const double eta = eta_of(j), row = others + (1 + 1 / eta) * changed + (1 + eta) * rest;
+          if (row > eta_best[j] * nodal_mass_[n]) eta_best[j] = row / nodal_mass_[n], eta_at[j] = n;
+        }
+      }
     }
   }
   // The partitions' sums in partition order; ties of the smallest step or Jacobian go to the first.
@@ -432,6 +519,14 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     double omega2 = 0;
     for (std::size_t c = 0; c < chunk_bound_.size(); ++c)
       if (chunk_bound_[c] > omega2) omega2 = chunk_bound_[c], r.limiting_node = chunk_bound_node_[c];
+    // The second form: its best eta, when it bounds omega_max^2 lower (the chunks' largest per eta).
+    for (int j = 0; !anp_rows_.empty() && j < kEtas; ++j) {
+      double eta_omega2 = 0;
+      std::size_t at = 0;
+      for (std::size_t c = 0; c < chunk_bound_.size(); ++c)
+        if (chunk_eta_bound_[kEtas * c + j] > eta_omega2) eta_omega2 = chunk_eta_bound_[kEtas * c + j], at = chunk_eta_node_[kEtas * c + j];
+      if (eta_omega2 < omega2) omega2 = eta_omega2, r.limiting_node = at;
+    }
     if (omega2 > 0) {
       const double omega = std::sqrt(omega2), xi = 0.5 * beta_ * omega;  // with beta: the damped mode's limit
       r.nodal_critical_step = viscous ? 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi) : 2.0 / omega;

@@ -87,6 +87,13 @@ struct NodeAveraging {
   }
 };
 
+// The rest operator's rows of an ANP block's volumetric part in the nodal step bound (design.md,
+// "Stable step"): per node b, k (|G0|^T V S^2s |G0| p)_b / p_b with |G0|_ab the norm of the block
+// row a, column b of the reference volume-rate map (the sum over the tets at a and b of V0 grad_X N_b,
+// over 4 V_a), S the block's averaging (nullptr: no smoothing), s its passes and p = V^(-1/2).
+std::vector<double> anp_rest_rows(const Model& model, const MaterialBlock& block, const std::vector<double>& node_reference_volume,
+                                  const NodeAveraging* averaging);
+
 // The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
 // volumetric part is the average of its nodes' pressures.
 std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
@@ -147,9 +154,17 @@ class InternalForces {
   // volume_offset.
   struct Partition {
     std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
+    std::size_t anp_rows_offset = 0;  // 2 volume_offset
   };
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
+  // The ANP blocks' second form of the nodal bound: per ANP partition 2 per node of its range (at
+  // 2 volume_offset; kernels/element_loop.hpp, anp_rows), their sums per node (anp_rows_), the
+  // rest operator's rows summed over the ANP blocks (anp_rest_rows_), and per node chunk and
+  // splitting weight eta (kEtas of them) the largest row / mass and its node.
+  static constexpr int kEtas = 13;
+  std::vector<double> partition_anp_rows_, anp_rows_, anp_rest_rows_, chunk_eta_bound_;
+  std::vector<std::size_t> chunk_eta_node_;
   // Nodal step bound: the masses (nullptr: off), the free nodes, the summed row sums, and per node
   // chunk the largest row sum / mass and its node.
   const double* nodal_mass_ = nullptr;
