@@ -323,11 +323,13 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
           change[k] = lanes::sqrt_of(d2), t_change += change[k];
         }
         const T volumetric = V0 * q * t, changed = V0 * q * t_change;
+        T rows[4][2];
+        for (int k = 0; k < 4; ++k) rows[k][0] = bound[k] * volumetric, rows[k][1] = change[k] * changed;
         for (int l = 0; l < L; ++l)
           for (int k : {1, 2, 3, 0}) {
             double* r = a.anp_rows + 2 * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
-            r[0] += lanes::lane(bound[k] * volumetric, l);
-            r[1] += lanes::lane(change[k] * changed, l);
+            r[0] += lanes::lane(rows[k][0], l);
+            r[1] += lanes::lane(rows[k][1], l);
           }
       }
     }

@@ -30,8 +30,10 @@ int default_threads(std::size_t elements) {
   return std::min(n, useful);
 }
 
-// The splitting weights of the ANP blocks' second step-bound form: 2^-6 ... 2^6.
-double eta_of(int j) { return std::ldexp(1.0, j - 6); }
+// The splitting weights eta = 2^-6 ... 2^6 of the ANP blocks' second step-bound form, as the
+// factors of its change rows, 1 + 1/eta, and of its rest rows, 1 + eta.
+constexpr double kEtaChange[] = {65, 33, 17, 9, 5, 3, 2, 1.5, 1.25, 1.125, 1.0625, 1.03125, 1.015625};
+constexpr double kEtaRest[] = {1.015625, 1.03125, 1.0625, 1.125, 1.25, 1.5, 2, 3, 5, 9, 17, 33, 65};
 
 // x[lo, hi) /= V (0 where the node has no tet of the block).
 void divide_by_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
@@ -486,10 +488,17 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       std::fill(eta_at, eta_at + kEtas, lo);
       for (std::size_t n = lo; n < hi; ++n) {
         if (!node_moves_[n]) continue;
-        const double others = nodal_bound_[n] - anp_rows_[2 * n], changed = anp_rows_[2 * n + 1], rest = anp_rest_rows_[n];
+        if (anp_rest_rows_[n] == 0) {  // no ANP tet here: the old row, divided as above (the same bits)
+          const double row = nodal_bound_[n] / nodal_mass_[n];
+          for (int j = 0; j < kEtas; ++j)
+            if (row > eta_best[j]) eta_best[j] = row, eta_at[j] = n;
+          continue;
+        }
+        const double inv_mass = 1 / nodal_mass_[n], others = (nodal_bound_[n] - anp_rows_[2 * n]) * inv_mass,
+                     changed = anp_rows_[2 * n + 1] * inv_mass, rest = anp_rest_rows_[n] * inv_mass;
         for (int j = 0; j < kEtas; ++j) {
-          const double eta = eta_of(j), row = others + (1 + 1 / eta) * changed + (1 + eta) * rest;
-          if (row > eta_best[j] * nodal_mass_[n]) eta_best[j] = row / nodal_mass_[n], eta_at[j] = n;
+          const double row = others + kEtaChange[j] * changed + kEtaRest[j] * rest;
+          if (row > eta_best[j]) eta_best[j] = row, eta_at[j] = n;
         }
       }
     }
