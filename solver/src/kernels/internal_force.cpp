@@ -45,9 +45,8 @@ void times_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
   for (std::size_t a = lo; a < hi; ++a) x[a] *= V[a];
 }
 
-}  // namespace
-
-NodeAveraging::NodeAveraging(const Model& m, const MaterialBlock& b, const std::vector<double>& V) {
+// The block's tets at each node, in element order: node a's are tets[first[a] .. first[a + 1]).
+std::pair<std::vector<std::size_t>, std::vector<std::size_t>> block_node_tets(const Model& m, const MaterialBlock& b) {
   const std::size_t n = m.num_nodes;
   std::vector<std::size_t> first(n + 1, 0);  // the block's tets at each node
   for (std::size_t e = b.begin; e < b.end; ++e)
@@ -56,6 +55,14 @@ NodeAveraging::NodeAveraging(const Model& m, const MaterialBlock& b, const std::
   std::vector<std::size_t> tets(first[n]), fill(first.begin(), first.end() - 1);
   for (std::size_t e = b.begin; e < b.end; ++e)
     for (int k = 0; k < 4; ++k) tets[fill[static_cast<std::size_t>(m.conn[4 * e + k])]++] = e;
+  return {std::move(first), std::move(tets)};
+}
+
+}  // namespace
+
+NodeAveraging::NodeAveraging(const Model& m, const MaterialBlock& b, const std::vector<double>& V) {
+  const std::size_t n = m.num_nodes;
+  const auto [first, tets] = block_node_tets(m, b);
   row.assign(n + 1, 0);
   std::vector<double> sum(n, 0.0);  // a's row, summed over its tets in element order
   std::vector<std::int32_t> neighbours;
@@ -116,13 +123,7 @@ std::vector<double> anp_step_bound_factors(const Model& m, const MaterialBlock& 
 
 std::vector<double> anp_rest_rows(const Model& m, const MaterialBlock& b, const std::vector<double>& V, const NodeAveraging* S) {
   const std::size_t n = m.num_nodes;
-  std::vector<std::size_t> first(n + 1, 0);  // the block's tets at each node
-  for (std::size_t e = b.begin; e < b.end; ++e)
-    for (int k = 0; k < 4; ++k) ++first[static_cast<std::size_t>(m.conn[4 * e + k]) + 1];
-  for (std::size_t a = 0; a < n; ++a) first[a + 1] += first[a];
-  std::vector<std::size_t> tets(first[n]), fill(first.begin(), first.end() - 1);
-  for (std::size_t e = b.begin; e < b.end; ++e)
-    for (int k = 0; k < 4; ++k) tets[fill[static_cast<std::size_t>(m.conn[4 * e + k])]++] = e;
+  const auto [first, tets] = block_node_tets(m, b);
   // |G0| row by row: the vector sums over a's tets, per node b of them (a itself included).
   std::vector<std::size_t> row(n + 1, 0);
   std::vector<std::int32_t> column;
