@@ -487,12 +487,12 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       std::size_t* eta_at = &chunk_eta_node_[kEtas * c];
       std::fill(eta_best, eta_best + kEtas, 0.0);
       std::fill(eta_at, eta_at + kEtas, lo);
+      double plain_best = 0;  // nodes without an ANP tet: the old row, divided as above (the same bits)
+      std::size_t plain_at = lo;
       for (std::size_t n = lo; n < hi; ++n) {
         if (!node_moves_[n]) continue;
-        if (anp_rest_rows_[n] == 0) {  // no ANP tet here: the old row, divided as above (the same bits)
-          const double row = nodal_bound_[n] / nodal_mass_[n];
-          for (int j = 0; j < kEtas; ++j)
-            if (row > eta_best[j]) eta_best[j] = row, eta_at[j] = n;
+        if (anp_rest_rows_[n] == 0) {
+          if (nodal_bound_[n] > plain_best * nodal_mass_[n]) plain_best = nodal_bound_[n] / nodal_mass_[n], plain_at = n;
           continue;
         }
         const double inv_mass = 1 / nodal_mass_[n], others = (nodal_bound_[n] - anp_rows_[2 * n]) * inv_mass,
@@ -502,6 +502,8 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
           if (row > eta_best[j]) eta_best[j] = row, eta_at[j] = n;
         }
       }
+      for (int j = 0; j < kEtas; ++j)
+        if (plain_best > eta_best[j]) eta_best[j] = plain_best, eta_at[j] = plain_at;
     }
   }
   // The partitions' sums in partition order; ties of the smallest step or Jacobian go to the first.
