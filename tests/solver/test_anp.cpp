@@ -336,7 +336,8 @@ TEST(AnpSlow, ThickSpherePressureConvergesToLames) {
 // alone gave 0.39). With interior nodes moved by up to 25 % of a cell the element estimate
 // collapses (its worst tet's own share of mass) while the nodal bound keeps the ratios, and so must
 // the step (standard tets: 0.45); and at a
-// deformed state of that mesh (20 % compression, 15 % shear; tangent with its stress terms) the
+// deformed state of that mesh (20 % compression, 15 % shear; tangent with its stress terms) and at
+// a tenth of it (where the second form's bound on the change since rest is the one in force) the
 // step must still be below 2 / omega_max.
 TEST(Anp, StableStepIsConservativeAndNotWasteful) {
   for (const double perturbation : {0.0, 0.25})
@@ -349,9 +350,13 @@ TEST(Anp, StableStepIsConservativeAndNotWasteful) {
         const double* X = &m.X[3 * a];
         deformed[3 * a] = 0.15 * X[2] + 0.002 * std::sin(400 * X[1]), deformed[3 * a + 1] = 0.05 * X[0], deformed[3 * a + 2] = -0.2 * X[2];
       }
-      for (const bool at_rest : {true, false}) {
+      // At rest, slightly deformed (a tenth of the state: the ANP rows' second form, whose change
+      // part then bounds the step, must stay conservative there too) and deformed.
+      for (const double amount : {0.0, 0.1, 1.0}) {
+        const bool at_rest = amount == 0.0;
         if (!at_rest && perturbation == 0.0) continue;
-        const std::vector<double> u = at_rest ? std::vector<double>(3 * m.num_nodes, 0.0) : deformed;
+        std::vector<double> u(3 * m.num_nodes);
+        for (std::size_t i = 0; i < u.size(); ++i) u[i] = amount * deformed[i];
         const Eigen::MatrixXd K(tangent_stiffness(m, 1e-10, u));
         const double omega_max = std::sqrt(testkit::generalized_modes(m, K).omega2.maxCoeff());
         InternalForces forces(m, 0.0, 1);
@@ -361,7 +366,7 @@ TEST(Anp, StableStepIsConservativeAndNotWasteful) {
         std::printf(
             "stable step, nu = 0.4999, %-8s tets, nodes moved by up to %2.0f %% of a cell, %s: element estimate %.3f, nodal bound %.3f of "
             "2 / omega_max (%.4e s); step ratio %.3f\n",
-            formulation, 100 * perturbation, at_rest ? "at rest " : "deformed", r.element_critical_step * omega_max / 2,
+            formulation, 100 * perturbation, at_rest ? "at rest " : (amount < 1 ? "slightly" : "deformed"), r.element_critical_step * omega_max / 2,
             r.nodal_critical_step * omega_max / 2, 2 / omega_max, ratio);
         EXPECT_LE(ratio, 1.0);
         EXPECT_EQ(r.critical_step, std::max(r.element_critical_step, r.nodal_critical_step));

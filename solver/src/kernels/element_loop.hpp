@@ -17,6 +17,7 @@
 // and J_a = v_a / V_a (v_a the same sum of current volumes). Its derivative gives each tet the
 // pressure p_e = (1/4) sum_{a of e} U'(J_a), so P = P_iso(F) + p_e cof(F): the nodal pressures come
 // from a J pass before this loop (internal_force.cpp), the deviatoric part from the element.
+#include <algorithm>
 #include <cmath>
 #include <concepts>
 #include <cstdint>
@@ -32,6 +33,11 @@ namespace tactus::solver {
 // A partition's force buffer holds 4 doubles per node: the force, then the nodal step bound's row
 // sum (unused when the bound is off), so the two scatters of a tet's node touch one cache line.
 inline constexpr std::size_t kForceStride = 4;
+
+// Tets per tile of the ANP blocks' deformation maxima (StressKernelArgs::anp_tiles); a multiple of
+// the lanes, so a group of lanes never straddles two tiles.
+inline constexpr std::size_t kAnpTile = 16;
+static_assert(kAnpTile % lanes::kLanes == 0);
 
 // One partition of one material block (internal_force.hpp).
 struct StressKernelArgs {
@@ -56,11 +62,11 @@ struct StressKernelArgs {
   bool nodal_bound = false;
   const double* anp_bound_factor = nullptr;
   double anp_bulk = 0;
-  // ANP tets with the bound on: the partition's second row buffer, 2 per node of its range (node n
-  // at anp_rows[2 (n - f_node_offset)]): the volumetric rows above alone, then the same rows on the
-  // change of the volume-rate vectors since the reference state, |d_b - d0_b| (design.md, "Stable
-  // step": the rest operator's weighted rows plus a perturbation, InternalForces).
-  double* anp_rows = nullptr;
+  // ANP tets with the bound on: the partition's tiles of kAnpTile consecutive tets (from `begin`),
+  // each receiving the largest |cof F - I|_F^2 of its tets (the second form of the bound, design.md
+  // "Stable step": a tet's volume-rate vectors have moved from the reference ones by at most that
+  // norm times their reference length; InternalForces).
+  double* anp_tiles = nullptr;
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
   // its step is computed with, and where its unscaled squared step (no beta) is stored.
   const double* mass_factor = nullptr;
@@ -309,28 +315,24 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     if constexpr (kAnp) {
       const T q = load_strided<T>(a.anp_bound_factor + (e - a.block_begin), 1);
       row += q * t;
-      if (a.anp_rows) {
-        // |d_b - d0_b| / V0 = |cof F grad_X N_b - grad_X N_b| (node 0's gradient minus the others'),
-        // and the rows of the volumetric part and of its change since the reference state.
-        T change[4], t_change = lanes::splat<T>(0.0);
-        for (int k = 0; k < 4; ++k) {
-          T d2 = lanes::splat<T>(0.0);
-          for (int i = 0; i < 3; ++i) {
-            const T g_ref = k == 0 ? -(g[i] + g[3 + i] + g[6 + i]) : g[3 * (k - 1) + i];
-            const T diff = cg[k][i] - g_ref;
-            d2 += diff * diff;
+      if (a.anp_tiles) {
+        // c^2 >= |cof F - I|_2^2, the smaller of its Frobenius norm's square and the product of its
+        // largest column and row sums (|A|_2^2 <= |A|_1 |A|_inf), its largest over the lanes into the
+        // tile: |cof F grad_X N_b - grad_X N_b| <= c |grad_X N_b|.
+        T frobenius = lanes::splat<T>(0.0), column_sum[3], row_sum[3];
+        for (int i = 0; i < 3; ++i) column_sum[i] = row_sum[i] = frobenius;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) {
+            const T moved = i == j ? cof(i, j) - 1.0 : cof(i, j), size = lanes::abs_of(moved);
+            frobenius += moved * moved, row_sum[i] += size, column_sum[j] += size;
           }
-          change[k] = lanes::sqrt_of(d2), t_change += change[k];
-        }
-        const T volumetric = V0 * q * t, changed = V0 * q * t_change;
-        T rows[4][2];
-        for (int k = 0; k < 4; ++k) rows[k][0] = bound[k] * volumetric, rows[k][1] = change[k] * changed;
-        for (int l = 0; l < L; ++l)
-          for (int k : {1, 2, 3, 0}) {
-            double* r = a.anp_rows + 2 * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
-            r[0] += lanes::lane(rows[k][0], l);
-            r[1] += lanes::lane(rows[k][1], l);
-          }
+        const T max_column = lanes::max_of(column_sum[0], lanes::max_of(column_sum[1], column_sum[2])),
+                max_row = lanes::max_of(row_sum[0], lanes::max_of(row_sum[1], row_sum[2]));
+        const T c2 = lanes::min_of(frobenius, max_column * max_row);
+        double largest = lanes::lane(c2, 0);
+        for (int l = 1; l < L; ++l) largest = std::max(largest, lanes::lane(c2, l));
+        double& tile = a.anp_tiles[(e - a.begin) / kAnpTile];
+        tile = std::max(tile, largest);
       }
     }
     row *= V0;

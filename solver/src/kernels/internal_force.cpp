@@ -45,6 +45,12 @@ void times_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
   for (std::size_t a = lo; a < hi; ++a) x[a] *= V[a];
 }
 
+// The lengths of a tet's four reference gradients grad_X N_k (node 0's is minus the others' sum).
+void reference_gradient_norms(const double* g, double norm[4]) {
+  norm[0] = std::sqrt(std::pow(g[0] + g[3] + g[6], 2) + std::pow(g[1] + g[4] + g[7], 2) + std::pow(g[2] + g[5] + g[8], 2));
+  for (int k = 0; k < 3; ++k) norm[k + 1] = std::sqrt(g[3 * k] * g[3 * k] + g[3 * k + 1] * g[3 * k + 1] + g[3 * k + 2] * g[3 * k + 2]);
+}
+
 // The block's tets at each node, in element order: node a's are tets[first[a] .. first[a + 1]).
 std::pair<std::vector<std::size_t>, std::vector<std::size_t>> block_node_tets(const Model& m, const MaterialBlock& b) {
   const std::size_t n = m.num_nodes;
@@ -103,10 +109,9 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
 std::vector<double> anp_step_bound_factors(const Model& m, const MaterialBlock& b, const std::vector<double>& V) {
   std::vector<double> t0(b.end - b.begin), R0(m.num_nodes, 0.0), q(b.end - b.begin);
   for (std::size_t e = b.begin; e < b.end; ++e) {
-    const double* g = &m.grad[9 * e];
-    double t = std::sqrt(std::pow(g[0] + g[3] + g[6], 2) + std::pow(g[1] + g[4] + g[7], 2) + std::pow(g[2] + g[5] + g[8], 2));
-    for (int k = 0; k < 3; ++k) t += std::sqrt(g[3 * k] * g[3 * k] + g[3 * k + 1] * g[3 * k + 1] + g[3 * k + 2] * g[3 * k + 2]);
-    t0[e - b.begin] = m.volume[e] * t;
+    double norm[4];
+    reference_gradient_norms(&m.grad[9 * e], norm);
+    t0[e - b.begin] = m.volume[e] * (norm[0] + norm[1] + norm[2] + norm[3]);
     for (int k = 0; k < 4; ++k) R0[static_cast<std::size_t>(m.conn[4 * e + k])] += t0[e - b.begin];
   }
   const double k16 = b.material.small_strain_bulk() / 16;
@@ -164,6 +169,25 @@ std::vector<double> anp_rest_rows(const Model& m, const MaterialBlock& b, const 
   for (std::size_t a = 0; a < n; ++a) rows[a] = p[a] > 0 ? rows[a] / p[a] : 0.0;
   return rows;
 }
+
+namespace {
+
+// Per node, the ANP block's volumetric rows of the first form at the reference state: the sum
+// over the block's tets at b of |grad_X N_b| q_e t0_e, t0_e = V0_e sum_k |grad_X N_k| (what the
+// stress pass adds at F = I; q the tets' factors, anp_step_bound_factors). The second form scales
+// it by the tets' deformation to bound the rows now (InternalForces::compute).
+std::vector<double> anp_reference_rows(const Model& m, const MaterialBlock& b, const std::vector<double>& q) {
+  std::vector<double> rows(m.num_nodes, 0.0);
+  for (std::size_t e = b.begin; e < b.end; ++e) {
+    double norm[4];
+    reference_gradient_norms(&m.grad[9 * e], norm);
+    const double factor = q[e - b.begin] * m.volume[e] * (norm[0] + norm[1] + norm[2] + norm[3]);
+    for (int k = 0; k < 4; ++k) rows[static_cast<std::size_t>(m.conn[4 * e + k])] += norm[k] * factor;
+  }
+  return rows;
+}
+
+}  // namespace
 
 // Each tet of [begin, end) adds a quarter of its current volume v = J V0 to its four nodes, v from
 // its current edges from node 0, (X_k - X_0) + (u_k - u_0) (the reference and the displacement
@@ -271,21 +295,25 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
       }
       const std::vector<double> rest =
           anp_rest_rows(model, model.blocks[k], a.reference_volume, model.blocks[k].material.pressure_smoothing() > 0 ? &a.averaging : nullptr);
+      // (A rigid block has no stress pass, so no volumetric rows to take out of its nodes' rows.)
+      const std::vector<double> reference =
+          model.blocks[k].material.rigid() ? std::vector<double>(model.num_nodes, 0.0) : anp_reference_rows(model, model.blocks[k], a.bound_factor);
       anp_rest_rows_.resize(model.num_nodes, 0.0);
-      for (std::size_t n = 0; n < model.num_nodes; ++n) anp_rest_rows_[n] += rest[n];
+      anp_reference_rows_.resize(model.num_nodes, 0.0);
+      for (std::size_t n = 0; n < model.num_nodes; ++n) anp_rest_rows_[n] += rest[n], anp_reference_rows_[n] += reference[n];
       anp_.push_back(std::move(a));
     }
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
   // Fixed partitions (independent of the thread count) and the node range each touches; the
   // Morton order of nodes and tets (model.cpp) keeps the ranges short.
-  std::size_t forces = 0, volumes = 0;
+  std::size_t forces = 0, volumes = 0, tiles = 0;
   for (std::size_t k = 0; k < model.blocks.size(); ++k) {
     const MaterialBlock& b = model.blocks[k];
     if (b.material.rigid()) continue;  // moved as rigid bodies (time/rigid.cpp): no stress, no step limit
     const std::size_t n = b.end - b.begin,
                       parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
     for (std::size_t p = 0; p < parts; ++p) {
-      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes, 2 * volumes};
+      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes, tiles};
       for (std::size_t e = q.begin; e < q.end; ++e)
         for (int a = 0; a < 4; ++a) {
           const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
@@ -293,13 +321,34 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
         }
       if (q.begin == q.end) q.node_lo = q.node_hi = 0;
       forces += kForceStride * (q.node_hi - q.node_lo);
-      if (b.material.anp()) volumes += q.node_hi - q.node_lo;
+      if (b.material.anp()) volumes += q.node_hi - q.node_lo, tiles += (q.end - q.begin + kAnpTile - 1) / kAnpTile;
       partitions_.push_back(q);
     }
   }
   partition_forces_.assign(forces, 0.0);
   partition_volumes_.assign(volumes, 0.0);
-  partition_anp_rows_.assign(2 * volumes, 0.0);
+  anp_tiles_.assign(tiles, 0.0);
+  // Per node, the tiles holding its ANP tets (ascending: partitions and their tets in order).
+  anp_node_tile_first_.assign(model.num_nodes + 1, 0);
+  for (int fill = 0; fill < 2; ++fill) {
+    std::vector<std::size_t> last(model.num_nodes, tiles), next(anp_node_tile_first_.begin(), anp_node_tile_first_.end() - 1);
+    if (fill) anp_node_tiles_.resize(anp_node_tile_first_.back());
+    for (const Partition& q : partitions_)
+      if (model.blocks[q.block].material.anp())
+        for (std::size_t e = q.begin; e < q.end; ++e)
+          for (int a = 0; a < 4; ++a) {
+            const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
+            const std::size_t tile = q.tile_offset + (e - q.begin) / kAnpTile;
+            if (last[node] == tile) continue;
+            last[node] = tile;
+            if (fill)
+              anp_node_tiles_[next[node]++] = static_cast<std::uint32_t>(tile);
+            else
+              ++anp_node_tile_first_[node + 1];
+          }
+    if (!fill)
+      for (std::size_t a = 0; a < model.num_nodes; ++a) anp_node_tile_first_[a + 1] += anp_node_tile_first_[a];
+  }
   partition_acc_.resize(partitions_.size());
   chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
   for (std::size_t p = 0; p < partitions_.size(); ++p)
@@ -318,7 +367,6 @@ void InternalForces::set_nodal_step_bound(const double* nodal_mass) {
   chunk_bound_.assign(chunk_partitions_.size(), 0.0);
   chunk_bound_node_.assign(chunk_partitions_.size(), 0);
   if (!anp_.empty()) {
-    anp_rows_.assign(2 * model_.num_nodes, 0.0);
     chunk_eta_bound_.assign(kEtas * chunk_partitions_.size(), 0.0);
     chunk_eta_node_.assign(kEtas * chunk_partitions_.size(), 0);
   }
@@ -335,7 +383,8 @@ std::size_t InternalForces::memory_bytes() const {
   std::size_t b = (mass_factor_.capacity() + element_dt2_.capacity() + partition_forces_.capacity() + partition_volumes_.capacity() +
                    nodal_bound_.capacity() + chunk_bound_.capacity()) *
                   sizeof(double);
-  b += (partition_anp_rows_.capacity() + anp_rows_.capacity() + anp_rest_rows_.capacity() + chunk_eta_bound_.capacity()) * sizeof(double);
+  b += (anp_tiles_.capacity() + anp_reference_rows_.capacity() + anp_rest_rows_.capacity() + chunk_eta_bound_.capacity()) * sizeof(double);
+  b += anp_node_tile_first_.capacity() * sizeof(std::size_t) + anp_node_tiles_.capacity() * sizeof(std::uint32_t);
   b += node_moves_.capacity() + (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
@@ -456,8 +505,8 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
         for (const AnpBlock& an : anp_)
           if (an.block == q.block) {
             args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
-            args.anp_rows = partition_anp_rows_.data() + q.anp_rows_offset;
-            std::fill(args.anp_rows, args.anp_rows + 2 * (q.node_hi - q.node_lo), 0.0);
+            args.anp_tiles = anp_tiles_.data() + q.tile_offset;
+            std::fill(args.anp_tiles, args.anp_tiles + (q.end - q.begin + kAnpTile - 1) / kAnpTile, 0.0);
           }
       }
       args.vectorised = vectorised_;
@@ -477,12 +526,13 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       for (std::size_t n = lo; n < hi; ++n)
         if (node_moves_[n] && nodal_bound_[n] > best * nodal_mass_[n]) best = nodal_bound_[n] / nodal_mass_[n], at = n;
       chunk_bound_[c] = best, chunk_bound_node_[c] = at;
-      if (anp_rows_.empty()) continue;
+      if (chunk_eta_bound_.empty()) continue;
       // The second form (design.md, "Stable step"): the ANP volumetric rows replaced by
       // (1 + eta) times the rest operator's plus (1 + 1/eta) times those of the change since the
-      // rest state, for each eta of a fixed grid (any eta > 0 gives a bound).
-      sum_chunk<2, 2>(c, partition_anp_rows_, &Partition::anp_rows_offset, anp_rows_.data(),
-                      [&](const Partition& q) { return block_pressure_[q.block] != nullptr; });
+      // rest state, for each eta of a fixed grid (any eta > 0 gives a bound). With C the largest
+      // c^2 >= |cof F - I|_2^2 of the tiles holding the node's tets (element_loop.hpp, anp_tiles),
+      // the change rows are <= C times the reference rows K, and the volumetric part of the old
+      // row is >= (1 - sqrt C)^2 K, which is taken out (a hair less, for the rounding of the sums).
       double* eta_best = &chunk_eta_bound_[kEtas * c];
       std::size_t* eta_at = &chunk_eta_node_[kEtas * c];
       std::fill(eta_best, eta_best + kEtas, 0.0);
@@ -495,8 +545,11 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
           if (nodal_bound_[n] > plain_best * nodal_mass_[n]) plain_best = nodal_bound_[n] / nodal_mass_[n], plain_at = n;
           continue;
         }
-        const double inv_mass = 1 / nodal_mass_[n], others = (nodal_bound_[n] - anp_rows_[2 * n]) * inv_mass,
-                     changed = anp_rows_[2 * n + 1] * inv_mass, rest = anp_rest_rows_[n] * inv_mass;
+        double C = 0;
+        for (std::size_t t = anp_node_tile_first_[n]; t < anp_node_tile_first_[n + 1]; ++t) C = std::max(C, anp_tiles_[anp_node_tiles_[t]]);
+        const double shrink = std::max(0.0, 1 - std::sqrt(C)), K = anp_reference_rows_[n], inv_mass = 1 / nodal_mass_[n],
+                     others = (nodal_bound_[n] - (1 - 1e-12) * shrink * shrink * K) * inv_mass, changed = C * K * inv_mass,
+                     rest = anp_rest_rows_[n] * inv_mass;
         for (int j = 0; j < kEtas; ++j) {
           const double row = others + kEtaChange[j] * changed + kEtaRest[j] * rest;
           if (row > eta_best[j]) eta_best[j] = row, eta_at[j] = n;
@@ -532,7 +585,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     for (std::size_t c = 0; c < chunk_bound_.size(); ++c)
       if (chunk_bound_[c] > omega2) omega2 = chunk_bound_[c], r.limiting_node = chunk_bound_node_[c];
     // The second form: its best eta, when it bounds omega_max^2 lower (the chunks' largest per eta).
-    for (int j = 0; !anp_rows_.empty() && j < kEtas; ++j) {
+    for (int j = 0; !chunk_eta_bound_.empty() && j < kEtas; ++j) {
       double eta_omega2 = 0;
       std::size_t at = 0;
       for (std::size_t c = 0; c < chunk_bound_.size(); ++c)

@@ -8,6 +8,7 @@
 // branch that must hold for both (hgo's fibre switch).
 #include <immintrin.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -192,6 +193,24 @@ template <class T>
 #else
   return make_lanes<Pack>([&](int l) { return std::sqrt(x[l]); });
 #endif
+}
+
+// |x|, and the lane-wise larger and smaller of two (a comparison's mask selects; no NaN here).
+[[gnu::always_inline]] inline double abs_of(double x) { return std::abs(x); }
+[[gnu::always_inline]] inline Pack abs_of(const Pack& x) { return x < 0 ? -x : x; }
+template <class T>
+[[gnu::always_inline]] inline T max_of(const T& x, const T& y) {
+  if constexpr (std::is_same_v<T, double>)
+    return std::max(x, y);
+  else
+    return x > y ? x : y;
+}
+template <class T>
+[[gnu::always_inline]] inline T min_of(const T& x, const T& y) {
+  if constexpr (std::is_same_v<T, double>)
+    return std::min(x, y);
+  else
+    return x < y ? x : y;
 }
 
 }  // namespace tactus::solver::lanes

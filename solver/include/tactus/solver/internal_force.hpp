@@ -7,6 +7,7 @@
 // sum is then taken in partition order, so the forces, energies and steps are bit-identical for
 // any number of threads.
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -154,16 +155,20 @@ class InternalForces {
   // volume_offset.
   struct Partition {
     std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
-    std::size_t anp_rows_offset = 0;  // 2 volume_offset
+    std::size_t tile_offset = 0;  // ANP blocks: its tiles' first in anp_tiles_
   };
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
-  // The ANP blocks' second form of the nodal bound: per ANP partition 2 per node of its range (at
-  // 2 volume_offset; kernels/element_loop.hpp, anp_rows), their sums per node (anp_rows_), the
-  // rest operator's rows summed over the ANP blocks (anp_rest_rows_), and per node chunk and
-  // splitting weight eta (kEtas of them) the largest row / mass and its node.
+  // The ANP blocks' second form of the nodal bound: per tile of kAnpTile tets of an ANP partition
+  // (from its tile_offset) the largest |cof F - I|_F^2 (kernels/element_loop.hpp, anp_tiles), per
+  // node the tiles holding its ANP tets (anp_node_tiles_ from anp_node_tile_first_[n]), the
+  // volumetric rows at the reference state (anp_reference_rows_) and the rest operator's rows
+  // (anp_rest_rows_), each summed over the ANP blocks, and per node chunk and splitting weight eta
+  // (kEtas of them) the largest row / mass and its node.
   static constexpr int kEtas = 13;
-  std::vector<double> partition_anp_rows_, anp_rows_, anp_rest_rows_, chunk_eta_bound_;
+  std::vector<double> anp_tiles_, anp_reference_rows_, anp_rest_rows_, chunk_eta_bound_;
+  std::vector<std::size_t> anp_node_tile_first_;
+  std::vector<std::uint32_t> anp_node_tiles_;
   std::vector<std::size_t> chunk_eta_node_;
   // Nodal step bound: the masses (nullptr: off), the free nodes, the summed row sums, and per node
   // chunk the largest row sum / mass and its node.
