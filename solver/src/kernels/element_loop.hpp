@@ -63,9 +63,9 @@ struct StressKernelArgs {
   const double* anp_bound_factor = nullptr;
   double anp_bulk = 0;
   // ANP tets with the bound on: the partition's tiles of kAnpTile consecutive tets (from `begin`),
-  // each receiving the largest |cof F - I|_F^2 of its tets (the second form of the bound, design.md
-  // "Stable step": a tet's volume-rate vectors have moved from the reference ones by at most that
-  // norm times their reference length; InternalForces).
+  // each receiving the largest c^2 >= |cof F - I|_2^2 of its tets (the second form of the bound,
+  // design.md "Stable step": a tet's volume-rate vectors have moved from the reference ones by at
+  // most c times their reference length; InternalForces).
   double* anp_tiles = nullptr;
   // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
   // its step is computed with, and where its unscaled squared step (no beta) is stored.

@@ -160,7 +160,7 @@ class InternalForces {
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
   // The ANP blocks' second form of the nodal bound: per tile of kAnpTile tets of an ANP partition
-  // (from its tile_offset) the largest |cof F - I|_F^2 (kernels/element_loop.hpp, anp_tiles), per
+  // (from its tile_offset) the largest c^2 >= |cof F - I|_2^2 (kernels/element_loop.hpp, anp_tiles), per
   // node the tiles holding its ANP tets (anp_node_tiles_ from anp_node_tile_first_[n]), the
   // volumetric rows at the reference state (anp_reference_rows_) and the rest operator's rows
   // (anp_rest_rows_), each summed over the ANP blocks, and per node chunk and splitting weight eta
