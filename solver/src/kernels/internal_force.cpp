@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <iterator>
 #include <limits>
 #include <utility>
 
@@ -30,10 +31,18 @@ int default_threads(std::size_t elements) {
   return std::min(n, useful);
 }
 
-// The splitting weights eta = 2^-6 ... 2^6 of the ANP blocks' second step-bound form, as the
-// factors of its change rows, 1 + 1/eta, and of its rest rows, 1 + eta.
-constexpr double kEtaChange[] = {65, 33, 17, 9, 5, 3, 2, 1.5, 1.25, 1.125, 1.0625, 1.03125, 1.015625};
-constexpr double kEtaRest[] = {1.015625, 1.03125, 1.0625, 1.125, 1.25, 1.5, 2, 3, 5, 9, 17, 33, 65};
+// The splitting weights eta_j = 2^(j - 6), j = 0 ... 12, of the ANP blocks' second step-bound form,
+// as the factors of its change rows, 1 + 1/eta, and of its rest rows, 1 + eta (all exact in binary).
+struct EtaFactors {
+  double change[13], rest[13];
+};
+constexpr EtaFactors eta_factors() {
+  EtaFactors f{};
+  double eta = 1.0 / 64;
+  for (int j = 0; j < 13; ++j, eta *= 2) f.change[j] = 1 + 1 / eta, f.rest[j] = 1 + eta;
+  return f;
+}
+constexpr EtaFactors kEta = eta_factors();
 
 // x[lo, hi) /= V (0 where the node has no tet of the block).
 void divide_by_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
@@ -45,11 +54,20 @@ void times_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
   for (std::size_t a = lo; a < hi; ++a) x[a] *= V[a];
 }
 
-// The lengths of a tet's four reference gradients grad_X N_k (node 0's is minus the others' sum).
+// Component i of a tet's reference gradient grad_X N_k from its nine stored ones (nodes 1-3;
+// node 0's is minus their sum).
+double reference_gradient(const double* g, int k, int i) { return k == 0 ? -(g[i] + g[3 + i] + g[6 + i]) : g[3 * (k - 1) + i]; }
+
+// The lengths of a tet's four reference gradients.
 void reference_gradient_norms(const double* g, double norm[4]) {
-  norm[0] = std::sqrt(std::pow(g[0] + g[3] + g[6], 2) + std::pow(g[1] + g[4] + g[7], 2) + std::pow(g[2] + g[5] + g[8], 2));
-  for (int k = 0; k < 3; ++k) norm[k + 1] = std::sqrt(g[3 * k] * g[3 * k] + g[3 * k + 1] * g[3 * k + 1] + g[3 * k + 2] * g[3 * k + 2]);
+  for (int k = 0; k < 4; ++k) {
+    const double x = reference_gradient(g, k, 0), y = reference_gradient(g, k, 1), z = reference_gradient(g, k, 2);
+    norm[k] = std::sqrt(x * x + y * y + z * z);
+  }
 }
+
+// The ANP tiles of a partition's tets (InternalForces::anp_tiles_).
+std::size_t tiles_of(std::size_t tets) { return (tets + kAnpTile - 1) / kAnpTile; }
 
 // The block's tets at each node, in element order: node a's are tets[first[a] .. first[a + 1]).
 std::pair<std::vector<std::size_t>, std::vector<std::size_t>> block_node_tets(const Model& m, const MaterialBlock& b) {
@@ -144,9 +162,7 @@ std::vector<double> anp_rest_rows(const Model& m, const MaterialBlock& b, const 
       for (int k = 0; k < 4; ++k) {
         const std::int32_t node = m.conn[4 * e + k];
         if (!seen[static_cast<std::size_t>(node)]) seen[static_cast<std::size_t>(node)] = 1, nodes.push_back(node);
-        for (int i = 0; i < 3; ++i)
-          sum[static_cast<std::size_t>(node)][static_cast<std::size_t>(i)] +=
-              m.volume[e] * (k == 0 ? -(g[i] + g[3 + i] + g[6 + i]) : g[3 * (k - 1) + i]);
+        for (int i = 0; i < 3; ++i) sum[static_cast<std::size_t>(node)][static_cast<std::size_t>(i)] += m.volume[e] * reference_gradient(g, k, i);
       }
     }
     std::sort(nodes.begin(), nodes.end());
@@ -321,7 +337,7 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
         }
       if (q.begin == q.end) q.node_lo = q.node_hi = 0;
       forces += kForceStride * (q.node_hi - q.node_lo);
-      if (b.material.anp()) volumes += q.node_hi - q.node_lo, tiles += (q.end - q.begin + kAnpTile - 1) / kAnpTile;
+      if (b.material.anp()) volumes += q.node_hi - q.node_lo, tiles += tiles_of(q.end - q.begin);
       partitions_.push_back(q);
     }
   }
@@ -366,6 +382,7 @@ void InternalForces::set_nodal_step_bound(const double* nodal_mass) {
   nodal_bound_.assign(model_.num_nodes, 0.0);
   chunk_bound_.assign(chunk_partitions_.size(), 0.0);
   chunk_bound_node_.assign(chunk_partitions_.size(), 0);
+  static_assert(std::size(kEta.change) == kEtas);
   if (!anp_.empty()) {
     chunk_eta_bound_.assign(kEtas * chunk_partitions_.size(), 0.0);
     chunk_eta_node_.assign(kEtas * chunk_partitions_.size(), 0);
@@ -506,7 +523,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
           if (an.block == q.block) {
             args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
             args.anp_tiles = anp_tiles_.data() + q.tile_offset;
-            std::fill(args.anp_tiles, args.anp_tiles + (q.end - q.begin + kAnpTile - 1) / kAnpTile, 0.0);
+            std::fill(args.anp_tiles, args.anp_tiles + tiles_of(q.end - q.begin), 0.0);
           }
       }
       args.vectorised = vectorised_;
@@ -551,7 +568,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
                      others = (nodal_bound_[n] - (1 - 1e-12) * shrink * shrink * K) * inv_mass, changed = C * K * inv_mass,
                      rest = anp_rest_rows_[n] * inv_mass;
         for (int j = 0; j < kEtas; ++j) {
-          const double row = others + kEtaChange[j] * changed + kEtaRest[j] * rest;
+          const double row = others + kEta.change[j] * changed + kEta.rest[j] * rest;
           if (row > eta_best[j]) eta_best[j] = row, eta_at[j] = n;
         }
       }
