@@ -11,6 +11,7 @@
 
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/output.hpp"
 #include "tactus/core/stable_step.hpp"
@@ -44,7 +45,7 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
   tactus::write_vtu(path(1), mesh);
   auto report = tactus::mesher::quality_report(mesh, speeds, 10.0, {}, advice);
   for (const auto& [key, value] : extra.items()) report[key] = value;
-  std::ofstream(path(2)) << report.dump(2) << '\n';
+  tactus::write_file(path(2), report.dump(2) + '\n');
   out.commit();
   const auto& all = report["all"];
   std::ostringstream step;

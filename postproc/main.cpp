@@ -16,6 +16,7 @@
 
 #include "tactus/core/cli.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/output.hpp"
@@ -128,8 +129,8 @@ int main(int argc, char** argv) {
       ro.section_normal = direction(section_normal, "--section-normal");
       summary.pictures = postproc::render_report(results, summary, staged.path(), ro);
     }
-    std::ofstream(staged.path() / "summary.json") << postproc::summary_json(summary);
-    std::ofstream(staged.path() / "summary.md") << postproc::summary_markdown(summary);
+    write_file(staged.path() / "summary.json", postproc::summary_json(summary));
+    write_file(staged.path() / "summary.md", postproc::summary_markdown(summary));
     staged.commit();
     log::info() << "report: " << (out / "summary.md").string() << " (" << summary.pictures.size() << " pictures)";
   });

@@ -26,6 +26,15 @@ int main(int argc, char** argv) {
   app.add_option("--edge-voxels", o.surfaces.target_edge_voxels, "surface remeshing edge length, voxels")->capture_default_str();
   app.add_flag("--no-surfaces", no_surfaces, "skip surface extraction");
   return cli::run(app, argc, argv, common, [&] {
+    // Bounds a sigma, a volume and an edge can sensibly mean (finite numbers are checked by cli::run;
+    // the sigma against the volume's extent once it is read, in segment_hand).
+    if (o.segment.denoise_sigma_voxels < 0 || o.segment.denoise_sigma_voxels > 50)
+      throw InputError("command line", "--denoise", "a Gaussian sigma of 0 (none) to 50 voxels", std::to_string(o.segment.denoise_sigma_voxels));
+    if (o.segment.min_bone_volume_mm3 < 0)
+      throw InputError("command line", "--min-bone-mm3", "a volume >= 0 mm^3", std::to_string(o.segment.min_bone_volume_mm3));
+    if (o.surfaces.target_edge_voxels < 0.5 || o.surfaces.target_edge_voxels > 50)
+      throw InputError("command line", "--edge-voxels", "a remeshing edge of 0.5 to 50 voxels (finer adds triangles, not detail)",
+                       std::to_string(o.surfaces.target_edge_voxels));
     if (*body_opt) o.segment.body_threshold_hu = body;
     if (*bone_opt) o.segment.bone_threshold_hu = bone;
     o.write_surfaces = !no_surfaces;

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/output.hpp"
 
 #include "tactus/core/cli.hpp"
@@ -14,21 +15,6 @@
 #include "tactus/solver/reference.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
-
-namespace {
-// --write-reference replaces a file only when it is a tactus reference already.
-void guard_reference_path(const std::filesystem::path& p) {
-  std::error_code ec;
-  if (!std::filesystem::exists(p, ec)) {
-    tactus::ensure_parent_directory(p);
-    return;
-  }
-  std::ifstream in(p);
-  const auto j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.is_object() || !j.contains("tactus_reference"))
-    throw tactus::WriteError(p.string(), "the file exists and is not a tactus reference; choose another name");
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace tactus;
@@ -95,7 +81,7 @@ int main(int argc, char** argv) {
         std::cout << csv;
       } else {
         OutputFiles out({mt_output}, common.output_rules({mt_scenario}));
-        std::ofstream(out.staged(0)) << csv;
+        write_file(out.staged(0), csv);
         out.commit();
       }
       return;
@@ -146,17 +132,20 @@ int main(int argc, char** argv) {
     // The reference is read before the run: a malformed one is refused up front.
     nlohmann::json reference;
     if (!check_file.empty()) {
+      require_regular_file(check_file, "a reference (JSON)");
       std::ifstream in(check_file);
       reference = nlohmann::json::parse(in, nullptr, false);
       solver::check_reference(nlohmann::json::object(), reference, check_file);
     }
-    if (!write_reference.empty()) guard_reference_path(write_reference);
+    // A reference replaces only a reference tactus wrote there (its manifest says so), checked before the run.
+    std::optional<OutputFiles> reference_out;
+    if (!write_reference.empty()) reference_out.emplace(std::vector<std::filesystem::path>{write_reference}, common.output_rules({scenario_file}));
     OutputFolder output(out, common.output_rules(solver::scenario_inputs(sc)), from ? from->staging : std::filesystem::path());
     const solver::RunSummary summary = solver::run_simulation(sc, output, identity, from ? &*from : nullptr);
-    if (!write_reference.empty()) {
-      StagedOutput staged(write_reference);
-      std::ofstream(staged.path()) << solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2) << '\n';
-      staged.commit();
+    if (reference_out) {
+      write_file(reference_out->staged(0),
+                 solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2) + '\n');
+      reference_out->commit();
       log::info() << "reference written: " << write_reference;
     }
     if (!check_file.empty()) {

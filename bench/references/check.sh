@@ -22,6 +22,9 @@ run_case() {  # run_case NAME SCENARIO MESH_DIR [more tactus-solve options]
   shift 3
   echo "== $name"
   rm -rf "$W/$name.out"
+  # --update: the stored reference is a file in the repository, not an output tactus wrote here;
+  # asking for the update is asking to replace it.
+  [ "$mode" = --write-reference ] && rm -f "$REF/$name.json"
   "$B/solver/tactus-solve" "$scenario" --meshes "$meshes" -o "$W/$name.out" -q "$mode" "$REF/$name.json" "$@"
 }
 

@@ -1,5 +1,6 @@
 #include "tactus/core/cli.hpp"
 
+#include <cctype>
 #include <iostream>
 #include <new>
 
@@ -25,6 +26,26 @@ void add_common_options(CLI::App& app, CommonOptions& options, const std::string
   }
 }
 
+namespace {
+
+// Every floating-point option's values, refused when not finite: "nan" and "inf" parse as
+// numbers, then compare false against every bound (--angle nan ran, meaning nothing).
+void require_finite_numbers(const CLI::App& app) {
+  for (const CLI::Option* opt : app.get_options()) {
+    if (opt->get_type_name().find("FLOAT") == std::string::npos) continue;
+    for (const std::string& value : opt->results()) {
+      std::size_t i = value.find_first_not_of("+- ");
+      std::string word = i == std::string::npos ? "" : value.substr(i, 3);
+      for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      if (word == "nan" || word == "inf")
+        throw InputError("command line", opt->get_name(), "a finite number", "'" + value + "'");
+    }
+  }
+  for (const CLI::App* sub : app.get_subcommands()) require_finite_numbers(*sub);
+}
+
+}  // namespace
+
 int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std::function<void()>& body) {
   const std::string program = app.get_name();
   options.program = program;
@@ -41,6 +62,7 @@ int run(CLI::App& app, int argc, char** argv, CommonOptions& options, const std:
                  : options.verbose == 1 ? log::Level::verbose
                                         : log::Level::info);
   try {
+    require_finite_numbers(app);
     if (!options.output_required.empty() && options.output.empty()) throw InputError("command line", "-o/--output", options.output_required);
     body();
     return 0;

@@ -1,5 +1,8 @@
 #include "tactus/core/error.hpp"
 
+#include <cerrno>
+#include <cstring>
+
 namespace tactus {
 
 namespace {
@@ -19,5 +22,21 @@ InputError::InputError(Formatted, std::string file, std::string field, const std
     : Error(message), file_(std::move(file)), field_(std::move(field)) {}
 
 WriteError::WriteError(std::string path, std::string reason) : Error(path + ": cannot write: " + reason), path_(std::move(path)) {}
+
+namespace {
+bool is_no_space(int err) { return err == ENOSPC || err == EDQUOT; }
+std::string system_reason(const std::string& doing, int err) {
+  if (is_no_space(err)) return doing + ": no space left on device" + (err == EDQUOT ? " (disk quota exceeded)" : "");
+  return doing + ": " + std::strerror(err);
+}
+}  // namespace
+
+WriteError::WriteError(Composed, std::string message, std::string path, bool no_space)
+    : Error(std::move(message)), path_(std::move(path)), no_space_(no_space) {}
+
+WriteError WriteError::with_note(const std::string& note) const { return WriteError(Composed{}, std::string(what()) + note, path_, no_space_); }
+
+WriteError::WriteError(std::string path, const std::string& doing, int err)
+    : Error(path + ": cannot write: " + system_reason(doing, err)), path_(std::move(path)), no_space_(is_no_space(err)) {}
 
 }  // namespace tactus

@@ -17,6 +17,13 @@ class H5Handle {
   H5Handle& operator=(const H5Handle&) = delete;
   hid_t get() const { return id_; }
   bool valid() const { return id_ >= 0; }
+  // Closes now and says whether that worked (a file's close writes its last metadata: on a full
+  // disk it is where the failure shows).
+  bool close() {
+    const herr_t rc = id_ >= 0 ? closer_(id_) : 0;
+    id_ = -1;
+    return rc >= 0;
+  }
 
  private:
   hid_t id_;

@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/core/mesh.hpp"
 #include "tactus/core/staged_output.hpp"
@@ -87,11 +88,14 @@ void write_msh(const fs::path& file, const TetMesh& mesh, bool binary) {
     try {
       gmsh::write(staged_msh.string());
     } catch (...) {
-      throw WriteError(file.string(), "gmsh failed writing it: " + GmshSession::last_error());
+      throw_library_write_failure(file, "gmsh failed writing it: " + GmshSession::last_error());
     }
-    fs::rename(staged_msh, out.path());
+    std::error_code ec;
+    fs::rename(staged_msh, out.path(), ec);
+    if (ec) throw WriteError(file.string(), "gmsh wrote nothing there (" + ec.message() + ")");
   }
-  out.commit();
+  // gmsh does not report a failed write: a file cut short by a full disk lacks its last section's end.
+  out.commit("$EndElements\n", "MSH file");
 }
 
 TetMesh tet_mesh_from_gmsh_model(const std::string& fname) {

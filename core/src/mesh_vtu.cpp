@@ -14,6 +14,7 @@
 #include <cmath>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/isolated.hpp"
 #include "tactus/core/mesh.hpp"
 #include "tactus/core/staged_output.hpp"
@@ -78,8 +79,9 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   writer->SetInputData(grid);
   writer->SetDataModeToAppended();
   writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1) throw WriteError(fname, "VTK failed writing the grid");
-  out.commit();
+  if (writer->Write() != 1 || writer->GetErrorCode() != 0)
+    throw_library_write_failure(file, "VTK failed writing the grid");
+  out.commit("</VTKFile>\n", "VTK grid");
 }
 
 const MeshField* VtuContents::point_field(std::string_view name) const {
@@ -159,7 +161,7 @@ void put_fields(ByteWriter& w, const std::vector<MeshField>& fields) {
 VtuContents read_vtu(const fs::path& file) {
   const std::string fname = file.string();
   std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an existing .vtu file", "no such file");
+  require_regular_file(file, "a VTK unstructured grid (.vtu)");
   // VTK's XML reader is not hardened against hostile bytes: it reads in an isolated child process.
   const std::string bytes = run_isolated(
       fname, "VTK unstructured grid (.vtu)",

@@ -16,6 +16,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/mesh.hpp"
 
@@ -432,8 +433,7 @@ TetMesh assemble(const RawMesh& raw, bool v41, const std::string& fname) {
 TetMesh read_msh(const fs::path& file) {
   const std::string fname = file.string();
   std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(fname, "", "an existing .msh file", "no such file");
-  if (fs::is_directory(file, ec)) throw InputError(fname, "", "a .msh file", "a directory");
+  require_regular_file(file, "a mesh (.msh)");
   std::string bytes;
   {
     std::ifstream in(file, std::ios::binary);

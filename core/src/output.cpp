@@ -1,19 +1,26 @@
 // Output folders and files that never delete what tactus did not write (see output.hpp).
 #include "tactus/core/output.hpp"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
-#include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/interrupt.hpp"
+#include "tactus/core/log.hpp"
 #include "tactus/core/version.hpp"
 
 namespace fs = std::filesystem;
@@ -24,63 +31,47 @@ namespace tactus {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-// Which process wrote a staging folder, and whether it still runs (a pid alone may be reused).
-struct ProcessId {
-  long pid = 0;
-  unsigned long long start = 0;  // /proc/<pid>/stat field 22: start time in clock ticks since boot
-  std::string boot;              // /proc/sys/kernel/random/boot_id
-};
+// Locks: an exclusive flock on `<folder>/.tactus-lock`, held by the process writing the folder
+// for as long as it lives (the kernel releases it when the process ends, however it ends).
+enum class LockState { taken, held, missing };
 
-std::string read_small_file(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
+LockState try_lock(const fs::path& folder, int& fd) {
+  fd = ::open((folder / kLockFile).c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) return LockState::missing;
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return LockState::taken;
+  ::close(fd);
+  fd = -1;
+  return LockState::held;
 }
 
-unsigned long long process_start(long pid) {
-  const std::string stat = read_small_file("/proc/" + std::to_string(pid) + "/stat");
-  // The command name (field 2) is in parentheses and may contain spaces: count from the last ')'.
-  const auto close = stat.rfind(')');
-  if (close == std::string::npos) return 0;
-  std::istringstream rest(stat.substr(close + 2));
-  std::string field;
-  for (int i = 3; i <= 22 && rest >> field; ++i)
-    if (i == 22) return std::strtoull(field.c_str(), nullptr, 10);
-  return 0;
+void release(int& fd) {
+  if (fd >= 0) ::close(fd);
+  fd = -1;
 }
 
-ProcessId this_process() {
-  ProcessId id;
-  id.pid = static_cast<long>(getpid());
-  id.start = process_start(id.pid);
-  id.boot = read_small_file("/proc/sys/kernel/random/boot_id");
-  while (!id.boot.empty() && (id.boot.back() == '\n' || id.boot.back() == ' ')) id.boot.pop_back();
-  return id;
+// Creates the lock file of a new staging folder and takes it.
+int create_lock(const fs::path& folder) {
+  const int fd = ::open((folder / kLockFile).c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) throw WriteError(folder.string(), "cannot create its lock file", errno);
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    throw WriteError(folder.string(), "cannot lock it", errno);
+  }
+  return fd;
 }
 
-bool still_running(const ProcessId& id) {
-  const ProcessId me = this_process();
-  if (id.boot != me.boot) return false;  // written before the last reboot
-  if (id.pid <= 0) return false;
-  return process_start(id.pid) == id.start && id.start != 0;
+// The safety tests' way to die like a killed process between the steps of a commit, from the
+// environment (never set in normal use): TACTUS_KILL_AT="commit:complete" (the output complete in
+// its staging folder, before the swap) or "commit:swapped" (after the swap, before the previous
+// output is sorted).
+void test_kill_point(const char* phase) {
+  static const char* spec = std::getenv("TACTUS_KILL_AT");
+  if (spec && std::string(spec) == std::string("commit:") + phase) std::raise(SIGKILL);
 }
 
 // ---------------------------------------------------------------------------------------------
-// Markers.
-std::int64_t mtime_ns(const fs::path& p) {
-  std::error_code ec;
-  const auto t = fs::last_write_time(p, ec);
-  return ec ? 0 : static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count());
-}
-
-json file_entry(const fs::path& p) {
-  std::error_code ec;
-  return {{"size", static_cast<std::uintmax_t>(fs::file_size(p, ec))}, {"mtime_ns", mtime_ns(p)}};
-}
-
-// A marker's JSON, or null when it is missing or not ours.
-json read_marker(const fs::path& p) {
+// Markers (manifests).
+json read_marker(const fs::path& p) {  // null when missing or not ours
   std::error_code ec;
   if (!fs::is_regular_file(p, ec)) return nullptr;
   std::ifstream in(p);
@@ -90,17 +81,19 @@ json read_marker(const fs::path& p) {
 }
 
 void write_json_atomically(const fs::path& p, const json& j) {
-  const fs::path tmp = p.string() + ".tmp-" + std::to_string(getpid());
-  {
-    std::ofstream out(tmp);
-    out << j.dump(1) << '\n';
-    if (!out) throw WriteError(p.string(), "the file system refused the write");
+  const fs::path tmp = p.string() + ".tmp-" + unique_suffix();
+  try {
+    write_file(tmp, j.dump(1) + '\n');
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
   }
   std::error_code ec;
   fs::rename(tmp, p, ec);
   if (ec) {
     fs::remove(tmp, ec);
-    throw WriteError(p.string(), ec.message());
+    throw WriteError(p.string(), "cannot move the manifest into place", ec.value());
   }
 }
 
@@ -111,13 +104,40 @@ std::string utc_now() {
   return buf;
 }
 
-json staging_marker(const std::string& tool) {
-  const ProcessId me = this_process();
-  return {{"tool", tool}, {"version", kVersion}, {"state", "writing"}, {"pid", me.pid}, {"process_start", me.start}, {"boot_id", me.boot}};
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
+json staging_marker(const std::string& tool, const std::string& token) {
+  return {{"tool", tool}, {"version", kVersion}, {"state", "writing"}, {"token", token}, {"pid", static_cast<long>(::getpid())}, {"started_ns", now_ns()}};
+}
+
+std::int64_t mtime_ns(const fs::path& p) {
+  std::error_code ec;
+  const auto t = fs::last_write_time(p, ec);
+  return ec ? 0 : static_cast<std::int64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count());
+}
+
+json file_entry(const fs::path& p) {
+  std::error_code ec;
+  return {{"size", static_cast<std::uintmax_t>(fs::file_size(p, ec))}, {"hash", file_hash(p)}};
+}
+
+// Whether the file at `p` is the one a manifest entry describes: by content hash; entries of
+// manifests written before hashes were recorded, by size and modification time.
+bool entry_matches(const json& entry, const fs::path& p) {
+  if (!entry.is_object()) return false;
+  std::error_code ec;
+  const auto size = fs::file_size(p, ec);
+  if (ec || entry.value("size", std::uintmax_t{0}) != size) return false;
+  if (entry.contains("hash")) return entry["hash"].is_string() && entry["hash"].get<std::string>() == file_hash(p);
+  return entry.value("mtime_ns", std::int64_t{-1}) == mtime_ns(p);
+}
+
+bool is_complete_marker(const json& m) { return !m.is_null() && m.value("state", "") == "complete" && m.contains("files") && m["files"].is_object(); }
+
 // ---------------------------------------------------------------------------------------------
-fs::path canonical_path(const fs::path& p) {
+fs::path absolute_path(const fs::path& p) {
   std::error_code ec;
   fs::path abs = fs::absolute(p, ec);
   if (ec) abs = p;
@@ -136,52 +156,80 @@ bool is_same_or_ancestor(const fs::path& ancestor, const fs::path& p) {
 
 // The place rules: not the current folder, not the root, not an input nor a folder containing one.
 void check_place(const fs::path& final, const OutputRules& rules, const std::string& kind) {
-  if (final.empty()) throw InputError("command line", "-o/--output", "an output " + kind, "an empty path");
-  const fs::path abs = canonical_path(final);
   std::error_code ec;
-  if (abs == canonical_path(fs::current_path(ec)))
+  if (final == absolute_path(fs::current_path(ec)))
     throw WriteError(final.string(), "it is the current folder; tactus writes its " + kind +
                                          " into a new folder (e.g. -o results) and never replaces the folder you work in");
-  if (abs == abs.root_path()) throw WriteError(final.string(), "it is the root of the file system");
   for (const auto& input : rules.inputs) {
     if (input.empty()) continue;
-    const fs::path in = canonical_path(input);
-    if (in == abs) throw WriteError(final.string(), "it is an input of this run (" + input.string() + "); choose another output");
-    if (is_same_or_ancestor(abs, in))
+    const fs::path in = absolute_path(input);
+    if (in == final) throw WriteError(final.string(), "it is an input of this run (" + input.string() + "); choose another output");
+    if (is_same_or_ancestor(final, in))
       throw WriteError(final.string(), "it contains an input of this run (" + input.string() + "); tactus would replace it: choose a new folder");
   }
 }
 
-// Creates the parent folders of a final path, as a WriteError when impossible.
-void make_parent(const fs::path& final) {
-  const fs::path parent = canonical_path(final).parent_path();
-  std::error_code ec;
-  if (fs::is_directory(parent, ec)) return;
-  fs::create_directories(parent, ec);
-  if (ec || !fs::is_directory(parent)) throw WriteError(parent.string(), "cannot create the folder (" + ec.message() + ")");
+// ---------------------------------------------------------------------------------------------
+// What is in a previous output folder, against its manifest.
+struct Existing {
+  bool present = false;               // a non-empty folder
+  json marker;                        // its manifest
+  std::vector<std::string> files;     // listed files, unchanged
+  std::vector<std::string> dirs;      // folders tactus made (listed, or holding a listed file)
+  std::vector<std::string> foreign;   // top-most entries tactus did not write: kept in place
+  std::vector<std::string> edited;    // listed files whose content changed since
+};
+
+// The folders a manifest accounts for: those it lists and those holding a listed file.
+std::set<std::string> manifest_dirs(const json& marker) {
+  std::set<std::string> dirs;
+  if (marker.contains("dirs") && marker["dirs"].is_array())
+    for (const auto& d : marker["dirs"])
+      if (d.is_string()) dirs.insert(d.get<std::string>());
+  for (const auto& [name, entry] : marker["files"].items())
+    for (fs::path p = fs::path(name).parent_path(); !p.empty(); p = p.parent_path()) dirs.insert(p.generic_string());
+  return dirs;
 }
 
-// Files under `dir` (relative paths) with their entries; anything that is neither a regular file
-// nor a folder is reported through `odd`.
-json snapshot(const fs::path& dir, std::string* odd = nullptr) {
-  json files = json::object();
-  std::error_code ec;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
-    const fs::path rel = it->path().lexically_relative(dir);
-    if (rel == kFolderMarker || rel == kFilesMarker) continue;  // tactus's own records
-    if (it->is_symlink()) {
-      if (odd && odd->empty()) *odd = rel.string() + " (a link)";
-      it.disable_recursion_pending();
-      continue;
+Existing classify(const fs::path& folder, const json& marker) {
+  Existing e;
+  e.present = true;
+  e.marker = marker;
+  const json& listed = marker["files"];
+  const std::set<std::string> dirs = manifest_dirs(marker);
+  std::vector<fs::path> pending{fs::path()};
+  while (!pending.empty()) {
+    const fs::path rel_dir = pending.back();
+    pending.pop_back();
+    std::error_code ec;
+    fs::directory_iterator it(folder / rel_dir, ec);
+    if (ec) throw WriteError((folder / rel_dir).string(), "cannot read the folder to see what is in it", ec.value());
+    std::vector<fs::directory_entry> entries(it, fs::directory_iterator());
+    std::sort(entries.begin(), entries.end());
+    for (const auto& entry : entries) {
+      const fs::path rel = rel_dir / entry.path().filename();
+      const std::string name = rel.generic_string();
+      if (name == kFolderMarker || name == kLockFile) continue;
+      if (name == kFilesMarker) {  // tactus's list of files written here by output-file tools: goes with the output
+        e.files.push_back(name);
+        continue;
+      }
+      const auto st = entry.symlink_status(ec);
+      if (fs::is_directory(st)) {
+        if (dirs.count(name)) {
+          e.dirs.push_back(name);
+          pending.push_back(rel);
+        } else {
+          e.foreign.push_back(name);
+        }
+      } else if (fs::is_regular_file(st) && listed.contains(name)) {
+        (entry_matches(listed[name], entry.path()) ? e.files : e.edited).push_back(name);
+      } else {
+        e.foreign.push_back(name);  // an unlisted file, a link, a FIFO, ...
+      }
     }
-    if (it->is_directory()) continue;
-    if (!it->is_regular_file()) {
-      if (odd && odd->empty()) *odd = rel.string();
-      continue;
-    }
-    files[rel.generic_string()] = file_entry(it->path());
   }
-  return files;
+  return e;
 }
 
 std::string first_entry(const fs::path& dir) {
@@ -192,15 +240,23 @@ std::string first_entry(const fs::path& dir) {
   return names.empty() ? "" : names.front();
 }
 
-// Throws unless `final` (a folder) may be replaced by an output of rules.tool.
-void check_folder_replaceable(const fs::path& final, const OutputRules& rules) {
+std::string list_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size() && i < 5; ++i) s += (i ? ", '" : "'") + names[i] + "'";
+  if (names.size() > 5) s += " and " + std::to_string(names.size() - 5) + " more";
+  return s;
+}
+
+// What is at `final` (a folder), or WriteError unless an output of rules.tool may replace it.
+Existing check_folder_replaceable(const fs::path& final, const OutputRules& rules) {
   std::error_code ec;
-  if (!fs::exists(fs::symlink_status(final, ec))) return;
-  if (fs::is_symlink(fs::symlink_status(final, ec))) throw WriteError(final.string(), "it is a link; give the folder itself, or a new folder");
-  if (!fs::is_directory(final, ec)) throw WriteError(final.string(), "it is a file, not a folder; choose a new folder");
-  if (fs::is_empty(final, ec)) return;
+  const auto st = fs::symlink_status(final, ec);
+  if (!fs::exists(st)) return {};
+  if (fs::is_symlink(st)) throw WriteError(final.string(), "it is a link; give the folder itself, or a new folder");
+  if (!fs::is_directory(st)) throw WriteError(final.string(), "it is a file, not a folder; choose a new folder");
+  if (fs::is_empty(final, ec)) return {};
   const json marker = read_marker(final / kFolderMarker);
-  if (marker.is_null() || !marker.contains("files") || !marker["files"].is_object() || marker.value("state", "") != "complete") {
+  if (!is_complete_marker(marker)) {
     std::size_t n = 0;
     for (auto it = fs::directory_iterator(final, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) ++n;
     throw WriteError(final.string(), "it is a folder tactus did not write (" + std::to_string(n) + " entries, e.g. '" + first_entry(final) +
@@ -210,75 +266,226 @@ void check_folder_replaceable(const fs::path& final, const OutputRules& rules) {
   if (writer != rules.tool && !rules.force)
     throw WriteError(final.string(),
                      "it holds the output of " + writer + ", not of " + rules.tool + "; give --force to replace it, or choose another folder");
-  std::string odd;
-  const json now = snapshot(final, &odd);
-  if (!odd.empty()) throw WriteError(final.string(), "'" + odd + "' in it was not written by tactus; move it away first");
-  const json& listed = marker["files"];
-  for (const auto& [name, entry] : now.items()) {
-    if (!listed.contains(name))
-      throw WriteError(final.string(), "'" + name + "' in it was not written by tactus; move it away, or choose another folder");
-    if (listed[name] != entry)
-      throw WriteError(final.string(), "'" + name + "' in it changed since tactus wrote it; move it away, or choose another folder");
-  }
+  Existing e = classify(final, marker);
+  if (!e.edited.empty())
+    throw WriteError(final.string(), list_names(e.edited) + " in it changed since " + writer +
+                                         " wrote it; tactus does not overwrite your edits: move or rename it, or choose another folder");
+  return e;
 }
 
-// Removes what the marker of a replaced output lists, then its empty folders. Anything else stays.
-void remove_listed(const fs::path& dir, const json& files) {
+// Moves the entries tactus did not write from the previous output `old` into the new one at
+// `final`, then removes what the previous manifest listed. Returns what was kept in place.
+std::vector<std::string> finish_replacement(const fs::path& final, const fs::path& old, const Existing& e) {
   std::error_code ec;
-  for (const auto& [name, entry] : files.items()) fs::remove(dir / name, ec);
-  fs::remove(dir / kFolderMarker, ec);
-  fs::remove(dir / kFilesMarker, ec);  // a list of files tactus wrote here later (OutputFiles), all of them listed above
-  std::vector<fs::path> dirs;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
-    if (it->is_directory() && !it->is_symlink()) dirs.push_back(it->path());
-  std::sort(dirs.rbegin(), dirs.rend());         // deepest first
-  for (const auto& d : dirs) fs::remove(d, ec);  // only removes empty folders
-  fs::remove(dir, ec);
+  for (const std::string& name : e.foreign) {
+    const fs::path target = final / name;
+    fs::create_directories(target.parent_path(), ec);
+    fs::rename(old / name, target, ec);
+    if (ec) throw WriteError(target.string(), "cannot keep it in place (" + ec.message() + "); it is still in " + old.string());
+  }
+  for (const std::string& name : e.files) fs::remove(old / name, ec);
+  std::vector<std::string> dirs = e.dirs;
+  std::sort(dirs.rbegin(), dirs.rend());  // deepest first
+  for (const std::string& d : dirs) fs::remove(old / d, ec);  // only when empty
+  fs::remove(old / kFolderMarker, ec);
+  fs::remove(old / kLockFile, ec);
+  if (!fs::remove(old, ec) && fs::exists(old))
+    log::warn(old.string() + " still holds entries tactus did not expect there (e.g. '" + first_entry(old) + "'): kept, look into it");
+  sync_directory(final);
+  return e.foreign;
 }
 
-// Staging folders `<name>.partial-*` of `tool` whose process is gone; `resumable`: only those
-// holding a kResumableDir (a killed run that can be continued), else only those without.
-std::vector<fs::path> dead_staging(const fs::path& final, const std::string& tool, bool resumable) {
-  std::vector<fs::path> found;
-  const fs::path parent = canonical_path(final).parent_path();
+void say_kept(const fs::path& final, const std::vector<std::string>& kept) {
+  if (!kept.empty())
+    log::info() << "kept " << kept.size() << (kept.size() == 1 ? " entry" : " entries") << " tactus did not write, in place in " << final.string()
+                << ": " << list_names(kept);
+}
+
+// renameat2 with a flag; false (errno set) when it failed.
+bool rename_with(const fs::path& from, const fs::path& to, unsigned flags) { return ::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), flags) == 0; }
+
+// Publishes the complete output in `staging` (its manifest `marker`, without "replaces") at
+// `final`. The staging folder holds its lock file (taken by this process).
+void publish(const fs::path& staging, const fs::path& final, const OutputRules& rules, json marker) {
+  const Existing old = check_folder_replaceable(final, rules);
+  // The user's entries in the previous output stay where they are: the new output must not hold one of their names.
+  for (const std::string& name : old.foreign)
+    for (fs::path p = name; !p.empty(); p = p.parent_path()) {
+      std::error_code ec;
+      const auto st = fs::symlink_status(staging / p, ec);
+      if (fs::exists(st) && (p != fs::path(name) ? !fs::is_directory(st) : true))
+        throw WriteError(final.string(), "'" + name + "' in it was not written by tactus, and the new output has an entry of that name; move it away");
+    }
+  std::error_code ec;
+  const bool replace = fs::exists(fs::symlink_status(final, ec));
+  const fs::path parent = final.parent_path();
+  if (!replace) {
+    write_json_atomically(staging / kFolderMarker, marker);
+    if (!rename_with(staging, final, RENAME_NOREPLACE)) {
+      const int err = errno;
+      if (err != EINVAL && err != ENOSYS) throw WriteError(final.string(), "cannot move the output into place", err);
+      fs::rename(staging, final, ec);  // a file system without renameat2 flags
+      if (ec) throw WriteError(final.string(), "cannot move the output into place", ec.value());
+    }
+    sync_directory(parent);
+    fs::remove(final / kLockFile, ec);
+    return;
+  }
+  // The previous output (or the empty folder) goes to where the staging folder was: the new
+  // manifest says so first, so a process killed after the swap leaves enough to finish it.
+  fs::path aside = staging;
+  marker["replaces"] = aside.filename().string();
+  write_json_atomically(staging / kFolderMarker, marker);
+  if (!rename_with(staging, final, RENAME_EXCHANGE)) {
+    const int err = errno;
+    if (err != EINVAL && err != ENOSYS) throw WriteError(final.string(), "cannot move the output into place", err);
+    // No atomic exchange on this file system: two renames, the manifest naming where the old one goes.
+    aside = parent / (final.filename().string() + ".replaced-" + unique_suffix());
+    marker["replaces"] = aside.filename().string();
+    write_json_atomically(staging / kFolderMarker, marker);
+    fs::rename(final, aside, ec);
+    if (ec) throw WriteError(final.string(), "cannot move the previous output aside", ec.value());
+    fs::rename(staging, final, ec);
+    if (ec) {
+      std::error_code back;
+      fs::rename(aside, final, back);
+      throw WriteError(final.string(), "cannot move the output into place", ec.value());
+    }
+  }
+  sync_directory(parent);
+  test_kill_point("swapped");
+  std::vector<std::string> kept;
+  try {
+    if (old.present) kept = finish_replacement(final, aside, old);
+  } catch (const Error& e) {
+    // The new output is in place; what is left of the previous one is finished by the next run.
+    log::warn(std::string(e.what()) + "; the rest of the previous output is in " + aside.string() + " until the next run writing " +
+              final.string() + " sorts it");
+    return;
+  }
+  if (!old.present) fs::remove(aside, ec);  // the empty folder that was there
+  marker.erase("replaces");
+  write_json_atomically(final / kFolderMarker, marker);
+  fs::remove(final / kLockFile, ec);
+  sync_directory(final);
+  say_kept(final, kept);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Staging folders `<name>.partial-*` of an output.
+struct Staging {
+  fs::path path;
+  json marker;
+};
+
+std::vector<Staging> sibling_staging(const fs::path& final) {
+  std::vector<Staging> found;
   const std::string prefix = final.filename().string() + ".partial-";
   std::error_code ec;
-  for (auto it = fs::directory_iterator(parent, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+  for (auto it = fs::directory_iterator(final.parent_path(), ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
     const std::string name = it->path().filename().string();
-    if (name.rfind(prefix, 0) != 0 || !it->is_directory()) continue;
-    const json m = read_marker(it->path() / kFolderMarker);
-    if (m.is_null() || m.value("tool", "") != tool || m.value("state", "") != "writing") continue;
-    ProcessId id;
-    id.pid = m.value("pid", 0L);
-    id.start = m.value("process_start", 0ULL);
-    id.boot = m.value("boot_id", "");
-    if (still_running(id)) continue;
-    std::error_code exists;
-    if (fs::is_directory(it->path() / kResumableDir, exists) == resumable) found.push_back(it->path());
+    if (name.rfind(prefix, 0) != 0 || !it->is_directory(ec) || it->is_symlink(ec)) continue;
+    json m = read_marker(it->path() / kFolderMarker);
+    if (m.is_null()) continue;  // being created, or not tactus's: never touched
+    found.push_back({it->path(), std::move(m)});
   }
-  std::sort(found.begin(), found.end());
+  std::sort(found.begin(), found.end(), [](const Staging& a, const Staging& b) { return a.path < b.path; });
   return found;
 }
 
-// Staging folders of `tool` whose process is gone, except those a killed run can be continued from.
-void remove_stale_staging(const fs::path& final, const std::string& tool) {
-  for (const fs::path& p : dead_staging(final, tool, false)) {
-    std::error_code rm;
-    fs::remove_all(p, rm);
+// A killed commit at `final`: the new output's manifest names where the previous output went.
+void finish_pending_replacement(const fs::path& final) {
+  const json marker = read_marker(final / kFolderMarker);
+  int fd = -1;
+  const LockState lock = try_lock(final, fd);
+  if (lock == LockState::held)
+    throw WriteError(final.string(), "another tactus tool is moving its output into place there right now; wait for it to finish");
+  std::error_code ec;
+  if (marker.is_null() || !marker.contains("replaces") || !marker["replaces"].is_string()) {
+    if (lock == LockState::taken) fs::remove(final / kLockFile, ec);  // left by a process killed just after its rename
+    release(fd);
+    return;
+  }
+  const fs::path old = final.parent_path() / marker["replaces"].get<std::string>();
+  std::vector<std::string> kept;
+  const json old_marker = read_marker(old / kFolderMarker);
+  if (fs::is_directory(old, ec)) {
+    if (is_complete_marker(old_marker)) {
+      Existing e = classify(old, old_marker);
+      e.foreign.insert(e.foreign.end(), e.edited.begin(), e.edited.end());  // a changed file is the user's now: kept
+      e.edited.clear();
+      kept = finish_replacement(final, old, e);
+    } else if (fs::is_empty(old, ec)) {
+      fs::remove(old, ec);
+    } else {
+      log::warn("the output that " + final.string() + " replaced is still in " + old.string() + " (no readable manifest): kept, look into it");
+    }
+  }
+  json done = marker;
+  done.erase("replaces");
+  write_json_atomically(final / kFolderMarker, done);
+  fs::remove(final / kLockFile, ec);
+  release(fd);
+  log::info() << "finished putting the output of an interrupted " << marker.value("tool", "tactus") << " run into place in " << final.string();
+  say_kept(final, kept);
+}
+
+// Staging folders whose process is gone: a complete one (killed between finishing and the
+// swap) is published when the rules allow it; one still being written is removed unless it can
+// be continued (checkpoints). Staging folders of live processes are left alone.
+void recover_staging(const fs::path& final) {
+  for (const Staging& s : sibling_staging(final)) {
+    int fd = -1;
+    if (try_lock(s.path, fd) != LockState::taken) continue;  // alive, or not ours to judge (no lock file)
+    std::error_code ec;
+    const std::string state = s.marker.value("state", "");
+    // Its own output, by the token in its name (a previous output moved aside here by a swap has another).
+    const std::string prefix = final.filename().string() + ".partial-";
+    const bool own = s.marker.value("token", "") == s.path.filename().string().substr(prefix.size());
+    if (state == "complete" && own && !s.marker.contains("replaces")) {
+      try {
+        publish(s.path, final, {s.marker.value("tool", ""), {}, false}, s.marker);
+        log::info() << "published the finished output of an interrupted " << s.marker.value("tool", "tactus") << " run at " << final.string();
+      } catch (const Error& e) {
+        log::warn("the finished output of an interrupted run is kept in " + s.path.string() + ": " + e.what());
+      }
+    } else if (state == "writing" && !fs::is_directory(s.path / kResumableDir, ec)) {
+      fs::remove_all(s.path, ec);
+    }
+    release(fd);
   }
 }
 
-// Creates a staging folder with its "writing" marker: proves the place is writable.
-fs::path create_staging(const fs::path& final, const std::string& tool) {
-  const fs::path staging = canonical_path(final).parent_path() / (final.filename().string() + ".partial-" + std::to_string(getpid()));
+// Refuses when another live process writes `final` and started first (the later of two refuses).
+void require_single_writer(const fs::path& final, const fs::path& own, const json& own_marker) {
+  for (const Staging& s : sibling_staging(final)) {
+    if (s.path == own) continue;
+    int fd = -1;
+    const LockState lock = try_lock(s.path, fd);
+    release(fd);
+    if (lock != LockState::held) continue;
+    const auto key = [](const json& m) { return std::make_pair(m.value("started_ns", std::int64_t{0}), m.value("token", std::string())); };
+    if (key(s.marker) <= key(own_marker))
+      throw WriteError(final.string(), "another " + s.marker.value("tool", std::string("tactus tool")) + " (pid " +
+                                           std::to_string(s.marker.value("pid", 0L)) + ") is writing this output right now (" + s.path.string() +
+                                           "); wait for it to finish, or choose another output");
+  }
+}
+
+// Creates a staging folder `<final>.partial-<token>` with its lock (taken) and its "writing" marker.
+fs::path create_staging(const fs::path& final, const std::string& tool, int& lock, json& marker) {
+  const std::string token = unique_suffix();
+  const fs::path staging = final.parent_path() / (final.filename().string() + ".partial-" + token);
   std::error_code ec;
-  fs::remove_all(staging, ec);  // our own pid: a leftover of this very process
   fs::create_directory(staging, ec);
-  if (ec) throw WriteError(staging.parent_path().string(), "cannot create a folder there (" + ec.message() + ")");
+  if (ec) throw WriteError(staging.parent_path().string(), "cannot create a folder there", ec.value());
   register_staging_path(staging);
   try {
-    write_json_atomically(staging / kFolderMarker, staging_marker(tool));
+    lock = create_lock(staging);
+    marker = staging_marker(tool, token);
+    write_json_atomically(staging / kFolderMarker, marker);
   } catch (...) {
+    release(lock);
     fs::remove_all(staging, ec);
     unregister_staging_path(staging);
     throw;
@@ -292,20 +499,45 @@ void check_space(const fs::path& where, std::uintmax_t bytes, const std::string&
   if (ec) return;
   if (s.available < bytes + bytes / 10)
     throw WriteError(final.string(), what + " needs about " + human_bytes(bytes) + " but only " + human_bytes(s.available) +
-                                         " is free there; free some space or write elsewhere");
+                                         " is free there (no space left on device); free some space or write elsewhere");
 }
 
-void discard_staging(fs::path& staging) {
+void discard_staging(fs::path& staging, int& lock) {
   if (staging.empty()) return;
   std::error_code ec;
   fs::remove_all(staging, ec);
   unregister_staging_path(staging);
+  release(lock);
 }
 
-// The files manifest of a directory (files tactus wrote there). A directory that is itself a
-// complete tactus output folder (an earlier version wrote `tactus-mesh -o mesh/` where the
-// pipeline now writes `-o mesh/mesh.msh`) lends its marker's top-level files, so a user's
-// previous results are recognised as tactus's after an upgrade.
+// Every regular file under `dir` (relative path -> size and hash) and every folder, each file
+// flushed to the disk first: what the manifest of a new output lists.
+void snapshot(const fs::path& dir, json& files, json& dirs) {
+  files = json::object();
+  dirs = json::array();
+  std::error_code ec;
+  std::vector<fs::path> all;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) all.push_back(it->path());
+  if (ec) throw WriteError(dir.string(), "cannot list what was written", ec.value());
+  std::sort(all.begin(), all.end());
+  for (const fs::path& p : all) {
+    const std::string rel = p.lexically_relative(dir).generic_string();
+    if (rel == kFolderMarker || rel == kLockFile || rel == kFilesMarker) continue;
+    const auto st = fs::symlink_status(p, ec);
+    if (fs::is_directory(st)) {
+      dirs.push_back(rel);
+      sync_directory(p);
+    } else if (fs::is_regular_file(st)) {
+      sync_file(p);
+      files[rel] = file_entry(p);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Output files: the manifest of a directory (files tactus wrote there). A directory that is itself
+// a complete tactus output folder lends its manifest's top-level files, so they are recognised
+// as tactus's too.
 json read_files_manifest(const fs::path& dir) {
   const fs::path p = dir / kFilesMarker;
   std::error_code ec;
@@ -315,8 +547,8 @@ json read_files_manifest(const fs::path& dir) {
     if (m.is_null() || !m.contains("files") || !m["files"].is_object())
       throw WriteError(p.string(), "it is not a tactus output list (unreadable); move it away");
   }
-  const json folder = fs::exists(dir / kFolderMarker, ec) ? read_marker(dir / kFolderMarker) : json();
-  if (!folder.is_null() && folder.value("state", "") == "complete" && folder.contains("files") && folder["files"].is_object())
+  const json folder = read_marker(dir / kFolderMarker);
+  if (is_complete_marker(folder))
     for (const auto& [name, entry] : folder["files"].items())
       if (name.find('/') == std::string::npos && !m["files"].contains(name) && entry.is_object()) {
         json e = entry;
@@ -324,17 +556,6 @@ json read_files_manifest(const fs::path& dir) {
         m["files"][name] = e;
       }
   return m;
-}
-
-// After files were replaced in a directory that is also a tactus output folder, that folder's
-// marker lists their new sizes and times, so it stays a valid record of what tactus wrote.
-void update_folder_marker(const fs::path& dir, const std::vector<fs::path>& replaced) {
-  std::error_code ec;
-  if (!fs::exists(dir / kFolderMarker, ec)) return;
-  json folder = read_marker(dir / kFolderMarker);
-  if (folder.is_null() || !folder.contains("files") || !folder["files"].is_object()) return;
-  for (const auto& f : replaced) folder["files"][f.filename().string()] = file_entry(f);
-  write_json_atomically(dir / kFolderMarker, folder);
 }
 
 void check_file_replaceable(const fs::path& final, const OutputRules& rules, const json& manifest) {
@@ -346,11 +567,64 @@ void check_file_replaceable(const fs::path& final, const OutputRules& rules, con
   const json& files = manifest["files"];
   if (!files.contains(name)) throw WriteError(final.string(), "the file exists and tactus did not write it; choose another name, or move it away");
   const json& entry = files[name];
-  if (entry.value("size", std::uintmax_t{0}) != fs::file_size(final, ec) || entry.value("mtime_ns", std::int64_t{0}) != mtime_ns(final))
-    throw WriteError(final.string(), "the file changed since tactus wrote it; choose another name, or move it away");
+  if (!entry_matches(entry, final))
+    throw WriteError(final.string(), "the file changed since tactus wrote it; tactus does not overwrite your edits: move or rename it");
   const std::string writer = entry.value("tool", "");
   if (writer != rules.tool && !rules.force)
     throw WriteError(final.string(), "it was written by " + writer + ", not by " + rules.tool + "; give --force to replace it");
+}
+
+// Records files just moved into `dir` in its manifest (and in the folder manifest of `dir` when it
+// is an output folder), under a lock on the folder so two tools finishing at once keep both.
+void record_files(const fs::path& dir, const json& entries) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) ::flock(fd, LOCK_EX);
+  try {
+    json manifest = read_files_manifest(dir);
+    for (const auto& [name, entry] : entries.items()) manifest["files"][name] = entry;
+    write_json_atomically(dir / kFilesMarker, manifest);
+    json folder = read_marker(dir / kFolderMarker);
+    if (is_complete_marker(folder)) {
+      for (const auto& [name, entry] : entries.items()) folder["files"][name] = json{{"size", entry["size"]}, {"hash", entry["hash"]}};
+      write_json_atomically(dir / kFolderMarker, folder);
+    }
+    sync_directory(dir);
+  } catch (...) {
+    if (fd >= 0) ::close(fd);
+    throw;
+  }
+  if (fd >= 0) ::close(fd);
+}
+
+// Moves the staged files of a commit into `dir` (those still staged: a killed commit may have
+// moved some) and records them.
+void move_staged_files(const fs::path& staging, const fs::path& dir, const json& entries) {
+  for (const auto& [name, entry] : entries.items()) {
+    std::error_code ec;
+    if (!fs::exists(staging / name, ec)) continue;
+    fs::rename(staging / name, dir / name, ec);
+    if (ec) throw WriteError((dir / name).string(), "cannot move the file into place", ec.value());
+  }
+  record_files(dir, entries);
+}
+
+// Commits of output files a killed process left half done (their staging says "committing").
+void recover_file_commits(const fs::path& first_final) {
+  for (const Staging& s : sibling_staging(first_final)) {
+    int fd = -1;
+    if (try_lock(s.path, fd) != LockState::taken) continue;
+    std::error_code ec;
+    const std::string state = s.marker.value("state", "");
+    if (state == "committing" && s.marker.contains("files") && s.marker["files"].is_object()) {
+      move_staged_files(s.path, first_final.parent_path(), s.marker["files"]);
+      log::info() << "finished putting the files of an interrupted " << s.marker.value("tool", "tactus") << " run into place in "
+                  << first_final.parent_path().string();
+      fs::remove_all(s.path, ec);
+    } else if (state == "writing") {
+      fs::remove_all(s.path, ec);
+    }
+    release(fd);
+  }
 }
 
 }  // namespace
@@ -365,31 +639,72 @@ std::string human_bytes(std::uintmax_t bytes) {
   return buf;
 }
 
-// ---------------------------------------------------------------------------------------------
-OutputFolder::OutputFolder(fs::path folder, OutputRules rules, const fs::path& resume) : final_(std::move(folder)), rules_(std::move(rules)) {
-  check_place(final_, rules_, "output folder");
-  check_folder_replaceable(final_, rules_);
-  make_parent(final_);
-  remove_stale_staging(final_, rules_.tool);
-  if (resume.empty()) {
-    staging_ = create_staging(final_, rules_.tool);
-    return;
-  }
-  // The killed run's staging folder becomes this process's: renamed to our pid, marked as ours.
-  const std::vector<fs::path> dead = dead_staging(final_, rules_.tool, true);
-  if (std::find(dead.begin(), dead.end(), canonical_path(resume)) == dead.end())
-    throw InputError(resume.string(), "", "the staging folder of a killed " + rules_.tool + " run writing " + final_.string(),
-                     "not one (its process still runs, or it belongs elsewhere)");
-  staging_ = canonical_path(final_).parent_path() / (final_.filename().string() + ".partial-" + std::to_string(getpid()));
+fs::path normalise_output_path(const fs::path& given, const std::string& kind) {
+  std::string s = given.string();
+  if (s.empty()) throw InputError("command line", "-o/--output", "an output " + kind, "an empty path");
+  while (s.size() > 1 && s.back() == '/') s.pop_back();
+  const fs::path p(s);
+  const fs::path name = p.filename();
+  if (name == ".")
+    throw WriteError(given.string(), "it is the current folder; tactus writes its output " + kind +
+                                         " into a new folder (e.g. -o results) and never replaces the folder you work in");
+  if (s == "/" || name.empty() || name == "..")
+    throw WriteError(given.string(), "an output " + kind + " path must end in a name (e.g. -o results)");
+  fs::path parent = p.parent_path();
+  if (parent.empty()) parent = ".";
   std::error_code ec;
-  fs::rename(resume, staging_, ec);
-  if (ec) throw WriteError(resume.string(), "cannot take over the interrupted run's folder (" + ec.message() + ")");
-  register_staging_path(staging_);
-  write_json_atomically(staging_ / kFolderMarker, staging_marker(rules_.tool));
+  fs::create_directories(parent, ec);  // as the kernel resolves it: "a/missing/../b" makes a/missing
+  if (!fs::is_directory(parent, ec))
+    throw WriteError(given.string(), "cannot create its folder " + parent.string() + " (" + (ec ? ec.message() : describe_file_type(parent)) + ")");
+  const fs::path resolved = fs::canonical(parent, ec);
+  if (ec) throw WriteError(given.string(), "cannot resolve its folder " + parent.string() + " (" + ec.message() + ")");
+  const fs::path final = resolved / name;
+  if (fs::is_symlink(fs::symlink_status(final, ec)))
+    throw WriteError(given.string(), "it is a link (to " + fs::read_symlink(final, ec).string() +
+                                         "); tactus does not write through links: give the folder itself, or a new name");
+  return final;
+}
+
+// ---------------------------------------------------------------------------------------------
+OutputFolder::OutputFolder(fs::path folder, OutputRules rules, const fs::path& resume) : rules_(std::move(rules)) {
+  final_ = normalise_output_path(folder, "folder");
+  check_place(final_, rules_, "output folder");
+  finish_pending_replacement(final_);
+  recover_staging(final_);
+  check_folder_replaceable(final_, rules_);
+  json marker;
+  if (resume.empty()) {
+    staging_ = create_staging(final_, rules_.tool, lock_, marker);
+  } else {
+    // The killed run's staging folder becomes this process's: its lock taken, its marker ours.
+    const fs::path candidate = absolute_path(resume);
+    const json m = read_marker(candidate / kFolderMarker);
+    const bool sibling = candidate.parent_path() == final_.parent_path() &&
+                         candidate.filename().string().rfind(final_.filename().string() + ".partial-", 0) == 0;
+    if (!sibling || m.is_null() || m.value("tool", "") != rules_.tool || try_lock(candidate, lock_) != LockState::taken)
+      throw InputError(resume.string(), "", "the staging folder of a killed " + rules_.tool + " run writing " + final_.string(),
+                       "not one (its process still runs, or it belongs elsewhere)");
+    staging_ = candidate;
+    register_staging_path(staging_);
+    marker = staging_marker(rules_.tool, m.value("token", unique_suffix()));
+    write_json_atomically(staging_ / kFolderMarker, marker);
+  }
+  try {
+    require_single_writer(final_, staging_, marker);
+  } catch (...) {
+    if (resume.empty()) {
+      discard_staging(staging_, lock_);
+    } else {
+      unregister_staging_path(staging_);
+      release(lock_);
+    }
+    throw;
+  }
 }
 
 OutputFolder::~OutputFolder() {
-  if (!committed_ && !kept_) discard_staging(staging_);
+  if (!committed_ && !kept_) discard_staging(staging_, lock_);
+  release(lock_);
 }
 
 void OutputFolder::keep_for_resume() {
@@ -397,54 +712,78 @@ void OutputFolder::keep_for_resume() {
   unregister_staging_path(staging_);
 }
 
-std::vector<fs::path> resumable_staging(const fs::path& folder, const std::string& tool) { return dead_staging(folder, tool, true); }
+std::vector<fs::path> resumable_staging(const fs::path& folder, const std::string& tool) {
+  std::vector<fs::path> found;
+  fs::path final;
+  try {
+    final = normalise_output_path(folder, "folder");
+  } catch (const Error&) {
+    return found;
+  }
+  for (const Staging& s : sibling_staging(final)) {
+    if (s.marker.value("tool", "") != tool || s.marker.value("state", "") != "writing") continue;
+    std::error_code ec;
+    if (!fs::is_directory(s.path / kResumableDir, ec)) continue;
+    int fd = -1;
+    const LockState lock = try_lock(s.path, fd);
+    release(fd);
+    if (lock == LockState::taken) found.push_back(s.path);
+  }
+  return found;
+}
 
 void OutputFolder::require_space(std::uintmax_t bytes, const std::string& what) const { check_space(staging_, bytes, what, final_); }
 
 void OutputFolder::commit() {
-  check_folder_replaceable(final_, rules_);
+  check_interrupt();
   json marker = {{"tool", rules_.tool}, {"version", kVersion}, {"state", "complete"}, {"written_utc", utc_now()}};
-  marker["files"] = snapshot(staging_);
-  write_json_atomically(staging_ / kFolderMarker, marker);
-  std::error_code ec;
-  const bool replace = fs::exists(final_, ec) && !fs::is_empty(final_, ec);
-  const fs::path trash = final_.string() + ".replaced-" + std::to_string(getpid());
-  json old_files = json::object();
-  if (replace) {
-    old_files = read_marker(final_ / kFolderMarker)["files"];
-    fs::rename(final_, trash, ec);
-    if (ec) throw WriteError(final_.string(), "cannot move the previous output aside (" + ec.message() + ")");
-  }
-  fs::rename(staging_, final_, ec);
-  if (ec) {
-    std::error_code back;
-    if (replace) fs::rename(trash, final_, back);
-    throw WriteError(final_.string(), "cannot move the output into place (" + ec.message() + ")");
-  }
+  const json writing = read_marker(staging_ / kFolderMarker);
+  marker["token"] = writing.is_null() ? unique_suffix() : writing.value("token", unique_suffix());
+  snapshot(staging_, marker["files"], marker["dirs"]);
+  write_json_atomically(staging_ / kFolderMarker, marker);  // complete: a kill from here on publishes it next time
+  test_kill_point("complete");
+  check_interrupt();
+  // From here the staging path is no longer this run's to remove: after the swap it holds the
+  // previous output (the interrupt watcher must not delete it on a forced exit).
   unregister_staging_path(staging_);
+  try {
+    publish(staging_, final_, rules_, marker);
+  } catch (const Error& e) {
+    kept_ = true;  // the complete output is not thrown away
+    throw WriteError(final_.string(), std::string(e.what()) + " (the new output is complete in " + staging_.string() +
+                                          "; it is put into place by the next run writing there once this is mended)");
+  }
   committed_ = true;
-  if (replace) remove_listed(trash, old_files);
 }
 
 // ---------------------------------------------------------------------------------------------
-OutputFiles::OutputFiles(std::vector<fs::path> files, OutputRules rules) : finals_(std::move(files)), rules_(std::move(rules)) {
-  if (finals_.empty()) throw InputError("command line", "-o/--output", "an output file");
-  dir_ = canonical_path(finals_.front()).parent_path();
-  for (const auto& f : finals_) {
-    check_place(f, rules_, "output file");
-    if (canonical_path(f).parent_path() != dir_) throw InputError("command line", "-o/--output", "output files in one folder", f.string());
+OutputFiles::OutputFiles(std::vector<fs::path> files, OutputRules rules) : rules_(std::move(rules)) {
+  if (files.empty()) throw InputError("command line", "-o/--output", "an output file");
+  for (const auto& f : files) finals_.push_back(normalise_output_path(f, "file"));
+  dir_ = finals_.front().parent_path();
+  for (std::size_t i = 0; i < finals_.size(); ++i) {
+    check_place(finals_[i], rules_, "output file");
+    if (finals_[i].parent_path() != dir_) throw InputError("command line", "-o/--output", "output files in one folder", files[i].string());
     std::error_code ec;
-    if (fs::is_directory(f, ec)) throw WriteError(f.string(), "it is a folder; give a file name (or a folder output without the extension)");
+    if (fs::is_directory(finals_[i], ec))
+      throw WriteError(files[i].string(), "it is a folder; give a file name (or a folder output without the extension)");
   }
-  make_parent(finals_.front());
+  recover_file_commits(finals_.front());
   const json manifest = read_files_manifest(dir_);
   for (const auto& f : finals_) check_file_replaceable(f, rules_, manifest);
-  remove_stale_staging(finals_.front(), rules_.tool);
-  staging_ = create_staging(finals_.front(), rules_.tool);
+  json marker;
+  staging_ = create_staging(finals_.front(), rules_.tool, lock_, marker);
+  try {
+    require_single_writer(finals_.front(), staging_, marker);
+  } catch (...) {
+    discard_staging(staging_, lock_);
+    throw;
+  }
 }
 
 OutputFiles::~OutputFiles() {
-  if (!committed_) discard_staging(staging_);
+  if (!committed_) discard_staging(staging_, lock_);
+  release(lock_);
 }
 
 fs::path OutputFiles::staged(std::size_t i) const { return staging_ / finals_.at(i).filename(); }
@@ -452,24 +791,31 @@ fs::path OutputFiles::staged(std::size_t i) const { return staging_ / finals_.at
 void OutputFiles::require_space(std::uintmax_t bytes, const std::string& what) const { check_space(staging_, bytes, what, finals_.front()); }
 
 void OutputFiles::commit() {
-  json manifest = read_files_manifest(dir_);
-  for (const auto& f : finals_) check_file_replaceable(f, rules_, manifest);
+  check_interrupt();
+  json entries = json::object();
   for (std::size_t i = 0; i < finals_.size(); ++i) {
     std::error_code ec;
-    if (!fs::exists(staged(i), ec)) throw WriteError(finals_[i].string(), "the tool wrote nothing there (internal error)");
-  }
-  for (std::size_t i = 0; i < finals_.size(); ++i) {
-    std::error_code ec;
-    fs::rename(staged(i), finals_[i], ec);
-    if (ec) throw WriteError(finals_[i].string(), "cannot move the file into place (" + ec.message() + ")");
-    json entry = file_entry(finals_[i]);
+    if (!fs::is_regular_file(staged(i), ec)) throw WriteError(finals_[i].string(), "the tool wrote nothing there (internal error)");
+    sync_file(staged(i));
+    json entry = file_entry(staged(i));
     entry["tool"] = rules_.tool;
-    manifest["files"][finals_[i].filename().string()] = entry;
+    entries[finals_[i].filename().string()] = entry;
   }
-  write_json_atomically(dir_ / kFilesMarker, manifest);
-  update_folder_marker(dir_, finals_);
+  const json manifest = read_files_manifest(dir_);
+  for (const auto& f : finals_) check_file_replaceable(f, rules_, manifest);
+  check_interrupt();
+  // The journal: a process killed while moving the files leaves what the next run needs to finish.
+  json marker = read_marker(staging_ / kFolderMarker);
+  if (marker.is_null()) marker = json::object();
+  marker["state"] = "committing";
+  marker["files"] = entries;
+  write_json_atomically(staging_ / kFolderMarker, marker);
+  unregister_staging_path(staging_);  // a forced exit now leaves the journal for the next run to finish
+  move_staged_files(staging_, dir_, entries);
   committed_ = true;
-  discard_staging(staging_);
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+  release(lock_);
 }
 
 }  // namespace tactus

@@ -2,12 +2,14 @@
 // back in an isolated child with a checksum over every array.
 #include "tactus/core/state_file.hpp"
 
+#include <cmath>
 #include <fcntl.h>
 #include <unistd.h>
 
 #include <cstdio>
 
 #include "hdf5_handle.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/isolated.hpp"
 #include "tactus/core/staged_output.hpp"
 
@@ -57,17 +59,7 @@ void write_array(hid_t file, const std::string& name, hid_t file_type, hid_t mem
   H5Handle space(H5Screate_simple(1, dims, nullptr), H5Sclose);
   H5Handle ds(H5Dcreate2(file, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
   if (!ds.valid() || (n > 0 && H5Dwrite(ds.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0))
-    throw WriteError(path.string(), "HDF5 failed writing " + name);
-}
-
-// Flushes a closed file's bytes to the disk, so the rename never publishes a name whose data a
-// power cut could still lose.
-void sync_file(const fs::path& p) {
-  const int fd = ::open(p.c_str(), O_RDONLY);
-  if (fd < 0) throw WriteError(p.string(), "cannot reopen it to flush it to the disk");
-  const int rc = ::fsync(fd);
-  ::close(fd);
-  if (rc != 0) throw WriteError(p.string(), "the disk refused to flush it (fsync)");
+    throw_library_write_failure(path, "HDF5 failed writing " + name);
 }
 
 struct ReadContext {
@@ -127,7 +119,7 @@ void write_state_file(const fs::path& file, const StateArrays& state, const std:
   StagedOutput out(file);
   {
     H5Handle f(H5Fcreate(out.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    if (!f.valid()) throw WriteError(file.string(), "HDF5 cannot create the file");
+    if (!f.valid()) throw_library_write_failure(file, "HDF5 cannot create the file");
     for (const auto& [name, v] : state.reals) write_array(f.get(), name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), v.size(), file);
     for (const auto& [name, v] : state.integers) write_array(f.get(), name, H5T_STD_I64LE, H5T_NATIVE_INT64, v.data(), v.size(), file);
     for (const auto& [name, v] : state.records) write_array(f.get(), name, H5T_STD_U8LE, H5T_NATIVE_UINT8, v.data(), v.size(), file);
@@ -136,20 +128,19 @@ void write_state_file(const fs::path& file, const StateArrays& state, const std:
     if (phase) phase("data");
     // The checksum last: a file cut anywhere before it has none and is refused.
     write_string_attribute(f.get(), "checksum", checksum_of(state));
-    if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0) throw WriteError(file.string(), "HDF5 failed flushing the file");
+    if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0 || !f.close())
+      throw_library_write_failure(file, "HDF5 failed finishing the file");
   }
   sync_file(out.path());
   if (phase) phase("written");
-  out.commit();
-  const int dir = ::open(file.parent_path().empty() ? "." : file.parent_path().c_str(), O_RDONLY | O_DIRECTORY);
-  if (dir >= 0) ::fsync(dir), ::close(dir);  // the rename itself on the disk
+  out.commit();  // flushed to the disk, renamed, and the rename flushed too
   if (phase) phase("renamed");
 }
 
 StateArrays read_state_file(const fs::path& file, const std::string& kind) {
   const std::string fname = file.string();
   std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) throw InputError(fname, "", "an existing " + kind + " file", "no such file");
+  require_regular_file(file, "a " + kind + " file");
   const std::uintmax_t size = fs::file_size(file, ec);
   // libhdf5 is not hardened against hostile bytes: it reads in an isolated child process.
   const std::string bytes = run_isolated(
@@ -197,26 +188,18 @@ StateArrays read_state_file(const fs::path& file, const std::string& kind) {
   return s;
 }
 
-std::string content_digest(const std::vector<fs::path>& files) {
-  Checksum c;
-  std::vector<char> buffer(1 << 20);
-  for (const fs::path& f : files) {  // the bytes only: the same file named another way is the same input
-    const std::uint64_t separator = 0x7461637475732d2dULL;
-    c.add(&separator, sizeof separator);
-    std::FILE* in = std::fopen(f.c_str(), "rb");
-    if (!in) {
-      c.add("<missing>", 9);
-      continue;
-    }
-    for (std::size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), in)) > 0;) c.add(buffer.data(), n);
-    std::fclose(in);
-  }
-  return c.hex();
-}
-
 // ---------------------------------------------------------------------------------------------
 void StateArchive::size_error(const std::string& name, std::size_t expected, std::size_t found) const {
   throw InputError(file_, name, std::to_string(expected) + " values (this model's)", std::to_string(found) + ": a checkpoint of another model?");
+}
+
+void StateArchive::invalid(const std::string& name, const std::string& expected, const std::string& found) const {
+  throw InputError(file_, name, expected, found + " (an edited or foreign checkpoint: start the run again without --restart)");
+}
+
+void StateArchive::require_finite(const std::string& name, const std::vector<double>& v) const {
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i])) invalid(name, "finite numbers", std::to_string(v[i]) + " at position " + std::to_string(i));
 }
 
 void StateArchive::missing(const std::string& name) const {

@@ -3,6 +3,7 @@
 // the soft-tissue envelope is a smooth union of a wrist, a palm and capsules around each finger.
 #include "tactus/data_samples/phantom.hpp"
 
+#include <exception>
 #include <omp.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/staged_output.hpp"
 #include "tactus/core/volume_filters.hpp"
 
@@ -249,6 +251,7 @@ void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::pa
   const int nx = ct.dims[0], ny = ct.dims[1], nz = ct.dims[2];
   const int width = std::max(4, static_cast<int>(std::to_string(nz - 1).size()));
   bool ok = true;
+  std::exception_ptr failure;  // the first slice that could not be written (a full disk, say)
 #pragma omp parallel for schedule(dynamic) reduction(&& : ok)
   for (int k = 0; k < nz; ++k) {
     cv::Mat slice(ny, nx, CV_16UC1);
@@ -256,9 +259,22 @@ void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::pa
       for (int i = 0; i < nx; ++i) slice.at<std::uint16_t>(j, i) = static_cast<std::uint16_t>(ct.at(i, j, k) - kIntercept);
     std::ostringstream name;
     name << "slice_" << std::setw(width) << std::setfill('0') << k << ".png";
-    ok = cv::imwrite((folder / name.str()).string(), slice, {cv::IMWRITE_PNG_COMPRESSION, 1}) && ok;
+    // Encoded in memory and written with every write checked (a full disk is an error, not a short PNG).
+    std::vector<unsigned char> png;
+    if (!cv::imencode(".png", slice, png, {cv::IMWRITE_PNG_COMPRESSION, 1})) {
+      ok = false;
+      continue;
+    }
+    try {
+      write_file(folder / name.str(), std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+    } catch (const WriteError&) {
+#pragma omp critical(tactus_slice_error)
+      if (!failure) failure = std::current_exception();
+      ok = false;
+    }
   }
-  if (!ok) throw WriteError(folder.string(), "a slice could not be written");
+  if (failure) std::rethrow_exception(failure);
+  if (!ok) throw WriteError(folder.string(), "a slice could not be encoded");
   nlohmann::json j;
   j["spacing_mm"] = {ct.spacing[0] * 1e3, ct.spacing[1] * 1e3, ct.spacing[2] * 1e3};
   j["origin_mm"] = {ct.origin[0] * 1e3, ct.origin[1] * 1e3, ct.origin[2] * 1e3};
@@ -267,7 +283,7 @@ void write_slice_stack(const Volume<std::int16_t>& ct, const std::filesystem::pa
   j["slices"] = nz;
   j["layout"] = "slice_k.png: row = y index, column = x index, k = z index; HU = slope * stored + intercept";
   j["source"] = "tactus-phantom (synthetic hand CT)";
-  std::ofstream(folder / "stack.json") << j.dump(2) << '\n';
+  write_file(folder / "stack.json", j.dump(2) + '\n');
 }
 
 }  // namespace tactus::samples

@@ -1,3 +1,4 @@
+#include "tactus/core/file_io.hpp"
 #include "tactus/mesher/objects.hpp"
 
 #include <gmsh.h>
@@ -131,7 +132,7 @@ TetMesh mesh_box(const Vec3& size, const Vec3& origin, double h, const std::stri
 StlSurface read_stl(const std::filesystem::path& stl) {
   const std::string file = stl.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(stl, ec)) throw InputError(file, "", "an existing STL file", "no such file");
+  require_regular_file(stl, "an STL surface");
   std::ifstream in(stl, std::ios::binary);
   const std::string b((std::istreambuf_iterator<char>(in)), {});
   std::vector<Vec3> corners;  // 3 per triangle

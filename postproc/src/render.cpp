@@ -16,6 +16,7 @@
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkPen.h>
 #include <vtkPlane.h>
 #include <vtkPlot.h>
@@ -43,6 +44,7 @@
 #include <map>
 #include <sstream>
 
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
@@ -143,11 +145,14 @@ void write_png(vtkRenderWindow* window, const fs::path& file) {
   grab->SetInput(window);
   grab->ReadFrontBufferOff();
   grab->Update();
+  // Encoded in memory and written with every write checked (a full disk is an error, not a short PNG).
   vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(file.string().c_str());
+  writer->WriteToMemoryOn();
   writer->SetInputConnection(grab->GetOutputPort());
   writer->Write();
-  if (!fs::exists(file)) throw WriteError(file.string(), "VTK did not write the picture");
+  vtkUnsignedCharArray* png = writer->GetResult();
+  if (!png || png->GetNumberOfValues() == 0) throw WriteError(file.string(), "VTK did not encode the picture");
+  write_file(file, std::string_view(reinterpret_cast<const char*>(png->GetPointer(0)), static_cast<std::size_t>(png->GetNumberOfValues())));
 }
 
 vtkSmartPointer<vtkRenderWindow> offscreen(int w, int h) {

@@ -1,4 +1,5 @@
 // Reading a results folder: results.pvd (ParaView collection), history.csv, run.json.
+#include "tactus/core/file_io.hpp"
 #include "tactus/postproc/results.hpp"
 
 #include <algorithm>
@@ -26,6 +27,7 @@ const std::vector<double>& History::column(const std::string& name) const {
 }
 
 History read_history_csv(const fs::path& file) {
+  require_regular_file(file, "a history.csv written by tactus-solve");
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "", "a readable history.csv (written by tactus-solve)", "no such file");
   History h;
@@ -33,6 +35,9 @@ History read_history_csv(const fs::path& file) {
   if (!std::getline(in, line) || line.empty()) throw InputError(file.string(), "line 1", "a header row", "empty file");
   std::stringstream hs(line);
   for (std::string name; std::getline(hs, name, ',');) h.names.push_back(name), h.columns[name];
+  if (h.names.empty() || h.names.front() != contracts::history::time.name)
+    throw InputError(file.string(), "line 1", std::string("a header row starting with '") + contracts::history::time.name + "' (written by tactus-solve)",
+                     "'" + line.substr(0, 60) + "' (no header?)");
   std::size_t row = 1;
   while (std::getline(in, line)) {
     ++row;
@@ -72,10 +77,14 @@ void validate_run_json(const nlohmann::json& j, const std::string& file) {
   for (const char* k : {rk::steps, rk::nodes, rk::tets}) require(j, "", k, "a count (integer >= 0)", count);
   for (const char* k : {rk::end_time, rk::wall_time}) require(j, "", k, "a number", number);
   require(j, "", rk::time_step, "an object", object);
-  for (const char* k : {"min", "max"}) require(j[rk::time_step], "time_step.", k, "a number", number);
+  // A run that failed before its first step has no step sizes nor energies yet (null).
+  const bool completed = j[rk::status] == "completed";
+  const auto measured = [&](const nlohmann::json& v) { return v.is_number() || (!completed && v.is_null()); };
+  const char* measured_what = completed ? "a number" : "a number (or null: the run failed before it was measured)";
+  for (const char* k : {"min", "max"}) require(j[rk::time_step], "time_step.", k, measured_what, measured);
   require(j, "", rk::energy, "an object", object);
   for (const char* k : {"initial", "balance_error", "contact_work_normal", "contact_work_friction"})
-    require(j[rk::energy], "energy.", k, "a number", number);
+    require(j[rk::energy], "energy.", k, measured_what, measured);
   if (j.contains(rk::timing)) {
     require(j, "", rk::timing, "an object", object);
     for (const char* k : {"stress_passes", "contact"}) require(j[rk::timing], "timing_s.", k, "a number", number);
@@ -105,6 +114,7 @@ Results read_results(const fs::path& folder) {
   r.folder = fs::absolute(folder);
   if (!fs::is_directory(folder)) throw InputError(folder.string(), "", "a results folder written by tactus-solve", "no such folder");
   const fs::path pvd = folder / "results.pvd";
+  require_regular_file(pvd, "the results listing results.pvd");
   std::ifstream in(pvd);
   if (!in) throw InputError(pvd.string(), "", "the results listing results.pvd", "no such file");
   std::stringstream text;
@@ -123,10 +133,9 @@ Results read_results(const fs::path& folder) {
     r.frames.push_back(f);
   }
   if (s.find("<Collection") == std::string::npos) throw InputError(pvd.string(), "", "a VTK Collection file", "other content");
-  if (r.frames.empty())
-    throw InputError(pvd.string(), "DataSet", "at least one output state to report on", "none (the run wrote no state: see run.json)");
   std::stable_sort(r.frames.begin(), r.frames.end(), [](const Frame& a, const Frame& b) { return a.time < b.time; });
   r.history = read_history_csv(folder / "history.csv");
+  require_regular_file(folder / "run.json", "run.json written by tactus-solve");
   std::ifstream rj(folder / "run.json");
   if (!rj) throw InputError((folder / "run.json").string(), "", "run.json written by tactus-solve", "no such file");
   std::stringstream rjs;
@@ -136,6 +145,16 @@ Results read_results(const fs::path& folder) {
   const auto j = nlohmann::json::parse(r.run_json, nullptr, false);
   if (j.is_discarded() || !j.is_object()) throw InputError(rj_file, "", "a JSON object (run.json written by tactus-solve)", "malformed JSON");
   validate_run_json(j, rj_file);
+  if (r.frames.empty()) {
+    // A run that failed before its first output: its failure is the report.
+    const std::string status = j[rk::status].get<std::string>();
+    const std::string message = j.contains(rk::message) && j[rk::message].is_string() ? j[rk::message].get<std::string>() : "";
+    if (status != "completed")
+      throw InputError(rj_file, rk::status, "a run with at least one output state to report on",
+                       "a run that " + status + " at step " + std::to_string(j[rk::steps].get<long long>()) + " before writing any" +
+                           (message.empty() ? std::string() : ": " + message));
+    throw InputError(pvd.string(), "DataSet", "at least one output state to report on", "none (the run wrote no state: see run.json)");
+  }
   for (const char* key : {rk::materials, rk::bodies}) {
     auto& names = std::string(key) == rk::materials ? r.materials : r.bodies;
     for (const auto& n : j[key]) names.push_back(n.get<std::string>());

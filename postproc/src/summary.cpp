@@ -127,6 +127,11 @@ Summary summarize(const Results& r) {
   for (const Frame& f : r.frames) {
     const VtuContents v = read_vtu(f.file);
     const std::string file = f.file.string();
+    // A state of another model (a file copied in, or a folder mixed from two runs) would be
+    // reported as this run's: its size must be the run's.
+    if ((s.nodes && v.mesh.nodes.size() != s.nodes) || (s.tets && v.mesh.tets.size() != s.tets))
+      throw InputError(file, "", "a state of this run's model (" + std::to_string(s.nodes) + " nodes, " + std::to_string(s.tets) + " tets, run.json)",
+                       std::to_string(v.mesh.nodes.size()) + " nodes, " + std::to_string(v.mesh.tets.size()) + " tets: a state of another model");
     const MeshField& vm = need_cell(v, cc::von_mises.name, file);
     const MeshField& mat = need_cell(v, cc::material.name, file);
     FrameSummary fs;

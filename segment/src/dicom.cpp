@@ -1,3 +1,4 @@
+#include "tactus/core/file_io.hpp"
 #include "tactus/segment/dicom.hpp"
 
 #include <algorithm>
@@ -211,6 +212,9 @@ class Walker {
       case 0x0008103E:
         out_.series_description = text(value, len);
         break;
+      case 0x00080060:
+        out_.modality = text(value, len);
+        break;
       case 0x0020000E:
         out_.series_uid = text(value, len);
         break;
@@ -326,6 +330,8 @@ void check_image(const DicomSlice& s) {
 }  // namespace
 
 bool looks_like_dicom(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return false;  // a FIFO or device would block the read
   std::ifstream in(file, std::ios::binary);
   char head[132] = {};
   in.read(head, 132);
@@ -412,6 +418,12 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
   std::vector<DicomSlice>& slices = chosen->slices;
   for (const DicomSlice& s : slices) check_image(s);
   const DicomSlice& first = slices.front();
+  // Segmentation works in Hounsfield units; another modality has no such scale (an MR series
+  // segmented with CT thresholds found tissue with no note at all).
+  if (!first.modality.empty() && first.modality != "CT")
+    log::warn(first.file.string() + ": (0008,0060) Modality is " + first.modality +
+              ", not CT: its values are not Hounsfield units, so the default thresholds may find the wrong tissue; "
+              "check the segmentation, or give --body-threshold and --bone-threshold in its own units");
   for (const DicomSlice& s : slices) {
     const std::string f = s.file.string();
     if (s.rows != first.rows || s.columns != first.columns)
@@ -482,6 +494,12 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
           reader.SetFileName(paths[k].string().c_str());
           if (!reader.Read()) throw InputError(paths[k].string(), "(7FE0,0010) PixelData", "pixel data GDCM can decode", "undecodable");
           const gdcm::Image& image = reader.GetImage();
+          // Native (unencapsulated) pixel data must hold every pixel: GDCM pads a short element
+          // with zeros (seen: 100 of 2,112 bytes decoded as a mostly black slice, exit 0).
+          const gdcm::DataElement& pixels = reader.GetFile().GetDataSet().GetDataElement(gdcm::Tag(0x7fe0, 0x0010));
+          if (const gdcm::ByteValue* raw = pixels.GetByteValue(); raw && raw->GetLength() < buffer.size())
+            throw InputError(paths[k].string(), "(7FE0,0010) PixelData", std::to_string(buffer.size()) + " bytes of pixels (rows x columns x bytes)",
+                             std::to_string(raw->GetLength()) + " bytes (truncated)");
           if (image.GetBufferLength() != buffer.size())
             throw InputError(paths[k].string(), "(7FE0,0010) PixelData", std::to_string(buffer.size()) + " bytes of pixels",
                              std::to_string(image.GetBufferLength()) + " bytes decoded");

@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/version.hpp"
 #include "tactus/segment/dicom.hpp"
@@ -27,7 +28,8 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   // A NIfTI, NRRD or MetaImage file; a folder with stack.json is a slice stack; one with DICOM
   // files (and no stack.json) a series.
   std::error_code ec;
-  const bool file = fs::is_regular_file(stack_folder, ec);
+  const bool file = !fs::is_directory(stack_folder, ec);
+  if (file) require_regular_file(stack_folder, "a CT input (a slice stack folder, a DICOM folder or a volume file)");
   const bool dicom = !file && is_dicom_folder(stack_folder);
   if (!dicom && !o.dicom_series.empty())
     throw InputError(stack_folder.string(), "--series", "a folder of DICOM files (--series chooses among its series)", "another input");
@@ -91,7 +93,7 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
                                {"edge_factor", r.edge_factor}});
   }
   j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
-  std::ofstream(out / "segment.json") << j.dump(2) << '\n';
+  write_file(out / "segment.json", j.dump(2) + '\n');
   staged.commit();
   log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU (" << s.body_threshold_source
               << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "

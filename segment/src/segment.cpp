@@ -463,6 +463,14 @@ Segmentation segment_hand(Volume<float> hu, const SegmentParams& p) {
     times << " " << step << " " << std::chrono::duration<double>(now - last).count() << " s;";
     last = now;
   };
+  // The kernel (3 sigma each side) must fit the volume: a larger one costs minutes and blurs the
+  // hand into the air (--denoise 1e6 ran for minutes on a tiny stack).
+  const int largest = std::max({hu.dims[0], hu.dims[1], hu.dims[2]});
+  if (3 * p.denoise_sigma_voxels > largest)
+    throw InputError("command line", "--denoise",
+                     "a sigma whose kernel (3 sigma) fits the volume's largest extent of " + std::to_string(largest) + " voxels (at most " +
+                         std::to_string(largest / 3.0) + ")",
+                     std::to_string(p.denoise_sigma_voxels));
   gaussian_blur(hu, p.denoise_sigma_voxels);
   lap("denoise");
   const Volume<std::uint8_t> body = find_body(hu, p, s);

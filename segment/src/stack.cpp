@@ -1,3 +1,4 @@
+#include "tactus/core/file_io.hpp"
 #include "tactus/segment/stack.hpp"
 
 #include <fcntl.h>
@@ -77,6 +78,7 @@ std::uint32_t be32(const unsigned char* p) { return (std::uint32_t{p[0]} << 24) 
 // CRC, a grey 8- or 16-bit IHDR of sane size, image data, and the end chunk.
 void validate_png(const fs::path& path) {
   const std::string file = path.string();
+  require_regular_file(path, "a slice image (PNG)");
   std::ifstream in(path, std::ios::binary);
   const std::string b((std::istreambuf_iterator<char>(in)), {});
   const auto* u = reinterpret_cast<const unsigned char*>(b.data());
@@ -109,6 +111,7 @@ void validate_png(const fs::path& path) {
 }
 
 void validate_tiff(const fs::path& path) {
+  require_regular_file(path, "a slice image (TIFF)");
   std::ifstream in(path, std::ios::binary);
   char head[4] = {};
   in.read(head, 4);
@@ -158,7 +161,8 @@ SliceStack read_slice_stack(const fs::path& folder) {
   const std::string mf = meta_file.string();
   const std::string fields = "spacing_mm, rescale_slope, rescale_intercept and slices";
   std::error_code ec;
-  if (!fs::is_regular_file(meta_file, ec)) throw InputError(mf, "", "a stack.json with " + fields, "missing");
+  if (!fs::exists(meta_file, ec)) throw InputError(mf, "", "a stack.json with " + fields, "missing");
+  require_regular_file(meta_file, "a stack.json with " + fields);
   if (fs::file_size(meta_file, ec) > (1u << 20)) throw InputError(mf, "", "a stack.json of at most 1 MB", "a larger file");
   std::ifstream in(meta_file);
   const json meta = json::parse(in, nullptr, false);

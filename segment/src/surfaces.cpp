@@ -28,6 +28,7 @@
 
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/progress.hpp"
 #include "tactus/core/staged_output.hpp"
@@ -147,6 +148,18 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
   // Remeshed at the target edge; a surface that fails its checks (a self-intersection where two
   // thin parts nearly touch, seen with 0.5 x 0.5 x 2.5 mm voxels) is remeshed again at 1.5x and
   // 2.25x the edge before tactus gives up: a coarser edge cannot fold into the gap.
+  // Bounded before remeshing: an edge far below the voxel asks for gigabytes of triangles. An
+  // equilateral triangle of edge h covers sqrt(3)/4 h^2.
+  {
+    const double h = p.target_edge_voxels * std::cbrt(L.voxel_volume());
+    const double estimate = PMP::area(extracted) / (0.433 * h * h);
+    constexpr double kMaxTriangles = 2e7;
+    if (estimate > kMaxTriangles)
+      throw InputError("command line", "--edge-voxels",
+                       "a remeshing edge giving at most 20 million triangles per surface (this one would need about " +
+                           std::to_string(static_cast<long long>(estimate)) + ")",
+                       std::to_string(p.target_edge_voxels));
+  }
   Mesh mesh;
   for (const double factor : {1.0, 1.5, 2.25}) {
     mesh = extracted;
@@ -194,15 +207,17 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
   }
   r.stl = folder / (name + ".stl");
   r.ply = folder / (name + ".ply");
-  {
-    std::ofstream os(r.stl, std::ios::binary);
+  {  // through memory: the file itself is written with every write checked (a full disk is an error)
+    std::ostringstream os(std::ios::binary);
     CGAL::IO::set_mode(os, CGAL::IO::BINARY);  // (the named parameter alone still writes ASCII in 5.5)
     CGAL::IO::write_STL(os, mesh, CGAL::parameters::use_binary_mode(true));
+    write_file(r.stl, os.str());
   }
   {
-    std::ofstream os(r.ply, std::ios::binary);
+    std::ostringstream os(std::ios::binary);
     CGAL::IO::set_mode(os, CGAL::IO::BINARY);
     CGAL::IO::write_PLY(os, mesh, CGAL::parameters::use_binary_mode(true));
+    write_file(r.ply, os.str());
   }
   return r;
 }

@@ -1,3 +1,4 @@
+#include "tactus/core/file_io.hpp"
 #include "tactus/segment/volume_files.hpp"
 
 #include <zlib.h>
@@ -51,9 +52,7 @@ std::string trim(const std::string& s) {
 }
 
 std::string read_bytes(const fs::path& file, std::uint64_t cap, const std::string& what) {
-  std::error_code ec;
-  const auto size = fs::file_size(file, ec);
-  if (ec) throw InputError(file.string(), "", "a readable " + what, "no such file or unreadable");
+  const auto size = require_regular_file(file, "a " + what);
   if (size > cap)
     throw InputError(file.string(), "", "a " + what + " of at most " + std::to_string(cap >> 20) + " MB", std::to_string(size) + " bytes");
   std::ifstream in(file, std::ios::binary);
@@ -62,6 +61,13 @@ std::string read_bytes(const fs::path& file, std::uint64_t cap, const std::strin
 
 // Inflates a gzip or zlib stream into exactly `expected` bytes (more or fewer is an error).
 std::string inflate_exactly(const std::string& in, std::size_t expected, const std::string& file, const std::string& field) {
+  // Deflate expands at most 1032:1: a header declaring more than that is refused before the
+  // buffer is allocated (a 352-byte header declaring 7e8 voxels once reserved 2.6 GB).
+  constexpr std::size_t kMaxDeflateRatio = 1032;
+  if (expected / kMaxDeflateRatio > in.size())
+    throw InputError(file, field, std::to_string(expected) + " bytes of voxels as the header declares, which " + std::to_string(in.size()) +
+                                      " compressed bytes cannot hold (deflate expands at most 1032:1)",
+                     "a file too short for its header (truncated, or a wrong size in the header)");
   std::string out(expected, '\0');
   z_stream z{};
   if (inflateInit2(&z, 15 + 32) != Z_OK) throw Error("zlib: cannot start inflating");
@@ -238,7 +244,13 @@ SliceStack read_nifti(const fs::path& path) {
       o[r] = f32(280 + 16 * static_cast<std::size_t>(r) + 12);
     }
   } else if (i16(252) > 0) {  // qform: a quaternion rotation, the voxel sizes, qfac for the third axis
-    const double b = f32(256), c = f32(260), d = f32(264), a = std::sqrt(std::max(0.0, 1 - b * b - c * c - d * d));
+    const double b = f32(256), c = f32(260), d = f32(264), bcd = b * b + c * c + d * d;
+    // a = sqrt(1 - b^2 - c^2 - d^2): (b, c, d) past the unit sphere is no rotation (seen: a spacing of
+    // 36 um for 3 mm voxels). A few ulps over 1 from float rounding is a = 0, as NIfTI's reference code does.
+    if (!std::isfinite(bcd) || bcd > 1 + 1e-5)
+      throw InputError(file, "quatern_b/c/d", "the vector part of a unit quaternion (b^2 + c^2 + d^2 <= 1)",
+                       "b^2 + c^2 + d^2 = " + std::to_string(bcd));
+    const double a = std::sqrt(std::max(0.0, 1 - bcd));
     const double R[3][3] = {{a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)},
                             {2 * (b * c + a * d), a * a + c * c - b * b - d * d, 2 * (c * d - a * b)},
                             {2 * (b * d - a * c), 2 * (c * d + a * b), a * a + d * d - c * c - b * b}};
@@ -255,12 +267,13 @@ SliceStack read_nifti(const fs::path& path) {
     o[r] *= to_mm;
     for (int c = 0; c < 3; ++c) M[r][c] *= to_mm;
   }
-  SliceStack s = make_stack(dims, M, o, ras, file, "qform/sform");
+  // The declared size against the file's before anything of that size is allocated.
   const std::size_t n = voxel_count(dims), bytes = n * scalar_size(type->second), offset = static_cast<std::size_t>(vox_offset);
   if (gz) raw = inflate_exactly(raw, offset + bytes, file, "voxels");
   if (raw.size() < offset + bytes)
     throw InputError(file, "voxels", std::to_string(bytes) + " bytes of voxels after byte " + std::to_string(offset),
                      std::to_string(raw.size() - std::min(raw.size(), offset)) + " (truncated)");
+  SliceStack s = make_stack(dims, M, o, ras, file, "qform/sform");
   convert(raw.data() + offset, n, type->second, big, slope, intercept, s.hu.data.data(), file);
   s.source = "NIfTI file " + file;
   return s;

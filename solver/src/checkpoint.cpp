@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/output.hpp"
 #include "tactus/core/version.hpp"

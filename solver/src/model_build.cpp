@@ -294,6 +294,24 @@ std::int32_t curve_index(const Model& m, const std::string& name) {
   return -1;
 }
 
+// InputError when dof c of node i, which boundary k is about to constrain, is already constrained
+// otherwise by an earlier boundary (fixed there, moving here: one of the two would be ignored).
+void conflicting_constraint(const Scenario& sc, const Model& m, std::size_t k, std::size_t i, int c) {
+  const std::int32_t j = m.constraint_boundary[3 * i + static_cast<std::size_t>(c)];
+  if (j < 0) return;
+  const BoundarySpec& a = sc.boundaries[static_cast<std::size_t>(j)];
+  const BoundarySpec& b = sc.boundaries[k];
+  const bool same = a.type == b.type && a.curve == b.curve && (a.type == "fixed" || (a.type == "velocity" ? a.velocity[c] == b.velocity[c]
+                                                                                                           : a.displacement[c] == b.displacement[c]));
+  if (same) return;
+  const std::size_t body = m.body_of_node(i);
+  const std::string axis(1, static_cast<char>('x' + c));
+  throw InputError(sc.file.string(), "boundary[" + std::to_string(k) + "]",
+                   "nodes not constrained otherwise by an earlier [[boundary]] (one of the two would be ignored)",
+                   "node " + std::to_string(i - m.bodies[body].node_begin + 1) + " of body '" + m.bodies[body].name + "' is " + a.type +
+                       " in " + axis + " by boundary[" + std::to_string(j) + "] and " + b.type + " by this one");
+}
+
 void apply_boundaries(const Scenario& sc, Model& m) {
   m.constrained.assign(3 * m.num_nodes, 0);
   m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
@@ -310,6 +328,7 @@ void apply_boundaries(const Scenario& sc, Model& m) {
       ++count;
       for (int c = 0; c < 3; ++c)
         if (bc.components[c]) {
+          conflicting_constraint(sc, m, k, i, c);
           m.constrained[3 * i + c] = bc.type == "displacement" ? 2 : 1;
           m.constraint_velocity[3 * i + c] = bc.type == "velocity" ? bc.velocity[c] : bc.type == "displacement" ? bc.displacement[c] : 0.0;
           m.constraint_curve[3 * i + c] = bc.type == "fixed" ? -1 : curve;
@@ -362,6 +381,18 @@ void add_rigid_motion(const Scenario& sc, Model& m) {
     BodyRange& body = m.bodies[bi];
     const std::string key = "bodies[" + std::to_string(bi) + "]";
     if (spec.rigid_velocity) {
+      // It moves the body's rigid pieces: on a body without one it would be silently ignored.
+      std::string used;
+      bool rigid = false;
+      for (const auto& [group, material] : spec.materials) {
+        const auto it = sc.materials.find(material);
+        rigid = rigid || (it != sc.materials.end() && it->second.type == "rigid");
+        used += (used.empty() ? "" : ", ") + material + (it != sc.materials.end() ? " (" + it->second.type + ")" : "");
+      }
+      if (!rigid)
+        throw InputError(sc.file.string(), key + (spec.rigid_velocity ? ".rigid_velocity" : ".rigid_angular_velocity"),
+                         "a body with rigid pieces (a material of type rigid) for the prescribed rigid motion to move",
+                         "body '" + spec.name + "' has none: " + used);
       body.rigid_prescribed = true;
       body.rigid_velocity = *spec.rigid_velocity, body.rigid_angular_velocity = *spec.rigid_angular_velocity;
       body.rigid_curve = curve_index(m, spec.rigid_curve);

@@ -14,6 +14,7 @@
 
 #include "output/results.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/interrupt.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/progress.hpp"
@@ -42,8 +43,17 @@ RunSummary run_simulation(const Scenario& sc, const fs::path& output_dir) {
 
 namespace {
 
-// Refused before any step: more steps than run.max_steps, or states that will not fit on the disk
-// (about 15 doubles per node and 16 per tet, uncompressed). Returns the estimated step count.
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// The rows history.csv gets every this many steps.
+std::size_t history_interval(const Scenario& sc, double est_steps) {
+  return sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every) : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000));
+}
+
+// Refused before any step: more steps than run.max_steps, or results that will not fit on the
+// disk. The estimate is this run's own: its states (about 15 doubles per node and 16 per tet,
+// uncompressed), its history rows, its two newest checkpoints (about 60 doubles per node) and the
+// last good state a failure writes. Returns the estimated step count.
 double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolver& solver, OutputFolder& out) {
   const double est_steps = sc.run.end_time / std::max(solver.time_step(), 1e-300);
   if (est_steps > sc.run.max_steps) {
@@ -55,9 +65,17 @@ double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolve
         "a run of at most run.max_steps = " + std::to_string(static_cast<long long>(sc.run.max_steps)) + " steps (raise run.max_steps to allow it)",
         f.str());
   }
-  const double state_bytes = 8.0 * (15.0 * static_cast<double>(model.num_nodes) + 16.0 * static_cast<double>(model.num_elements));
-  const auto states = solver.schedule().size();
-  out.require_space(static_cast<std::uintmax_t>(state_bytes * static_cast<double>(states) + 2e5 * 200), std::to_string(states) + " result states");
+  const double nodes = static_cast<double>(model.num_nodes), tets = static_cast<double>(model.num_elements);
+  const double state_bytes = 8.0 * (15.0 * nodes + 16.0 * tets);
+  const auto states = static_cast<double>(solver.schedule().size());
+  const double columns = 40.0 + 6.0 * static_cast<double>(model.boundaries.size()) + 19.0 * static_cast<double>(model.bodies.size());
+  const double history_bytes = 24.0 * columns * (est_steps / static_cast<double>(history_interval(sc, est_steps)) + states + 1);
+  const double checkpoint_bytes = sc.run.checkpoints() ? 2 * 8.0 * (60.0 * nodes + 2.0 * tets) : 0.0;
+  const double bytes = state_bytes * (states + 1) + history_bytes + checkpoint_bytes + 64e3;
+  std::ostringstream what;
+  what << static_cast<long long>(states) << " result states, " << static_cast<long long>(est_steps / static_cast<double>(history_interval(sc, est_steps)))
+       << " history rows" << (sc.run.checkpoints() ? " and two checkpoints" : "");
+  out.require_space(static_cast<std::uintmax_t>(bytes), what.str());
   return est_steps;
 }
 
@@ -121,8 +139,7 @@ class RunLoop {
         folder_(out.path()),
         identity_(identity),
         history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from), rigid_body_names(solver)),
-        history_every_(sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
-                                                : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000))),
+        history_every_(history_interval(sc, est_steps)),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1),
         next_checkpoint_time_(sc.run.checkpoint_interval),
         last_checkpoint_wall_(std::chrono::steady_clock::now()) {
@@ -168,6 +185,35 @@ class RunLoop {
       // The last good state: u^{n-1} (before the failing update), with the half-step velocity.
       write("last_good_state.vtu", solver_.previous_displacement(), solver_.half_step_velocity(), solver_.time() - 0.5 * solver_.time_step());
       return e.what();
+    } catch (const WriteError& e) {
+      throw keep_checkpoints(e);
+    }
+  }
+
+  // A write that failed (a full disk, say) ends the run, but not its work: the newest checkpoint
+  // stays in the staging folder, and the error says how to continue once the cause is mended.
+  WriteError keep_checkpoints(const WriteError& e) {
+    std::vector<fs::path> kept;
+    std::error_code ec;
+    for (auto it = fs::directory_iterator(folder_ / kResumableDir, ec); !ec && it != fs::directory_iterator(); it.increment(ec))
+      if (it->path().extension() == ".h5") kept.push_back(it->path());
+    if (kept.empty())
+      return e.with_note(sc_.run.checkpoints() ? "; no checkpoint was written yet, so the run must start again"
+                                               : "; free some space and run again (with run.checkpoint_interval, such a run can be continued)");
+    out_.keep_for_resume();
+    std::sort(kept.begin(), kept.end());
+    return e.with_note("; the run's newest checkpoint (" + kept.back().filename().string() + ") is kept in " + out_.path().string() +
+                       (e.no_space() ? ": free some space, then" : ": mend the cause, then") + " tactus-solve --restart " + out_.final_path().string() +
+                       " continues the run from it");
+  }
+
+  // The run's last writes (history, listing, run.json), with the same care for its checkpoints.
+  template <class F>
+  void finishing(F&& write) {
+    try {
+      write();
+    } catch (const WriteError& e) {
+      throw keep_checkpoints(e);
     }
   }
 
@@ -199,7 +245,10 @@ class RunLoop {
   bool checkpoint_due() {
     const RunSpec& r = sc_.run;
     if (r.checkpoint_interval > 0 && solver_.time() >= next_checkpoint_time_ && !solver_.finished()) {
-      while (next_checkpoint_time_ <= solver_.time()) next_checkpoint_time_ += r.checkpoint_interval;
+      // The next multiple of the interval after t (one jump: a step may pass several).
+      next_checkpoint_time_ += r.checkpoint_interval;
+      if (next_checkpoint_time_ <= solver_.time()) next_checkpoint_time_ = r.checkpoint_interval * (std::floor(solver_.time() / r.checkpoint_interval) + 1);
+      if (next_checkpoint_time_ <= solver_.time()) next_checkpoint_time_ = std::nextafter(solver_.time(), kInfinity);
       return true;
     }
     return r.checkpoint_wall_interval > 0 &&
@@ -278,12 +327,29 @@ class RunLoop {
     a.io_records("loop.peaks.pairs", p.pairs), a.io_records("loop.peaks.at_outputs", p.at_outputs);
   }
 
+  // The loop's restored bookkeeping against the run (the integrator checks its own state).
+  void validate_loop_state(const StateArchive& a) const {
+    const double t = solver_.time(), interval = sc_.run.checkpoint_interval;
+    if (next_out_ > solver_.schedule().size() || (next_out_ < solver_.schedule().size() && solver_.schedule()[next_out_] < t))
+      a.invalid("loop.next_output", "the next output state of the run's schedule after t = " + std::to_string(t) + " s", std::to_string(next_out_));
+    if (!std::isfinite(next_checkpoint_time_) || next_checkpoint_time_ < 0 || (interval > 0 && next_checkpoint_time_ > t + interval * (1 + 1e-9)))
+      a.invalid("loop.next_checkpoint_time", "a time within one checkpoint_interval after t = " + std::to_string(t) + " s",
+                std::to_string(next_checkpoint_time_));
+    for (const auto& [time, file] : pvd_) {
+      unsigned index = 0;
+      char rest = 0;
+      if (!std::isfinite(time) || time > t || std::sscanf(file.c_str(), "results/state_%u.vtu%c", &index, &rest) != 1 || index >= next_out_)
+        a.invalid("loop.pvd_files", "the states written before t = " + std::to_string(t) + " s (results/state_NNNN.vtu)", "'" + file + "'");
+    }
+  }
+
   // Continues from a checkpoint: the state, the bookkeeping, and the results folder as it was
   // then (states written after it, and half-written files of the killed process, go).
   void restore(const RestartPoint& from) {
     StateArchive a(from.state, from.file.string());
     solver_.checkpoint(a);
     loop_state(a);
+    validate_loop_state(a);
     summary_.restarts.emplace_back(from.step, from.time);
     std::error_code ec;
     for (auto it = fs::directory_iterator(folder_ / "results", ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
@@ -389,12 +455,13 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
 
   fs::create_directories(staged.path() / "results");
   RunLoop loop(sc, model, solver, staged, est_steps, identity, from);
-  const nlohmann::json failure = loop.finish(loop.run());
-  loop.drop_checkpoints();
+  nlohmann::json failure = loop.run();
+  loop.finishing([&] { failure = loop.finish(failure); });
   RunSummary& summary = loop.summary();
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary.run_json = run_json(sc, model, solver, summary, loop.peaks(), failure);
-  std::ofstream(staged.path() / "run.json") << summary.run_json.dump(2) << '\n';
+  loop.finishing([&] { write_file(staged.path() / "run.json", summary.run_json.dump(2) + '\n'); });
+  loop.drop_checkpoints();  // the run is complete: they are no part of its results
   staged.commit();
   const Energies& en = solver.energies();
   log::info() << summary.status << ": " << summary.steps << " steps to t = " << summary.end_time << " s in " << summary.wall_seconds

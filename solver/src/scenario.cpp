@@ -1,5 +1,6 @@
 // scenario.toml reader. All validation is driven by the declarations below, which also produce
 // the key reference (`tactus-solve keys`), so the docs cannot drift from what is accepted.
+#include "tactus/core/file_io.hpp"
 #include "tactus/solver/scenario.hpp"
 
 #include <toml++/toml.h>
@@ -24,6 +25,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 ValueSpec opt(ValueSpec s, std::string default_text) {
   s.required = false;
   s.default_text = std::move(default_text);
+  return s;
+}
+// A count: an integer, or a float with no fractional part (1e7).
+ValueSpec whole(ValueSpec s) {
+  s.type = ValueType::integer;
   return s;
 }
 ValueSpec typed(std::string key, ValueType type, std::string unit, std::string doc, bool required, std::string default_text = {}) {
@@ -56,10 +62,10 @@ const SectionSpec& run_section() {
        typed("gravity", ValueType::vec3, "m/s^2", "body acceleration", false, "[0, 0, 0]"),
        opt(number("gravity_ramp_time", "s", "gravity grows linearly from 0 over this time", 0, false), "0"),
        typed("gravity_curve", ValueType::string, "", "a [curves] name scaling gravity (instead of gravity_ramp_time)", false),
-       opt(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false), "0"),
-       opt(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false), "0"),
-       opt(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false), "10000"),
-       opt(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false), "1e7"),
+       opt(whole(number("threads", "", "worker threads (0: all cores, at most one per ~4000 tets)", 0, false, 1024, false)), "0"),
+       opt(whole(number("history_every", "", "write a history row every N steps (0: about 2000 rows)", 0, false)), "0"),
+       opt(whole(number("max_outputs", "", "refuse schedules with more output states than this (a runaway guard)", 1, false, 1e9, false)), "10000"),
+       opt(whole(number("max_steps", "", "refuse runs expected to take more steps than this (a runaway guard)", 1, false, 1e15, false)), "1e7"),
        opt(number("minimum_time_step", "s",
                   "mass scaling: tets whose stable step (before the safety factor) falls below this get mass until it is met; the added "
                   "mass is reported per body (0: off)",
@@ -200,7 +206,7 @@ const SectionSpec& contact_solver_section() {
       "contact_solver",
       "Uzawa iterations of the bi-potential contact solver (Gauss-Seidel over the contact nodes).",
       {opt(number("tolerance", "", "stop when max |dr| <= tolerance * max |r| over the contact nodes", 0, true, 1, true), "1e-6"),
-       opt(number("max_iterations", "", "iteration limit per step (reached: a warning, the run goes on)", 1, false, 1e6, false), "200"),
+       opt(whole(number("max_iterations", "", "iteration limit per step (reached: a warning, the run goes on)", 1, false, 1e6, false)), "200"),
        opt(number("search_factor", "", "search distance and penetration band, in mean master edge lengths", 0, true, 10, false), "0.5"),
        opt(number("verlet_skin", "",
                   "node-to-surface search: candidate triangles are gathered within the band plus this skin (in mean master edge lengths) "
@@ -223,11 +229,11 @@ const SectionSpec& contact_solver_section() {
                   "depth / dt (run.json contact.uzawa.recovering_rows counts them)",
                   0, true),
            "1.0"),
-       opt(number("sweep_blocks", "",
+       opt(whole(number("sweep_blocks", "",
                   "the Uzawa sweep is cut into at most this many slabs along the contact (at most one per 256 rows), the even ones swept "
                   "in parallel, then the odd ones, then the rows they share in order; the same bits on any thread count; 1: one "
                   "Gauss-Seidel sweep in row order",
-                  1, false, 4096, false),
+                  1, false, 4096, false)),
            "16")}};
   return s;
 }
@@ -303,12 +309,20 @@ class Reader {
     return *v;
   }
 
+  // A whole number: a TOML integer, or a float without a fractional part (1e7 as max_steps documents
+  // it); 2.5 is refused naming the key, never rounded.
   std::int64_t integer(const toml::table& t, const ValueSpec& s, const std::string& path) const {
     const toml::node* n = t.get(s.key);
-    const auto v = n ? n->value<std::int64_t>() : std::nullopt;
-    if (!v || !n->is_integer()) fail(join(path, s.key), std::string(type_name(ValueType::integer)), n ? describe(*n) : "missing");
-    check_range(static_cast<double>(*v), s, join(path, s.key));
-    return *v;
+    std::optional<double> v;
+    if (n && n->is_integer()) v = static_cast<double>(*n->value<std::int64_t>());
+    if (n && n->is_floating_point()) v = *n->value<double>();
+    if (!v || !std::isfinite(*v) || *v != std::floor(*v) || std::abs(*v) > 9.0e18)
+      fail(join(path, s.key), "a whole number" + unit_suffix(s), n ? describe(*n) : "missing");
+    check_range(*v, s, join(path, s.key));
+    return static_cast<std::int64_t>(*v);
+  }
+  std::int64_t integer(const toml::table& t, const ValueSpec& s, const std::string& path, std::int64_t def) const {
+    return t.contains(s.key) ? integer(t, s, path) : def;
   }
 
   void check_range(double v, const ValueSpec& s, const std::string& key) const {
@@ -400,8 +414,11 @@ class Reader {
   static std::string describe(const toml::node& n) {
     std::ostringstream o;
     if (n.is_table()) return "a table";
-    if (n.is_array()) {
-      o << "an array of " << n.as_array()->size();
+    if (n.is_array()) {  // its values, so the wrong one shows: "[0.1, nan, 0]"
+      const toml::array& a = *n.as_array();
+      o << '[';
+      for (std::size_t i = 0; i < a.size() && i < 6; ++i) o << (i ? ", " : "") << describe(a[i]);
+      o << (a.size() > 6 ? ", ... (" + std::to_string(a.size()) + " values)]" : "]");
       return o.str();
     }
     if (n.is_string()) {
@@ -470,14 +487,22 @@ void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
     run.gravity_ramp_time = r.number(t, *spec.find("gravity_ramp_time"), "run", 0);
     run.gravity_curve = r.string(t, *spec.find("gravity_curve"), "run");
     if (!run.gravity_curve.empty() && run.gravity_ramp_time > 0) r.fail("run", "either gravity_ramp_time or gravity_curve", "both");
-    run.threads = static_cast<int>(r.number(t, *spec.find("threads"), "run", 0));
-    run.history_every = static_cast<int>(r.number(t, *spec.find("history_every"), "run", 0));
-    run.max_outputs = r.number(t, *spec.find("max_outputs"), "run", 10000);
-    run.max_steps = r.number(t, *spec.find("max_steps"), "run", 1e7);
+    run.threads = static_cast<int>(r.integer(t, *spec.find("threads"), "run", 0));
+    run.history_every = static_cast<int>(r.integer(t, *spec.find("history_every"), "run", 0));
+    run.max_outputs = static_cast<double>(r.integer(t, *spec.find("max_outputs"), "run", 10000));
+    run.max_steps = static_cast<double>(r.integer(t, *spec.find("max_steps"), "run", 10000000));
     run.minimum_time_step = r.number(t, *spec.find("minimum_time_step"), "run", 0);
     run.added_mass_limit = r.number(t, *spec.find("added_mass_limit"), "run", 0.01);
     run.checkpoint_interval = r.number(t, *spec.find("checkpoint_interval"), "run", 0);
     run.checkpoint_wall_interval = r.number(t, *spec.find("checkpoint_wall_interval"), "run", 0);
+    // Checkpoints count against the same runaway guard as output states (1e-300 s would never end).
+    if (run.checkpoint_interval > 0 && run.end_time / run.checkpoint_interval > run.max_outputs) {
+      std::ostringstream e, f;
+      e << "an interval >= run.end_time / run.max_outputs = " << run.end_time / run.max_outputs << " s (at most run.max_outputs = "
+        << static_cast<long long>(run.max_outputs) << " checkpoints)";
+      f << run.checkpoint_interval << " s (" << run.end_time / run.checkpoint_interval << " checkpoints)";
+      r.fail("run.checkpoint_interval", e.str(), f.str());
+    }
     for (double time : run.output_times)
       if (time > run.end_time) r.fail("run.output_times", "times <= run.end_time", std::to_string(time));
     // Counted before anything is built: an interval of 1e-9 s over 1000 s is 10^12 states.
@@ -816,13 +841,13 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     const toml::table& t = r.table(*n, "contact_solver");
     r.check_keys(t, spec, "contact_solver");
     sc.contact_solver.tolerance = r.number(t, *spec.find("tolerance"), "contact_solver", 1e-6);
-    sc.contact_solver.max_iterations = static_cast<int>(r.number(t, *spec.find("max_iterations"), "contact_solver", 200));
+    sc.contact_solver.max_iterations = static_cast<int>(r.integer(t, *spec.find("max_iterations"), "contact_solver", 200));
     sc.contact_solver.search_factor = r.number(t, *spec.find("search_factor"), "contact_solver", 0.5);
     sc.contact_solver.pressure_window = r.number(t, *spec.find("pressure_window"), "contact_solver", 1e-5);
     sc.contact_solver.verlet_skin = r.number(t, *spec.find("verlet_skin"), "contact_solver", 0.5);
     sc.contact_solver.pressure_average_area = r.number(t, *spec.find("pressure_average_area"), "contact_solver", 25e-6);
     sc.contact_solver.recovery_speed = r.number(t, *spec.find("recovery_speed"), "contact_solver", 1.0);
-    sc.contact_solver.sweep_blocks = static_cast<int>(r.number(t, *spec.find("sweep_blocks"), "contact_solver", 16));
+    sc.contact_solver.sweep_blocks = static_cast<int>(r.integer(t, *spec.find("sweep_blocks"), "contact_solver", 16));
   }
 }
 
@@ -830,7 +855,7 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
 
 Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
   const std::string fname = file.string();
-  if (!fs::exists(file)) throw InputError(fname, "", "an existing scenario file", "no such file");
+  require_regular_file(file, "a scenario (.toml)");
   toml::table root;
   try {
     root = toml::parse_file(fname);

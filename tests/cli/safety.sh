@@ -86,7 +86,7 @@ pid=$!
 sleep 1.5
 kill -9 $pid
 wait $pid 2>/dev/null
-[ -n "$(ls -d "$T"/slow.partial-$pid 2>/dev/null)" ] || bad "kill -9 left no staging folder (test premise)"
+[ -n "$(ls -d "$T"/slow.partial-$pid-* 2>/dev/null)" ] || bad "kill -9 left no staging folder (test premise)"
 "$B/solver/tactus-solve" "$T/case/s.toml" -o "$T/slow" -q || bad "the run after the killed one failed"
 [ -z "$(ls -d "$T"/slow.partial-* 2>/dev/null)" ] || bad "the stale staging of the killed run is still there"
 

@@ -1,11 +1,14 @@
 // core/output: a tool's output never deletes or overwrites what tactus did not write (issue:
 // "tactus-solve s.toml -o mydata deleted thesis.tex"). Each test builds the situation on disk and
 // checks both the refusal and that every user file is still there, byte for byte.
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <fstream>
 #include <sstream>
 
@@ -105,26 +108,52 @@ TEST(OutputFolder, ReplacesItsOwnPreviousOutput) {
   for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename(), "results");  // no trash left
 }
 
-TEST(OutputFolder, RefusesItsOwnOutputOnceAUserAddedOrEditedAFile) {
+// A user's file, folder or link added to a previous output stays in place, byte for byte; a
+// listed file whose content changed (by hash, even at the same size) makes the tool refuse.
+TEST(OutputFolder, KeepsWhatAUserAddedAndRefusesAnEditedFile) {
   TempDir dir;
-  make_output(dir / "results", "tactus-solve", {{"run.json", "1"}});
+  make_output(dir / "results", "tactus-solve", {{"run.json", "1"}, {"results/state_0000.vtu", "old"}});
   write(dir / "results" / "notes.txt", "mine");
-  expect_refusal([&] { OutputFolder(dir / "results", kSolve); }, "notes.txt");
+  fs::create_directories(dir / "results" / "my_empty");
+  fs::create_directories(dir / "results" / "results" / "mine");
+  fs::create_directory_symlink(dir.path(), dir / "results" / "link");
+  {
+    OutputFolder out(dir / "results", kSolve);
+    write(out.path() / "run.json", "2");
+    out.commit();
+  }
+  EXPECT_EQ(read(dir / "results" / "run.json"), "2");
   EXPECT_EQ(read(dir / "results" / "notes.txt"), "mine");
+  EXPECT_TRUE(fs::is_directory(dir / "results" / "my_empty"));
+  EXPECT_TRUE(fs::is_directory(dir / "results" / "results" / "mine"));
+  EXPECT_TRUE(fs::is_symlink(dir / "results" / "link"));
+  EXPECT_FALSE(fs::exists(dir / "results" / "results" / "state_0000.vtu"));  // listed: replaced
+  for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename(), "results");  // no trash left
 
   make_output(dir / "results2", "tactus-solve", {{"run.json", "1"}});
-  write(dir / "results2" / "run.json", "edited by hand");
+  write(dir / "results2" / "run.json", "2");  // same size, other content: only the hash tells
   expect_refusal([&] { OutputFolder(dir / "results2", kSolve); }, "changed since");
-  EXPECT_EQ(read(dir / "results2" / "run.json"), "edited by hand");
+  EXPECT_EQ(read(dir / "results2" / "run.json"), "2");
+}
+
+// A hand-written file that carries tactus's marker keys is not a manifest of this folder's files.
+TEST(OutputFolder, AHandWrittenMarkerDoesNotMakeFilesTactus) {
+  TempDir dir;
+  write(dir / "mine" / "thesis.tex", "my thesis");
+  write(dir / "mine" / tactus::kFolderMarker, R"({"tool": "tactus-solve", "state": "complete", "files": {"thesis.tex": {"size": 9, "hash": "0"}}})");
+  expect_refusal([&] { OutputFolder(dir / "mine", kSolve); }, "changed since");
+  EXPECT_EQ(read(dir / "mine" / "thesis.tex"), "my thesis");
 }
 
 TEST(OutputFolder, ChecksAgainAtCommit) {
   TempDir dir;
   make_output(dir / "results", "tactus-solve", {{"run.json", "1"}});
   OutputFolder out(dir / "results", kSolve);
+  write(dir / "results" / "run.json", "edited while the run went on");
   write(dir / "results" / "notes.txt", "added while the run went on");
   write(out.path() / "run.json", "2");
-  expect_refusal([&] { out.commit(); }, "notes.txt");
+  expect_refusal([&] { out.commit(); }, "run.json");
+  EXPECT_EQ(read(dir / "results" / "run.json"), "edited while the run went on");
   EXPECT_EQ(read(dir / "results" / "notes.txt"), "added while the run went on");
 }
 
@@ -168,24 +197,93 @@ TEST(OutputFolder, RefusesWhenTheSpaceIsShort) {
   out.require_space(1000, "the results");
 }
 
-TEST(OutputFolder, RemovesStaleStagingOfDeadRunsOnly) {
+// Staleness is the lock, never a process id: a staging folder whose lock file is free belongs to
+// a process that is gone, whatever pid it records; one whose lock is held is alive, even if its
+// recorded pid names no process here (another PID namespace). A killed run's staging with
+// checkpoints is kept for --restart.
+TEST(OutputFolder, StaleStagingIsJudgedByItsLockNotByAPid) {
   TempDir dir;
-  // A staging folder left by a killed run: its marker names a process that has exited.
+  const auto staging = [&](const std::string& token, const std::string& tool, bool checkpoints) {
+    const fs::path p = dir / ("results.partial-" + token);
+    write(p / "run.json", "half");
+    write(p / tactus::kLockFile, "");
+    write(p / tactus::kFolderMarker, R"({"tool": ")" + tool + R"(", "state": "writing", "token": ")" + token + R"(", "pid": )" +
+                                         std::to_string(::getpid()) + R"(, "started_ns": 1})");
+    if (checkpoints) write(p / tactus::kResumableDir / "c.h5", "x");
+    return p;
+  };
+  const fs::path dead = staging("1-aaaa", "tactus-solve", false);       // records this very pid, yet its lock is free
+  const fs::path resumable = staging("1-bbbb", "tactus-solve", true);  // a killed run with checkpoints
+  const fs::path alive = staging("1-cccc", "tactus-post", false);      // its lock held by a child (another "namespace")
+  int go[2];
+  ASSERT_EQ(pipe(go), 0);
   const pid_t child = fork();
-  if (child == 0) _exit(0);
-  waitpid(child, nullptr, 0);
-  const fs::path stale = dir / ("results.partial-" + std::to_string(child));
-  write(stale / "run.json", "half");
-  write(stale / tactus::kFolderMarker,
-        R"({"tool": "tactus-solve", "state": "writing", "pid": )" + std::to_string(child) + R"(, "process_start": 1, "boot_id": "x"})");
-  // One of a run still going (this process) and one of another tool: both kept.
-  const fs::path other = dir / "results.partial-1";
-  write(other / tactus::kFolderMarker, R"({"tool": "tactus-post", "state": "writing", "pid": 1, "process_start": 1, "boot_id": "x"})");
-  {
-    OutputFolder out(dir / "results", kSolve);
-    EXPECT_FALSE(fs::exists(stale));
-    EXPECT_TRUE(fs::exists(other));
+  if (child == 0) {
+    const int fd = ::open((alive / tactus::kLockFile).c_str(), O_RDWR);
+    ::flock(fd, LOCK_EX);
+    char c = 0;
+    (void)!::write(go[1], &c, 1);
+    ::pause();
+    _exit(0);
   }
+  char c;
+  ASSERT_EQ(::read(go[0], &c, 1), 1);
+  {
+    expect_refusal([&] { OutputFolder(dir / "results", kSolve); }, "writing this output right now");
+    EXPECT_FALSE(fs::exists(dead));
+    EXPECT_TRUE(fs::exists(resumable / tactus::kResumableDir / "c.h5"));
+    EXPECT_TRUE(fs::exists(alive / "run.json"));
+  }
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+  OutputFolder out(dir / "results", kSolve);  // its lock is free now
+  EXPECT_FALSE(fs::exists(alive));
+}
+
+// A process killed after its output was complete but before the swap: the next run publishes it.
+TEST(OutputFolder, TheNextRunFinishesACommitAKilledRunLeft) {
+  TempDir dir;
+  make_output(dir / "results", "tactus-solve", {{"run.json", "old"}});
+  write(dir / "results" / "notes.txt", "mine");
+  // A killed swap (two-rename form): the new output at its place, naming the previous one aside.
+  const fs::path aside = dir / "results.replaced-1-abcd";
+  fs::rename(dir / "results", aside);
+  make_output(dir / "results", "tactus-solve", {{"run.json", "new"}});
+  {
+    std::string m = read(dir / "results" / tactus::kFolderMarker);
+    m.insert(m.find('{') + 1, R"("replaces": "results.replaced-1-abcd",)");
+    write(dir / "results" / tactus::kFolderMarker, m);
+  }
+  OutputFolder next(dir / "results", kSolve);
+  EXPECT_FALSE(fs::exists(aside));
+  EXPECT_EQ(read(dir / "results" / "run.json"), "new");
+  EXPECT_EQ(read(dir / "results" / "notes.txt"), "mine");
+}
+
+TEST(OutputFolder, NormalisesTheOutputPathBeforeAnyWork) {
+  TempDir dir;
+  fs::create_directories(dir / "real");
+  fs::create_directory_symlink(dir / "real", dir / "link");
+  {
+    OutputFolder out((dir / "R").string() + "/", kSolve);  // trailing slash
+    write(out.path() / "run.json", "1");
+    out.commit();
+  }
+  EXPECT_EQ(read(dir / "R" / "run.json"), "1");
+  {
+    OutputFolder out(dir / "link" / "x", kSolve);  // a link in the parent
+    write(out.path() / "run.json", "2");
+    out.commit();
+  }
+  EXPECT_EQ(read(dir / "real" / "x" / "run.json"), "2");
+  {
+    OutputFolder out(dir / "a" / "missing" / ".." / "y", kSolve);  // '..' after a missing folder
+    write(out.path() / "run.json", "3");
+    out.commit();
+  }
+  EXPECT_EQ(read(dir / "a" / "y" / "run.json"), "3");
+  expect_refusal([&] { OutputFolder(dir / "link", kSolve); }, "link");
+  EXPECT_TRUE(fs::is_empty(dir / "real" / "x") == false);
 }
 
 TEST(OutputFiles, WritesTogetherAndRecordsThem) {

@@ -17,6 +17,8 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
+#include <optional>
 #include <map>
 #include <random>
 #include <sstream>
@@ -35,6 +37,8 @@
 #include "tactus/segment/dicom.hpp"
 #include "tactus/segment/stack.hpp"
 #include "tactus/segment/volume_files.hpp"
+#include "tactus/core/output.hpp"
+#include "tactus/solver/checkpoint.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -59,6 +63,8 @@ struct Target {
   std::function<void()> read;  // throws tactus errors on bad input
   // Applied after mutating: lets mutations through a format's checksums to the decoder behind them.
   std::function<std::string(std::string)> fixup = [](std::string s) { return s; };
+  // A structure-aware mutator in place of the byte and text ones (seed -> mutated input), when set.
+  std::function<std::string(const std::string&, std::uint64_t)> mutator;
 };
 
 // Recomputes every PNG chunk CRC that the chunk structure still allows, so the mutated image data
@@ -134,6 +140,145 @@ master_body = "base"
 master_surface = "zmax"
 friction = 0.3
 )";
+
+// --------------------------------------------------------------------------------------------
+// Structure-aware mutators.
+const std::vector<std::string> kValues = {"nan",  "inf",   "-inf", "-1",   "0",       "1e300",  "-1e300",   "1e-300", "2.5",
+                                          "-0.0", "1e18",  "true", "\"x\"", "[1, 2]",  "[]",     "{a = 1}",  "[[1, 2], [3]]"};
+
+// A checkpoint's values: one array (or record) of the state file, one or a few values changed to
+// an out-of-range index, a sign flip, NaN, a huge or tiny number, or swapped with another entry;
+// written back with its checksum recomputed (core/state_file.cpp).
+std::string mutate_checkpoint_values(const std::string& original, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const fs::path scratch = fs::temp_directory_path() / ("tactus-fuzz-ckpt-" + std::to_string(getpid()) + ".h5");
+  write_file(scratch, original);
+  StateArrays a = read_state_file(scratch, "tactus-solve checkpoint");
+  const int rounds = 1 + static_cast<int>(rng() % 2);
+  for (int r = 0; r < rounds; ++r) {
+    const int kind = static_cast<int>(rng() % 3);
+    if (kind == 2 && !a.records.empty()) {  // a packed struct's field (4 aligned bytes) made -1 or huge
+      auto it = std::next(a.records.begin(), static_cast<long>(rng() % a.records.size()));
+      std::string& bytes = it->second;
+      if (bytes.size() < 4) continue;
+      const std::size_t at = 4 * (rng() % (bytes.size() / 4));
+      const std::uint32_t values[] = {0xFFFFFFFFu, 0x7FFFFFFFu, 0x00100000u, 0x7FF80000u};
+      std::memcpy(bytes.data() + at, &values[rng() % std::size(values)], 4);
+    } else if (kind == 0 && !a.integers.empty()) {
+      auto it = std::next(a.integers.begin(), static_cast<long>(rng() % a.integers.size()));
+      std::vector<std::int64_t>& v = it->second;
+      if (v.empty()) continue;
+      static const std::int64_t values[] = {-1, -2, 1 << 20, 2147483647, -2147483648LL, 1LL << 40, 0, 3};
+      const std::size_t i = rng() % v.size();
+      if (rng() % 3 == 0)
+        v[i] = v[i] + 1;
+      else if (rng() % 4 == 0)
+        std::swap(v[i], v[rng() % v.size()]);
+      else
+        v[i] = values[rng() % std::size(values)];
+    } else if (!a.reals.empty()) {
+      auto it = std::next(a.reals.begin(), static_cast<long>(rng() % a.reals.size()));
+      std::vector<double>& v = it->second;
+      if (v.empty()) continue;
+      static const double values[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e300, -1e300, 1e12, -1, 0, 1e-300};
+      const std::size_t i = rng() % v.size();
+      if (rng() % 3 == 0)
+        v[i] = -v[i] * 2;
+      else
+        v[i] = values[rng() % std::size(values)];
+    }
+  }
+  write_state_file(scratch, a);
+  std::string out = read_file(scratch);
+  fs::remove(scratch);
+  return out;
+}
+
+// A TOML scenario: on a random "key = value" line, the value replaced by one of the wrong type
+// or an extreme number, two keys' values swapped, two keys' names swapped, or a key dropped.
+std::string mutate_toml_structure(const std::string& original, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::string> lines;
+  std::stringstream ss(original);
+  for (std::string l; std::getline(ss, l);) lines.push_back(l);
+  std::vector<std::size_t> keyed;
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    if (lines[i].find(" = ") != std::string::npos && lines[i][0] != '#') keyed.push_back(i);
+  const int rounds = 1 + static_cast<int>(rng() % 3);
+  for (int r = 0; r < rounds && !keyed.empty(); ++r) {
+    std::string& a = lines[keyed[rng() % keyed.size()]];
+    std::string& b = lines[keyed[rng() % keyed.size()]];
+    const std::size_t ea = a.find(" = "), eb = b.find(" = ");
+    switch (rng() % 4) {
+      case 0:
+      case 1:
+        a = a.substr(0, ea) + " = " + kValues[rng() % kValues.size()];
+        break;
+      case 2: {  // values swapped
+        const std::string va = a.substr(ea), vb = b.substr(eb);
+        a = a.substr(0, ea) + vb, b = b.substr(0, eb) + va;
+        break;
+      }
+      default: {  // keys swapped
+        const std::string ka = a.substr(0, ea), kb = b.substr(0, eb);
+        a = kb + a.substr(ea), b = ka + b.substr(eb);
+        break;
+      }
+    }
+  }
+  std::string out;
+  for (const std::string& l : lines) out += l + '\n';
+  return out;
+}
+
+// A .msh (ASCII): in $Nodes a coordinate made NaN or huge, in $Elements a node tag made 0,
+// negative, one past the last node or 2^31; or a section header swapped with another.
+std::string mutate_msh_structure(const std::string& original, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::string> lines;
+  std::stringstream ss(original);
+  for (std::string l; std::getline(ss, l);) lines.push_back(l);
+  std::size_t nodes_at = 0, elements_at = 0, end_nodes = 0, end_elements = 0;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i] == "$Nodes") nodes_at = i;
+    if (lines[i] == "$EndNodes") end_nodes = i;
+    if (lines[i] == "$Elements") elements_at = i;
+    if (lines[i] == "$EndElements") end_elements = i;
+  }
+  const auto words = [](const std::string& l) {
+    std::vector<std::string> w;
+    std::stringstream s(l);
+    for (std::string x; s >> x;) w.push_back(x);
+    return w;
+  };
+  const auto join = [](const std::vector<std::string>& w) {
+    std::string l;
+    for (const auto& x : w) l += (l.empty() ? "" : " ") + x;
+    return l;
+  };
+  const int rounds = 1 + static_cast<int>(rng() % 3);
+  for (int r = 0; r < rounds; ++r) {
+    const int op = static_cast<int>(rng() % 3);
+    if (op == 0 && end_nodes > nodes_at + 2) {
+      const std::size_t i = nodes_at + 2 + rng() % (end_nodes - nodes_at - 2);
+      std::vector<std::string> w = words(lines[i]);
+      static const char* values[] = {"nan", "inf", "1e300", "-1e300", "1e10"};
+      if (w.size() == 3) w[rng() % 3] = values[rng() % std::size(values)];
+      lines[i] = join(w);
+    } else if (op == 1 && end_elements > elements_at + 2) {
+      const std::size_t i = elements_at + 2 + rng() % (end_elements - elements_at - 2);
+      std::vector<std::string> w = words(lines[i]);
+      static const char* values[] = {"0", "-1", "28", "2147483648", "99999"};
+      if (w.size() > 1) w[1 + rng() % (w.size() - 1)] = values[rng() % std::size(values)];
+      lines[i] = join(w);
+    } else if (!lines.empty()) {
+      std::swap(lines[rng() % lines.size()], lines[rng() % lines.size()]);
+    }
+  }
+  std::string out;
+  for (const std::string& l : lines) out += l + '\n';
+  return out;
+}
 
 std::vector<Target> make_targets(const fs::path& work) {
   std::vector<Target> t;
@@ -224,6 +369,69 @@ std::vector<Target> make_targets(const fs::path& work) {
     fs::create_directories(f.parent_path());
     write_state_file(f, state);
     t.push_back({"checkpoint", f, false, [f] { read_state_file(f, "tactus-solve checkpoint"); }});
+  }
+  {  // a checkpoint's values: a real run killed mid-contact, one array value changed and the
+     // checksum written again (so only tactus's own validation stands between it and the solver),
+     // then continued as tactus-solve --restart does. The restore runs to the end time.
+    const fs::path d = work / "restart";
+    fs::create_directories(d);
+    write_msh(d / "pad.msh", samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01));
+    write_msh(d / "base.msh", samples::make_box_mesh(2, 2, 1, 0.01, 0.01, 0.01));
+    std::string sc = kScenario;
+    sc.replace(sc.find("[run]\n"), 6, "[run]\ncheckpoint_interval = 1e-4\n");
+    write_file(d / "s.toml", sc);
+    const pid_t child = fork();
+    if (child == 0) {  // killed at step 400 of ~500: the newest checkpoint is mid-contact
+      setenv("TACTUS_KILL_AT", "step:400", 1);
+      try {
+        solver::run_simulation(solver::read_scenario(d / "s.toml"), d / "out");
+      } catch (...) {
+      }
+      _exit(3);
+    }
+    int status = 0;
+    waitpid(child, &status, 0);
+    const std::optional<solver::RestartPoint> point = solver::find_restart_point(d / "out");
+    if (!point) throw std::runtime_error("tactus-fuzz: the killed run left no checkpoint (setup)");
+    for (const auto& e : fs::directory_iterator(point->file.parent_path()))  // only the one mutated: no fallback hides a refusal
+      if (e.path() != point->file) fs::remove(e.path());
+    const fs::path staging = point->staging, checkpoint = point->file;
+    Target values{"checkpoint_values", checkpoint, false, [d, staging, checkpoint] {
+                    // A private copy: a restore that is accepted publishes its output.
+                    const fs::path own = d / ("run-" + std::to_string(getpid()));
+                    fs::create_directories(own);
+                    fs::copy(staging, own / staging.filename(), fs::copy_options::recursive);
+                    const std::optional<solver::RestartPoint> from = solver::find_restart_point(own / "out");
+                    if (!from) throw InputError(checkpoint.string(), "", "a checkpoint", "none read back");
+                    const solver::Scenario scenario = solver::read_scenario(from->identity.scenario);
+                    OutputFolder out(own / "out", {"tactus-solve", {}, false}, from->staging);
+                    solver::run_simulation(scenario, out, solver::run_identity(scenario, {}), &*from);
+                  }};
+    values.mutator = [](const std::string& original, std::uint64_t seed) { return mutate_checkpoint_values(original, seed); };
+    t.push_back(values);
+  }
+  {  // the structure of a scenario and a mesh: keys swapped, values of the wrong type, NaN, huge or
+     // negative numbers, node indices out of range
+    const fs::path d = work / "structured";
+    fs::create_directories(d);
+    write_msh(d / "pad.msh", samples::make_box_mesh(2, 2, 2, 0.01, 0.01, 0.01));
+    write_msh(d / "base.msh", samples::make_box_mesh(2, 2, 1, 0.01, 0.01, 0.01));
+    std::string sc = kScenario;
+    sc.replace(sc.find("end_time = 1e-3"), 15, "end_time = 2e-5");
+    sc.replace(sc.find("output_times = [5e-4, 1e-3]"), 27, "output_times = [2e-5]");
+    write_file(d / "s.toml", sc);
+    Target scenario{"scenario_struct", d / "s.toml", true, [d] {
+                      const solver::Scenario s = solver::read_scenario(d / "s.toml");
+                      solver::run_simulation(s, d / ("out-" + std::to_string(getpid())));
+                    }};
+    scenario.mutator = mutate_toml_structure;
+    t.push_back(scenario);
+    Target mesh{"msh_struct", d / "pad.msh", true, [d] {
+                  const solver::Scenario s = solver::read_scenario(d / "s.toml");
+                  solver::run_simulation(s, d / ("out-" + std::to_string(getpid())));
+                }};
+    mesh.mutator = mutate_msh_structure;
+    t.push_back(mesh);
   }
   {  // a results folder: run.json, history.csv, a state .vtu
     const fs::path d = work / "results";
@@ -461,8 +669,10 @@ int main(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     const long n = replay_reader.empty() ? mutations : static_cast<long>(replay_files.size());
     for (long k = 0; k < n; ++k) {
-      const std::string input = replay_reader.empty() ? t.fixup(mutate(original, t.text, seed * 1000003ULL + static_cast<std::uint64_t>(k)))
-                                                      : read_file(replay_files[static_cast<std::size_t>(k)]);
+      const std::uint64_t case_seed = seed * 1000003ULL + static_cast<std::uint64_t>(k);
+      const std::string input = !replay_reader.empty() ? read_file(replay_files[static_cast<std::size_t>(k)])
+                                : t.mutator              ? t.mutator(original, case_seed)
+                                                         : t.fixup(mutate(original, t.text, case_seed));
       write_file(t.file, input);
       std::string detail;
       const Outcome o = read_in_child(t, lim, detail);

@@ -5,13 +5,19 @@
 #      (check_report.py), energy balance within 2 % of the initial kinetic energy, no inversion;
 #   2. a re-run skips all five stages;
 #   3. a run that ends before the bodies meet: the report says no contact occurred;
-#   4. a stage failing mid-way (bad scenario): the pipeline names it, earlier outputs stay;
+#   4. a stage failing mid-way (bad scenario): the pipeline names it, every output stays as it
+#      was (the previous report too: pipeline.json lists it as stale);
 #   5. a results folder with a missing state file: tactus-post refuses it, naming the file;
-#   6. interrupts: SIGTERM during the solve stops it cleanly (the stale report removed,
+#   6. interrupts: SIGTERM during the solve stops it cleanly (the report kept and listed stale,
 #      pipeline.json "interrupted"; the scenario writes checkpoints, so the solve keeps its newest
 #      in its staging folder and nothing else is left) and the next pipeline run continues the
 #      solve from it; a second pipeline on a locked folder is refused; a folder tactus did not
-#      write is refused as the work folder.
+#      write is refused as the work folder;
+#   7. a user's files in a stage folder: a note, a folder and a link put into report/ survive a
+#      re-run byte for byte; an edited summary.md makes the post stage refuse, naming it, and stays;
+#   8. the step cache checks outputs: a solve folder replaced behind the pipeline's back runs the
+#      solve again; a truncated stamp runs its stage again (no traceback); a pipeline killed with
+#      SIGKILL takes its running stage with it (no orphan publishes later).
 # Usage: e2e.sh <build dir>
 set -euo pipefail
 BUILD=$(cd "$1" && pwd)
@@ -52,9 +58,9 @@ cat "$T/fourth.err"
 grep -q "stage 'solve' failed" "$T/fourth.err" || fail "the failing stage is not named"
 grep -q "contact\[0\].friction" "$T/fourth.err" || fail "the solver's message is not shown"
 [ -f "$T/work/mesh/mesh.msh" ] && [ -f "$T/work/segment/labels.h5" ] || fail "earlier stages' outputs were removed"
-[ ! -e "$T/work/report" ] || fail "a report describing older results was left behind after the failed solve"
-"$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='failed' and j['failed_stage']=='solve' else 1)" \
-  || fail "pipeline.json does not record the failed solve"
+[ -f "$T/work/report/summary.md" ] || fail "the previous report was removed after the failed solve"
+"$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='failed' and j['failed_stage']=='solve' and '$T/work/report' in j['stale_outputs'] else 1)" \
+  || fail "pipeline.json does not record the failed solve and the stale report"
 
 echo "--- 5. a results folder missing a state file"
 rm "$T/broken/results/state_0000.vtu"
@@ -88,7 +94,8 @@ grep -q "interrupted" "$T/sixth.err" || fail "no interrupt message"
 kept=$(find "$T/work" -name '*.partial-*')
 [ "$(echo "$kept" | wc -w)" = 1 ] && [ -d "$kept/checkpoints" ] && ls "$kept"/checkpoints/checkpoint_*.h5 > /dev/null ||
   fail "expected only the stopped solve's staging folder with its checkpoint, found: $kept"
-[ ! -e "$T/work/report" ] || fail "the old report was left looking current"
+"$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if '$T/work/report' in j['stale_outputs'] else 1)" \
+  || fail "pipeline.json does not list the old report as stale"
 pgrep -f "tactus-solve.*$T/work" > /dev/null && fail "the solver is still running"
 "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/work" --end-time 2e-3 \
   --mesh-args "$MESH_ARGS" --object "$OBJECT" -q > "$T/resumed.log"
@@ -101,4 +108,42 @@ if "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/h
   fail "a foreign folder was used"
 fi
 grep -q "did not write" "$T/foreign.err" && [ "$(cat "$T/mine/notes.txt")" = "my notes" ] || fail "the foreign folder message or content"
+
+echo "--- 7. a user's files in a stage folder"
+sums() { (cd "$T/work/report" && find notes.txt mine -type f -exec sha256sum {} + | sort; readlink mylink); }
+echo "my notes" > "$T/work/report/notes.txt"
+mkdir -p "$T/work/report/mine/empty" && echo "figure" > "$T/work/report/mine/fig.txt"
+ln -s "$T/phantom" "$T/work/report/mylink"
+before=$(sums)
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 --post-args "--no-pictures" > "$T/seventh.log"
+grep -q "== post: done" "$T/seventh.log" || fail "the post stage did not re-run with new arguments"
+[ "$(sums)" = "$before" ] && [ -d "$T/work/report/mine/empty" ] || fail "a user's file in report/ changed"
+echo "my edit" >> "$T/work/report/summary.md"
+edited=$(sha256sum < "$T/work/report/summary.md")
+if run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 > "$T/edit.log" 2> "$T/edit.err"; then fail "the post stage overwrote an edited summary.md"; fi
+grep -q "'summary.md' in it changed since" "$T/edit.err" || { cat "$T/edit.err"; fail "the refusal does not name the edited file"; }
+[ "$(sha256sum < "$T/work/report/summary.md")" = "$edited" ] && [ "$(sums)" = "$before" ] || fail "a user's file changed"
+mv "$T/work/report/summary.md" "$T/my_summary.md"
+
+echo "--- 8. the step cache checks the outputs"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 > /dev/null
+"$BUILD/solver/tactus-solve" "$SRC/pipeline/scenarios/hand_block.toml" --meshes "$T/work" -o "$T/work/solve" --end-time 5e-5 -q
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 > "$T/eighth.log"
+grep -q "solve: its output changed since" "$T/eighth.log" && grep -q "== solve: done" "$T/eighth.log" || fail "a replaced solve output was trusted"
+"$PY" -c "import json,sys; sys.exit(0 if abs(json.load(open('$T/work/solve/run.json'))['end_time'] - 1e-4) < 1e-12 else 1)" \
+  || fail "solve/run.json is not the run of the scenario's end time"
+head -c 20 "$T/work/.pipeline/post.json" > "$T/cut" && mv "$T/cut" "$T/work/.pipeline/post.json"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 > "$T/stamp.log" 2>&1 || { cat "$T/stamp.log"; fail "a truncated stamp failed the pipeline"; }
+grep -q "== post: done" "$T/stamp.log" && ! grep -q Traceback "$T/stamp.log" || fail "a truncated stamp did not just re-run its stage"
+"$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/work" --end-time 2e-3 --force \
+  --mesh-args "$MESH_ARGS" --object "$OBJECT" -q > "$T/kill.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 300); do grep -q "== solve:" "$T/kill.log" 2>/dev/null && break; sleep 0.2; done
+sleep 1
+pgrep -f "tactus-solve.*$T/work" > /dev/null || fail "test premise: the solve is not running"
+kill -KILL $pid; wait $pid 2>/dev/null || true
+for _ in $(seq 1 50); do pgrep -f "tactus-solve.*$T/work" > /dev/null || break; sleep 0.2; done
+pgrep -f "tactus-solve.*$T/work" > /dev/null && fail "the solve outlived the pipeline killed with SIGKILL"
+"$PY" -c "import json,sys; sys.exit(0 if abs(json.load(open('$T/work/solve/run.json'))['end_time'] - 1e-4) < 1e-12 else 1)" \
+  || fail "solve/run.json changed after the pipeline was killed"
 echo "e2e: all good"

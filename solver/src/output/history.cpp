@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "results.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 
@@ -73,19 +74,20 @@ HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vecto
                        ec ? "no file" : std::to_string(size) + " bytes");
     std::filesystem::resize_file(file, resume_at, ec);  // the rows after the checkpoint go: they are computed again
     if (ec) throw WriteError(file.string(), "cannot cut the history back to the checkpoint (" + ec.message() + ")");
-    out_.open(file, std::ios::app);
+    out_ = std::make_unique<FileWriter>(file, FileWriter::Mode::append);
     return;
   }
-  out_.open(file);
-  for (std::size_t k = 0; k < kColumns.size(); ++k) out_ << (k ? "," : "") << kColumns[k].spec->name;
+  out_ = std::make_unique<FileWriter>(file);
+  std::string header;
+  for (std::size_t k = 0; k < kColumns.size(); ++k) header += (k ? "," : "") + std::string(kColumns[k].spec->name);
   for (const auto& b : boundaries)
     for (const auto* family : h::per_boundary)
-      for (const char* axis : {"_x", "_y", "_z"}) out_ << ',' << family->prefix << b.name << axis;
-  for (const auto& body : mass_scaled_bodies) out_ << ',' << h::added_mass.prefix << body;
+      for (const char* axis : {"_x", "_y", "_z"}) header += "," + std::string(family->prefix) + b.name + axis;
+  for (const auto& body : mass_scaled_bodies) header += "," + std::string(h::added_mass.prefix) + body;
   for (const auto& body : rigid_bodies)
     for (const auto* family : h::per_rigid_body)
-      for (const char* axis : {"_x", "_y", "_z"}) out_ << ',' << family->prefix << rigid_column_name(body) << axis;
-  out_ << '\n';
+      for (const char* axis : {"_x", "_y", "_z"}) header += "," + std::string(family->prefix) + rigid_column_name(body) + axis;
+  out_->write(header + '\n');
 }
 
 namespace {
@@ -119,15 +121,12 @@ void HistoryWriter::write(const HistoryRow& row) {
       for (int c = 0; c < 3; ++c) append_value(line, v[c]);
   }
   line += '\n';
-  out_.write(line.data() + 1, static_cast<std::streamsize>(line.size() - 1));  // without the first value's comma
+  out_->write(std::string_view(line).substr(1));  // without the first value's comma
 }
 
 std::uintmax_t HistoryWriter::flush() {
-  out_.flush();
-  std::error_code ec;
-  const std::uintmax_t size = std::filesystem::file_size(file_, ec);
-  if (out_.fail() || ec) throw WriteError(file_.string(), "the file system refused the history");
-  return size;
+  out_->flush();
+  return out_->size();
 }
 
 std::string rigid_column_name(const std::string& name) {
@@ -142,9 +141,6 @@ std::string rigid_column_name(const std::string& name) {
   return squeezed;
 }
 
-void HistoryWriter::close() {
-  out_.close();
-  if (out_.fail()) throw WriteError(file_.string(), "the file system refused the history");
-}
+void HistoryWriter::close() { out_->close(); }
 
 }  // namespace tactus::solver

@@ -5,13 +5,14 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "tactus/core/file_io.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
@@ -56,7 +57,7 @@ class HistoryWriter {
   void close();
 
  private:
-  std::ofstream out_;
+  std::unique_ptr<FileWriter> out_;  // every write checked: a full disk stops the run, never cuts the history short
   std::filesystem::path file_;
   std::size_t boundaries_ = 0, mass_scaled_bodies_ = 0, rigid_bodies_ = 0;
   std::string line_;  // the row being written (its capacity kept: no allocation per step)

@@ -6,6 +6,7 @@
 #include "results.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/solver/internal_force.hpp"
 
 namespace fs = std::filesystem;
@@ -95,12 +96,12 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
 }
 
 void write_pvd(const fs::path& file, const std::vector<std::pair<double, std::string>>& entries) {
-  std::ofstream o(file);
+  std::ostringstream o;
   o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
   o << std::setprecision(12);
   for (const auto& [t, name] : entries) o << "    <DataSet timestep=\"" << t << "\" part=\"0\" file=\"" << name << "\"/>\n";
   o << "  </Collection>\n</VTKFile>\n";
-  if (!o) throw WriteError(file.string(), "the file system refused the listing");
+  write_file(file, o.str());
 }
 
 void RunPeaks::add_contact_step(const ContactStepReport& cr, double t, const Vec3& peak_at, const std::vector<PairStepReport>& per_pair) {

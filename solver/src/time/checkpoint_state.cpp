@@ -3,6 +3,8 @@
 // reading it (the per-partition force arrays, the step's contact rows, the energy chunks) is left
 // out. One function per class serves saving and loading (StateArchive), and each array is checked
 // against the size this model gives it, so a checkpoint of another model is refused by name.
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "../contact/detection.hpp"
@@ -35,7 +37,87 @@ void checkpoint_search(StateArchive& a, const std::string& p, DetectionScratch& 
   a.io(p + "mortar.slave_local", s.mortar.slave_local);
 }
 
+// A restored search state, checked against the pair it belongs to: every index it holds is one a
+// step dereferences (a triangle, a node, a slave, a list position), so each is bounded here.
+void validate_search(const StateArchive& a, const std::string& p, const DetectionScratch& s, const ContactPair& pair, std::size_t nodes) {
+  const auto nt = static_cast<long long>(pair.master->triangles().size() / 3);
+  const std::size_t ns = pair.slave_nodes.size();
+  const auto nn = static_cast<long long>(nodes);
+  const DetectionScratch::Grid& g = s.grid;
+  long long cells = 1;
+  for (int c = 0; c < 3; ++c) {
+    if (g.n[c] < 1 || g.n[c] > (1 << 20)) a.invalid(p + "grid.n", "1 to 2^20 cells per axis", std::to_string(g.n[c]));
+    cells *= g.n[c];
+  }
+  if (cells > (1LL << 31)) a.invalid(p + "grid.n", "at most 2^31 cells", std::to_string(cells));
+  if (!(g.cell > 0) || !std::isfinite(g.cell)) a.invalid(p + "grid.cell", "a cell size > 0", std::to_string(g.cell));
+  a.require_finite(p + "grid.lo", std::vector<double>(g.lo, g.lo + 3));
+  if (!g.start.empty() || !g.count.empty()) {
+    a.require_starts(p + "grid.count", g.count, static_cast<std::size_t>(cells), g.items.size());
+    if (g.start.size() != g.count.size()) a.invalid(p + "grid.start", std::to_string(g.count.size()) + " cell ends", std::to_string(g.start.size()));
+    for (std::size_t c = 0; c < g.start.size(); ++c)  // cell c spans [count[c], start[c])
+      if (g.start[c] < g.count[c] || static_cast<std::size_t>(g.start[c]) > g.items.size())
+        a.invalid(p + "grid.start", "cell ends within the cell's items", std::to_string(g.start[c]) + " at cell " + std::to_string(c));
+  }
+  a.require_indices(p + "grid.items", g.items, 0, nt);
+  for (std::size_t t = 0; t < g.box.size(); ++t)
+    for (int c = 0; c < 3; ++c)
+      if (g.box[t][c] < 0 || g.box[t][c] > g.box[t][3 + c] || g.box[t][3 + c] >= g.n[c])
+        a.invalid(p + "grid.box", "cell ranges within the grid", "triangle " + std::to_string(t));
+  a.require_finite(p + "grid.extent", g.extent), a.require_finite(p + "grid.normal", g.normal);
+  if (g.extent.size() > 6 * static_cast<std::size_t>(nt) || g.normal.size() > 4 * static_cast<std::size_t>(nt) || g.box.size() > static_cast<std::size_t>(nt))
+    a.invalid(p + "grid.box", "at most one entry per master triangle", "more");
+  a.require_indices(p + "slot_triangle", s.slot_triangle, -1, nt);
+  if (s.slot_triangle.size() > 2 * ns || s.slot_data.size() != 7 * s.slot_triangle.size())
+    a.invalid(p + "slot_triangle", "2 slots per slave node, 7 numbers each", std::to_string(s.slot_triangle.size()) + " slots");
+  a.require_finite(p + "slot_data", s.slot_data);
+  if (!(s.skin >= 0) || !std::isfinite(s.skin)) a.invalid(p + "skin", "a search skin >= 0", std::to_string(s.skin));
+  for (auto [name, snapshot] : {std::pair<const char*, const BuildSnapshot*>{"built.", &s.built}, {"mortar.integrated.", &s.mortar.integrated}}) {
+    a.require_indices(p + name + "nodes", snapshot->nodes, 0, nn);
+    if (snapshot->x.size() != 3 * snapshot->nodes.size()) a.invalid(p + name + "x", "3 coordinates per node", std::to_string(snapshot->x.size()));
+    a.require_finite(p + name + "x", snapshot->x), a.require_finite(p + name + "band", snapshot->band);
+  }
+  if (!s.candidate_start.empty()) a.require_starts(p + "candidate_start", s.candidate_start, ns, s.candidates.size());
+  a.require_indices(p + "candidates", s.candidates, 0, nt);
+  a.require_indices(p + "active_triangles", s.active_triangles, 0, nt);
+  a.require_indices(p + "mortar.masters", s.mortar.masters, 0, nn);
+  if (s.mortar.weights.size() != s.mortar.masters.size()) a.invalid(p + "mortar.weights", "one weight per master", std::to_string(s.mortar.weights.size()));
+  a.require_finite(p + "mortar.weights", s.mortar.weights);
+  a.require_indices(p + "mortar.slave_local", s.mortar.slave_local, 0, static_cast<long long>(ns));
+  for (std::size_t i = 0; i < s.mortar.rows.size(); ++i) {
+    const MortarRow& r = s.mortar.rows[i];
+    const bool finite = std::isfinite(r.n[0]) && std::isfinite(r.n[1]) && std::isfinite(r.n[2]) && std::isfinite(r.gap) && std::isfinite(r.along_normal) &&
+                        std::isfinite(r.area);
+    if (r.slave_index < 0 || static_cast<std::size_t>(r.slave_index) >= ns || r.slave_node < 0 || r.slave_node >= nn || r.begin > r.end ||
+        r.end > s.mortar.masters.size() || !finite)
+      a.invalid(p + "mortar.rows", "rows of this pair's slaves and masters", "row " + std::to_string(i));
+  }
+}
+
 }  // namespace
+
+void ContactSolver::validate_restored(const StateArchive& a) const {
+  for (std::size_t p = 0; p < pairs_.size(); ++p) {
+    const std::string prefix = "contact.pair" + std::to_string(p) + ".";
+    a.require_finite(prefix + "last_reaction", last_reaction_.reaction[p]);
+    validate_search(a, prefix, scratch_[p], pairs_[p], model_.num_nodes);
+  }
+  a.require_finite("contact.windowed_pressure", windowed_pressure_);
+  const ContactRows& r = ahead_rows_;
+  const std::size_t rows = r.pair.size();
+  a.require_indices("contact.ahead.pair", r.pair, 0, static_cast<long long>(pairs_.size()));
+  if (r.slave_index.size() != rows || r.normal.size() != 3 * rows || r.gap.size() != rows || r.area.size() != rows)
+    a.invalid("contact.ahead", "one slave, normal, gap and area per row", std::to_string(rows) + " rows with other counts");
+  for (std::size_t i = 0; i < rows; ++i)
+    if (r.slave_index[i] < 0 || static_cast<std::size_t>(r.slave_index[i]) >= pairs_[static_cast<std::size_t>(r.pair[i])].slave_nodes.size())
+      a.invalid("contact.ahead.slave_index", "a slave of the row's pair", std::to_string(r.slave_index[i]) + " at row " + std::to_string(i));
+  a.require_starts("contact.ahead.start", r.start, rows, r.nodes.size());
+  if (r.start.empty() && rows) a.invalid("contact.ahead.start", "row starts", "none");
+  a.require_indices("contact.ahead.nodes", r.nodes, 0, static_cast<long long>(model_.num_nodes));
+  if (r.weights.size() != r.nodes.size()) a.invalid("contact.ahead.weights", "one weight per node", std::to_string(r.weights.size()));
+  a.require_finite("contact.ahead.weights", r.weights), a.require_finite("contact.ahead.normal", r.normal);
+  a.require_finite("contact.ahead.gap", r.gap), a.require_finite("contact.ahead.area", r.area);
+}
 
 void ContactSolver::checkpoint(StateArchive& a) {
   for (std::size_t p = 0; p < pairs_.size(); ++p) {
@@ -52,6 +134,7 @@ void ContactSolver::checkpoint(StateArchive& a) {
   a.io("contact.ahead.pair", r.pair), a.io("contact.ahead.slave_index", r.slave_index), a.io("contact.ahead.start", r.start);
   a.io("contact.ahead.nodes", r.nodes), a.io("contact.ahead.weights", r.weights), a.io("contact.ahead.normal", r.normal);
   a.io("contact.ahead.gap", r.gap), a.io("contact.ahead.area", r.area);
+  if (a.loading()) validate_restored(a);
 }
 
 void ExplicitSolver::checkpoint(StateArchive& a) {
@@ -101,6 +184,49 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
   a.io("integrator.velocity_advanced", velocity_advanced_);
   checkpoint_rigid_bodies(a, rigid_);
   contact_.checkpoint(a);
+  if (a.loading()) validate_restored(a);
+}
+
+void ExplicitSolver::validate_restored(const StateArchive& a) {
+  for (auto [name, v] : {std::pair<const char*, const std::vector<double>*>{"u", &u_},
+                         {"v_half", &v_half_},
+                         {"v_prev_half", &v_prev_half_},
+                         {"force", &f_},
+                         {"inverse_mass", &inv_mass_},
+                         {"nodal_mass", &mass_},
+                         {"prescribed_velocity", &prescribed_v_},
+                         {"body_mass", &body_mass_}})
+    a.require_finite(std::string("integrator.") + name, *v);
+  for (std::size_t i = 0; i < mass_.size(); ++i)
+    if (!(mass_[i] >= 0) || !(inv_mass_[3 * i] >= 0)) a.invalid("integrator.nodal_mass", "masses >= 0", "node " + std::to_string(i));
+  if (pass_.limiting_element >= model_.num_elements || pass_.min_jacobian_element >= model_.num_elements || pass_.limiting_node >= model_.num_nodes)
+    a.invalid("integrator.stress_pass", "an element and a node of this model", "an index out of range");
+  // Times against the run: a step that never reaches the end, or an end already passed, hangs or
+  // skips the run.
+  const double end = run_.end_time;
+  if (!(time_ >= 0 && time_ <= end)) a.invalid("integrator.time", "a time from 0 to the run's end time " + std::to_string(end) + " s", std::to_string(time_));
+  if (!(dt_next_ > 0 && dt_next_ <= end) || !(dt_prev_ >= 0 && dt_prev_ <= end))
+    a.invalid("integrator.dt_next", "steps > 0 and within the run's end time", std::to_string(dt_next_) + " and " + std::to_string(dt_prev_));
+  if (next_target_ >= schedule_.size())
+    a.invalid("integrator.next_target", "an output time of the run's schedule (fewer than " + std::to_string(schedule_.size()) + ")", std::to_string(next_target_));
+  for (const RigidBody& r : rigid_) {
+    const Vec3d* vectors[] = {&r.centre, &r.momentum, &r.angular_momentum, &r.force, &r.moment};
+    for (const Vec3d* v : vectors)
+      if (!v->allFinite()) a.invalid("rigid." + r.name, "finite numbers", "a non-finite value");
+    if (!r.rotation.allFinite() || (r.rotation.transpose() * r.rotation - Mat3::Identity()).norm() > 1e-6)
+      a.invalid("rigid." + r.name + ".rotation", "a rotation matrix", "a matrix that is not one");
+  }
+  // The state must be the one its energies describe: the strain energy of the restored
+  // displacements, computed again, against the one the checkpoint stored (edited displacements of
+  // 1e300 once ran on to an 18 % energy error). The sum's order may differ with the thread count.
+  std::vector<double> force(f_.size());
+  const StressPassResult again = forces_.compute(u_.data(), v_half_.data(), force.data());
+  const double stored = pass_.strain_energy;
+  const double scale = std::max({std::abs(stored), energy_.scale(), 1e-300});
+  if (!(again.min_jacobian > 0) || !std::isfinite(again.strain_energy) || std::abs(again.strain_energy - stored) > 1e-8 * scale)
+    a.invalid("integrator.u", "displacements whose strain energy is the stored " + std::to_string(stored) + " J",
+              "displacements giving " + std::to_string(again.strain_energy) + " J (min J " + std::to_string(again.min_jacobian) + ")");
+  check_energy();
 }
 
 }  // namespace tactus::solver

@@ -33,10 +33,19 @@ class InputError : public Error {
 class WriteError : public Error {
  public:
   WriteError(std::string path, std::string reason);
+  // A failed system call: `err` (errno) names the reason; ENOSPC and EDQUOT say "no space left on
+  // device" and mark the error as no_space(), which a run that can be continued reacts to.
+  WriteError(std::string path, const std::string& doing, int err);
   const std::string& path() const noexcept { return path_; }
+  bool no_space() const noexcept { return no_space_; }
+  // The same error with `note` appended to its message (what was kept, how to go on).
+  WriteError with_note(const std::string& note) const;
 
  private:
+  struct Composed {};
+  WriteError(Composed, std::string message, std::string path, bool no_space);
   std::string path_;
+  bool no_space_ = false;
 };
 
 // A run that finished but whose figures differ from a stored reference beyond tolerance.

@@ -4,12 +4,15 @@
 // file writers (write_msh, write_vtu, write_h5, ...) use it; a tool's whole output goes through
 // OutputFolder / OutputFiles (output.hpp), which decide whether the final place may be used.
 #include <filesystem>
+#include <string>
+#include <string_view>
 
 namespace tactus {
 
 class StagedOutput {
  public:
-  // The staging path is a sibling "<name>.partial-<pid>" (same file system: the rename is atomic).
+  // The staging path is a sibling "<name>.partial-<pid>-<random>" (same file system: the rename
+  // is atomic; no other process, whatever its pid, picks the same name).
   explicit StagedOutput(std::filesystem::path final_path);
   ~StagedOutput();  // removes the staging file unless committed
   StagedOutput(const StagedOutput&) = delete;
@@ -17,8 +20,10 @@ class StagedOutput {
 
   const std::filesystem::path& path() const noexcept { return staging_; }
   const std::filesystem::path& final_path() const noexcept { return final_; }
-  // Renames the staged file to the final path (replacing a file there; never a folder).
-  void commit();
+  // Flushes the staged file to the disk (checked), checks that it ends with `tail` when one is
+  // given (a third-party writer's format end: a file cut short by a full disk is caught), renames
+  // it to the final path (replacing a file there; never a folder) and flushes the folder.
+  void commit(std::string_view tail = {}, const std::string& format = {});
 
  private:
   std::filesystem::path final_, staging_;

@@ -38,10 +38,6 @@ void write_state_file(const std::filesystem::path& file, const StateArrays& stat
 // its arrays do not match their checksum.
 StateArrays read_state_file(const std::filesystem::path& file, const std::string& kind);
 
-// A digest (64-bit FNV-1a, hex) of the files' bytes in order (not their names), to tell whether
-// inputs changed; a missing file counts as "<missing>".
-std::string content_digest(const std::vector<std::filesystem::path>& files);
-
 class StateArchive {
  public:
   static constexpr std::size_t kAnySize = std::numeric_limits<std::size_t>::max();
@@ -79,6 +75,31 @@ class StateArchive {
     v.resize(bytes.size() / sizeof(T));
     if (!bytes.empty()) std::memcpy(static_cast<void*>(v.data()), bytes.data(), bytes.size());
   }
+  // Loading: a checkpoint is input like any other. These refuse it (InputError naming the file and
+  // the array) when a value read is not what this model allows: an index out of [lo, hi), a
+  // non-finite number, a broken list of starts. Its checksum says only that the bytes are the ones
+  // written, not who wrote them.
+  [[noreturn]] void invalid(const std::string& name, const std::string& expected, const std::string& found) const;
+  template <class V>
+  void require_indices(const std::string& name, const V& v, long long lo, long long hi) const {
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (static_cast<long long>(v[i]) < lo || static_cast<long long>(v[i]) >= hi)
+        invalid(name, "indices from " + std::to_string(lo) + " to " + std::to_string(hi - 1) + " (this model's)",
+                std::to_string(static_cast<long long>(v[i])) + " at position " + std::to_string(i));
+  }
+  // Starts of a compressed list: `count` + 1 non-decreasing values from 0 (or, empty, no list yet) to at most `items`.
+  template <class V>
+  void require_starts(const std::string& name, const V& start, std::size_t count, std::size_t items) const {
+    if (start.empty()) return;
+    if (start.size() != count + 1) size_error(name, count + 1, start.size());
+    for (std::size_t i = 0; i < start.size(); ++i)
+      if (static_cast<long long>(start[i]) < (i ? static_cast<long long>(start[i - 1]) : 0) || static_cast<std::size_t>(start[i]) > items)
+        invalid(name, "non-decreasing list starts from 0 to " + std::to_string(items), std::to_string(static_cast<long long>(start[i])) + " at position " + std::to_string(i));
+  }
+  void require_finite(const std::string& name, const std::vector<double>& v) const;
+  void require_finite(const std::string& name, double x) const { require_finite(name, std::vector<double>{x}); }
+  const std::string& file() const { return file_; }
+
   template <class T>
   void io_record(const std::string& name, T& x) {
     std::vector<T> v{x};

@@ -22,6 +22,7 @@ namespace tactus::segment {
 struct DicomSlice {
   std::filesystem::path file;
   std::string series_uid, series_description, sop_class_uid, transfer_syntax;
+  std::string modality;  // (0008,0060): "CT", "MR", ...
   int rows = 0, columns = 0, bits_allocated = 0, bits_stored = 0, high_bit = -1, pixel_representation = 0, samples_per_pixel = 0;
   std::array<double, 2> pixel_spacing{0, 0};            // mm: between rows, between columns
   std::array<double, 3> position{0, 0, 0};              // ImagePositionPatient, mm

@@ -279,6 +279,8 @@ class ContactSolver {
   // each pair's search state (Verlet lists, grid, mortar rows and where they were built) and the
   // rows detected ahead for the next step.
   void checkpoint(StateArchive& archive);
+  // Loading: every restored index (triangles, nodes, slaves, list starts) within this model's.
+  void validate_restored(const StateArchive& archive) const;
 
  private:
   void detect(const double* u, double search_factor, ContactRows& rows);

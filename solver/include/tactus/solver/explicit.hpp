@@ -104,6 +104,10 @@ class ExplicitSolver {
   // solver's warm starts and searches (checkpoint.cpp). A solver built from the same model and run
   // settings and then loaded continues bit for bit as the one that saved.
   void checkpoint(StateArchive& archive);
+  // Loading: refuses (InputError naming the checkpoint and the array) a restored state this model
+  // cannot step from: non-finite or negative values, times outside the run, displacements whose
+  // recomputed strain energy is not the stored one; then the energy check.
+  void validate_restored(const StateArchive& archive);
 
  private:
   // detect_ahead: the next step's contact detection runs on one thread during the pass (it reads
