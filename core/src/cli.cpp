@@ -37,8 +37,7 @@ void require_finite_numbers(const CLI::App& app) {
       std::size_t i = value.find_first_not_of("+- ");
       std::string word = i == std::string::npos ? "" : value.substr(i, 3);
       for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      if (word == "nan" || word == "inf")
-        throw InputError("command line", opt->get_name(), "a finite number", "'" + value + "'");
+      if (word == "nan" || word == "inf") throw InputError("command line", opt->get_name(), "a finite number", "'" + value + "'");
     }
   }
   for (const CLI::App* sub : app.get_subcommands()) require_finite_numbers(*sub);

@@ -79,8 +79,7 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   writer->SetInputData(grid);
   writer->SetDataModeToAppended();
   writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1 || writer->GetErrorCode() != 0)
-    throw_library_write_failure(file, "VTK failed writing the grid");
+  if (writer->Write() != 1 || writer->GetErrorCode() != 0) throw_library_write_failure(file, "VTK failed writing the grid");
   out.commit("</VTKFile>\n", "VTK grid");
 }
 

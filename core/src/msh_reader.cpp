@@ -16,8 +16,8 @@
 #include <set>
 #include <unordered_map>
 
-#include "tactus/core/file_io.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/mesh.hpp"
 
 namespace fs = std::filesystem;

@@ -7,10 +7,10 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <csignal>
-#include <cstdlib>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -104,12 +104,11 @@ std::string utc_now() {
   return buf;
 }
 
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
+std::int64_t now_ns() { return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count(); }
 
 json staging_marker(const std::string& tool, const std::string& token) {
-  return {{"tool", tool}, {"version", kVersion}, {"state", "writing"}, {"token", token}, {"pid", static_cast<long>(::getpid())}, {"started_ns", now_ns()}};
+  return {{"tool", tool},          {"version", kVersion}, {"state", "writing"}, {"token", token}, {"pid", static_cast<long>(::getpid())},
+          {"started_ns", now_ns()}};
 }
 
 std::int64_t mtime_ns(const fs::path& p) {
@@ -172,12 +171,12 @@ void check_place(const fs::path& final, const OutputRules& rules, const std::str
 // ---------------------------------------------------------------------------------------------
 // What is in a previous output folder, against its manifest.
 struct Existing {
-  bool present = false;               // a non-empty folder
-  json marker;                        // its manifest
-  std::vector<std::string> files;     // listed files, unchanged
-  std::vector<std::string> dirs;      // folders tactus made (listed, or holding a listed file)
-  std::vector<std::string> foreign;   // top-most entries tactus did not write: kept in place
-  std::vector<std::string> edited;    // listed files whose content changed since
+  bool present = false;              // a non-empty folder
+  json marker;                       // its manifest
+  std::vector<std::string> files;    // listed files, unchanged
+  std::vector<std::string> dirs;     // folders tactus made (listed, or holding a listed file)
+  std::vector<std::string> foreign;  // top-most entries tactus did not write: kept in place
+  std::vector<std::string> edited;   // listed files whose content changed since
 };
 
 // The folders a manifest accounts for: those it lists and those holding a listed file.
@@ -285,7 +284,7 @@ std::vector<std::string> finish_replacement(const fs::path& final, const fs::pat
   }
   for (const std::string& name : e.files) fs::remove(old / name, ec);
   std::vector<std::string> dirs = e.dirs;
-  std::sort(dirs.rbegin(), dirs.rend());  // deepest first
+  std::sort(dirs.rbegin(), dirs.rend());                      // deepest first
   for (const std::string& d : dirs) fs::remove(old / d, ec);  // only when empty
   fs::remove(old / kFolderMarker, ec);
   fs::remove(old / kLockFile, ec);
@@ -302,7 +301,9 @@ void say_kept(const fs::path& final, const std::vector<std::string>& kept) {
 }
 
 // renameat2 with a flag; false (errno set) when it failed.
-bool rename_with(const fs::path& from, const fs::path& to, unsigned flags) { return ::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), flags) == 0; }
+bool rename_with(const fs::path& from, const fs::path& to, unsigned flags) {
+  return ::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), flags) == 0;
+}
 
 // Publishes the complete output in `staging` (its manifest `marker`, without "replaces") at
 // `final`. The staging folder holds its lock file (taken by this process).
@@ -314,7 +315,8 @@ void publish(const fs::path& staging, const fs::path& final, const OutputRules& 
       std::error_code ec;
       const auto st = fs::symlink_status(staging / p, ec);
       if (fs::exists(st) && (p != fs::path(name) ? !fs::is_directory(st) : true))
-        throw WriteError(final.string(), "'" + name + "' in it was not written by tactus, and the new output has an entry of that name; move it away");
+        throw WriteError(final.string(),
+                         "'" + name + "' in it was not written by tactus, and the new output has an entry of that name; move it away");
     }
   std::error_code ec;
   const bool replace = fs::exists(fs::symlink_status(final, ec));
@@ -359,8 +361,8 @@ void publish(const fs::path& staging, const fs::path& final, const OutputRules& 
     if (old.present) kept = finish_replacement(final, aside, old);
   } catch (const Error& e) {
     // The new output is in place; what is left of the previous one is finished by the next run.
-    log::warn(std::string(e.what()) + "; the rest of the previous output is in " + aside.string() + " until the next run writing " +
-              final.string() + " sorts it");
+    log::warn(std::string(e.what()) + "; the rest of the previous output is in " + aside.string() + " until the next run writing " + final.string() +
+              " sorts it");
     return;
   }
   if (!old.present) fs::remove(aside, ec);  // the empty folder that was there
@@ -517,7 +519,8 @@ void snapshot(const fs::path& dir, json& files, json& dirs) {
   dirs = json::array();
   std::error_code ec;
   std::vector<fs::path> all;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) all.push_back(it->path());
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+    all.push_back(it->path());
   if (ec) throw WriteError(dir.string(), "cannot list what was written", ec.value());
   std::sort(all.begin(), all.end());
   for (const fs::path& p : all) {
@@ -648,8 +651,7 @@ fs::path normalise_output_path(const fs::path& given, const std::string& kind) {
   if (name == ".")
     throw WriteError(given.string(), "it is the current folder; tactus writes its output " + kind +
                                          " into a new folder (e.g. -o results) and never replaces the folder you work in");
-  if (s == "/" || name.empty() || name == "..")
-    throw WriteError(given.string(), "an output " + kind + " path must end in a name (e.g. -o results)");
+  if (s == "/" || name.empty() || name == "..") throw WriteError(given.string(), "an output " + kind + " path must end in a name (e.g. -o results)");
   fs::path parent = p.parent_path();
   if (parent.empty()) parent = ".";
   std::error_code ec;
@@ -679,8 +681,8 @@ OutputFolder::OutputFolder(fs::path folder, OutputRules rules, const fs::path& r
     // The killed run's staging folder becomes this process's: its lock taken, its marker ours.
     const fs::path candidate = absolute_path(resume);
     const json m = read_marker(candidate / kFolderMarker);
-    const bool sibling = candidate.parent_path() == final_.parent_path() &&
-                         candidate.filename().string().rfind(final_.filename().string() + ".partial-", 0) == 0;
+    const bool sibling =
+        candidate.parent_path() == final_.parent_path() && candidate.filename().string().rfind(final_.filename().string() + ".partial-", 0) == 0;
     if (!sibling || m.is_null() || m.value("tool", "") != rules_.tool || try_lock(candidate, lock_) != LockState::taken)
       throw InputError(resume.string(), "", "the staging folder of a killed " + rules_.tool + " run writing " + final_.string(),
                        "not one (its process still runs, or it belongs elsewhere)");

@@ -2,9 +2,9 @@
 // back in an isolated child with a checksum over every array.
 #include "tactus/core/state_file.hpp"
 
-#include <cmath>
 #include <fcntl.h>
 #include <unistd.h>
+#include <cmath>
 
 #include <cstdio>
 
@@ -128,8 +128,7 @@ void write_state_file(const fs::path& file, const StateArrays& state, const std:
     if (phase) phase("data");
     // The checksum last: a file cut anywhere before it has none and is refused.
     write_string_attribute(f.get(), "checksum", checksum_of(state));
-    if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0 || !f.close())
-      throw_library_write_failure(file, "HDF5 failed finishing the file");
+    if (H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0 || !f.close()) throw_library_write_failure(file, "HDF5 failed finishing the file");
   }
   sync_file(out.path());
   if (phase) phase("written");

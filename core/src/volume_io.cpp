@@ -214,21 +214,21 @@ void read_voxels(hid_t ds, hid_t ftype, const hsize_t shape[3], Volume<T>& v, co
       throw InputError(file, dataset, "readable voxel data",
                        "slices z = " + std::to_string(z0) + " to " + std::to_string(z0 + n - 1) + " cannot be read (truncated or corrupt)");
     for (hsize_t z = z0; z < z0 + n; ++z) {
-    const std::int64_t* ib = integer_file ? ibuf.data() + (z - z0) * slice : nullptr;
-    const double* db = integer_file ? nullptr : dbuf.data() + (z - z0) * slice;
-    T* out = v.data.data() + z * slice;
-    for (hsize_t i = 0; i < slice; ++i) {
-      const double value = integer_file ? static_cast<double>(ib[i]) : db[i];
-      if (!(value >= lo && value <= hi)) {
-        std::ostringstream f;
-        f << value << " at voxel (x " << i % shape[2] << ", y " << i / shape[2] << ", z " << z << ")";
-        throw InputError(file, dataset,
-                         std::string("values a ") + (std::is_integral_v<T> ? "label" : "voxel") + " of this volume can hold, in [" +
-                             std::to_string(static_cast<long long>(lo)) + ", " + std::to_string(static_cast<long long>(hi)) + "]",
-                         f.str());
+      const std::int64_t* ib = integer_file ? ibuf.data() + (z - z0) * slice : nullptr;
+      const double* db = integer_file ? nullptr : dbuf.data() + (z - z0) * slice;
+      T* out = v.data.data() + z * slice;
+      for (hsize_t i = 0; i < slice; ++i) {
+        const double value = integer_file ? static_cast<double>(ib[i]) : db[i];
+        if (!(value >= lo && value <= hi)) {
+          std::ostringstream f;
+          f << value << " at voxel (x " << i % shape[2] << ", y " << i / shape[2] << ", z " << z << ")";
+          throw InputError(file, dataset,
+                           std::string("values a ") + (std::is_integral_v<T> ? "label" : "voxel") + " of this volume can hold, in [" +
+                               std::to_string(static_cast<long long>(lo)) + ", " + std::to_string(static_cast<long long>(hi)) + "]",
+                           f.str());
+        }
+        out[i] = static_cast<T>(value);
       }
-      out[i] = static_cast<T>(value);
-    }
     }
   }
 }
@@ -267,8 +267,7 @@ void write_h5(const fs::path& file, const std::string& dataset, const Volume<T>&
       for (const auto& [id, name] : *labels) table[std::to_string(id)] = name;
       write_string_attribute(ds.get(), "label_table", table.dump());
     }
-    if (!ds.close() || H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0 || !f.close())
-      throw_library_write_failure(file, "HDF5 failed finishing the file");
+    if (!ds.close() || H5Fflush(f.get(), H5F_SCOPE_GLOBAL) < 0 || !f.close()) throw_library_write_failure(file, "HDF5 failed finishing the file");
   }
   out.commit();
 }
@@ -394,8 +393,7 @@ void write_vti(const fs::path& file, const Volume<T>& volume, const std::string&
   writer->SetInputData(image);
   writer->SetDataModeToAppended();
   writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1 || writer->GetErrorCode() != 0)
-    throw_library_write_failure(file, "VTK failed writing the image");
+  if (writer->Write() != 1 || writer->GetErrorCode() != 0) throw_library_write_failure(file, "VTK failed writing the image");
   out.commit("</VTKFile>\n", "VTK image");
 }
 

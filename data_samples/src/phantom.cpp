@@ -3,8 +3,8 @@
 // the soft-tissue envelope is a smooth union of a wrist, a palm and capsules around each finger.
 #include "tactus/data_samples/phantom.hpp"
 
-#include <exception>
 #include <omp.h>
+#include <exception>
 
 #include <algorithm>
 #include <array>

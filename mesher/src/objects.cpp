@@ -1,5 +1,5 @@
-#include "tactus/core/file_io.hpp"
 #include "tactus/mesher/objects.hpp"
+#include "tactus/core/file_io.hpp"
 
 #include <gmsh.h>
 #include <algorithm>

@@ -16,7 +16,6 @@
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
-#include <vtkUnsignedCharArray.h>
 #include <vtkPen.h>
 #include <vtkPlane.h>
 #include <vtkPlot.h>
@@ -33,6 +32,7 @@
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkThreshold.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkWindowToImageFilter.h>
 #include <vtkXMLUnstructuredGridReader.h>
@@ -44,9 +44,9 @@
 #include <map>
 #include <sstream>
 
-#include "tactus/core/file_io.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 #include "tactus/core/log.hpp"
 
 namespace fs = std::filesystem;

@@ -1,6 +1,6 @@
 // Reading a results folder: results.pvd (ParaView collection), history.csv, run.json.
-#include "tactus/core/file_io.hpp"
 #include "tactus/postproc/results.hpp"
+#include "tactus/core/file_io.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -35,8 +35,9 @@ History read_history_csv(const fs::path& file) {
   if (!std::getline(in, line) || line.empty()) throw InputError(file.string(), "line 1", "a header row", "empty file");
   std::stringstream hs(line);
   for (std::string name; std::getline(hs, name, ',');) h.names.push_back(name), h.columns[name];
-  if (h.names.empty() || h.names.front() != contracts::history::time.name)
-    throw InputError(file.string(), "line 1", std::string("a header row starting with '") + contracts::history::time.name + "' (written by tactus-solve)",
+  if (std::find(h.names.begin(), h.names.end(), contracts::history::time.name) == h.names.end())
+    throw InputError(file.string(), "line 1",
+                     std::string("a header row naming the columns, '") + contracts::history::time.name + "' among them (written by tactus-solve)",
                      "'" + line.substr(0, 60) + "' (no header?)");
   std::size_t row = 1;
   while (std::getline(in, line)) {

@@ -1,5 +1,5 @@
-#include "tactus/core/file_io.hpp"
 #include "tactus/segment/dicom.hpp"
+#include "tactus/core/file_io.hpp"
 
 #include <algorithm>
 #include <atomic>

@@ -28,7 +28,7 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   // A NIfTI, NRRD or MetaImage file; a folder with stack.json is a slice stack; one with DICOM
   // files (and no stack.json) a series.
   std::error_code ec;
-  const bool file = !fs::is_directory(stack_folder, ec);
+  const bool file = fs::exists(stack_folder, ec) && !fs::is_directory(stack_folder, ec);
   if (file) require_regular_file(stack_folder, "a CT input (a slice stack folder, a DICOM folder or a volume file)");
   const bool dicom = !file && is_dicom_folder(stack_folder);
   if (!dicom && !o.dicom_series.empty())

@@ -1,5 +1,5 @@
-#include "tactus/core/file_io.hpp"
 #include "tactus/segment/stack.hpp"
+#include "tactus/core/file_io.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

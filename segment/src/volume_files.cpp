@@ -1,5 +1,5 @@
-#include "tactus/core/file_io.hpp"
 #include "tactus/segment/volume_files.hpp"
+#include "tactus/core/file_io.hpp"
 
 #include <zlib.h>
 
@@ -65,8 +65,9 @@ std::string inflate_exactly(const std::string& in, std::size_t expected, const s
   // buffer is allocated (a 352-byte header declaring 7e8 voxels once reserved 2.6 GB).
   constexpr std::size_t kMaxDeflateRatio = 1032;
   if (expected / kMaxDeflateRatio > in.size())
-    throw InputError(file, field, std::to_string(expected) + " bytes of voxels as the header declares, which " + std::to_string(in.size()) +
-                                      " compressed bytes cannot hold (deflate expands at most 1032:1)",
+    throw InputError(file, field,
+                     std::to_string(expected) + " bytes of voxels as the header declares, which " + std::to_string(in.size()) +
+                         " compressed bytes cannot hold (deflate expands at most 1032:1)",
                      "a file too short for its header (truncated, or a wrong size in the header)");
   std::string out(expected, '\0');
   z_stream z{};

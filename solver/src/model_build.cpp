@@ -301,15 +301,15 @@ void conflicting_constraint(const Scenario& sc, const Model& m, std::size_t k, s
   if (j < 0) return;
   const BoundarySpec& a = sc.boundaries[static_cast<std::size_t>(j)];
   const BoundarySpec& b = sc.boundaries[k];
-  const bool same = a.type == b.type && a.curve == b.curve && (a.type == "fixed" || (a.type == "velocity" ? a.velocity[c] == b.velocity[c]
-                                                                                                           : a.displacement[c] == b.displacement[c]));
+  const bool same = a.type == b.type && a.curve == b.curve &&
+                    (a.type == "fixed" || (a.type == "velocity" ? a.velocity[c] == b.velocity[c] : a.displacement[c] == b.displacement[c]));
   if (same) return;
   const std::size_t body = m.body_of_node(i);
   const std::string axis(1, static_cast<char>('x' + c));
   throw InputError(sc.file.string(), "boundary[" + std::to_string(k) + "]",
                    "nodes not constrained otherwise by an earlier [[boundary]] (one of the two would be ignored)",
-                   "node " + std::to_string(i - m.bodies[body].node_begin + 1) + " of body '" + m.bodies[body].name + "' is " + a.type +
-                       " in " + axis + " by boundary[" + std::to_string(j) + "] and " + b.type + " by this one");
+                   "node " + std::to_string(i - m.bodies[body].node_begin + 1) + " of body '" + m.bodies[body].name + "' is " + a.type + " in " +
+                       axis + " by boundary[" + std::to_string(j) + "] and " + b.type + " by this one");
 }
 
 void apply_boundaries(const Scenario& sc, Model& m) {

@@ -47,7 +47,8 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // The rows history.csv gets every this many steps.
 std::size_t history_interval(const Scenario& sc, double est_steps) {
-  return sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every) : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000));
+  return sc.run.history_every > 0 ? static_cast<std::size_t>(sc.run.history_every)
+                                  : std::max<std::size_t>(1, static_cast<std::size_t>(est_steps / 2000));
 }
 
 // Refused before any step: more steps than run.max_steps, or results that will not fit on the
@@ -73,8 +74,9 @@ double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolve
   const double checkpoint_bytes = sc.run.checkpoints() ? 2 * 8.0 * (60.0 * nodes + 2.0 * tets) : 0.0;
   const double bytes = state_bytes * (states + 1) + history_bytes + checkpoint_bytes + 64e3;
   std::ostringstream what;
-  what << static_cast<long long>(states) << " result states, " << static_cast<long long>(est_steps / static_cast<double>(history_interval(sc, est_steps)))
-       << " history rows" << (sc.run.checkpoints() ? " and two checkpoints" : "");
+  what << static_cast<long long>(states) << " result states, "
+       << static_cast<long long>(est_steps / static_cast<double>(history_interval(sc, est_steps))) << " history rows"
+       << (sc.run.checkpoints() ? " and two checkpoints" : "");
   out.require_space(static_cast<std::uintmax_t>(bytes), what.str());
   return est_steps;
 }
@@ -203,8 +205,8 @@ class RunLoop {
     out_.keep_for_resume();
     std::sort(kept.begin(), kept.end());
     return e.with_note("; the run's newest checkpoint (" + kept.back().filename().string() + ") is kept in " + out_.path().string() +
-                       (e.no_space() ? ": free some space, then" : ": mend the cause, then") + " tactus-solve --restart " + out_.final_path().string() +
-                       " continues the run from it");
+                       (e.no_space() ? ": free some space, then" : ": mend the cause, then") + " tactus-solve --restart " +
+                       out_.final_path().string() + " continues the run from it");
   }
 
   // The run's last writes (history, listing, run.json), with the same care for its checkpoints.
@@ -247,7 +249,8 @@ class RunLoop {
     if (r.checkpoint_interval > 0 && solver_.time() >= next_checkpoint_time_ && !solver_.finished()) {
       // The next multiple of the interval after t (one jump: a step may pass several).
       next_checkpoint_time_ += r.checkpoint_interval;
-      if (next_checkpoint_time_ <= solver_.time()) next_checkpoint_time_ = r.checkpoint_interval * (std::floor(solver_.time() / r.checkpoint_interval) + 1);
+      if (next_checkpoint_time_ <= solver_.time())
+        next_checkpoint_time_ = r.checkpoint_interval * (std::floor(solver_.time() / r.checkpoint_interval) + 1);
       if (next_checkpoint_time_ <= solver_.time()) next_checkpoint_time_ = std::nextafter(solver_.time(), kInfinity);
       return true;
     }

@@ -1,7 +1,7 @@
 // scenario.toml reader. All validation is driven by the declarations below, which also produce
 // the key reference (`tactus-solve keys`), so the docs cannot drift from what is accepted.
-#include "tactus/core/file_io.hpp"
 #include "tactus/solver/scenario.hpp"
+#include "tactus/core/file_io.hpp"
 
 #include <toml++/toml.h>
 #include <cctype>
@@ -230,10 +230,10 @@ const SectionSpec& contact_solver_section() {
                   0, true),
            "1.0"),
        opt(whole(number("sweep_blocks", "",
-                  "the Uzawa sweep is cut into at most this many slabs along the contact (at most one per 256 rows), the even ones swept "
-                  "in parallel, then the odd ones, then the rows they share in order; the same bits on any thread count; 1: one "
-                  "Gauss-Seidel sweep in row order",
-                  1, false, 4096, false)),
+                        "the Uzawa sweep is cut into at most this many slabs along the contact (at most one per 256 rows), the even ones swept "
+                        "in parallel, then the odd ones, then the rows they share in order; the same bits on any thread count; 1: one "
+                        "Gauss-Seidel sweep in row order",
+                        1, false, 4096, false)),
            "16")}};
   return s;
 }
@@ -317,7 +317,7 @@ class Reader {
     if (n && n->is_integer()) v = static_cast<double>(*n->value<std::int64_t>());
     if (n && n->is_floating_point()) v = *n->value<double>();
     if (!v || !std::isfinite(*v) || *v != std::floor(*v) || std::abs(*v) > 9.0e18)
-      fail(join(path, s.key), "a whole number" + unit_suffix(s), n ? describe(*n) : "missing");
+      fail(join(path, s.key), "an integer (a whole number)" + unit_suffix(s), n ? describe(*n) : "missing");
     check_range(*v, s, join(path, s.key));
     return static_cast<std::int64_t>(*v);
   }
@@ -498,8 +498,8 @@ void read_run(const Reader& r, const toml::table& root, Scenario& sc) {
     // Checkpoints count against the same runaway guard as output states (1e-300 s would never end).
     if (run.checkpoint_interval > 0 && run.end_time / run.checkpoint_interval > run.max_outputs) {
       std::ostringstream e, f;
-      e << "an interval >= run.end_time / run.max_outputs = " << run.end_time / run.max_outputs << " s (at most run.max_outputs = "
-        << static_cast<long long>(run.max_outputs) << " checkpoints)";
+      e << "an interval >= run.end_time / run.max_outputs = " << run.end_time / run.max_outputs
+        << " s (at most run.max_outputs = " << static_cast<long long>(run.max_outputs) << " checkpoints)";
       f << run.checkpoint_interval << " s (" << run.end_time / run.checkpoint_interval << " checkpoints)";
       r.fail("run.checkpoint_interval", e.str(), f.str());
     }

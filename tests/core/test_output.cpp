@@ -127,7 +127,7 @@ TEST(OutputFolder, KeepsWhatAUserAddedAndRefusesAnEditedFile) {
   EXPECT_TRUE(fs::is_directory(dir / "results" / "my_empty"));
   EXPECT_TRUE(fs::is_directory(dir / "results" / "results" / "mine"));
   EXPECT_TRUE(fs::is_symlink(dir / "results" / "link"));
-  EXPECT_FALSE(fs::exists(dir / "results" / "results" / "state_0000.vtu"));  // listed: replaced
+  EXPECT_FALSE(fs::exists(dir / "results" / "results" / "state_0000.vtu"));                            // listed: replaced
   for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename(), "results");  // no trash left
 
   make_output(dir / "results2", "tactus-solve", {{"run.json", "1"}});
@@ -212,7 +212,7 @@ TEST(OutputFolder, StaleStagingIsJudgedByItsLockNotByAPid) {
     if (checkpoints) write(p / tactus::kResumableDir / "c.h5", "x");
     return p;
   };
-  const fs::path dead = staging("1-aaaa", "tactus-solve", false);       // records this very pid, yet its lock is free
+  const fs::path dead = staging("1-aaaa", "tactus-solve", false);      // records this very pid, yet its lock is free
   const fs::path resumable = staging("1-bbbb", "tactus-solve", true);  // a killed run with checkpoints
   const fs::path alive = staging("1-cccc", "tactus-post", false);      // its lock held by a child (another "namespace")
   int go[2];

@@ -18,8 +18,8 @@
 #include <fstream>
 #include <functional>
 #include <limits>
-#include <optional>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -28,6 +28,7 @@
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
 #include "tactus/core/mesh.hpp"
+#include "tactus/core/output.hpp"
 #include "tactus/core/state_file.hpp"
 #include "tactus/core/volume.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
@@ -37,7 +38,6 @@
 #include "tactus/segment/dicom.hpp"
 #include "tactus/segment/stack.hpp"
 #include "tactus/segment/volume_files.hpp"
-#include "tactus/core/output.hpp"
 #include "tactus/solver/checkpoint.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/run.hpp"
@@ -143,8 +143,8 @@ friction = 0.3
 
 // --------------------------------------------------------------------------------------------
 // Structure-aware mutators.
-const std::vector<std::string> kValues = {"nan",  "inf",   "-inf", "-1",   "0",       "1e300",  "-1e300",   "1e-300", "2.5",
-                                          "-0.0", "1e18",  "true", "\"x\"", "[1, 2]",  "[]",     "{a = 1}",  "[[1, 2], [3]]"};
+const std::vector<std::string> kValues = {"nan",  "inf",  "-inf", "-1",    "0",      "1e300", "-1e300",  "1e-300",       "2.5",
+                                          "-0.0", "1e18", "true", "\"x\"", "[1, 2]", "[]",    "{a = 1}", "[[1, 2], [3]]"};
 
 // A checkpoint's values: one array (or record) of the state file, one or a few values changed to
 // an out-of-range index, a sign flip, NaN, a huge or tiny number, or swapped with another entry;
@@ -180,7 +180,8 @@ std::string mutate_checkpoint_values(const std::string& original, std::uint64_t 
       auto it = std::next(a.reals.begin(), static_cast<long>(rng() % a.reals.size()));
       std::vector<double>& v = it->second;
       if (v.empty()) continue;
-      static const double values[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e300, -1e300, 1e12, -1, 0, 1e-300};
+      static const double values[] = {
+          std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), 1e300, -1e300, 1e12, -1, 0, 1e-300};
       const std::size_t i = rng() % v.size();
       if (rng() % 3 == 0)
         v[i] = -v[i] * 2;
@@ -671,8 +672,8 @@ int main(int argc, char** argv) {
     for (long k = 0; k < n; ++k) {
       const std::uint64_t case_seed = seed * 1000003ULL + static_cast<std::uint64_t>(k);
       const std::string input = !replay_reader.empty() ? read_file(replay_files[static_cast<std::size_t>(k)])
-                                : t.mutator              ? t.mutator(original, case_seed)
-                                                         : t.fixup(mutate(original, t.text, case_seed));
+                                : t.mutator            ? t.mutator(original, case_seed)
+                                                       : t.fixup(mutate(original, t.text, case_seed));
       write_file(t.file, input);
       std::string detail;
       const Outcome o = read_in_child(t, lim, detail);

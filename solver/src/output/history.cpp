@@ -6,9 +6,9 @@
 #include <cmath>
 
 #include "results.hpp"
-#include "tactus/core/file_io.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 
 namespace tactus::solver {
 

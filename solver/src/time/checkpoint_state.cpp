@@ -65,7 +65,8 @@ void validate_search(const StateArchive& a, const std::string& p, const Detectio
       if (g.box[t][c] < 0 || g.box[t][c] > g.box[t][3 + c] || g.box[t][3 + c] >= g.n[c])
         a.invalid(p + "grid.box", "cell ranges within the grid", "triangle " + std::to_string(t));
   a.require_finite(p + "grid.extent", g.extent), a.require_finite(p + "grid.normal", g.normal);
-  if (g.extent.size() > 6 * static_cast<std::size_t>(nt) || g.normal.size() > 4 * static_cast<std::size_t>(nt) || g.box.size() > static_cast<std::size_t>(nt))
+  if (g.extent.size() > 6 * static_cast<std::size_t>(nt) || g.normal.size() > 4 * static_cast<std::size_t>(nt) ||
+      g.box.size() > static_cast<std::size_t>(nt))
     a.invalid(p + "grid.box", "at most one entry per master triangle", "more");
   a.require_indices(p + "slot_triangle", s.slot_triangle, -1, nt);
   if (s.slot_triangle.size() > 2 * ns || s.slot_data.size() != 7 * s.slot_triangle.size())
@@ -81,13 +82,14 @@ void validate_search(const StateArchive& a, const std::string& p, const Detectio
   a.require_indices(p + "candidates", s.candidates, 0, nt);
   a.require_indices(p + "active_triangles", s.active_triangles, 0, nt);
   a.require_indices(p + "mortar.masters", s.mortar.masters, 0, nn);
-  if (s.mortar.weights.size() != s.mortar.masters.size()) a.invalid(p + "mortar.weights", "one weight per master", std::to_string(s.mortar.weights.size()));
+  if (s.mortar.weights.size() != s.mortar.masters.size())
+    a.invalid(p + "mortar.weights", "one weight per master", std::to_string(s.mortar.weights.size()));
   a.require_finite(p + "mortar.weights", s.mortar.weights);
   a.require_indices(p + "mortar.slave_local", s.mortar.slave_local, 0, static_cast<long long>(ns));
   for (std::size_t i = 0; i < s.mortar.rows.size(); ++i) {
     const MortarRow& r = s.mortar.rows[i];
-    const bool finite = std::isfinite(r.n[0]) && std::isfinite(r.n[1]) && std::isfinite(r.n[2]) && std::isfinite(r.gap) && std::isfinite(r.along_normal) &&
-                        std::isfinite(r.area);
+    const bool finite = std::isfinite(r.n[0]) && std::isfinite(r.n[1]) && std::isfinite(r.n[2]) && std::isfinite(r.gap) &&
+                        std::isfinite(r.along_normal) && std::isfinite(r.area);
     if (r.slave_index < 0 || static_cast<std::size_t>(r.slave_index) >= ns || r.slave_node < 0 || r.slave_node >= nn || r.begin > r.end ||
         r.end > s.mortar.masters.size() || !finite)
       a.invalid(p + "mortar.rows", "rows of this pair's slaves and masters", "row " + std::to_string(i));
@@ -204,11 +206,13 @@ void ExplicitSolver::validate_restored(const StateArchive& a) {
   // Times against the run: a step that never reaches the end, or an end already passed, hangs or
   // skips the run.
   const double end = run_.end_time;
-  if (!(time_ >= 0 && time_ <= end)) a.invalid("integrator.time", "a time from 0 to the run's end time " + std::to_string(end) + " s", std::to_string(time_));
+  if (!(time_ >= 0 && time_ <= end))
+    a.invalid("integrator.time", "a time from 0 to the run's end time " + std::to_string(end) + " s", std::to_string(time_));
   if (!(dt_next_ > 0 && dt_next_ <= end) || !(dt_prev_ >= 0 && dt_prev_ <= end))
     a.invalid("integrator.dt_next", "steps > 0 and within the run's end time", std::to_string(dt_next_) + " and " + std::to_string(dt_prev_));
   if (next_target_ >= schedule_.size())
-    a.invalid("integrator.next_target", "an output time of the run's schedule (fewer than " + std::to_string(schedule_.size()) + ")", std::to_string(next_target_));
+    a.invalid("integrator.next_target", "an output time of the run's schedule (fewer than " + std::to_string(schedule_.size()) + ")",
+              std::to_string(next_target_));
   for (const RigidBody& r : rigid_) {
     const Vec3d* vectors[] = {&r.centre, &r.momentum, &r.angular_momentum, &r.force, &r.moment};
     for (const Vec3d* v : vectors)

@@ -94,7 +94,8 @@ class StateArchive {
     if (start.size() != count + 1) size_error(name, count + 1, start.size());
     for (std::size_t i = 0; i < start.size(); ++i)
       if (static_cast<long long>(start[i]) < (i ? static_cast<long long>(start[i - 1]) : 0) || static_cast<std::size_t>(start[i]) > items)
-        invalid(name, "non-decreasing list starts from 0 to " + std::to_string(items), std::to_string(static_cast<long long>(start[i])) + " at position " + std::to_string(i));
+        invalid(name, "non-decreasing list starts from 0 to " + std::to_string(items),
+                std::to_string(static_cast<long long>(start[i])) + " at position " + std::to_string(i));
   }
   void require_finite(const std::string& name, const std::vector<double>& v) const;
   void require_finite(const std::string& name, double x) const { require_finite(name, std::vector<double>{x}); }
