@@ -140,6 +140,8 @@ void ContactSolver::checkpoint(StateArchive& a) {
 }
 
 void ExplicitSolver::checkpoint(StateArchive& a) {
+  // What the model and scenario fix (the constructor computed them): a checkpoint must agree.
+  const double user_dt = user_dt_, initial_critical = initial_critical_;
   // Per dof and per node (sizes fixed by the model).
   for (auto [name, v] : {std::pair<const char*, std::vector<double>*>{"u", &u_},
                          {"v_half", &v_half_},
@@ -186,7 +188,13 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
   a.io("integrator.velocity_advanced", velocity_advanced_);
   checkpoint_rigid_bodies(a, rigid_);
   contact_.checkpoint(a);
-  if (a.loading()) validate_restored(a);
+  if (a.loading()) {
+    if (user_dt_ != user_dt || initial_critical_ != initial_critical)
+      a.invalid("integrator.user_dt",
+                "the step this scenario and model give (" + std::to_string(user_dt) + ", critical " + std::to_string(initial_critical) + " s)",
+                std::to_string(user_dt_) + ", critical " + std::to_string(initial_critical_) + " s");
+    validate_restored(a);
+  }
 }
 
 void ExplicitSolver::validate_restored(const StateArchive& a) {
@@ -210,6 +218,13 @@ void ExplicitSolver::validate_restored(const StateArchive& a) {
     a.invalid("integrator.time", "a time from 0 to the run's end time " + std::to_string(end) + " s", std::to_string(time_));
   if (!(dt_next_ > 0 && dt_next_ <= end) || !(dt_prev_ >= 0 && dt_prev_ <= end))
     a.invalid("integrator.dt_next", "steps > 0 and within the run's end time", std::to_string(dt_next_) + " and " + std::to_string(dt_prev_));
+  // The nominal step only shrinks with the stable step; far below the initial one the run would
+  // take forever (a checkpoint with a tiny step hung the run).
+  const double floor = 1e-4 * (user_dt_ > 0 ? std::min(user_dt_, initial_critical_) : initial_critical_ * run_.time_step_safety);
+  if (!(nominal_next_ >= floor && std::isfinite(nominal_next_)) || dt_next_ > nominal_next_ * (1 + 1e-9) ||
+      !(min_step_ratio_ > 0 && min_step_ratio_ <= 1 + 1e-9))
+    a.invalid("integrator.nominal_next", "a step of at least " + std::to_string(floor) + " s, the step taken no larger",
+              std::to_string(nominal_next_) + " (step " + std::to_string(dt_next_) + ", ratio " + std::to_string(min_step_ratio_) + ")");
   if (next_target_ >= schedule_.size())
     a.invalid("integrator.next_target", "an output time of the run's schedule (fewer than " + std::to_string(schedule_.size()) + ")",
               std::to_string(next_target_));
