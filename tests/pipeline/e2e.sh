@@ -115,7 +115,7 @@ echo "my notes" > "$T/work/report/notes.txt"
 mkdir -p "$T/work/report/mine/empty" && echo "figure" > "$T/work/report/mine/fig.txt"
 ln -s "$T/phantom" "$T/work/report/mylink"
 before=$(sums)
-run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 --post-args "--no-pictures" > "$T/seventh.log"
+run "$SRC/pipeline/scenarios/hand_block.toml" 1e-4 --post-args=--no-pictures > "$T/seventh.log"
 grep -q "== post: done" "$T/seventh.log" || fail "the post stage did not re-run with new arguments"
 [ "$(sums)" = "$before" ] && [ -d "$T/work/report/mine/empty" ] || fail "a user's file in report/ changed"
 echo "my edit" >> "$T/work/report/summary.md"
