@@ -195,13 +195,24 @@ std::string mutate_checkpoint_values(const std::string& original, std::uint64_t 
   return out;
 }
 
+// A text as its lines, and back (the structure mutators edit whole lines).
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream ss(text);
+  for (std::string l; std::getline(ss, l);) lines.push_back(l);
+  return lines;
+}
+std::string join_lines(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& l : lines) out += l + '\n';
+  return out;
+}
+
 // A TOML scenario: on a random "key = value" line, the value replaced by one of the wrong type
 // or an extreme number, two keys' values swapped, two keys' names swapped, or a key dropped.
 std::string mutate_toml_structure(const std::string& original, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
-  std::vector<std::string> lines;
-  std::stringstream ss(original);
-  for (std::string l; std::getline(ss, l);) lines.push_back(l);
+  std::vector<std::string> lines = split_lines(original);
   std::vector<std::size_t> keyed;
   for (std::size_t i = 0; i < lines.size(); ++i)
     if (lines[i].find(" = ") != std::string::npos && lines[i][0] != '#') keyed.push_back(i);
@@ -227,18 +238,14 @@ std::string mutate_toml_structure(const std::string& original, std::uint64_t see
       }
     }
   }
-  std::string out;
-  for (const std::string& l : lines) out += l + '\n';
-  return out;
+  return join_lines(lines);
 }
 
 // A .msh (ASCII): in $Nodes a coordinate made NaN or huge, in $Elements a node tag made 0,
 // negative, one past the last node or 2^31; or a section header swapped with another.
 std::string mutate_msh_structure(const std::string& original, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
-  std::vector<std::string> lines;
-  std::stringstream ss(original);
-  for (std::string l; std::getline(ss, l);) lines.push_back(l);
+  std::vector<std::string> lines = split_lines(original);
   std::size_t nodes_at = 0, elements_at = 0, end_nodes = 0, end_elements = 0;
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (lines[i] == "$Nodes") nodes_at = i;
@@ -276,9 +283,7 @@ std::string mutate_msh_structure(const std::string& original, std::uint64_t seed
       std::swap(lines[rng() % lines.size()], lines[rng() % lines.size()]);
     }
   }
-  std::string out;
-  for (const std::string& l : lines) out += l + '\n';
-  return out;
+  return join_lines(lines);
 }
 
 std::vector<Target> make_targets(const fs::path& work) {
