@@ -4,18 +4,7 @@
 # Usage: safety.sh BUILD_DIR
 set -u
 B=$(cd "$1" && pwd)
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fail=0
-bad() { echo "FAIL: $*"; fail=1; }
-expect() {  # expect RC FRAGMENT -- command...   (stderr must contain FRAGMENT)
-  local want=$1 frag=$2
-  shift 3
-  local err rc
-  err=$("$@" 2>&1 >/dev/null)
-  rc=$?
-  if [ "$rc" != "$want" ] || ! grep -qF -- "$frag" <<<"$err"; then bad "$* -> rc $rc (want $want), stderr: $err"; fi
-}
+. "$(dirname "$0")/lib.sh"
 
 "$B/data_samples/tactus-sample-mesh" --size 0.02 0.02 0.02 --cells 4 4 4 -o "$T/case/cube.msh" -q
 cat > "$T/case/s.toml" <<'TOML'
