@@ -167,8 +167,9 @@ void cube(const std::filesystem::path& work) {
   body.mesh = work / "cube.msh";
   body.materials["*"] = "rubber";
   sc.bodies.push_back(body);
-  sc.boundaries.push_back(BoundarySpec{"cube", "zmin", {}, "fixed", {0, 0, 0}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
-  sc.boundaries.push_back(BoundarySpec{"cube", "zmax", {}, "velocity", {0, 0, -0.01 / 0.2}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
+  sc.boundaries.push_back(BoundarySpec{"cube", "zmin", {}, solver::BoundaryType::fixed, {0, 0, 0}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
+  sc.boundaries.push_back(
+      BoundarySpec{"cube", "zmax", {}, solver::BoundaryType::velocity, {0, 0, -0.01 / 0.2}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
   const auto t0 = Clock::now();
   const RunSummary s = run_simulation(sc, work / "results");
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -54,6 +54,11 @@ int main(int argc, char** argv) {
   auto* results_ref = app.add_subcommand("results-reference", "print the reference of the result files (Markdown, or --json)");
   bool results_json = false;
   results_ref->add_flag("--json", results_json, "as JSON (what the Python tools read)");
+  auto* plan =
+      app.add_subcommand("mesh-plan", "print the scenario's [[pipeline.meshes]] and the files its bodies read, as JSON (what tactus-pipeline runs)");
+  std::string plan_scenario, plan_meshes;
+  plan->add_option("scenario", plan_scenario, "scenario.toml")->required();
+  plan->add_option("--meshes", plan_meshes, "the folder the mesh and fibre paths are relative to (default: the scenario's)");
   auto* mtest = app.add_subcommand("material-point", "Cauchy stress vs stretch of one material of a scenario, as CSV");
   mtest->alias("material-test");
   std::string mt_scenario, mt_material, mt_mode = "uniaxial", mt_output;
@@ -73,6 +78,10 @@ int main(int argc, char** argv) {
     }
     if (results_ref->parsed()) {
       std::cout << (results_json ? solver::results_reference_json().dump(2) + "\n" : solver::results_reference_markdown());
+      return;
+    }
+    if (plan->parsed()) {
+      std::cout << solver::mesh_plan_json(solver::read_scenario(plan_scenario, plan_meshes));
       return;
     }
     if (mtest->parsed()) {

@@ -301,15 +301,17 @@ void conflicting_constraint(const Scenario& sc, const Model& m, std::size_t k, s
   if (j < 0) return;
   const BoundarySpec& a = sc.boundaries[static_cast<std::size_t>(j)];
   const BoundarySpec& b = sc.boundaries[k];
-  const bool same = a.type == b.type && a.curve == b.curve &&
-                    (a.type == "fixed" || (a.type == "velocity" ? a.velocity[c] == b.velocity[c] : a.displacement[c] == b.displacement[c]));
+  const bool same =
+      a.type == b.type && a.curve == b.curve &&
+      (a.type == BoundaryType::fixed || (a.type == BoundaryType::velocity ? a.velocity[c] == b.velocity[c] : a.displacement[c] == b.displacement[c]));
   if (same) return;
   const std::size_t body = m.body_of_node(i);
   const std::string axis(1, static_cast<char>('x' + c));
   throw InputError(sc.file.string(), "boundary[" + std::to_string(k) + "]",
                    "nodes not constrained otherwise by an earlier [[boundary]] (one of the two would be ignored)",
-                   "node " + std::to_string(i - m.bodies[body].node_begin + 1) + " of body '" + m.bodies[body].name + "' is " + a.type + " in " +
-                       axis + " by boundary[" + std::to_string(j) + "] and " + b.type + " by this one");
+                   "node " + std::to_string(i - m.bodies[body].node_begin + 1) + " of body '" + m.bodies[body].name + "' is " +
+                       boundary_type_name(a.type) + " in " + axis + " by boundary[" + std::to_string(j) + "] and " + boundary_type_name(b.type) +
+                       " by this one");
 }
 
 void apply_boundaries(const Scenario& sc, Model& m) {
@@ -329,15 +331,17 @@ void apply_boundaries(const Scenario& sc, Model& m) {
       for (int c = 0; c < 3; ++c)
         if (bc.components[c]) {
           conflicting_constraint(sc, m, k, i, c);
-          m.constrained[3 * i + c] = bc.type == "displacement" ? 2 : 1;
-          m.constraint_velocity[3 * i + c] = bc.type == "velocity" ? bc.velocity[c] : bc.type == "displacement" ? bc.displacement[c] : 0.0;
-          m.constraint_curve[3 * i + c] = bc.type == "fixed" ? -1 : curve;
+          m.constrained[3 * i + c] = bc.type == BoundaryType::displacement ? 2 : 1;
+          m.constraint_velocity[3 * i + c] = bc.type == BoundaryType::velocity       ? bc.velocity[c]
+                                             : bc.type == BoundaryType::displacement ? bc.displacement[c]
+                                                                                     : 0.0;
+          m.constraint_curve[3 * i + c] = bc.type == BoundaryType::fixed ? -1 : curve;
           m.constraint_boundary[3 * i + c] = static_cast<std::int32_t>(k);
         }
     }
     const std::string key = "boundary[" + std::to_string(k) + "]";
     if (count == 0) throw InputError(sc.file.string(), key, "a selection containing nodes of body '" + bc.body + "'", "no node");
-    log::verbose() << key << ": " << count << " nodes " << bc.type;
+    log::verbose() << key << ": " << count << " nodes " << boundary_type_name(bc.type);
   }
 }
 

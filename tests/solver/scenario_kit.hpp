@@ -30,8 +30,8 @@ inline void add_whole_boundary_group(TetMesh& box) {
   for (std::size_t t = 0, n = box.triangles.size(); t < n; ++t) box.triangles.push_back(box.triangles[t]), box.triangle_group.push_back(20);
 }
 
-// A [[boundary]] entry: `type` ("fixed", "velocity", "displacement") on `components` of a body's group.
-inline solver::BoundarySpec boundary(const std::string& body, const std::string& group, const std::string& type, std::array<bool, 3> components,
+// A [[boundary]] entry: `type` (fixed, velocity, displacement) on `components` of a body's group.
+inline solver::BoundarySpec boundary(const std::string& body, const std::string& group, solver::BoundaryType type, std::array<bool, 3> components,
                                      const std::string& name) {
   solver::BoundarySpec b;
   b.body = body, b.group = group, b.type = type, b.components = components, b.name = name;

@@ -667,11 +667,11 @@ void sphere_over_a_corner(bool mortar, bool edge_pass = true) {
   sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
   sc.bodies.push_back(testkit::body_from_mesh(dir, "sphere", graded_sphere(R, {0.014, 0.014, Hb + 5e-5}, h, h, 1e-3), "m"));
   sc.bodies.back().initial_velocity = {0.4, 0.4, 0};
-  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   ContactSpec c;
   c.slave_body = "sphere", c.slave_surface = "surface", c.master_body = "block", c.master_surface = "surface";
   if (mortar)
-    c.method = "mortar", c.edge_pass = edge_pass;
+    c.method = ContactMethod::mortar, c.edge_pass = edge_pass;
   else
     c.two_pass = true;
   sc.contacts.push_back(c);
@@ -780,7 +780,7 @@ TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
   sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
   sc.bodies.push_back(testkit::body_from_mesh(dir, "plate", plate, "m"));
   sc.bodies.back().initial_velocity = {-c * v0, 0, -c * v0};
-  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   ContactSpec cs;
   cs.slave_body = "plate", cs.slave_surface = "zmin", cs.master_body = "block", cs.master_surface = "surface";
   sc.contacts.push_back(cs);
@@ -850,7 +850,7 @@ RecoveryRun cube_back_over_an_edge(double recovery_speed) {
   add_whole_boundary_group(cube);
   sc.bodies.push_back(testkit::body_from_mesh(dir, "cube", cube, "m"));
   sc.bodies.back().initial_velocity = {-v0, 0, 0};
-  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   ContactSpec c;
   c.slave_body = "cube", c.slave_surface = "surface", c.master_body = "block", c.master_surface = "zmax";
   sc.contacts.push_back(c);
@@ -931,8 +931,8 @@ void sliding_over_a_coarser_slab(const std::string& method) {
   sc.materials["m"] = testkit::linear_elastic_instance("m", E, 0.3, 1000);
   sc.bodies.push_back(testkit::body_from_mesh(dir, "slab", slab, "m"));
   sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "m"));
-  sc.boundaries.push_back(testkit::boundary("slab", "zmin", "fixed", {true, true, true}, "base"));
-  BoundarySpec drag = testkit::boundary("block", "zmax", "velocity", {true, true, false}, "drag");
+  sc.boundaries.push_back(testkit::boundary("slab", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
+  BoundarySpec drag = testkit::boundary("block", "zmax", solver::BoundaryType::velocity, {true, true, false}, "drag");
   drag.velocity = {v, 0, 0};
   drag.curve = "start";
   sc.boundaries.push_back(drag);
@@ -944,7 +944,8 @@ void sliding_over_a_coarser_slab(const std::string& method) {
   sc.curves["start"] = start;
   sc.loads.push_back({"block", "zmax", p, "press"});
   ContactSpec c;
-  c.slave_body = "block", c.slave_surface = "zmin", c.master_body = "slab", c.master_surface = "zmax", c.friction = mu, c.method = method;
+  c.slave_body = "block", c.slave_surface = "zmin", c.master_body = "slab", c.master_surface = "zmax", c.friction = mu,
+  c.method = method == "mortar" ? ContactMethod::mortar : ContactMethod::node_to_surface;
   sc.contacts.push_back(c);
   sc.contact_solver.tolerance = 1e-10;
   sc.contact_solver.max_iterations = 1000;
@@ -1015,7 +1016,7 @@ TEST(Contact, RigidSphereDroppedOnASoftBlock) {
   sc.materials["steel"] = MaterialInstance{"steel", "rigid", {{{"density", rho}}, {}}};
   sc.bodies.push_back(testkit::body_from_mesh(dir, "block", block, "soft"));
   sc.bodies.push_back(testkit::body_from_mesh(dir, "sphere", graded_sphere(R, {0, 0, 1e-7}, 2.5e-4, 2.5e-3, 1.5e-3), "steel"));
-  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   ContactSpec c;
   c.slave_body = "block", c.slave_surface = "zmax", c.master_body = "sphere", c.master_surface = "surface";
   sc.contacts.push_back(c);

@@ -100,14 +100,14 @@ HertzOutcome hertz_press(double h, bool on_block) {
   if (on_block) sc.bodies.push_back(testkit::body_from_mesh(dir, "block", quarter_block(h), "m"));
   sc.curves["ramp"] = CurveSpec{"ramp", {}, {}, true, 0.0, 60 * transit};
   for (const auto& body : sc.bodies) {  // rollers on the two symmetry planes
-    sc.boundaries.push_back(testkit::boundary(body.name, "xmin", "fixed", {true, false, false}, body.name + "_x"));
-    sc.boundaries.push_back(testkit::boundary(body.name, "ymin", "fixed", {false, true, false}, body.name + "_y"));
+    sc.boundaries.push_back(testkit::boundary(body.name, "xmin", solver::BoundaryType::fixed, {true, false, false}, body.name + "_x"));
+    sc.boundaries.push_back(testkit::boundary(body.name, "ymin", solver::BoundaryType::fixed, {false, true, false}, body.name + "_y"));
   }
-  if (on_block) sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {false, false, true}, "base"));
+  if (on_block) sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {false, false, true}, "base"));
   // Hertz's approach for the contact radius a is a^2 / R (with the sphere's own compression away
   // from the contact, on the block too, about that).
-  BoundarySpec top = testkit::boundary("sphere", "zmax", "fixed", {false, false, true}, "top");
-  top.type = "displacement", top.displacement = {0, 0, -kContactRadius * kContactRadius / kRadius - gap}, top.curve = "ramp";
+  BoundarySpec top = testkit::boundary("sphere", "zmax", solver::BoundaryType::fixed, {false, false, true}, "top");
+  top.type = BoundaryType::displacement, top.displacement = {0, 0, -kContactRadius * kContactRadius / kRadius - gap}, top.curve = "ramp";
   sc.boundaries.push_back(top);
   ContactSpec contact;
   contact.slave_body = "sphere", contact.slave_surface = "surface";

@@ -79,8 +79,8 @@ TEST(Loading, DisplacementBoundaryFollowsItsCurveExactly) {
   Scenario sc = one_body(dir, samples::make_box_mesh(3, 3, 3, 0.1, 0.1, 0.1), testkit::linear_elastic_instance("rubber", 1e6, 0.3, 1000));
   sc.run.end_time = 0.02;
   sc.curves["press"] = table("press", {0.0, 0.005, 0.012}, {0.0, 1.0, 0.4});
-  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {true, true, true}, "base"));
-  BoundarySpec top = testkit::boundary("body", "zmax", "displacement", {true, true, true}, "top");
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
+  BoundarySpec top = testkit::boundary("body", "zmax", solver::BoundaryType::displacement, {true, true, true}, "top");
   top.displacement = {2e-4, 0, -1e-3};
   top.curve = "press";
   sc.boundaries.push_back(top);
@@ -111,10 +111,10 @@ TEST(Loading, QuasiStaticCompressionReactionIsEEpsA) {
   sc.run.end_time = 1.0;
   sc.damping.alpha = 600;
   sc.curves["ramp"] = smooth_step("ramp", 0.0, 0.03);
-  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {false, false, true}, "base"));
-  sc.boundaries.push_back(testkit::boundary("body", "xmin", "fixed", {true, false, false}, "symmetry_x"));
-  sc.boundaries.push_back(testkit::boundary("body", "ymin", "fixed", {false, true, false}, "symmetry_y"));
-  BoundarySpec top = testkit::boundary("body", "zmax", "displacement", {false, false, true}, "top");
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", solver::BoundaryType::fixed, {false, false, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("body", "xmin", solver::BoundaryType::fixed, {true, false, false}, "symmetry_x"));
+  sc.boundaries.push_back(testkit::boundary("body", "ymin", solver::BoundaryType::fixed, {false, true, false}, "symmetry_y"));
+  BoundarySpec top = testkit::boundary("body", "zmax", solver::BoundaryType::displacement, {false, false, true}, "top");
   top.displacement = {0, 0, -eps * L};
   top.curve = "ramp";
   sc.boundaries.push_back(top);
@@ -139,7 +139,7 @@ TEST(Loading, ReactionsBalanceTheBodyLoad) {
   sc.run.gravity_curve = "ramp";
   sc.damping.alpha = 300;
   sc.curves["ramp"] = smooth_step("ramp", 0.0, 0.05);
-  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {true, true, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   const Model m = build_model(sc);
   double mass = 0;
   for (double mi : m.mass) mass += mi;
@@ -169,9 +169,9 @@ Decay bar_first_mode_decay(double alpha, double beta) {
   Scenario sc = one_body(dir, samples::make_box_mesh(24, 1, 1, L, 0.05, 0.05), testkit::linear_elastic_instance("bar", 1e6, 0.0, 1000));
   sc.run.end_time = 0.8;  // about six periods
   sc.damping = {alpha, beta};
-  sc.boundaries.push_back(testkit::boundary("body", "xmin", "fixed", {true, true, true}, "root"));
+  sc.boundaries.push_back(testkit::boundary("body", "xmin", solver::BoundaryType::fixed, {true, true, true}, "root"));
   BoundarySpec lateral;
-  lateral.body = "body", lateral.box = std::array<Vec3, 2>{Vec3{-1, -1, -1}, Vec3{2, 1, 1}}, lateral.type = "fixed";
+  lateral.body = "body", lateral.box = std::array<Vec3, 2>{Vec3{-1, -1, -1}, Vec3{2, 1, 1}}, lateral.type = BoundaryType::fixed;
   lateral.components = {false, true, true}, lateral.name = "lateral";
   sc.boundaries.push_back(lateral);
   Model m = build_model(sc);
@@ -233,7 +233,7 @@ TEST(Loading, RotatedBodyUnderRotatedLoadsGivesTheRotatedSolution) {
   Scenario a = one_body(dir, samples::make_box_mesh(3, 3, 3, 0.1, 0.1, 0.1), tissue);
   a.run.end_time = 0.01;
   a.run.gravity = {10, -20, -150};
-  a.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {true, true, true}, "base"));
+  a.boundaries.push_back(testkit::boundary("body", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   Scenario b = a;
   BodySpec& body = b.bodies[0];
   const double th = 40 * kPi / 180, n = std::sqrt(14.0), x = 1 / n, y = 2 / n, z = 3 / n, c = std::cos(th), s = std::sin(th), C = 1 - c;
@@ -283,10 +283,10 @@ TEST(Loading, PressurisedThickCylinderMatchesLame) {
   sc.run.end_time = 2.0;
   sc.damping.alpha = 400;
   sc.curves["ramp"] = smooth_step("ramp", 0.0, 0.05);
-  sc.boundaries.push_back(testkit::boundary("body", "ymin", "fixed", {false, true, false}, "cut_y"));  // phi = 0: the y = 0 plane
-  sc.boundaries.push_back(testkit::boundary("body", "ymax", "fixed", {true, false, false}, "cut_x"));  // phi = 90 deg: x = 0
-  sc.boundaries.push_back(testkit::boundary("body", "zmin", "fixed", {false, false, true}, "plane_strain_0"));
-  sc.boundaries.push_back(testkit::boundary("body", "zmax", "fixed", {false, false, true}, "plane_strain_1"));
+  sc.boundaries.push_back(testkit::boundary("body", "ymin", solver::BoundaryType::fixed, {false, true, false}, "cut_y"));  // phi = 0: the y = 0 plane
+  sc.boundaries.push_back(testkit::boundary("body", "ymax", solver::BoundaryType::fixed, {true, false, false}, "cut_x"));  // phi = 90 deg: x = 0
+  sc.boundaries.push_back(testkit::boundary("body", "zmin", solver::BoundaryType::fixed, {false, false, true}, "plane_strain_0"));
+  sc.boundaries.push_back(testkit::boundary("body", "zmax", solver::BoundaryType::fixed, {false, false, true}, "plane_strain_1"));
   sc.loads.push_back(LoadSpec{"body", "xmin", p, "ramp"});  // the inner wall r = a
   const Model m = build_model(sc);
   ExplicitSolver s(m, sc.run, sc.damping);

@@ -48,7 +48,7 @@ RunSpec scaled_run(double floor, double limit) {
   RunSpec r;
   r.end_time = 1e9;
   r.threads = 1;
-  r.nodal_step_bound = false;
+  r.step_estimate = StepEstimate::element;
   r.minimum_time_step = floor;
   r.added_mass_limit = limit;
   return r;

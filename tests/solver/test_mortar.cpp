@@ -75,16 +75,17 @@ PatchResult patch_test(const TetMesh& lower, const TetMesh& upper, const std::st
   sc.bodies.push_back(testkit::body_from_mesh(dir, "lower", lower, "m"));
   sc.bodies.push_back(testkit::body_from_mesh(dir, "upper", upper, "m"));
   sc.curves["ramp"] = CurveSpec{"ramp", {}, {}, true, 0.0, 0.01};
-  sc.boundaries.push_back(testkit::boundary("lower", "zmin", "fixed", {false, false, true}, "base"));
+  sc.boundaries.push_back(testkit::boundary("lower", "zmin", solver::BoundaryType::fixed, {false, false, true}, "base"));
   for (const char* body : {"lower", "upper"}) {  // rollers on the two symmetry planes
-    sc.boundaries.push_back(testkit::boundary(body, "xmin", "fixed", {true, false, false}, std::string(body) + "_x"));
-    sc.boundaries.push_back(testkit::boundary(body, "ymin", "fixed", {false, true, false}, std::string(body) + "_y"));
+    sc.boundaries.push_back(testkit::boundary(body, "xmin", solver::BoundaryType::fixed, {true, false, false}, std::string(body) + "_x"));
+    sc.boundaries.push_back(testkit::boundary(body, "ymin", solver::BoundaryType::fixed, {false, true, false}, std::string(body) + "_y"));
   }
-  BoundarySpec top = testkit::boundary("upper", "zmax", "fixed", {false, false, true}, "top");
-  top.type = "displacement", top.displacement = {0, 0, -2e-5}, top.curve = "ramp";  // 0.1 % strain
+  BoundarySpec top = testkit::boundary("upper", "zmax", solver::BoundaryType::fixed, {false, false, true}, "top");
+  top.type = BoundaryType::displacement, top.displacement = {0, 0, -2e-5}, top.curve = "ramp";  // 0.1 % strain
   sc.boundaries.push_back(top);
   ContactSpec c;
-  c.slave_body = "upper", c.slave_surface = "zmin", c.master_body = "lower", c.master_surface = "zmax", c.method = method;
+  c.slave_body = "upper", c.slave_surface = "zmin", c.master_body = "lower", c.master_surface = "zmax",
+  c.method = method == "mortar" ? ContactMethod::mortar : ContactMethod::node_to_surface;
   sc.contacts.push_back(c);
   sc.contact_solver.tolerance = 1e-10;
   sc.contact_solver.max_iterations = 2000;
@@ -132,12 +133,13 @@ SweepRun press_and_slide(int sweep_blocks, int threads, int steps) {
   sc.materials["m"] = testkit::linear_elastic_instance("m", 1e6, 0.3, 1000);
   sc.bodies.push_back(testkit::body_from_mesh(dir, "lower", samples::make_box_mesh(20, 20, 2, L, L, H), "m"));
   sc.bodies.push_back(testkit::body_from_mesh(dir, "upper", samples::make_box_mesh(30, 30, 2, L, L, H, {0, 0, H}), "m"));
-  sc.boundaries.push_back(testkit::boundary("lower", "zmin", "fixed", {true, true, true}, "base"));
-  BoundarySpec top = testkit::boundary("upper", "zmax", "fixed", {true, true, true}, "top");
-  top.type = "velocity", top.velocity = {0.02, 0, -0.05};
+  sc.boundaries.push_back(testkit::boundary("lower", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
+  BoundarySpec top = testkit::boundary("upper", "zmax", solver::BoundaryType::fixed, {true, true, true}, "top");
+  top.type = BoundaryType::velocity, top.velocity = {0.02, 0, -0.05};
   sc.boundaries.push_back(top);
   ContactSpec c;
-  c.slave_body = "upper", c.slave_surface = "zmin", c.master_body = "lower", c.master_surface = "zmax", c.method = "mortar", c.friction = 0.3;
+  c.slave_body = "upper", c.slave_surface = "zmin", c.master_body = "lower", c.master_surface = "zmax", c.method = ContactMethod::mortar,
+  c.friction = 0.3;
   sc.contacts.push_back(c);
   sc.contact_solver.tolerance = 1e-10;
   sc.contact_solver.max_iterations = 2000;

@@ -130,8 +130,8 @@ std::vector<double> compressed_with_inclusion(const MaterialInstance& inclusion,
   CurveSpec ramp;
   ramp.name = "ramp", ramp.smooth_step = true, ramp.t0 = 0, ramp.t1 = 0.01;
   sc.curves["ramp"] = ramp;
-  sc.boundaries.push_back(testkit::boundary("block", "zmin", "fixed", {true, true, true}, "base"));
-  BoundarySpec top = testkit::boundary("block", "zmax", "displacement", {true, true, true}, "top");
+  sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
+  BoundarySpec top = testkit::boundary("block", "zmax", solver::BoundaryType::displacement, {true, true, true}, "top");
   top.displacement = {0, 0, -0.04 * L};
   top.curve = "ramp";
   sc.boundaries.push_back(top);

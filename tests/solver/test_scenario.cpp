@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
@@ -338,4 +339,103 @@ TEST(ResultsReference, DocsMatchContracts) {
   text << md.rdbuf();
   EXPECT_EQ(text.str(), results_reference_markdown());
   EXPECT_EQ(nlohmann::json::parse(js), results_reference_json());
+}
+
+// Every integer key and every enumeration key, found from the declarations themselves (so a new
+// key is covered without a new test): 2.5 for an integer and "no_such_value" for an enumeration
+// are refused naming the key (run.threads = 2.5 once ran on 2 threads). Oracle: the key's full
+// path and "an integer" / its first valid value in the message.
+TEST_F(ScenarioFile, EveryIntegerAndEnumerationKeyRefusesABadValue) {
+  // A scenario with one table of every section, and where each section's keys go.
+  const std::string base = std::string(kValid) + R"(
+[damping]
+alpha = 1.0
+[[bodies]]
+name = "tool"
+mesh = "pad.msh"
+materials = { "*" = "bone" }
+translate = [0, 0, 0.0105]
+[curves.ramp]
+times = [0, 1e-3]
+values = [0, 1]
+[[load]]
+body = "pad"
+group = "xmax"
+type = "pressure"
+pressure = 10.0
+[[contact]]
+slave_body = "tool"
+slave_surface = "zmin"
+master_body = "pad"
+master_surface = "zmax"
+[contact_solver]
+tolerance = 1e-6
+[[pipeline.meshes]]
+output = "pad.msh"
+kind = "box"
+)";
+  ASSERT_NO_THROW(read_scenario(write(base)));
+  // The line after which a key of each section is inserted (materials: the hgo law's section).
+  const std::map<std::string, std::string> anchor{{"run", "end_time = 1e-3\n"},
+                                                  {"damping", "alpha = 1.0\n"},
+                                                  {"bodies", "initial_velocity = [2.0, 0, 0]\n"},
+                                                  {"curves.<name>", "values = [0, 1]\n"},
+                                                  {"boundary", "type = \"fixed\"\n"},
+                                                  {"load", "pressure = 10.0\n"},
+                                                  {"contact", "master_surface = \"zmax\"\n"},
+                                                  {"contact_solver", "tolerance = 1e-6\n"},
+                                                  {"pipeline.meshes", "kind = \"box\"\n"},
+                                                  {"materials.<name> with type = \"hgo\"", "k2 = 882.847\n"}};
+  std::size_t integers = 0, enumerations = 0;
+  for (const SectionSpec& section : scenario_reference()) {
+    for (const ValueSpec& key : section.keys) {
+      const bool integer = key.type == ValueType::integer, enumeration = !key.choices.empty();
+      if (!integer && !enumeration) continue;
+      if (section.name.rfind("materials.<name> with type", 0) == 0 && section.name != "materials.<name> with type = \"hgo\"") {
+        // Keys every law with a volumetric split shares are tried on hgo; a law's own key needs a
+        // material of that law here.
+        bool shared = false;
+        for (const SectionSpec& s : scenario_reference())
+          if (s.name == "materials.<name> with type = \"hgo\"") shared = s.find(key.key) != nullptr;
+        ASSERT_TRUE(shared) << section.name << "." << key.key << ": add a material of this law to the test scenario";
+        continue;
+      }
+      const auto where = anchor.find(section.name);
+      ASSERT_NE(where, anchor.end()) << "no table of section " << section.name << " in the test scenario (key " << key.key << ")";
+      std::string path = section.name;
+      if (section.name == "materials.<name> with type = \"hgo\"") path = "materials.skin";
+      if (section.name == "curves.<name>") path = "curves.ramp";
+      if (section.name == "bodies" || section.name == "boundary" || section.name == "load" || section.name == "contact" ||
+          section.name == "pipeline.meshes")
+        path += "[0]";
+      if (section.name == "bodies") path = "bodies[0]";
+      // An already present key is replaced (type, kind), else the key is added after the anchor.
+      std::string text = base;
+      const std::string bad = integer ? "2.5" : "\"no_such_value\"";
+      const std::size_t at = text.find(where->second);
+      ASSERT_NE(at, std::string::npos);
+      const std::string line = key.key + " = ";
+      const std::size_t table_start = text.rfind("\n[", at), section_end = text.find("\n[", at);
+      const std::size_t own = text.find("\n" + line, table_start);
+      if (own != std::string::npos && own < section_end) {
+        const std::size_t eol = text.find('\n', own + 1);
+        text.replace(own + 1, eol - own - 1, line + bad);
+      } else {
+        text.insert(at + where->second.size(), line + bad + "\n");
+      }
+      std::string message;
+      try {
+        read_scenario(write(text));
+      } catch (const InputError& e) {
+        message = e.what();
+      }
+      std::printf("%-28s %-22s -> %s\n", path.c_str(), key.key.c_str(), message.c_str());
+      EXPECT_NE(message.find(path + "." + key.key), std::string::npos) << message;
+      EXPECT_NE(message.find(integer ? "an integer" : "\"" + key.choices.front() + "\""), std::string::npos) << message;
+      (integer ? integers : enumerations) += 1;
+    }
+  }
+  std::printf("%zu integer keys and %zu enumeration keys refused a bad value\n", integers, enumerations);
+  EXPECT_GE(integers, 6u);      // threads, history_every, max_outputs, max_steps, max_iterations, sweep_blocks, pressure_smoothing
+  EXPECT_GE(enumerations, 6u);  // step_estimate, boundary type, load type, contact method, mesh kind, formulation
 }

@@ -35,8 +35,8 @@ Scenario cube(const std::filesystem::path& dir, double end_time, double time_ste
   body.mesh = dir / "cube.msh";
   body.materials["*"] = "rubber";
   sc.bodies.push_back(body);
-  sc.boundaries.push_back(BoundarySpec{"cube", "zmin", {}, "fixed", {0, 0, 0}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
-  sc.boundaries.push_back(BoundarySpec{"cube", "zmax", {}, "velocity", {0, 0, -0.05}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
+  sc.boundaries.push_back(BoundarySpec{"cube", "zmin", {}, BoundaryType::fixed, {0, 0, 0}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
+  sc.boundaries.push_back(BoundarySpec{"cube", "zmax", {}, BoundaryType::velocity, {0, 0, -0.05}, {true, true, true}, {0, 0, 0}, "", "", {0, 0, 0}});
   return sc;
 }
 

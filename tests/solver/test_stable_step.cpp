@@ -83,7 +83,7 @@ TEST(StableStep, NodalBoundStaysBelowTheTrueLimit) {
         RunSpec run;
         run.end_time = 1;
         const ExplicitSolver nodal(box, run, DampingSpec{}), nodal_damped(box, run, DampingSpec{0, beta});
-        run.nodal_step_bound = false;
+        run.step_estimate = StepEstimate::element;
         const ExplicitSolver element(box, run, DampingSpec{});
         const double ratio = nodal.critical_step() * omega / 2;
         std::printf(
@@ -109,7 +109,7 @@ TEST(StableStep, SolverStepEqualsCoreFunction) {
   const Model model = build_model(mesh, mat);
   RunSpec run;
   run.end_time = 1;
-  run.nodal_step_bound = false;  // the element estimate alone
+  run.step_estimate = StepEstimate::element;  // the element estimate alone
   const ExplicitSolver s(model, run, DampingSpec{});
   // The P-wave modulus lambda + 2 mu = K + 4 mu / 3.
   const CriticalStep core =
@@ -201,7 +201,7 @@ TEST(StableStep, FailedRunWritesLastGoodState) {
   BoundarySpec bc;
   bc.body = "cube";
   bc.group = "xmin";
-  bc.type = "fixed";
+  bc.type = BoundaryType::fixed;
   sc.boundaries.push_back(bc);
   sc.run.time_step = 1.2 * true_limit(build_model(sc));
   EXPECT_THROW(run_simulation(sc, dir / "out"), NumericalError);

@@ -262,13 +262,14 @@ void add_scenario_contacts(Model& m, const Scenario& sc) {
       p.friction = cs.friction;
       p.report_sign = swap ? -1.0 : 1.0;
       p.entry = static_cast<int>(k);
-      set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"), contact_method(cs) == "mortar");
+      set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"),
+                         contact_method(cs) == ContactMethod::mortar);
       set_slave_surface(p, m, swap ? master_tris : slave_tris);
       log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master->describe() << ", mean master edge "
                      << p.search_scale * 1e3 << " mm";
       m.contact_pairs.push_back(std::move(p));
     }
-    if (cs.edge_pass && contact_method(cs) == "mortar")
+    if (cs.edge_pass && contact_method(cs) == ContactMethod::mortar)
       add_edge_pass(m, cs, static_cast<int>(k), key, slave_tris, master_tris, m.contact_pairs.back().master->triangles());
   }
 }

@@ -105,6 +105,7 @@ MaterialType make_material_type() {
     ValueSpec formulation;
     formulation.key = "formulation";
     formulation.type = ValueType::string;
+    formulation.choices = {"standard", "anp"};
     formulation.default_text = "\"anp\" when bulk / shear > 100, else \"standard\"";
     formulation.doc =
         "standard: one-point linear tets; anp: average nodal pressure tets (volumetric part from nodal volumes of this "

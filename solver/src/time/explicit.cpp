@@ -120,7 +120,7 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
               a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             },
             &ahead};
-  forces_.set_nodal_step_bound(run_.nodal_step_bound ? mass_.data() : nullptr);  // the masses the run integrates with
+  forces_.set_nodal_step_bound(run_.step_estimate == StepEstimate::nodal ? mass_.data() : nullptr);  // the masses the run integrates with
   pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data(), side);
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   detection_ahead_seconds_ += ahead.seconds;

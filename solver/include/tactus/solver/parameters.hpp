@@ -20,6 +20,7 @@ struct ValueSpec {
   bool required = false;
   std::string default_text;  // shown in the reference; empty when required or none
   std::string doc;
+  std::vector<std::string> choices;  // an enumeration's values as written in the file (empty: not one)
 
   // "> 0", "[0, 0.5)", ... or "" when unbounded.
   std::string range_text() const;

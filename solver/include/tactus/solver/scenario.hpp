@@ -15,14 +15,17 @@
 
 namespace tactus::solver {
 
+// The critical step: the larger of the element estimate and a bound from each node's whole mass
+// (nodal), or the element estimate alone (element; what explicit codes call element-by-element).
+// design.md "The stable step".
+enum class StepEstimate { nodal, element };
+
 struct RunSpec {
   double end_time = 0;
   double time_step_safety = 0.9;
   double time_step = 0;          // 0: automatic (safety x critical step)
   bool force_time_step = false;  // accept a user time_step above the stable limit
-  // The stable step: the larger of the element estimate and the nodal bound (true), or the element
-  // estimate alone (false; what explicit codes call element-by-element). design.md "The stable step".
-  bool nodal_step_bound = true;
+  StepEstimate step_estimate = StepEstimate::nodal;
   std::vector<double> output_times;
   double output_interval = 0;
   double energy_tolerance = 0.25;  // relative energy-balance error that stops a run as unstable
@@ -74,6 +77,10 @@ struct BodySpec {
   std::array<Vec3, 3> rotation{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};  // rows of R
   Vec3 rotate_about{0, 0, 0};
   bool rotated = false;
+  // As given (the reader turns them into `rotation`): an axis and an angle, or a matrix's rows.
+  std::optional<Vec3> rotate_axis;
+  double rotate_angle = 0;  // deg
+  std::vector<Vec3> rotate_matrix;
   Vec3 translate{0, 0, 0};
   Vec3 initial_velocity{0, 0, 0};
   Vec3 initial_angular_velocity{0, 0, 0};  // rad/s about the body's centre of mass: v = v0 + w x (X - c)
@@ -84,16 +91,19 @@ struct BodySpec {
   // Placement against an earlier body: moved along one axis to leave against_gap between the
   // bounding boxes (e.g. the block 0.5 mm from the hand, whatever the hand mesh).
   std::string against;
-  int against_axis = 0, against_side = 1;
+  int against_axis = 0, against_side = 1;  // x, y, z = 0, 1, 2; +1: on the other body's high side
   double against_gap = 0;
   std::map<std::string, std::string> materials;  // physical volume name (or "*") -> material
 };
+
+enum class BoundaryType { fixed, velocity, displacement };
+const char* boundary_type_name(BoundaryType t);
 
 struct BoundarySpec {
   std::string body;
   std::string group;                       // physical surface or volume group name, or empty when a box is given
   std::optional<std::array<Vec3, 2>> box;  // [min, max] in placed coordinates
-  std::string type;                        // "fixed", "velocity" or "displacement"
+  BoundaryType type = BoundaryType::fixed;
   Vec3 velocity{0, 0, 0};
   std::array<bool, 3> components{true, true, true};
   Vec3 displacement{0, 0, 0};  // type = "displacement": u(t) = displacement x curve(t) (x 1 without a curve)
@@ -104,11 +114,19 @@ struct BoundarySpec {
 
 // [[load]]: a follower pressure on a physical surface group (normal to the current surface, on
 // the current area), positive pushing into the body, scaled by a curve.
+enum class LoadType { pressure };
+
 struct LoadSpec {
   std::string body, group;
   double pressure = 0;  // Pa
   std::string curve;    // empty: constant
+  LoadType type = LoadType::pressure;
 };
+
+// node_to_surface: each slave node on its closest master point; mortar: segment-to-segment
+// integrals of the slave surface; automatic: contact_method() chooses.
+enum class ContactMethod { automatic, node_to_surface, mortar };
+const char* contact_method_name(ContactMethod m);
 
 // [[contact]]: slave nodes of one body's surface against another body's surface or a rigid plane.
 struct ContactSpec {
@@ -119,14 +137,14 @@ struct ContactSpec {
   // Mortar only: also the master's convex edge and corner nodes (faces meeting at more than
   // kEdgePassAngleDeg) against the slave surface, node to surface (surfaces.cpp).
   bool edge_pass = true;
-  std::string method;  // "node_to_surface", "mortar", or empty: contact_method() chooses
+  ContactMethod method = ContactMethod::automatic;
 };
 
 // The method of a [[contact]] entry: its own, or by default mortar (segment-to-segment integrals of
 // the slave surface: a pressure field that passes the contact patch test) for a deformable master
 // of another surface in one pass, and node_to_surface for self-contact, a rigid plane and two_pass
 // (mortar has no second pass: its rows already weigh the master's nodes).
-std::string contact_method(const ContactSpec& c);
+ContactMethod contact_method(const ContactSpec& c);
 // A [[contact]] entry whose master is its own slave surface (skin on skin).
 bool is_self_contact(const ContactSpec& c);
 
@@ -160,6 +178,16 @@ struct ContactSettings {
   static constexpr std::size_t kMinRowsPerSweepBlock = 256;
 };
 
+// [[pipeline.meshes]]: how tactus-pipeline makes a mesh (or fibre file) the scenario uses.
+enum class MeshKind { labels, box, stl, fibres };
+const char* mesh_kind_name(MeshKind k);
+struct MeshPlanEntry {
+  std::string output;  // relative to the pipeline's work folder
+  MeshKind kind = MeshKind::labels;
+  std::string args;  // tactus-mesh options
+  std::string file;  // kind = stl: the STL (relative to the scenario); kind = fibres: the mesh (relative to the work folder)
+};
+
 struct Scenario {
   std::filesystem::path file;
   RunSpec run;
@@ -171,11 +199,16 @@ struct Scenario {
   std::map<std::string, CurveSpec> curves;
   std::vector<ContactSpec> contacts;
   ContactSettings contact_solver;
+  std::vector<MeshPlanEntry> mesh_plan;  // [[pipeline.meshes]]
 };
 
 // Relative mesh and fibre paths are resolved against `mesh_dir` when given (tactus-solve --meshes,
 // used by the pipeline), else against the scenario file's folder.
 Scenario read_scenario(const std::filesystem::path& file, const std::filesystem::path& mesh_dir = {});
+
+// The mesh plan as tactus-pipeline reads it: {"meshes": [{output, kind, args, file}], "inputs":
+// [every mesh and fibre file the bodies read, resolved]}.
+std::string mesh_plan_json(const Scenario& sc);
 
 // The declarations, in reference order (sections, then one per material type).
 std::vector<SectionSpec> scenario_reference();
