@@ -95,49 +95,12 @@ int main(int argc, char** argv) {
       }
       return;
     }
-    // --restart OUT: the run's scenario and options come from its checkpoint.
-    std::optional<solver::RestartPoint> from;
-    if (!restart_dir.empty()) {
-      if (!scenario_file.empty() || !mesh_dir.empty() || *end_time_opt || !common.output.empty())
-        throw InputError("command line", "--restart", "the output folder alone (the scenario, --meshes, --end-time and -o are the checkpoint's)",
-                         "more arguments");
-      from = solver::find_restart_point(restart_dir);
-      if (!from)
-        throw InputError(restart_dir, "--restart", "a killed tactus-solve run writing this folder, with a checkpoint (run.checkpoint_interval)",
-                         "none: nothing to continue");
-      scenario_file = from->identity.scenario;
-      mesh_dir = from->identity.meshes;
-      common.output = restart_dir;
-    }
-    if (scenario_file.empty()) throw CLI::RequiredError("scenario");
-    solver::Scenario sc = solver::read_scenario(scenario_file, mesh_dir);
-    // --end-time (or the end time a restarted run was started with): later output times are dropped.
-    if (*end_time_opt && (!(end_time > 0) || !std::isfinite(end_time)))
-      throw InputError("command line", "--end-time", "a time > 0 in s", end_time_opt->as<std::string>());
-    if (from) end_time = from->identity.end_time;
-    if (end_time > 0 && end_time != sc.run.end_time) {
-      sc.run.end_time = end_time;
-      std::erase_if(sc.run.output_times, [&](double t) { return t > end_time * (1 + 1e-12); });
-    }
-    const std::filesystem::path out =
-        common.output.empty() ? std::filesystem::path(scenario_file).parent_path() / "results" : std::filesystem::path(common.output);
-    const solver::RunIdentity identity = solver::run_identity(sc, mesh_dir);
-    if (from) solver::check_restart_identity(*from, identity);
-    if (resume && !from) {
-      from = solver::find_restart_point(out);
-      if (from) {
-        try {
-          solver::check_restart_identity(*from, identity);
-        } catch (const InputError& e) {
-          log::warn(std::string("not continuing the killed run: ") + e.what() + "; starting from t = 0");
-          from.reset();
-        }
-      }
-    }
-    if (!from && !resume)
-      for (const auto& killed : resumable_staging(out, "tactus-solve"))
-        log::warn("a killed run writing " + out.string() + " can still be continued (tactus-solve --restart " + out.string() + "); its folder " +
-                  killed.string() + " is kept: delete it to drop it");
+    solver::SolveRequest request{scenario_file, mesh_dir, common.output, restart_dir, std::nullopt, resume};
+    if (*end_time_opt) request.end_time = end_time;
+    if (restart_dir.empty() && scenario_file.empty()) throw CLI::RequiredError("scenario");
+    solver::PreparedRun run = solver::prepare_run(request);
+    const solver::Scenario& sc = run.scenario;
+    scenario_file = run.scenario_file.string();
     // The reference is read before the run: a malformed one is refused up front.
     nlohmann::json reference;
     if (!check_file.empty()) {
@@ -149,8 +112,8 @@ int main(int argc, char** argv) {
     // A reference replaces only a reference tactus wrote there (its manifest says so), checked before the run.
     std::optional<OutputFiles> reference_out;
     if (!write_reference.empty()) reference_out.emplace(std::vector<std::filesystem::path>{write_reference}, common.output_rules({scenario_file}));
-    OutputFolder output(out, common.output_rules(solver::scenario_inputs(sc)), from ? from->staging : std::filesystem::path());
-    const solver::RunSummary summary = solver::run_simulation(sc, output, identity, from ? &*from : nullptr);
+    OutputFolder output(run.output, common.output_rules(solver::scenario_inputs(sc)), run.from ? run.from->staging : std::filesystem::path());
+    const solver::RunSummary summary = solver::run_simulation(sc, output, run.identity, run.from ? &*run.from : nullptr);
     if (reference_out) {
       write_file(reference_out->staged(0),
                  solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2) + '\n');

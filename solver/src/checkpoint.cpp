@@ -2,6 +2,7 @@
 #include "tactus/solver/checkpoint.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
@@ -83,6 +84,51 @@ void check_restart_identity(const RestartPoint& p, const RunIdentity& id) {
   if (p.identity.version != id.version) refuse("run.version", "tactus " + p.identity.version, "tactus " + id.version);
   if (p.identity.inputs_digest != id.inputs_digest)
     refuse("run.inputs_digest", "the scenario, meshes and fibre files as they were", "one of them has changed");
+}
+
+PreparedRun prepare_run(SolveRequest q) {
+  PreparedRun p;
+  if (!q.restart.empty()) {
+    if (!q.scenario.empty() || !q.meshes.empty() || q.end_time || !q.output.empty())
+      throw InputError("command line", "--restart", "the output folder alone (the scenario, --meshes, --end-time and -o are the checkpoint's)",
+                       "more arguments");
+    p.from = find_restart_point(q.restart);
+    if (!p.from)
+      throw InputError(q.restart.string(), "--restart", "a killed tactus-solve run writing this folder, with a checkpoint (run.checkpoint_interval)",
+                       "none: nothing to continue");
+    q.scenario = p.from->identity.scenario, q.meshes = p.from->identity.meshes, q.output = q.restart;
+    q.end_time = p.from->identity.end_time;
+  }
+  if (q.scenario.empty()) throw InputError("command line", "scenario", "a scenario.toml", "none");
+  p.scenario_file = q.scenario;
+  p.scenario = read_scenario(q.scenario, q.meshes);
+  // --end-time (or the end time a restarted run was started with): later output times are dropped.
+  if (q.end_time && (!(*q.end_time > 0) || !std::isfinite(*q.end_time)))
+    throw InputError("command line", "--end-time", "a time > 0 in s", std::to_string(*q.end_time));
+  if (q.end_time && *q.end_time != p.scenario.run.end_time) {
+    const double end = *q.end_time;
+    p.scenario.run.end_time = end;
+    std::erase_if(p.scenario.run.output_times, [&](double t) { return t > end * (1 + 1e-12); });
+  }
+  p.output = q.output.empty() ? q.scenario.parent_path() / "results" : q.output;
+  p.identity = run_identity(p.scenario, q.meshes);
+  if (p.from) check_restart_identity(*p.from, p.identity);
+  if (q.resume && !p.from) {
+    p.from = find_restart_point(p.output);
+    if (p.from) {
+      try {
+        check_restart_identity(*p.from, p.identity);
+      } catch (const InputError& e) {
+        log::warn(std::string("not continuing the killed run: ") + e.what() + "; starting from t = 0");
+        p.from.reset();
+      }
+    }
+  }
+  if (!p.from && !q.resume)
+    for (const auto& killed : resumable_staging(p.output, "tactus-solve"))
+      log::warn("a killed run writing " + p.output.string() + " can still be continued (tactus-solve --restart " + p.output.string() +
+                "); its folder " + killed.string() + " is kept: delete it to drop it");
+  return p;
 }
 
 }  // namespace tactus::solver

@@ -52,11 +52,18 @@ grep -q "== solve: done" "$T/third.log" || fail "solve did not re-run with a new
 cp -r "$T/work/solve" "$T/broken"   # for 5.
 
 echo "--- 4. a stage failing mid-way"
-sed 's/^friction = 0.3/friction = -0.3/' "$SRC/pipeline/scenarios/hand_block.toml" > "$T/bad.toml"
+# A key the scenario reader refuses stops the pipeline before any stage, with tactus-solve's
+# message (the pipeline reads the scenario through tactus-solve mesh-plan).
+sed 's/^friction = 0.3/friction = -0.3/' "$SRC/pipeline/scenarios/hand_block.toml" > "$T/bad_key.toml"
+if run "$T/bad_key.toml" 1e-3 > "$T/fourth.log" 2> "$T/fourth.err"; then fail "pipeline succeeded on a bad key"; fi
+cat "$T/fourth.err"
+grep -q "contact\[0\].friction" "$T/fourth.err" || fail "the scenario reader's message is not shown"
+# A surface group the mesh does not have is found only when the solve builds its model: that stage fails.
+sed 's/^master_surface = "surface"/master_surface = "no_such_group"/' "$SRC/pipeline/scenarios/hand_block.toml" > "$T/bad.toml"
 if run "$T/bad.toml" 1e-3 > "$T/fourth.log" 2> "$T/fourth.err"; then fail "pipeline succeeded on a bad scenario"; fi
 cat "$T/fourth.err"
 grep -q "stage 'solve' failed" "$T/fourth.err" || fail "the failing stage is not named"
-grep -q "contact\[0\].friction" "$T/fourth.err" || fail "the solver's message is not shown"
+grep -q "no_such_group" "$T/fourth.err" || fail "the solver's message is not shown"
 [ -f "$T/work/mesh/mesh.msh" ] && [ -f "$T/work/segment/labels.h5" ] || fail "earlier stages' outputs were removed"
 [ -f "$T/work/report/summary.md" ] || fail "the previous report was removed after the failed solve"
 "$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='failed' and j['failed_stage']=='solve' and '$T/work/report' in j['stale_outputs'] else 1)" \

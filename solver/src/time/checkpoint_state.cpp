@@ -186,7 +186,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
   a.io("integrator.next_target", next_target_);
   a.io("integrator.next_lands", next_lands_);
   a.io("integrator.velocity_advanced", velocity_advanced_);
-  checkpoint_rigid_bodies(a, rigid_);
+  checkpoint_rigid_bodies(a, rigid_.bodies_for_checkpoint());
   contact_.checkpoint(a);
   if (a.loading()) {
     if (user_dt_ != user_dt || initial_critical_ != initial_critical)
@@ -228,7 +228,7 @@ void ExplicitSolver::validate_restored(const StateArchive& a) {
   if (next_target_ >= schedule_.size())
     a.invalid("integrator.next_target", "an output time of the run's schedule (fewer than " + std::to_string(schedule_.size()) + ")",
               std::to_string(next_target_));
-  for (const RigidBody& r : rigid_) {
+  for (const RigidBody& r : rigid_.bodies()) {
     const Vec3d* vectors[] = {&r.centre, &r.momentum, &r.angular_momentum, &r.force, &r.moment};
     for (const Vec3d* v : vectors)
       if (!v->allFinite()) a.invalid("rigid." + r.name, "finite numbers", "a non-finite value");

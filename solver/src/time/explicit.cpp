@@ -45,7 +45,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
       body_mass_[static_cast<std::size_t>(element_body_[e])] += model.block_of(e).material.density() * model.volume[e];
     }
   }
-  init_rigid_bodies();
+  rigid_.init(model_, v_half_.data(), v_prev_half_.data(), contact_inv_mass_.data());
   contact_.set_threads(forces_.threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   schedule_ = output_schedule(run);
@@ -53,9 +53,9 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   stress_pass();
   initial_critical_ = pass_.critical_step;
   contact_.set_pressure_window(std::max(model.contact_settings.pressure_window, 10 * initial_critical_));
-  double kinetic = rigid_kinetic_energy(true), added = 0;  // the initial energy is the physical one; mass added at t = 0 is booked as added
+  double kinetic = rigid_.kinetic_energy(true), added = 0;  // the initial energy is the physical one; mass added at t = 0 is booked as added
   for (std::size_t i = 0; i < ndof; ++i) {
-    if (on_rigid_body(i / 3)) continue;
+    if (rigid_.holds(i / 3)) continue;
     kinetic += 0.5 * mass_[i / 3] * v_half_[i] * v_half_[i];
     added += 0.5 * (mass_[i / 3] - model.mass[i / 3]) * v_half_[i] * v_half_[i];
     added_momentum_[i % 3] += (mass_[i / 3] - model.mass[i / 3]) * v_half_[i];
@@ -155,7 +155,7 @@ void ExplicitSolver::scale_mass() {
       for (int k = 0; k < 4; ++k) {
         const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
         // A node of a rigid body gets none: the body's mass is its own (and far larger).
-        if (on_rigid_body(n)) {
+        if (rigid_.holds(n)) {
           added_mass_body_[static_cast<std::size_t>(element_body_[e])] -= 0.25 * added;
           continue;
         }
@@ -247,16 +247,19 @@ void ExplicitSolver::advance_velocity() {
   auto free_velocity = [&](std::size_t i, double fext) { return (c_minus * v_old_of[i] + dtbar * (fext + f_[i]) * inv_mass_[i]) * c_plus; };
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : free_velocity(i, external_force(i));
-  if (!rigid_.empty()) kick_rigid_bodies(dt, dtbar, c_minus, c_plus, next_lands_ ? schedule_[next_target_] : time_ + dt);
+  if (!rigid_.empty())
+    rigid_.kick(
+        model_, f_.data(), [this](std::size_t i) { return external_force(i); }, u_.data(), time_, next_lands_ ? schedule_[next_target_] : time_ + dt,
+        dt, dtbar, c_minus, c_plus);
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
     contact_report_ =
-        contact_.correct_velocities(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_, rigid_rows_.get());
+        contact_.correct_velocities(u_.data(), v_new_of, v_old_of, contact_inv_mass_.data(), dtbar * c_plus, dt, dt_prev_, rigid_.contact_rows());
     contact_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 
-  if (!rigid_.empty()) drift_rigid_bodies(dt);
+  if (!rigid_.empty()) rigid_.drift(model_, u_.data(), dt, v_new_of);
   // The supports' forces: R = m (v_new - v_free) / (dtbar c_plus), exactly what the update added.
   for (std::size_t k = 0; k < constrained_dofs_.size(); ++k) {
     const auto i = static_cast<std::size_t>(constrained_dofs_[k]);
@@ -264,9 +267,9 @@ void ExplicitSolver::advance_velocity() {
   }
   accumulate_reactions();
 
-  double kinetic = rigid_kinetic_energy(first), ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
+  double kinetic = rigid_.kinetic_energy(first), ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
   const double* __restrict mass_of = mass_.data();
-  const std::int32_t* rigid_of = rigid_of_node_.empty() ? nullptr : rigid_of_node_.data();
+  const std::int32_t* rigid_of = rigid_.piece_of_node();
   if (mass_scaling()) {
     // Mass added at t^n: its kinetic energy 1/2 dm (v^n)^2, the difference it makes to the kinetic
     // energy below, and its momentum dm v^{n-1/2}: the update from v^{n-1/2} conserves the
@@ -310,16 +313,7 @@ void ExplicitSolver::advance_velocity() {
     energy_chunks_[c] = sum;
   }
   for (const auto& sum : energy_chunks_) kinetic += sum[0], ext_back += sum[1], ext_fwd += sum[2], damp_back += sum[3], damp_fwd += sum[4];
-  for (const RigidBody& b : rigid_) {  // mass damping -alpha P, -alpha L; a prescribed body's support
-    const Vec3d P_n = first ? b.momentum_before : 0.5 * (b.momentum_before + b.momentum);
-    const Vec3d L_n = first ? b.angular_momentum_before : 0.5 * (b.angular_momentum_before + b.angular_momentum);
-    const Vec3d V_old = b.momentum_before / b.mass, V_new = b.momentum / b.mass;
-    const Vec3d w_old = b.angular_velocity_of(b.angular_momentum_before), w_new = b.angular_velocity_of(b.angular_momentum);
-    damp_back += alpha * dt_prev_ * (P_n.dot(V_old) + L_n.dot(w_old));
-    damp_fwd += alpha * dt * (P_n.dot(V_new) + L_n.dot(w_new));
-    ext_back += dt_prev_ * (b.reaction_force.dot(V_old) + b.reaction_moment.dot(w_old));
-    ext_fwd += dt * (b.reaction_force.dot(V_new) + b.reaction_moment.dot(w_new));
-  }
+  rigid_.add_work(alpha, dt_prev_, dt, first, damp_back, damp_fwd, ext_back, ext_fwd);
   const ContactStepReport& c = contact_report_;
   ext_back += c.support_work_back;
   ext_fwd += c.support_work_forward;
@@ -362,10 +356,7 @@ void ExplicitSolver::advance_position() {
   const double dt = dt_next_;
 #pragma omp parallel for num_threads(forces_.threads()) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) u_[i] += dt * v_half_[i];
-  for (std::size_t k = 0; k < rigid_.size(); ++k) {  // exactly on the body, not the sum of secant steps
-    rigid_[k].centre = rigid_next_[k].centre, rigid_[k].rotation = rigid_next_[k].rotation;
-    rigid_displacements(rigid_[k], model_, rigid_[k].centre, rigid_[k].rotation, u_.data());
-  }
+  rigid_.place(model_, u_.data());
   min_step_ratio_ = std::min(min_step_ratio_, dt / nominal_next_);
   if (next_lands_) {
     time_ = schedule_[next_target_++];  // exactly, not the sum of the steps
@@ -385,126 +376,6 @@ void ExplicitSolver::advance_position() {
     throw NumericalError(o.str());
   }
   choose_step();
-}
-
-void ExplicitSolver::init_rigid_bodies() {
-  rigid_ = find_rigid_bodies(model_);
-  if (rigid_.empty()) return;
-  rigid_next_.resize(rigid_.size());
-  rigid_rows_ = std::make_unique<RigidRows>();
-  RigidRows& rows = *rigid_rows_;
-  rows.X = model_.X.data(), rows.u = u_.data();
-  rigid_of_node_.assign(model_.num_nodes, -1);
-  rows.body_of_node = rigid_of_node_.data();
-  const std::size_t nb = rigid_.size();
-  rows.centre.resize(nb), rows.V.resize(nb), rows.w.resize(nb), rows.inv_mass.resize(nb), rows.inv_inertia.resize(nb);
-  rows.moved.resize(nb);
-  for (RigidBody& b : rigid_) {
-    const BodyRange& body = model_.bodies[b.body];
-    const auto a0 = static_cast<std::size_t>(b.nodes.front());
-    Vec3d V, w;
-    if (b.prescribed) {
-      const double c = curve_at(b.curve, 0.0);
-      V = c * b.velocity, w = c * b.angular_velocity;
-    } else {  // the body's initial velocity field v0 + w x (X - c_body), at this piece's centre
-      w = Vec3d(body.initial_angular_velocity.data());
-      V = Vec3d(&model_.initial_velocity[3 * a0]) + w.cross(b.centre0 - Vec3d(&model_.X[3 * a0]));
-    }
-    b.momentum_before = b.momentum = b.mass * V;
-    b.angular_momentum_before = b.angular_momentum = b.inertia0 * w;
-    for (std::size_t k = 0; k < b.nodes.size(); ++k) {
-      const auto a = static_cast<std::size_t>(b.nodes[k]);
-      rigid_of_node_[a] = b.prescribed ? kPrescribedRigid : static_cast<std::int32_t>(&b - rigid_.data());
-      const Vec3d v = V + w.cross(Vec3d(&b.offset[3 * k]));
-      for (std::size_t d = 0; d < 3; ++d) {
-        v_half_[3 * a + d] = v_prev_half_[3 * a + d] = v[static_cast<Eigen::Index>(d)];
-        contact_inv_mass_[3 * a + d] = 0;  // held like a support in the contact sweep (its reaction moves the body)
-      }
-    }
-  }
-}
-
-double ExplicitSolver::rigid_kinetic_energy(bool first) const {
-  double kinetic = 0;
-  for (const RigidBody& b : rigid_)
-    kinetic += first ? b.kinetic_energy(b.momentum_before, b.angular_momentum_before)
-                     : b.kinetic_energy(0.5 * (b.momentum_before + b.momentum), 0.5 * (b.angular_momentum_before + b.angular_momentum));
-  return kinetic;
-}
-
-void ExplicitSolver::kick_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next) {
-  for (std::size_t k = 0; k < rigid_.size(); ++k) {
-    RigidBody& b = rigid_[k];
-    // Force and moment about the centre at t^n: internal forces of the deformable tets on the
-    // shared nodes, gravity and follower pressures.
-    Vec3d F = Vec3d::Zero(), T = Vec3d::Zero();
-    for (std::int32_t node : b.nodes) {
-      const auto a = static_cast<std::size_t>(node);
-      Vec3d f, r;
-      for (std::size_t d = 0; d < 3; ++d) {
-        f[static_cast<Eigen::Index>(d)] = f_[3 * a + d] + external_force(3 * a + d);
-        r[static_cast<Eigen::Index>(d)] = model_.X[3 * a + d] + u_[3 * a + d] - b.centre[static_cast<Eigen::Index>(d)];
-      }
-      F += f, T += r.cross(f);
-    }
-    b.force = F, b.moment = T;
-    b.momentum_before = b.momentum, b.angular_momentum_before = b.angular_momentum;
-    if (b.prescribed) {
-      // The given motion over the step (its integral, as velocity boundaries do), and the support
-      // force and moment that make it: what the kick would have to add.
-      const double share = b.curve < 0 ? dt
-                                       : model_.curves[static_cast<std::size_t>(b.curve)].integral(t_next) -
-                                             model_.curves[static_cast<std::size_t>(b.curve)].integral(time_);
-      b.momentum = b.mass * b.velocity * share / dt;
-      b.angular_momentum = b.inertia() * b.angular_velocity * share / dt;
-      b.reaction_force = (b.momentum / c_plus - c_minus * b.momentum_before) / dtbar - F;
-      b.reaction_moment = (b.angular_momentum / c_plus - c_minus * b.angular_momentum_before) / dtbar - T;
-    } else {
-      b.momentum = (c_minus * b.momentum_before + dtbar * F) * c_plus;
-      b.angular_momentum = (c_minus * b.angular_momentum_before + dtbar * T) * c_plus;
-    }
-    // As the contact sweep sees it: velocity and angular velocity at t^{n+1/2}, centre and inverse
-    // inertia at t^n.
-    RigidRows& rows = *rigid_rows_;
-    const Mat3 inv_inertia = b.inverse_inertia();
-    const Vec3d w = inv_inertia * b.angular_momentum;
-    for (int d = 0; d < 3; ++d) {
-      rows.centre[k][static_cast<std::size_t>(d)] = b.centre[d], rows.V[k][static_cast<std::size_t>(d)] = b.momentum[d] / b.mass;
-      rows.w[k][static_cast<std::size_t>(d)] = w[d];
-      for (int e = 0; e < 3; ++e) rows.inv_inertia[k][static_cast<std::size_t>(3 * d + e)] = inv_inertia(d, e);
-    }
-    rows.inv_mass[k] = 1.0 / b.mass;
-    rows.moved[k] = 0;
-  }
-}
-
-void ExplicitSolver::drift_rigid_bodies(double dt) {
-  const RigidRows& rows = *rigid_rows_;
-  for (std::size_t k = 0; k < rigid_.size(); ++k) {
-    RigidBody& b = rigid_[k];
-    Mat3 next_rotation;
-    if (b.prescribed) {
-      const Vec3d w = b.angular_velocity_of(b.angular_momentum);
-      const double angle = w.norm() * dt;
-      next_rotation = (angle > 0 ? Mat3(Eigen::AngleAxisd(angle, w / w.norm())) : Mat3::Identity()) * b.rotation;
-    } else {
-      // The contact sweep's impulses, taken back as momentum and angular momentum (untouched
-      // bodies keep theirs bit for bit).
-      if (rows.moved[k]) {
-        b.momentum = b.mass * Vec3d(rows.V[k].data());
-        b.angular_momentum = b.inertia() * Vec3d(rows.w[k].data());
-      }
-      next_rotation = free_rotation(b, b.rotation, b.angular_momentum, dt);
-    }
-    rigid_next_[k] = {b.centre + dt * b.momentum / b.mass, next_rotation};
-    // The nodes' velocities over the step: the secant ones, so u^{n+1} = u^n + dt v^{n+1/2} lands
-    // on the body (advance_position then sets it exactly).
-    for (std::size_t j = 0; j < b.nodes.size(); ++j) {
-      const auto a = static_cast<std::size_t>(b.nodes[j]);
-      const Vec3d x = rigid_next_[k].centre + rigid_next_[k].rotation * Vec3d(&b.offset[3 * j]);
-      for (std::size_t d = 0; d < 3; ++d) v_half_[3 * a + d] = (x[static_cast<Eigen::Index>(d)] - model_.X[3 * a + d] - u_[3 * a + d]) / dt;
-    }
-  }
 }
 
 std::size_t ExplicitSolver::memory_bytes() const {

@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 
+#include "../contact/bipotential.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/state_file.hpp"
 
@@ -124,8 +125,8 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
     r.centre = r.centre0;
     const BodyRange& body = m.bodies[r.body];
     r.prescribed = body.rigid_prescribed;
-    r.velocity = Vec3d(body.rigid_velocity.data()), r.angular_velocity = Vec3d(body.rigid_angular_velocity.data());
-    r.curve = body.rigid_curve;
+    r.motion.velocity = Vec3d(body.rigid_velocity.data()), r.motion.angular_velocity = Vec3d(body.rigid_angular_velocity.data());
+    r.motion.curve = body.rigid_curve;
     for (std::int32_t a : r.nodes)
       for (int d = 0; d < 3; ++d)
         if (m.constrained[3 * static_cast<std::size_t>(a) + static_cast<std::size_t>(d)])
@@ -180,6 +181,182 @@ void checkpoint_rigid_bodies(StateArchive& a, std::vector<RigidBody>& bodies) {
     std::vector<double> q(r.rotation.data(), r.rotation.data() + 9);
     a.io(p + "rotation", q, 9);
     r.rotation = Eigen::Map<const Mat3>(q.data());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+RigidBodies::RigidBodies() = default;
+RigidBodies::~RigidBodies() = default;
+RigidBodies::RigidBodies(RigidBodies&&) noexcept = default;
+RigidBodies& RigidBodies::operator=(RigidBodies&&) noexcept = default;
+
+namespace {
+double curve_value(const Model& m, std::int32_t curve, double t) { return curve < 0 ? 1.0 : m.curves[static_cast<std::size_t>(curve)].at(t); }
+}  // namespace
+
+void RigidBodies::init(const Model& model, double* v_half, double* v_prev_half, double* contact_inv_mass) {
+  bodies_ = find_rigid_bodies(model);
+  if (bodies_.empty()) return;
+  next_.resize(bodies_.size());
+  rows_ = std::make_unique<RigidRows>();
+  RigidRows& rows = *rows_;
+  rows.X = model.X.data();
+  piece_of_node_.assign(model.num_nodes, -1);
+  rows.body_of_node = piece_of_node_.data();
+  const std::size_t nb = bodies_.size();
+  rows.centre.resize(nb), rows.V.resize(nb), rows.w.resize(nb), rows.inv_mass.resize(nb), rows.inv_inertia.resize(nb);
+  rows.moved.resize(nb);
+  for (RigidBody& b : bodies_) {
+    const BodyRange& body = model.bodies[b.body];
+    const auto a0 = static_cast<std::size_t>(b.nodes.front());
+    Vec3d V, w;
+    if (b.prescribed) {
+      const double c = curve_value(model, b.motion.curve, 0.0);
+      w = c * b.motion.angular_velocity;
+      V = c * b.motion.velocity;
+      if (b.motion.pivot) V += w.cross(b.centre0 - *b.motion.pivot);
+    } else {  // the body's initial velocity field v0 + w x (X - c_body), at this piece's centre
+      w = Vec3d(body.initial_angular_velocity.data());
+      V = Vec3d(&model.initial_velocity[3 * a0]) + w.cross(b.centre0 - Vec3d(&model.X[3 * a0]));
+    }
+    b.momentum_before = b.momentum = b.mass * V;
+    b.angular_momentum_before = b.angular_momentum = b.inertia0 * w;
+    for (std::size_t k = 0; k < b.nodes.size(); ++k) {
+      const auto a = static_cast<std::size_t>(b.nodes[k]);
+      piece_of_node_[a] = b.prescribed ? kPrescribed : static_cast<std::int32_t>(&b - bodies_.data());
+      const Vec3d v = V + w.cross(Vec3d(&b.offset[3 * k]));
+      for (std::size_t d = 0; d < 3; ++d) {
+        v_half[3 * a + d] = v_prev_half[3 * a + d] = v[static_cast<Eigen::Index>(d)];
+        contact_inv_mass[3 * a + d] = 0;  // held like a support in the contact sweep (its reaction moves the body)
+      }
+    }
+  }
+}
+
+void RigidBodies::prescribe(std::size_t piece, const RigidMotion& motion) {
+  if (piece >= bodies_.size())
+    throw InputError("scenario", "rigid motion", "a rigid piece (" + std::to_string(bodies_.size()) + " in the model)",
+                     "piece " + std::to_string(piece));
+  RigidBody& b = bodies_[piece];
+  b.prescribed = true;
+  b.motion = motion;
+  for (std::int32_t a : b.nodes) piece_of_node_[static_cast<std::size_t>(a)] = kPrescribed;
+}
+
+void RigidBodies::kick(const Model& model, const double* f, const std::function<double(std::size_t)>& external, const double* u, double time,
+                       double t_next, double dt, double dtbar, double c_minus, double c_plus) {
+  RigidRows& rows = *rows_;
+  rows.u = u;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    RigidBody& b = bodies_[k];
+    // Force and moment about the centre at t^n: internal forces of the deformable tets on the
+    // shared nodes, gravity and follower pressures.
+    Vec3d F = Vec3d::Zero(), T = Vec3d::Zero();
+    for (std::int32_t node : b.nodes) {
+      const auto a = static_cast<std::size_t>(node);
+      Vec3d fa, r;
+      for (std::size_t d = 0; d < 3; ++d) {
+        fa[static_cast<Eigen::Index>(d)] = f[3 * a + d] + external(3 * a + d);
+        r[static_cast<Eigen::Index>(d)] = model.X[3 * a + d] + u[3 * a + d] - b.centre[static_cast<Eigen::Index>(d)];
+      }
+      F += fa, T += r.cross(fa);
+    }
+    b.force = F, b.moment = T;
+    b.momentum_before = b.momentum, b.angular_momentum_before = b.angular_momentum;
+    if (b.prescribed) {
+      // The given motion over the step (its integral, as velocity boundaries do), and the support
+      // force and moment that make it: what the kick would have to add.
+      const RigidMotion& mo = b.motion;
+      const double share = mo.curve < 0 ? dt
+                                        : model.curves[static_cast<std::size_t>(mo.curve)].integral(t_next) -
+                                              model.curves[static_cast<std::size_t>(mo.curve)].integral(time);
+      if (!mo.pivot) {
+        b.momentum = b.mass * mo.velocity * share / dt;
+      } else {
+        // About a pivot p carried with the piece: p moves by the velocity's integral and the
+        // centre turns about it by the angle's, exactly (a joint's motion, as a chain prescribes it).
+        const Vec3d angle = mo.angular_velocity * share;
+        const Mat3 turn = angle.norm() > 0 ? Mat3(Eigen::AngleAxisd(angle.norm(), angle / angle.norm())) : Mat3::Identity();
+        const Vec3d p = b.centre + b.rotation * (*mo.pivot - b.centre0);
+        const Vec3d next_centre = p + mo.velocity * share + turn * (b.centre - p);
+        b.momentum = b.mass * (next_centre - b.centre) / dt;
+      }
+      b.angular_momentum = b.inertia() * mo.angular_velocity * share / dt;
+      b.reaction_force = (b.momentum / c_plus - c_minus * b.momentum_before) / dtbar - F;
+      b.reaction_moment = (b.angular_momentum / c_plus - c_minus * b.angular_momentum_before) / dtbar - T;
+    } else {
+      b.momentum = (c_minus * b.momentum_before + dtbar * F) * c_plus;
+      b.angular_momentum = (c_minus * b.angular_momentum_before + dtbar * T) * c_plus;
+    }
+    // As the contact sweep sees it: velocity and angular velocity at t^{n+1/2}, centre and inverse
+    // inertia at t^n.
+    const Mat3 inv_inertia = b.inverse_inertia();
+    const Vec3d w = inv_inertia * b.angular_momentum;
+    for (int d = 0; d < 3; ++d) {
+      rows.centre[k][static_cast<std::size_t>(d)] = b.centre[d], rows.V[k][static_cast<std::size_t>(d)] = b.momentum[d] / b.mass;
+      rows.w[k][static_cast<std::size_t>(d)] = w[d];
+      for (int e = 0; e < 3; ++e) rows.inv_inertia[k][static_cast<std::size_t>(3 * d + e)] = inv_inertia(d, e);
+    }
+    rows.inv_mass[k] = 1.0 / b.mass;
+    rows.moved[k] = 0;
+  }
+}
+
+void RigidBodies::drift(const Model& model, const double* u, double dt, double* v_half) {
+  const RigidRows& rows = *rows_;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    RigidBody& b = bodies_[k];
+    Mat3 next_rotation;
+    if (b.prescribed) {
+      const Vec3d w = b.angular_velocity_of(b.angular_momentum);
+      const double angle = w.norm() * dt;
+      next_rotation = (angle > 0 ? Mat3(Eigen::AngleAxisd(angle, w / w.norm())) : Mat3::Identity()) * b.rotation;
+    } else {
+      // The contact sweep's impulses, taken back as momentum and angular momentum (untouched
+      // bodies keep theirs bit for bit).
+      if (rows.moved[k]) {
+        b.momentum = b.mass * Vec3d(rows.V[k].data());
+        b.angular_momentum = b.inertia() * Vec3d(rows.w[k].data());
+      }
+      next_rotation = free_rotation(b, b.rotation, b.angular_momentum, dt);
+    }
+    next_[k] = {b.centre + dt * b.momentum / b.mass, next_rotation};
+    // The nodes' velocities over the step: the secant ones, so u^{n+1} = u^n + dt v^{n+1/2} lands
+    // on the body (place() then sets it exactly).
+    for (std::size_t j = 0; j < b.nodes.size(); ++j) {
+      const auto a = static_cast<std::size_t>(b.nodes[j]);
+      const Vec3d x = next_[k].centre + next_[k].rotation * Vec3d(&b.offset[3 * j]);
+      for (std::size_t d = 0; d < 3; ++d) v_half[3 * a + d] = (x[static_cast<Eigen::Index>(d)] - model.X[3 * a + d] - u[3 * a + d]) / dt;
+    }
+  }
+}
+
+void RigidBodies::place(const Model& model, double* u) {
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    bodies_[k].centre = next_[k].centre, bodies_[k].rotation = next_[k].rotation;
+    rigid_displacements(bodies_[k], model, bodies_[k].centre, bodies_[k].rotation, u);
+  }
+}
+
+double RigidBodies::kinetic_energy(bool first) const {
+  double kinetic = 0;
+  for (const RigidBody& b : bodies_)
+    kinetic += first ? b.kinetic_energy(b.momentum_before, b.angular_momentum_before)
+                     : b.kinetic_energy(0.5 * (b.momentum_before + b.momentum), 0.5 * (b.angular_momentum_before + b.angular_momentum));
+  return kinetic;
+}
+
+void RigidBodies::add_work(double alpha, double dt_prev, double dt, bool first, double& damp_back, double& damp_fwd, double& ext_back,
+                           double& ext_fwd) const {
+  for (const RigidBody& b : bodies_) {
+    const Vec3d P_n = first ? b.momentum_before : 0.5 * (b.momentum_before + b.momentum);
+    const Vec3d L_n = first ? b.angular_momentum_before : 0.5 * (b.angular_momentum_before + b.angular_momentum);
+    const Vec3d V_old = b.momentum_before / b.mass, V_new = b.momentum / b.mass;
+    const Vec3d w_old = b.angular_velocity_of(b.angular_momentum_before), w_new = b.angular_velocity_of(b.angular_momentum);
+    damp_back += alpha * dt_prev * (P_n.dot(V_old) + L_n.dot(w_old));
+    damp_fwd += alpha * dt * (P_n.dot(V_new) + L_n.dot(w_new));
+    ext_back += dt_prev * (b.reaction_force.dot(V_old) + b.reaction_moment.dot(w_old));
+    ext_fwd += dt * (b.reaction_force.dot(V_new) + b.reaction_moment.dot(w_new));
   }
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // Restart checkpoints of a run (docs/design.md "Checkpoints and restart").
 //
-// Where: `<OUT>.partial-<pid>/checkpoints/checkpoint_<step>.h5`, inside the staging folder of the
+// Where: `<OUT>.partial-<pid>-<token>/checkpoints/checkpoint_<step>.h5`, inside the staging folder of the
 // run writing OUT (core/output.hpp), so a killed run and its checkpoints are found from OUT alone.
 // The newest two are kept: a new one is written under a temporary name, flushed and renamed
 // (core/state_file.hpp) before the older goes, so a complete one is on the disk at every moment.
@@ -53,5 +53,25 @@ std::optional<RestartPoint> find_restart_point(const std::filesystem::path& outp
 // InputError when `point` cannot continue a run of `identity` (another scenario or end time, a
 // changed input, another tactus), naming what differs.
 void check_restart_identity(const RestartPoint& point, const RunIdentity& identity);
+
+// What a solve is asked to do (tactus-solve's command line): a scenario into an output folder,
+// or `restart`: continue the killed run writing that folder (its scenario, meshes and end time
+// come from its checkpoint); `resume`: continue a killed run of the same inputs when there is one.
+struct SolveRequest {
+  std::filesystem::path scenario, meshes, output, restart;
+  std::optional<double> end_time;  // --end-time: later output times are dropped
+  bool resume = false;
+};
+// The run a request comes to: the scenario read (end time applied), where it goes, its identity
+// and the checkpoint it continues from, if any. Refuses (InputError) a restart with more than the
+// folder, a folder with nothing to continue, a checkpoint of other inputs; a resume whose
+// checkpoint does not match starts from t = 0 with a warning.
+struct PreparedRun {
+  Scenario scenario;
+  std::filesystem::path scenario_file, output;
+  RunIdentity identity;
+  std::optional<RestartPoint> from;
+};
+PreparedRun prepare_run(SolveRequest request);
 
 }  // namespace tactus::solver

@@ -96,7 +96,9 @@ class ExplicitSolver {
   const Vec3& added_momentum() const { return added_momentum_; }
   const std::vector<double>& nodal_mass() const { return mass_; }  // the model's plus the added, per node
   // Rigid bodies (rigid.hpp): centre and rotation at t^n, momenta at t^{n+1/2} after advance_velocity.
-  const std::vector<RigidBody>& rigid_bodies() const { return rigid_; }
+  const std::vector<RigidBody>& rigid_bodies() const { return rigid_.bodies(); }
+  // The seam for joint-driven motion (rigid.hpp): rigid piece k moves as `motion` says.
+  void prescribe_rigid_motion(std::size_t piece, const RigidMotion& motion) { rigid_.prescribe(piece, motion); }
 
   // Saves (or, loading, restores) everything the next step reads: the state at t^n between
   // advance_position() and advance_velocity() - u^n, v^{n-1/2}, the forces and stress pass at u^n,
@@ -128,13 +130,6 @@ class ExplicitSolver {
   double curve_at(std::int32_t curve, double t) const;
   // Sums support_force_ per boundary into reactions_, with the moments about their points (loading.cpp).
   void accumulate_reactions();
-  // Rigid bodies: the initial momenta and nodal velocities; each step's kick by the forces at t^n
-  // and drift to t^{n+1} (velocities of their nodes: the secant ones); their kinetic energy and
-  // mass-damping power at t^n (rigid.cpp, explicit.cpp).
-  void init_rigid_bodies();
-  void kick_rigid_bodies(double dt, double dtbar, double c_minus, double c_plus, double t_next);  // P, L to t^{n+1/2}
-  void drift_rigid_bodies(double dt);  // after contact: c, Q at t^{n+1} and the nodes' secant velocities
-  double rigid_kinetic_energy(bool first) const;
 
   const Model& model_;
   RunSpec run_;
@@ -173,19 +168,7 @@ class ExplicitSolver {
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
   Energies energy_;
-  std::vector<RigidBody> rigid_;
-  // Per node (empty without rigid bodies): its free rigid body's index, kPrescribedRigid on a
-  // prescribed one, -1 on none. The contact sweep reads it as is (a prescribed body's nodes hold
-  // like supports).
-  static constexpr std::int32_t kPrescribedRigid = -2;
-  std::vector<std::int32_t> rigid_of_node_;
-  bool on_rigid_body(std::size_t node) const { return !rigid_of_node_.empty() && rigid_of_node_[node] != -1; }
-  std::unique_ptr<RigidRows> rigid_rows_;  // the free ones, as the contact sweep sees them
-  struct RigidStep {
-    Vec3d centre;
-    Mat3 rotation;
-  };
-  std::vector<RigidStep> rigid_next_;  // each body's centre and rotation at t^{n+1} (from advance_velocity)
+  RigidBodies rigid_;  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
 };
 
 }  // namespace tactus::solver

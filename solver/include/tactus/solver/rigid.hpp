@@ -19,6 +19,9 @@
 // are its reaction.
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,19 +34,30 @@ class StateArchive;
 
 namespace tactus::solver {
 
+struct RigidRows;  // contact/bipotential.hpp: the free bodies as the contact sweep sees them
+
+// A prescribed motion of one rigid piece: the point `pivot` (reference coordinates, carried with
+// the piece; empty: its centre of mass) moves at `velocity` and the piece turns about it at
+// `angular_velocity`, both scaled by curve(t). Over a step the pivot moves by the velocity's
+// integral and the piece turns about it by the angular velocity's, exactly.
+struct RigidMotion {
+  Vec3d velocity = Vec3d::Zero(), angular_velocity = Vec3d::Zero();
+  std::optional<Vec3d> pivot;
+  std::int32_t curve = -1;
+};
+
 struct RigidBody {
   std::string name;                 // "hand/bone #3": the body, the material, the piece
   std::size_t body = 0;             // model.bodies index
   std::vector<std::int32_t> nodes;  // internal ids, ascending
   std::vector<double> offset;       // per node, X_a - c_0 (3 each)
   double mass = 0;
-  Vec3d centre0 = Vec3d::Zero();                                     // reference centre of mass
-  Mat3 inertia0 = Mat3::Zero();                                      // about centre0, reference frame
-  Mat3 axes = Mat3::Identity();                                      // principal axes of inertia0 (columns, right-handed)
-  Vec3d principal = Vec3d::Zero();                                   // principal moments
-  bool prescribed = false;                                           // moves with rigid_velocity / rigid_angular_velocity
-  Vec3d velocity = Vec3d::Zero(), angular_velocity = Vec3d::Zero();  // prescribed, before the curve
-  std::int32_t curve = -1;
+  Vec3d centre0 = Vec3d::Zero();    // reference centre of mass
+  Mat3 inertia0 = Mat3::Zero();     // about centre0, reference frame
+  Mat3 axes = Mat3::Identity();     // principal axes of inertia0 (columns, right-handed)
+  Vec3d principal = Vec3d::Zero();  // principal moments
+  bool prescribed = false;          // moves as `motion` says (bodies.rigid_velocity, or RigidBodies::prescribe)
+  RigidMotion motion;
   // State: centre and rotation at t^n, momentum and spatial angular momentum at t^{n+1/2} (after
   // advance_velocity; at t^{n-1/2} before it), and the previous half step's.
   Vec3d centre = Vec3d::Zero();
@@ -78,5 +92,60 @@ Mat3 free_rotation(const RigidBody& body, const Mat3& rotation, const Vec3d& L, 
 void rigid_displacements(const RigidBody& body, const Model& model, const Vec3d& centre, const Mat3& rotation, double* u);
 
 void checkpoint_rigid_bodies(StateArchive& archive, std::vector<RigidBody>& bodies);
+
+// The rigid pieces of a model through the steps of the integrator (explicit.hpp, eq. 35 in its
+// half-step form): a kick of their momenta by the forces at t^n, the contact sweep's impulses, a
+// drift to t^{n+1}, and their placement. ExplicitSolver calls these; the pieces' state is here.
+class RigidBodies {
+ public:
+  // Per node: kPrescribed on a prescribed piece, the free piece's index, or -1 (none).
+  static constexpr std::int32_t kPrescribed = -2;
+
+  RigidBodies();
+  ~RigidBodies();
+  RigidBodies(RigidBodies&&) noexcept;
+  RigidBodies& operator=(RigidBodies&&) noexcept;
+
+  // Finds the pieces, gives each its initial momenta (the body's initial velocity field at its
+  // centre, or its prescribed motion at t = 0) and its nodes that velocity in both half-step
+  // arrays; their contact inverse masses become 0 (the piece takes a reaction as a whole).
+  void init(const Model& model, double* v_half, double* v_prev_half, double* contact_inv_mass);
+  // The seam for joint-driven motion: piece k moves as `motion` says from now on (InputError when
+  // a piece has no such index).
+  void prescribe(std::size_t piece, const RigidMotion& motion);
+
+  bool empty() const { return bodies_.empty(); }
+  const std::vector<RigidBody>& bodies() const { return bodies_; }
+  std::vector<RigidBody>& bodies_for_checkpoint() { return bodies_; }
+  bool holds(std::size_t node) const { return !piece_of_node_.empty() && piece_of_node_[node] != -1; }
+  const std::int32_t* piece_of_node() const { return piece_of_node_.empty() ? nullptr : piece_of_node_.data(); }
+  RigidRows* contact_rows() { return rows_.get(); }
+
+  // P, L to t^{n+1/2} from the force and moment at t^n on each piece's nodes (internal forces f
+  // plus external(dof)), with the mass damping factors c_minus, c_plus; a prescribed piece gets
+  // the momenta of its motion over [time, t_next] and the reaction that makes them.
+  void kick(const Model& model, const double* f, const std::function<double(std::size_t)>& external, const double* u, double time, double t_next,
+            double dt, double dtbar, double c_minus, double c_plus);
+  // After the contact sweep: its impulses taken back, the centre and rotation at t^{n+1}, and the
+  // nodes' secant velocities over the step in v_half.
+  void drift(const Model& model, const double* u, double dt, double* v_half);
+  // The pieces at t^{n+1}: exactly on the body, not the sum of secant steps.
+  void place(const Model& model, double* u);
+  // Kinetic energy at t^n (first step: at t^0).
+  double kinetic_energy(bool first) const;
+  // Their part of the step's work: mass damping -alpha P, -alpha L and a prescribed piece's
+  // support, over the half steps behind (dt_prev) and ahead (dt).
+  void add_work(double alpha, double dt_prev, double dt, bool first, double& damp_back, double& damp_fwd, double& ext_back, double& ext_fwd) const;
+
+ private:
+  std::vector<RigidBody> bodies_;
+  std::vector<std::int32_t> piece_of_node_;
+  std::unique_ptr<RigidRows> rows_;  // the free ones, as the contact sweep sees them
+  struct Placement {
+    Vec3d centre;
+    Mat3 rotation;
+  };
+  std::vector<Placement> next_;  // each piece at t^{n+1} (from drift)
+};
 
 }  // namespace tactus::solver
