@@ -31,8 +31,8 @@ lam = E * nu / ((1 + nu) * (1 - 2 * nu))
 k = lam + 2 * mu / 3
 
 perturb = float(sys.argv[1]) if len(sys.argv) > 1 else 0.0
-idx = lambda i, j, l: (i * (n + 1) + j) * (n + 1) + l
-X = np.array([[i * h, j * h, l * h] for i in range(n + 1) for j in range(n + 1) for l in range(n + 1)])
+idx = lambda i, j, k: (i * (n + 1) + j) * (n + 1) + k
+X = np.array([[i * h, j * h, k * h] for i in range(n + 1) for j in range(n + 1) for k in range(n + 1)])
 rng = np.random.default_rng(11)
 for a in range(len(X)):
     if all(0 < c < L - 1e-12 for c in X[a]):
@@ -81,10 +81,11 @@ for e, t in enumerate(tets):
     B = np.zeros((6, 12))
     for a in range(4):
         gx, gy, gz = grads[e, a]
-        B[:, 3 * a:3 * a + 3] = [[gx, 0, 0], [0, gy, 0], [0, 0, gz], [0, gz, gy], [gz, 0, gx], [gy, gx, 0]]
+        B[:, 3 * a : 3 * a + 3] = [[gx, 0, 0], [0, gy, 0], [0, 0, gz], [0, gz, gy], [gz, 0, gx], [gy, gx, 0]]
     ke = vols[e] * B.T @ D @ B
     dofs = np.array([[3 * a, 3 * a + 1, 3 * a + 2] for a in t]).ravel()
     Kdev[np.ix_(dofs, dofs)] += ke
+
 
 # G: nodal velocity -> nodal Jdot (plain ANP): (G x)_a = (1/V_a) sum_{e at a} (1/4) sum_b d_b . x_b,
 # for the volume-rate vectors dd of every tet's nodes (d_b = V0 cof F grad N_b).
@@ -93,7 +94,7 @@ def volume_rate_map(dd):
     for e, t in enumerate(tets):
         for a in t:
             for bi, b in enumerate(t):
-                Gm[a, 3 * b:3 * b + 3] += dd[e, bi] / 4 / Vn[a]
+                Gm[a, 3 * b : 3 * b + 3] += dd[e, bi] / 4 / Vn[a]
     return Gm
 
 
@@ -110,7 +111,7 @@ def block_gershgorin(K):
     r = np.zeros(N)
     for b in range(N):
         for c in range(N):
-            blk = K[3 * b:3 * b + 3, 3 * c:3 * c + 3]
+            blk = K[3 * b : 3 * b + 3, 3 * c : 3 * c + 3]
             if np.any(blk):
                 r[b] += np.linalg.norm(blk, 2)
     return r
@@ -157,8 +158,10 @@ for s in (0, 1, 2):
     A = 2 / np.sqrt(((beta_dev + beta_vol) / mass).max())
     B = 2 / np.sqrt(((beta_dev + rvol) / mass).max())
     C = 2 / np.sqrt(((rdev_assembled + rvol) / mass).max())
-    print(f"s = {s}: 2/omega_max = {exact:.4e} s; A (solver's rows) {A / exact:.3f}, "
-          f"B (dev rows + assembled vol Gershgorin) {B / exact:.3f}, C (assembled Gershgorin) {C / exact:.3f}")
+    print(
+        f"s = {s}: 2/omega_max = {exact:.4e} s; A (solver's rows) {A / exact:.3f}, "
+        f"B (dev rows + assembled vol Gershgorin) {B / exact:.3f}, C (assembled Gershgorin) {C / exact:.3f}"
+    )
 
 # At a deformed state (the deformation of Anp.StableStepIsConservativeAndNotWasteful: 15 % shear,
 # 20 % compression, a 0.2 mm ripple): the volumetric rows only, as step bounds relative to A's.
@@ -188,8 +191,11 @@ for s in (0, 2):
     wA = (rA / mass).max()
     wc = (rc / mass).max()
     wp = min(((1 + eta) * r0 / mass + (1 + 1 / eta) * rD / mass).max() for eta in np.geomspace(1e-3, 1e3, 121))
-    print(f"s = {s}: assembled at x {np.sqrt(wA / wc):.3f}, perturbation of the rest assembly {np.sqrt(wA / wp):.3f} "
-          f"(|d - d0| / |d| = {np.linalg.norm(dc - d) / np.linalg.norm(dc):.3f})")
+    print(
+        f"s = {s}: assembled at x {np.sqrt(wA / wc):.3f}, perturbation of the rest assembly {np.sqrt(wA / wp):.3f} "
+        f"(|d - d0| / |d| = {np.linalg.norm(dc - d) / np.linalg.norm(dc):.3f})"
+    )
+
 
 # D: the rest operator's weighted rows plus a perturbation, computable from what the stress pass
 # has.  |(S^s G x)_a| <= (S^s |G| |x|)_a entrywise (S >= 0, |G| the norms of the 3-vector blocks),
@@ -200,7 +206,7 @@ for s in (0, 2):
 # at x the change dG enters as (1 + eta) rest rows + (1 + 1/eta) absolute rows on |d_b - d0_b|.
 def weighted_rest_rows(s):
     Gn0 = np.linalg.norm(G.reshape(N, N, 3), axis=2)
-    p = Vn ** -0.5
+    p = Vn**-0.5
     w = np.linalg.matrix_power(S, 2 * s) @ (Gn0 @ p)
     return k * (Gn0.T @ (Vn * w)) / p
 

@@ -1,6 +1,7 @@
 """Figures read from a tactus-solve history.csv, shared by the bench scripts."""
-import bisect
 import csv
+
+import numpy as np
 
 
 def read_columns(history_csv, *names):
@@ -12,15 +13,12 @@ def read_columns(history_csv, *names):
 
 def time_integral(t, y, lo=None, hi=None):
     """The trapezoid-rule integral of y(t) over [lo, hi] (default: the whole run), y linear between rows."""
+    t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
     lo = t[0] if lo is None else max(lo, t[0])
     hi = t[-1] if hi is None else min(hi, t[-1])
-    def at(x):
-        i = min(max(bisect.bisect_right(t, x) - 1, 0), len(t) - 2)
-        return y[i] + (y[i + 1] - y[i]) * (x - t[i]) / (t[i + 1] - t[i])
-    i0, i1 = bisect.bisect_right(t, lo), bisect.bisect_left(t, hi)
-    xs = [lo] + t[i0:i1] + [hi]
-    ys = [at(lo)] + y[i0:i1] + [at(hi)]
-    return sum(0.5 * (ys[i] + ys[i + 1]) * (xs[i + 1] - xs[i]) for i in range(len(xs) - 1))
+    inside = (t > lo) & (t < hi)
+    xs = np.concatenate(([lo], t[inside], [hi]))
+    return float(np.trapz(np.interp(xs, t, y), xs))
 
 
 def contact_impulse(history_csv):

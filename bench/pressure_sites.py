@@ -20,8 +20,10 @@ CUTS = 8
 
 def state_files(solve):
     """A solve folder's output states from its results.pvd: {time (s, rounded to 1e-9): .vtu path}, in time order."""
-    return {round(float(ds.get("timestep")), 9): os.path.join(solve, ds.get("file"))
-            for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet")}
+    return {
+        round(float(ds.get("timestep")), 9): os.path.join(solve, ds.get("file"))
+        for ds in ET.parse(os.path.join(solve, "results.pvd")).getroot().iter("DataSet")
+    }
 
 
 def read_state(path):
@@ -34,8 +36,14 @@ def read_state(path):
     pd, cd = grid.GetPointData(), grid.GetCellData()
     displacement = vtk_to_numpy(pd.GetArray("displacement")).astype(float)
     cells = vtk_to_numpy(grid.GetCells().GetConnectivityArray()).reshape(-1, 4)
-    return {"x": points, "X": points - displacement, "p": vtk_to_numpy(pd.GetArray("contact_pressure")).astype(float),
-            "gap": vtk_to_numpy(pd.GetArray("contact_gap")).astype(float), "tets": cells, "body": vtk_to_numpy(cd.GetArray("body"))}
+    return {
+        "x": points,
+        "X": points - displacement,
+        "p": vtk_to_numpy(pd.GetArray("contact_pressure")).astype(float),
+        "gap": vtk_to_numpy(pd.GetArray("contact_gap")).astype(float),
+        "tets": cells,
+        "body": vtk_to_numpy(cd.GetArray("body")),
+    }
 
 
 def skin_triangles(state):
@@ -55,12 +63,12 @@ def samples(state, triangles):
     bary = []
     for i in range(CUTS):
         for j in range(CUTS - i):
-            for up in ((0, 1) if i + j + 1 < CUTS else (0,)):
+            for up in (0, 1) if i + j + 1 < CUTS else (0,):
                 l1, l2 = (i + (2.0 if up else 1.0) / 3.0) / CUTS, (j + (2.0 if up else 1.0) / 3.0) / CUTS
                 bary.append((1 - l1 - l2, l1, l2))
     bary = np.array(bary)  # (64, 3)
     a, b, c = x[triangles[:, 0]], x[triangles[:, 1]], x[triangles[:, 2]]
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1) / CUTS ** 2
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1) / CUTS**2
     points = bary[None, :, 0, None] * a[:, None] + bary[None, :, 1, None] * b[:, None] + bary[None, :, 2, None] * c[:, None]
     pressure = bary @ p[triangles].T  # (64, n)
     return points.reshape(-1, 3), np.repeat(area, len(bary)), (pressure.T * area[:, None]).reshape(-1)
@@ -87,7 +95,7 @@ class Field:
         c = np.floor(np.asarray(centre) / self.radius).astype(np.int64)
         spans = [self.bins.get((c[0] + i, c[1] + j, c[2] + k)) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)]
         index = np.concatenate([np.arange(a, b) for a, b in (s for s in spans if s)] or [np.zeros(0, dtype=np.int64)])
-        inside = index[((self.points[index] - centre) ** 2).sum(axis=1) <= self.radius ** 2]
+        inside = index[((self.points[index] - centre) ** 2).sum(axis=1) <= self.radius**2]
         total = self.area[inside].sum()
         return self.force[inside].sum() / total if total > 0 else 0.0
 

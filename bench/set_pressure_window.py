@@ -3,7 +3,9 @@
 # --pressure-window): the key added to an existing [contact_solver] table, or the table appended.
 # Refuses a scenario that sets the window itself, and a window that is not a time > 0.
 #   set_pressure_window.py SCENARIO OUT TAU
-import re, sys
+import re
+import sys
+
 text, tau = open(sys.argv[1]).read(), sys.argv[3]
 try:
     if not float(tau) > 0:

@@ -40,8 +40,21 @@ def stage_meshes(work):
             shutil.copyfileobj(src, dst)
     fibres = os.path.join(work, "mesh", "fibres.vtu")
     if not os.path.exists(fibres):
-        subprocess.run([os.path.join(BUILD, "mesher", "tactus-mesh"), "fibres", os.path.join(work, "mesh", "mesh.msh"), "--angle", "30",
-                        "--axis", "z", "-o", fibres, "-q"], check=True)
+        subprocess.run(
+            [
+                os.path.join(BUILD, "mesher", "tactus-mesh"),
+                "fibres",
+                os.path.join(work, "mesh", "mesh.msh"),
+                "--angle",
+                "30",
+                "--axis",
+                "z",
+                "-o",
+                fibres,
+                "-q",
+            ],
+            check=True,
+        )
 
 
 def scenario_variant(k, formulation, fibres, path, k1=None):
@@ -87,8 +100,11 @@ def main():
     stage_meshes(work)
     if a.k1 is not None:
         print(f"k1 = {a.k1:g} Pa")
-    print("| k (Pa) | formulation | fibres | peak contact pressure (MPa) | peak contact force (kN) | peak tissue von Mises (MPa) | peak bone von Mises (MPa) "
-          "| largest isochoric fibre stretch | tissue element J | step (ns) | wall (s) | status |")
+    print(
+        "| k (Pa) | formulation | fibres | peak contact pressure (MPa) | peak contact force (kN) "
+        "| peak tissue von Mises (MPa) | peak bone von Mises (MPa) "
+        "| largest isochoric fibre stretch | tissue element J | step (ns) | wall (s) | status |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for k, formulation, fibres in [(k, f, g) for g in a.fibres for k in a.k for f in a.formulations]:
         name = f"k{k:g}_{formulation}" + ("" if fibres == "global" else "_anatomical") + ("" if a.k1 is None else f"_k1_{a.k1:g}")
@@ -97,18 +113,25 @@ def main():
         if not (a.reuse and os.path.exists(os.path.join(out, "run.json"))):
             shutil.rmtree(out, ignore_errors=True)
             scenario_variant(k, formulation, fibres, scenario, a.k1)
-            proc = subprocess.run([os.path.join(BUILD, "solver", "tactus-solve"), scenario, "--meshes", work, "-o", out, "-q"],
-                                  capture_output=True, text=True)
+            proc = subprocess.run(
+                [os.path.join(BUILD, "solver", "tactus-solve"), scenario, "--meshes", work, "-o", out, "-q"], capture_output=True, text=True
+            )
         if not os.path.exists(os.path.join(out, "run.json")):
-            print(f"| {k:g} | {formulation} | {fibres} | failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else proc.returncode} |")
+            print(
+                f"| {k:g} | {formulation} | {fibres} | failed: {proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else proc.returncode} |"
+            )
             continue
         run = json.load(open(os.path.join(out, "run.json")))
         wall = run["wall_time_s"]
         peaks = run["peak_von_mises_at_outputs"]
         stretch, j_lo, j_hi = tissue_fields(out)
-        print(f"| {k:g} | {formulation} | {fibres} | {run['contact']['peak_pressure']['value'] / 1e6:.1f} | {run['contact']['peak_force']['value'] / 1e3:.2f} "
-              f"| {peaks['soft_tissue'] / 1e6:.2f} | {peaks['bone'] / 1e6:.1f} | {stretch:.3f} | {j_lo:.3f}..{j_hi:.3f} "
-              f"| {run['time_step']['min'] * 1e9:.0f}..{run['time_step']['max'] * 1e9:.0f} | {wall:.0f} | {run['status']} |", flush=True)
+        print(
+            f"| {k:g} | {formulation} | {fibres} | {run['contact']['peak_pressure']['value'] / 1e6:.1f} "
+            f"| {run['contact']['peak_force']['value'] / 1e3:.2f} "
+            f"| {peaks['soft_tissue'] / 1e6:.2f} | {peaks['bone'] / 1e6:.1f} | {stretch:.3f} | {j_lo:.3f}..{j_hi:.3f} "
+            f"| {run['time_step']['min'] * 1e9:.0f}..{run['time_step']['max'] * 1e9:.0f} | {wall:.0f} | {run['status']} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ def main():
     for k in range(n):
         (x0, y0), (x1, y1) = ring[k], ring[(k + 1) % n]
         tris += [((x0, y0, -h), (x1, y1, -h), (x1, y1, h)), ((x0, y0, -h), (x1, y1, h), (x0, y0, h))]  # side, outward
-        tris += [((0, 0, h), (x0, y0, h), (x1, y1, h)), ((0, 0, -h), (x1, y1, -h), (x0, y0, -h))]     # caps
+        tris += [((0, 0, h), (x0, y0, h), (x1, y1, h)), ((0, 0, -h), (x1, y1, -h), (x0, y0, -h))]  # caps
     # local (u, v, along) -> world indices, a cyclic permutation (keeps the facets outward)
     order = {"x": (1, 2, 0), "y": (2, 0, 1), "z": (0, 1, 2)}[a.axis]
 

@@ -47,6 +47,7 @@ def main(vtu_path, png_path, field="von_mises"):
     look_from(renderer, (1, -1.4, 0.9), (0, 0, 0), 1.25)
     write_png(renderer, (900, 650), png_path)
 
+
 if __name__ == "__main__":
     if len(sys.argv) < 3:
         sys.exit("usage: render_state.py STATE.vtu OUT.png [cell field]")

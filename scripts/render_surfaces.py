@@ -28,6 +28,7 @@ def main(folder, png_path):
     look_from(renderer, (0.15, -0.5, 0.35), (0, 0, 0.12), 1.3)
     write_png(renderer, (700, 900), png_path)
 
+
 if __name__ == "__main__":
     if len(sys.argv) != 3:
         sys.exit("usage: render_surfaces.py SURFACES_FOLDER OUT.png")

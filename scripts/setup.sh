@@ -12,7 +12,7 @@ PACKAGES=(
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libgtest-dev libgdcm-dev zlib1g-dev
   xvfb xauth
   python3 python3-numpy python3-h5py python3-meshio python3-vtk9
-  python3-pydicom python3-nibabel dicom3tools
+  python3-pydicom python3-nibabel dicom3tools black python3-flake8
 )
 
 missing=()

@@ -51,18 +51,20 @@ def figures(path):
 def compare_history(pa, pb):
     """Every column both files have, as text (bit for bit); a column on one side only must be
     allowed by prefix (--allow history:reaction_ admits the reaction columns a change added)."""
+
     def columns(path):
         lines = open(path).read().splitlines()
         names = lines[0].split(",")
         rows = [line.split(",") for line in lines[1:]]
         return {n: [r[k] for r in rows] for k, n in enumerate(names)}
+
     A, B = columns(pa), columns(pb)
     out = []
     for name in sorted(set(A) | set(B)):
         if name in A and name in B:
             if A[name] != B[name]:
                 out.append(f"history.csv: {name} differs")
-        elif not any(x.startswith("history:") and name.startswith(x[len("history:"):]) for x in ALLOW):
+        elif not any(x.startswith("history:") and name.startswith(x[len("history:") :]) for x in ALLOW):
             out.append(f"history.csv: {name} only in one")
     return out
 

@@ -167,7 +167,11 @@ std::string default_text(double v) {
   return s;
 }
 
-std::string default_text(const Vec3& v) { return "[" + default_text(v[0]) + ", " + default_text(v[1]) + ", " + default_text(v[2]) + "]"; }
+std::string default_text(const Vec3& v) {
+  std::string s(1, '[');  // (appended, not "[" + s: GCC 12's -Wrestrict false positive)
+  s.append(default_text(v[0])).append(", ").append(default_text(v[1])).append(", ").append(default_text(v[2])).append("]");
+  return s;
+}
 
 std::string default_text(const std::string& v) { return v.empty() ? "" : "\"" + v + "\""; }
 

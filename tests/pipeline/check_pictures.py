@@ -29,7 +29,7 @@ def model_area(file):
     img = r.GetOutput()
     w, h, _ = img.GetDimensions()
     rgb = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(int)
-    return rgb[60:h - 60, : int(0.86 * w)]  # without the captions and the colour bar
+    return rgb[60 : h - 60, : int(0.86 * w)]  # without the captions and the colour bar
 
 
 report = sys.argv[1]
@@ -57,7 +57,7 @@ if "pressure.png" in summary["pictures"]:
         fail("pressure.png: no red (peak) pixels")
     # The black dot marks the peak node: a disc of black pixels right at the red peak.
     centre = red.mean(axis=0)
-    ys, xs = np.mgrid[0:a.shape[0], 0:a.shape[1]]
+    ys, xs = np.mgrid[0 : a.shape[0], 0 : a.shape[1]]
     near = np.hypot(ys - centre[0], xs - centre[1]) < 0.05 * a.shape[1]
     dot = int(((a.max(axis=2) < 30) & near).sum())
     print(f"  ok pressure.png: {len(red)} red pixels, {dot} black dot pixels within {0.05 * a.shape[1]:.0f} px of them")
