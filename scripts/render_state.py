@@ -1,5 +1,6 @@
 """Renders one tactus result state (.vtu) to PNG: the deformed bodies coloured by von Mises
-stress, with a scalar bar. A stop-gap picture maker until tactus-post lands; run under xvfb-run:
+stress, with a scalar bar: a quick look at one state without a report (tactus-post draws the
+report's pictures); run under xvfb-run:
     xvfb-run -a /usr/bin/python3 scripts/render_state.py out/pad_press/results/state_0003.vtu pad.png
 """
 import sys

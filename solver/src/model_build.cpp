@@ -208,7 +208,8 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
   for (const auto& [name, inst] : sc.materials) {
     MaterialBlock b;
     b.name = name;
-    b.material = Material::make(inst.type, inst.values, "materials." + name);
+    const auto law = sc.laws.find(name);
+    b.material = law != sc.laws.end() ? law->second : Material::make(inst.type, inst.values, "materials." + name);
     b.begin = order.size();
     for (std::size_t e = 0; e < m.num_elements; ++e)
       if (tets.material[e] == name) order.push_back(e);
@@ -425,6 +426,7 @@ void add_rigid_motion(const Scenario& sc, Model& m) {
 
 Model build_model(const Scenario& sc) {
   Model m;
+  if (!sc.file.empty()) m.source = sc.file.string();
   TetAssignment tets;
   for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) append_body(sc, bi, m, tets);
 

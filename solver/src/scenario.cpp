@@ -443,7 +443,7 @@ void read_materials(const Reader& r, const toml::table& root, Scenario& sc, cons
         m.values.numbers[ps.key] = static_cast<double>(r.integer(t, ps, path));
     }
     m.values.source = fname;
-    Material::make(m.type, m.values, path);  // the law's own checks (hgo: two non-zero fibre directions)
+    sc.laws[name] = Material::make(m.type, m.values, path);  // with the law's own checks (hgo: two non-zero fibre directions)
     sc.materials[name] = m;
   }
 }

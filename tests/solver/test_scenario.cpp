@@ -439,3 +439,19 @@ kind = "box"
   EXPECT_GE(integers, 6u);      // threads, history_every, max_outputs, max_steps, max_iterations, sweep_blocks, pressure_smoothing
   EXPECT_GE(enumerations, 6u);  // step_estimate, boundary type, load type, contact method, mesh kind, formulation
 }
+
+// A run shorter than half a step is blamed on run.end_time, in the scenario's own file (it once
+// named run.output_times in a file called "scenario").
+TEST_F(ScenarioFile, RunShorterThanHalfAStepNamesTheEndTime) {
+  const Scenario sc = read_scenario(write(replace(replace(kValid, "end_time = 1e-3", "end_time = 1e-9"), "output_times = [5e-4, 1e-3]", "")));
+  const Model m = build_model(sc);
+  std::string message;
+  try {
+    ExplicitSolver solver(m, sc.run, sc.damping);
+  } catch (const InputError& e) {
+    message = e.what();
+  }
+  std::printf("%s\n", message.c_str());
+  EXPECT_NE(message.find("scenario.toml: run.end_time"), std::string::npos) << message;
+  EXPECT_NE(message.find("half a time step"), std::string::npos) << message;
+}

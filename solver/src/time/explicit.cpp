@@ -75,12 +75,12 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
         << "); lower it, remove it for the automatic step, or set run.force_time_step = true";
       std::ostringstream f;
       f << run.time_step << " s";
-      throw InputError("scenario", "run.time_step", o.str(), f.str());
+      throw InputError(model_.source, "run.time_step", o.str(), f.str());
     }
     user_dt_ = run.time_step;
   }
   if (!(user_dt_ > 0) && !std::isfinite(pass_.critical_step))
-    throw InputError("scenario", "run.time_step", "a time step (every tet is rigid: no stable limit to take it from)", "none");
+    throw InputError(model_.source, "run.time_step", "a time step (every tet is rigid: no stable limit to take it from)", "none");
   // Scheduled times closer than half a step apart cannot be landed on without tiny steps (each
   // state would repeat the one before): refused, naming them.
   const double nominal = user_dt_ > 0 ? user_dt_ : run.time_step_safety * pass_.critical_step;
@@ -88,9 +88,14 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   for (double t : schedule_) {
     if (t > 0 && t - before < 0.5 * nominal) {
       std::ostringstream o, f;
+      if (before == 0 && t == schedule_.back()) {  // the run itself is shorter than half a step
+        o << "an end time of at least half a time step (the step is " << nominal << " s, " << describe_step_limit() << ")";
+        f << t << " s";
+        throw InputError(model_.source, "run.end_time", o.str(), f.str());
+      }
       o << "output times at least half a time step apart (the step is " << nominal << " s, " << describe_step_limit() << ")";
       f << before << " s and " << t << " s";
-      throw InputError("scenario", run.output_interval > 0 ? "run.output_interval" : "run.output_times", o.str(), f.str());
+      throw InputError(model_.source, run.output_interval > 0 ? "run.output_interval" : "run.output_times", o.str(), f.str());
     }
     before = t;
   }

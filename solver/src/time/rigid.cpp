@@ -130,10 +130,10 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
     for (std::int32_t a : r.nodes)
       for (int d = 0; d < 3; ++d)
         if (m.constrained[3 * static_cast<std::size_t>(a) + static_cast<std::size_t>(d)])
-          throw InputError("scenario", "boundary", "no [[boundary]] on the nodes of a rigid body (give bodies.rigid_velocity instead)",
+          throw InputError(m.source, "boundary", "no [[boundary]] on the nodes of a rigid body (give bodies.rigid_velocity instead)",
                            "one on " + r.name);
     if (!(r.principal.minCoeff() > 0))
-      throw InputError("scenario", "materials", "rigid pieces with a volume", r.name + " has no rotational inertia (a flat or degenerate piece)");
+      throw InputError(m.source, "materials", "rigid pieces with a volume", r.name + " has no rotational inertia (a flat or degenerate piece)");
   }
   return out;
 }

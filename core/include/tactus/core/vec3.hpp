@@ -1,6 +1,8 @@
 #pragma once
-// The one 3-vector of tactus (points, directions, velocities: std::array<double, 3>, as in
-// TetMesh) and its few operations, shared by every stage instead of private helper kits.
+// The 3-vector of tactus's data between stages (points, directions, velocities in meshes, scenarios
+// and results: std::array<double, 3>, as in TetMesh) and its few operations, shared by every stage.
+// Inside the solver's algebra Eigen's Vec3d is used (rigid bodies, contact frames), and the SIMD
+// kernels have their own lane vectors (lanes::V3); this one is for the data they exchange.
 #include <array>
 #include <cmath>
 

@@ -3,6 +3,7 @@
 // memory locality, in flat structure-of-arrays form. Built once from a Scenario; the time
 // integrator only reads it.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,7 @@ struct BodyRange {
 };
 
 struct Model {
+  std::string source = "scenario";  // the scenario file it was built from, for messages
   // Nodes (internal, locality-ordered numbering), 3 doubles per node.
   std::size_t num_nodes = 0;
   std::vector<double> X;     // reference positions
@@ -108,10 +110,6 @@ Model build_model(const TetMesh& mesh, const Material& material, const std::stri
 // cache lines; exposed for the benchmarks.
 void reorder_for_locality(Model& model);
 
-}  // namespace tactus::solver
-
-#include <functional>
-namespace tactus::solver {
 // Constrains the chosen components of every node whose reference position satisfies `select`
 // to the given velocity (0 = fixed). Returns how many nodes were selected. For tests/benchmarks.
 std::size_t constrain_nodes(Model& model, const std::function<bool(const double* X)>& select, std::array<bool, 3> components,

@@ -194,6 +194,9 @@ struct Scenario {
   DampingSpec damping;
   std::vector<BodySpec> bodies;
   std::map<std::string, MaterialInstance> materials;
+  // The laws the reader made from `materials` (by name; a scenario built in code has none, and
+  // build_model makes them from the values).
+  std::map<std::string, Material> laws;
   std::vector<BoundarySpec> boundaries;
   std::vector<LoadSpec> loads;
   std::map<std::string, CurveSpec> curves;
