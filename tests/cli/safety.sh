@@ -6,21 +6,7 @@ set -u
 B=$(cd "$1" && pwd)
 . "$(dirname "$0")/lib.sh"
 
-"$B/data_samples/tactus-sample-mesh" --size 0.02 0.02 0.02 --cells 4 4 4 -o "$T/case/cube.msh" -q
-cat > "$T/case/s.toml" <<'TOML'
-[run]
-end_time = 0.05
-[[bodies]]
-name = "cube"
-mesh = "cube.msh"
-materials = { "*" = "rubber" }
-initial_velocity = [0.1, 0, 0]
-[materials.rubber]
-type = "neo_hookean"
-mu = 3000.0
-bulk = 50000.0
-density = 1000.0
-TOML
+cube_case "$T/case"
 
 # 1. Data loss: a folder with a user's thesis, the current folder, the results being read.
 mkdir -p "$T/mydata" && echo "my thesis" > "$T/mydata/thesis.tex"

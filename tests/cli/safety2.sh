@@ -13,21 +13,7 @@ SAMPLE=$B/data_samples/tactus-sample-mesh PHANTOM=$B/data_samples/tactus-phantom
 PY=/usr/bin/python3  # Debian's, with python3-pydicom and python3-nibabel (scripts/setup.sh)
 cd "$T" || exit 1
 
-"$SAMPLE" --size 0.02 0.02 0.02 --cells 4 4 4 -o cube.msh -q
-cat > s.toml <<'TOML'
-[run]
-end_time = 0.05
-[[bodies]]
-name = "cube"
-mesh = "cube.msh"
-materials = { "*" = "rubber" }
-initial_velocity = [0.1, 0, 0]
-[materials.rubber]
-type = "neo_hookean"
-mu = 3000.0
-bulk = 50000.0
-density = 1000.0
-TOML
+cube_case .
 # A run of a few seconds that checkpoints every 10,000 steps.
 sed 's/end_time = 0.05/end_time = 0.25\ntime_step = 1e-6\ncheckpoint_interval = 0.01/' s.toml > slow.toml
 # scenario VARIANT 'sed script': s.toml edited.

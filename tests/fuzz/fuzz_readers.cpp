@@ -429,18 +429,16 @@ std::vector<Target> make_targets(const fs::path& work) {
     // A mutated but valid scenario may ask for a long run (end_time 1.7 s: 10^5 steps): the
     // harness gives every run the runaway guard a user with little time would set, so such a run
     // is refused up front by run.max_steps instead of running past the time limit.
-    Target scenario{"scenario_struct", d / "s.toml", true, [d] {
-                      solver::Scenario s = solver::read_scenario(d / "s.toml");
-                      s.run.max_steps = std::min(s.run.max_steps, 20000.0);
-                      solver::run_simulation(s, d / ("out-" + std::to_string(getpid())));
-                    }};
+    // (The same for a mutated mesh: a tiny element means many steps.)
+    const auto run_capped = [d] {
+      solver::Scenario s = solver::read_scenario(d / "s.toml");
+      s.run.max_steps = std::min(s.run.max_steps, 20000.0);
+      solver::run_simulation(s, d / ("out-" + std::to_string(getpid())));
+    };
+    Target scenario{"scenario_struct", d / "s.toml", true, run_capped};
     scenario.mutator = mutate_toml_structure;
     t.push_back(scenario);
-    Target mesh{"msh_struct", d / "pad.msh", true, [d] {
-                  solver::Scenario s = solver::read_scenario(d / "s.toml");
-                  s.run.max_steps = std::min(s.run.max_steps, 20000.0);  // as above: a tiny element means many steps
-                  solver::run_simulation(s, d / ("out-" + std::to_string(getpid())));
-                }};
+    Target mesh{"msh_struct", d / "pad.msh", true, run_capped};
     mesh.mutator = mutate_msh_structure;
     t.push_back(mesh);
   }

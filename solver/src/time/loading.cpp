@@ -42,8 +42,6 @@ double CurveSpec::integral(double t) const {
   return sum;
 }
 
-double ExplicitSolver::curve_at(std::int32_t curve, double t) const { return curve < 0 ? 1.0 : model_.curves[static_cast<std::size_t>(curve)].at(t); }
-
 void ExplicitSolver::init_loading() {
   const std::size_t ndof = 3 * model_.num_nodes;
   auto curve_of = [&](std::size_t i) { return model_.constraint_curve.empty() ? -1 : model_.constraint_curve[i]; };
@@ -54,7 +52,7 @@ void ExplicitSolver::init_loading() {
     const bool displacement = model_.constrained[i] == 2;
     if (displacement || curve_of(i) >= 0) driven_dofs_.push_back(static_cast<std::int32_t>(i));
     // v^{-1/2}: the prescribed velocity at t = 0 (a displacement starts from rest).
-    if (!displacement) prescribed_v_[i] = model_.constraint_velocity[i] * curve_at(curve_of(i), 0.0);
+    if (!displacement) prescribed_v_[i] = model_.constraint_velocity[i] * model_.curve_at(curve_of(i), 0.0);
   }
   support_force_.assign(constrained_dofs_.size(), 0.0);
   curve_at_next_.assign(model_.curves.size(), 0.0);
@@ -82,7 +80,7 @@ void ExplicitSolver::apply_loading(double t_next, double dt) {
       prescribed_v_[i] = value * curve_increment_[static_cast<std::size_t>(c)] / dt;
   }
   if (model_.gravity_curve >= 0)
-    gravity_factor_ = curve_at(model_.gravity_curve, time_);
+    gravity_factor_ = model_.curve_at(model_.gravity_curve, time_);
   else if (run_.gravity_ramp_time > 0)
     gravity_factor_ = std::min(1.0, time_ / run_.gravity_ramp_time);
   else
@@ -92,7 +90,7 @@ void ExplicitSolver::apply_loading(double t_next, double dt) {
   // (outward of the body), so the load turns and stretches with the surface.
   std::fill(pressure_force_.begin(), pressure_force_.end(), 0.0);
   for (const PressureLoad& load : model_.pressure_loads) {
-    const double p = load.pressure * curve_at(load.curve, time_);
+    const double p = load.pressure * model_.curve_at(load.curve, time_);
     if (p == 0) continue;
     for (std::size_t t = 0; t + 2 < load.triangles.size(); t += 3) {
       double x[3][3];

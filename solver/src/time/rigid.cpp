@@ -190,10 +190,6 @@ RigidBodies::~RigidBodies() = default;
 RigidBodies::RigidBodies(RigidBodies&&) noexcept = default;
 RigidBodies& RigidBodies::operator=(RigidBodies&&) noexcept = default;
 
-namespace {
-double curve_value(const Model& m, std::int32_t curve, double t) { return curve < 0 ? 1.0 : m.curves[static_cast<std::size_t>(curve)].at(t); }
-}  // namespace
-
 void RigidBodies::init(const Model& model, double* v_half, double* v_prev_half, double* contact_inv_mass) {
   bodies_ = find_rigid_bodies(model);
   if (bodies_.empty()) return;
@@ -211,7 +207,7 @@ void RigidBodies::init(const Model& model, double* v_half, double* v_prev_half, 
     const auto a0 = static_cast<std::size_t>(b.nodes.front());
     Vec3d V, w;
     if (b.prescribed) {
-      const double c = curve_value(model, b.motion.curve, 0.0);
+      const double c = model.curve_at(b.motion.curve, 0.0);
       w = c * b.motion.angular_velocity;
       V = c * b.motion.velocity;
       if (b.motion.pivot) V += w.cross(b.centre0 - *b.motion.pivot);

@@ -129,7 +129,6 @@ class ExplicitSolver {
   // dofs, the gravity factor and the follower pressures on the current surface.
   void init_loading();  // the lists of constrained and driven dofs, the velocities at t = 0
   void apply_loading(double t_next, double dt);
-  double curve_at(std::int32_t curve, double t) const;
   // Sums support_force_ per boundary into reactions_, with the moments about their points (loading.cpp).
   void accumulate_reactions();
 

@@ -70,6 +70,8 @@ struct Model {
   std::vector<double> constraint_velocity;
   std::vector<std::int32_t> constraint_curve, constraint_boundary;
   std::vector<CurveSpec> curves;
+  // curves[curve] at time t; 1 for curve -1 (none: constant).
+  double curve_at(std::int32_t curve, double t) const { return curve < 0 ? 1.0 : curves[static_cast<std::size_t>(curve)].at(t); }
   std::vector<BoundaryReactionSpec> boundaries;  // one per [[boundary]] entry
   std::vector<PressureLoad> pressure_loads;
   std::int32_t gravity_curve = -1;
