@@ -23,6 +23,8 @@
 
 namespace {
 
+using namespace tactus;
+
 // The output files of a mesh: <out>/mesh.msh, mesh.vtu, quality.json for a folder output, or
 // <out>.msh, <out>.vtu, <out>_quality.json when -o names a .msh file.
 std::vector<std::filesystem::path> output_files(const std::filesystem::path& out) {
@@ -133,20 +135,22 @@ void write_fibres(const std::filesystem::path& mesh_file, const tactus::mesher::
   log::info() << "wrote " << file.string();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  using namespace tactus;
-  CLI::App app{"tactus-mesh: conforming tetrahedral meshes of segmented anatomy (CGAL) and of objects (gmsh)", "tactus-mesh"};
-  cli::CommonOptions common;
-  cli::add_common_options(app, common, "output folder, or a .msh path", "an output folder or .msh path");
+// The options of meshing a label volume (the tool's main job).
+struct ImageOptions {
   std::string labels_file;
   mesher::ImageMeshParams p;
   // The materials are the solver's business: the report quotes the critical step for the wave
   // speeds given here (per physical volume name, "*" for the others), and otherwise the step
   // each subdomain would have at 1000 m/s, which scales as 1 / speed.
   std::vector<std::string> speed_args;
-  app.add_option("labels", labels_file, "labels.h5 from tactus-segment");
+  std::vector<double> refine_box_mm;
+  bool keep_surfaces = false, keep_small_regions = false;
+  double min_region_mm3 = 0;
+};
+
+void add_image_options(CLI::App& app, ImageOptions& o) {
+  mesher::ImageMeshParams& p = o.p;
+  app.add_option("labels", o.labels_file, "labels.h5 from tactus-segment");
   app.add_option("--facet-angle", p.facet_angle_deg, "min surface triangle angle, deg")->capture_default_str();
   app.add_option("--facet-size", p.facet_size_mm, "max surface triangle size, mm")->capture_default_str();
   app.add_option("--bone-facet-size", p.bone_facet_size_mm, "max triangle size on bone surfaces, mm")->capture_default_str();
@@ -155,8 +159,7 @@ int main(int argc, char** argv) {
                  "Gaussian sigma (voxels, 0-3) of the label indicators: boundaries between voxel centres instead of the voxels' staircase "
                  "(0: off)")
       ->capture_default_str();
-  std::vector<double> refine_box_mm;
-  app.add_option("--refine-box", refine_box_mm,
+  app.add_option("--refine-box", o.refine_box_mm,
                  "X0 Y0 Z0 X1 Y1 Z1: a world box (mm) meshed finer, e.g. where the skin will touch (with --refine-size)")
       ->expected(6);
   app.add_option("--refine-size", p.refine_size_mm, "max facet size inside --refine-box, mm (cells there: twice it)")->check(CLI::PositiveNumber);
@@ -169,93 +172,115 @@ int main(int argc, char** argv) {
   app.add_flag("--lloyd", p.lloyd, "Lloyd smoothing before perturb/exude");
   app.add_option("--sliver-bound", p.exude_sliver_bound_deg, "perturb/exude target dihedral angle, deg")->capture_default_str();
   app.add_option("--time-limit", p.optimiser_time_limit_s, "time limit of each optimiser, s")->capture_default_str();
-  bool keep_surfaces = false;
-  app.add_flag("--no-volume-restore", keep_surfaces, "keep CGAL's surfaces (bones then come out 3-4 % small)");
-  double min_region_mm3 = 0;
-  bool keep_small_regions = false;
-  app.add_option("--min-region-mm3", min_region_mm3,
+  app.add_flag("--no-volume-restore", o.keep_surfaces, "keep CGAL's surfaces (bones then come out 3-4 % small)");
+  app.add_option("--min-region-mm3", o.min_region_mm3,
                  "connected regions of one label (or enclosed background pockets) smaller than this go to the label they border most "
                  "(0: two tets of the bone cell size, bone-cell-size^3 / 5)")
       ->check(CLI::NonNegativeNumber);
-  app.add_flag("--keep-small-regions", keep_small_regions, "mesh every region however small (tiny tets set the stable step)");
+  app.add_flag("--keep-small-regions", o.keep_small_regions, "mesh every region however small (tiny tets set the stable step)");
   app.add_option("--seed", p.seed, "random seed")->capture_default_str();
   app.add_option("--max-elements", p.max_elements, "refuse meshes expected to have more tets than this")->capture_default_str();
-  app.add_option("--wave-speed", speed_args,
+  app.add_option("--wave-speed", o.speed_args,
                  "GROUP=SPEED: P-wave speed (m/s) of a physical volume for the step report "
                  "(repeatable; GROUP \"*\" for the rest; e.g. soft_tissue=309 \"*\"=2304, the paper's tissue and bone)");
+}
 
-  app.fallthrough();  // -o, -v given after a subcommand belong to the main command
-  auto* box = app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh");
+// Regions below --min-region-mm3 given to the label they border most, each warned about; what
+// the report lists of them.
+nlohmann::json absorb_small_regions(Volume<std::uint8_t>& labels, const LabelTable& table, const ImageOptions& o) {
+  nlohmann::json absorbed = nlohmann::json::array();
+  const std::size_t min_voxels = mesher::min_region_voxels(labels, o.min_region_mm3, o.p.bone_cell_size_mm);
+  for (const auto& r : mesher::absorb_small_regions(labels, min_voxels)) {
+    const auto name = [&](int id) { return table.count(id) ? table.at(id) : id == 0 ? std::string("background") : "label " + std::to_string(id); };
+    std::ostringstream m;
+    m << "mesher: a region of " << name(r.label) << " of " << r.voxels << " voxel(s) at (" << r.at[0] << ", " << r.at[1] << ", " << r.at[2]
+      << ") m is below " << min_voxels << " voxels (--min-region-mm3); it becomes " << name(r.into);
+    log::warn(m.str());
+    absorbed.push_back({{"label", r.label}, {"name", name(r.label)}, {"voxels", r.voxels}, {"into", r.into}, {"at_m", r.at}});
+  }
+  return absorbed;
+}
+
+void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
+  if (o.labels_file.empty()) throw CLI::RequiredError("labels");
+  MeshOutput output(common.output, common.output_rules({o.labels_file}));
+  mesher::ImageMeshParams& p = o.p;
+  p.restore_volumes = !o.keep_surfaces;
+  if (!o.refine_box_mm.empty() && !(p.refine_size_mm > 0)) throw InputError("command line", "--refine-box", "a --refine-size for the box", "none");
+  if (p.refine_size_mm > 0 && o.refine_box_mm.empty()) throw InputError("command line", "--refine-size", "a --refine-box to refine", "none");
+  for (std::size_t i = 0; i < o.refine_box_mm.size(); ++i) p.refine_box_m[i] = o.refine_box_mm[i] * 1e-3;
+  p.refine_cell_size_mm = 2 * p.refine_size_mm;  // the box's cells grade inward from its finer surface
+  LabelTable table;
+  auto labels = read_h5<std::uint8_t>(o.labels_file, "/labels", &table);
+  const nlohmann::json absorbed = o.keep_small_regions ? nlohmann::json::array() : absorb_small_regions(labels, table, o);
+  const auto t0 = std::chrono::steady_clock::now();
+  const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
+  log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
+  output.write(mesh, wave_speeds(mesh, o.speed_args), {{"absorbed_regions", absorbed}});
+}
+
+// The subcommands: the paper's block and an STL object (gmsh), and the fibre field of a mesh.
+struct ObjectTools {
+  CLI::App *box, *fibres, *stl;
   std::array<double, 3> size{0.1, 0.1, 0.05}, origin{0, 0, 0};
-  double h = 0.01;
-  box->add_option("--size", size, "edge lengths, m")->capture_default_str();
-  box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
-  box->add_option("--element-size", h, "element size, m")->capture_default_str();
-  double edge_radius = 0;
-  box->add_option("--edge-radius", edge_radius, "round every edge with this radius, m (meshed at about half of it; 0: sharp)")->capture_default_str();
-
-  auto* fib = app.add_subcommand("fibres", "rule-based hgo fibre directions of a mesh, as the .vtu bodies.fibres reads");
-  std::string fib_mesh, fib_axis = "z";
+  double h = 0.01, edge_radius = 0, stl_scale = 1.0;
+  std::string fib_mesh, fib_axis = "z", stl_file;
   mesher::FibreFieldOptions fo;
-  fib->add_option("mesh", fib_mesh, "the mesh (.msh) with a skin surface group")->required();
-  fib->add_option("--angle", fo.angle_deg, "each family's angle to the reference direction, deg")->capture_default_str();
-  fib->add_option("--axis", fib_axis, "x, y or z: the base (the wrist) is the mesh's low end along it")->capture_default_str();
-  fib->add_option("--base-fraction", fo.base_fraction, "nodes within this fraction of the extent from the low end form the base")
-      ->capture_default_str();
-  fib->add_option("--skin-group", fo.skin_group, "the physical surface group of the skin")->capture_default_str();
-  auto* stl = app.add_subcommand("stl", "a closed STL object, meshed with gmsh");
-  std::string stl_file;
-  double stl_scale = 1.0;
-  stl->add_option("file", stl_file, "closed STL surface")->required();
-  stl->add_option("--element-size", h, "element size, m")->capture_default_str();
-  stl->add_option("--scale", stl_scale, "factor from STL units to m (1e-3 for mm)")->capture_default_str();
 
-  return cli::run(app, argc, argv, common, [&] {
+  explicit ObjectTools(CLI::App& app)
+      : box(app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh")),
+        fibres(app.add_subcommand("fibres", "rule-based hgo fibre directions of a mesh, as the .vtu bodies.fibres reads")),
+        stl(app.add_subcommand("stl", "a closed STL object, meshed with gmsh")) {
+    box->add_option("--size", size, "edge lengths, m")->capture_default_str();
+    box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
+    box->add_option("--element-size", h, "element size, m")->capture_default_str();
+    box->add_option("--edge-radius", edge_radius, "round every edge with this radius, m (meshed at about half of it; 0: sharp)")
+        ->capture_default_str();
+    fibres->add_option("mesh", fib_mesh, "the mesh (.msh) with a skin surface group")->required();
+    fibres->add_option("--angle", fo.angle_deg, "each family's angle to the reference direction, deg")->capture_default_str();
+    fibres->add_option("--axis", fib_axis, "x, y or z: the base (the wrist) is the mesh's low end along it")->capture_default_str();
+    fibres->add_option("--base-fraction", fo.base_fraction, "nodes within this fraction of the extent from the low end form the base")
+        ->capture_default_str();
+    fibres->add_option("--skin-group", fo.skin_group, "the physical surface group of the skin")->capture_default_str();
+    stl->add_option("file", stl_file, "closed STL surface")->required();
+    stl->add_option("--element-size", h, "element size, m")->capture_default_str();
+    stl->add_option("--scale", stl_scale, "factor from STL units to m (1e-3 for mm)")->capture_default_str();
+  }
+
+  // False when no subcommand was given (a label volume is to be meshed).
+  bool run(const ImageOptions& o, const cli::CommonOptions& common) const {
     const std::filesystem::path out = common.output;
-    if (fib->parsed()) {
+    if (fibres->parsed()) {
       if (fib_axis != "x" && fib_axis != "y" && fib_axis != "z") throw InputError("command line", "--axis", "x, y or z", "\"" + fib_axis + "\"");
-      fo.axis = fib_axis[0] - 'x';
-      write_fibres(fib_mesh, fo, out, common.output_rules({fib_mesh}));
-      return;
-    }
-    if (box->parsed()) {
+      mesher::FibreFieldOptions options = fo;
+      options.axis = fib_axis[0] - 'x';
+      write_fibres(fib_mesh, options, out, common.output_rules({fib_mesh}));
+    } else if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
-      const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", p.max_elements, edge_radius);
-      output.write(mesh, wave_speeds(mesh, speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
-      return;
-    }
-    if (stl->parsed()) {
+      const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", o.p.max_elements, edge_radius);
+      output.write(mesh, wave_speeds(mesh, o.speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
+    } else if (stl->parsed()) {
       MeshOutput output(out, common.output_rules({stl_file}));
-      const TetMesh mesh = mesher::mesh_stl_object(stl_file, h, stl_scale, "object", p.max_elements);
-      output.write(mesh, wave_speeds(mesh, speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
-      return;
+      const TetMesh mesh = mesher::mesh_stl_object(stl_file, h, stl_scale, "object", o.p.max_elements);
+      output.write(mesh, wave_speeds(mesh, o.speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
+    } else {
+      return false;
     }
-    if (labels_file.empty()) throw CLI::RequiredError("labels");
-    MeshOutput output(out, common.output_rules({labels_file}));
-    p.restore_volumes = !keep_surfaces;
-    if (!refine_box_mm.empty() && !(p.refine_size_mm > 0)) throw InputError("command line", "--refine-box", "a --refine-size for the box", "none");
-    if (p.refine_size_mm > 0 && refine_box_mm.empty()) throw InputError("command line", "--refine-size", "a --refine-box to refine", "none");
-    for (std::size_t i = 0; i < refine_box_mm.size(); ++i) p.refine_box_m[i] = refine_box_mm[i] * 1e-3;
-    p.refine_cell_size_mm = 2 * p.refine_size_mm;  // the box's cells grade inward from its finer surface
-    LabelTable table;
-    auto labels = read_h5<std::uint8_t>(labels_file, "/labels", &table);
-    nlohmann::json absorbed = nlohmann::json::array();
-    if (!keep_small_regions) {
-      const std::size_t min_voxels = mesher::min_region_voxels(labels, min_region_mm3, p.bone_cell_size_mm);
-      for (const auto& r : mesher::absorb_small_regions(labels, min_voxels)) {
-        const auto name = [&](int id) {
-          return table.count(id) ? table.at(id) : id == 0 ? std::string("background") : "label " + std::to_string(id);
-        };
-        std::ostringstream m;
-        m << "mesher: a region of " << name(r.label) << " of " << r.voxels << " voxel(s) at (" << r.at[0] << ", " << r.at[1] << ", " << r.at[2]
-          << ") m is below " << min_voxels << " voxels (--min-region-mm3); it becomes " << name(r.into);
-        log::warn(m.str());
-        absorbed.push_back({{"label", r.label}, {"name", name(r.label)}, {"voxels", r.voxels}, {"into", r.into}, {"at_m", r.at}});
-      }
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
-    log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
-    output.write(mesh, wave_speeds(mesh, speed_args), {{"absorbed_regions", absorbed}});
+    return true;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tactus-mesh: conforming tetrahedral meshes of segmented anatomy (CGAL) and of objects (gmsh)", "tactus-mesh"};
+  cli::CommonOptions common;
+  cli::add_common_options(app, common, "output folder, or a .msh path", "an output folder or .msh path");
+  ImageOptions options;
+  add_image_options(app, options);
+  app.fallthrough();  // -o, -v given after a subcommand belong to the main command
+  const ObjectTools tools(app);
+  return cli::run(app, argc, argv, common, [&] {
+    if (!tools.run(options, common)) mesh_labels(options, common);
   });
 }

@@ -64,124 +64,147 @@ QualityAdvice QualityAdvice::gmsh_object() {
   return a;
 }
 
-nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg, const QualityGuarantees& goal,
-                              const QualityAdvice& advice) {
-  struct Acc {
-    std::size_t tets = 0, slivers = 0, below10 = 0, inverted = 0, below_goal_angle = 0;
-    std::size_t worst_angle_tet = 0, shortest_tet = 0;
-    double volume = 0, min_dihedral = 180, max_dihedral = 0, min_radius_ratio = 1, max_edge_ratio = 0, min_length = 1e300;
-    std::vector<double> lengths;
-    std::array<std::size_t, 18> dihedral_hist{};  // 10-degree bins of the minimum dihedral angle
-  };
-  std::map<int, Acc> acc;
-  Acc all;
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
-    const auto& t = mesh.tets[e];
-    const TetQuality q = tet_quality(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
-                                     mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]);
-    for (Acc* a : {&acc[mesh.tet_group[e]], &all}) {
-      ++a->tets;
-      a->volume += q.volume;
-      a->inverted += q.volume <= 0;
-      a->slivers += q.min_dihedral_deg < sliver_deg;
-      a->below10 += q.min_dihedral_deg < 10;
-      a->below_goal_angle += q.min_dihedral_deg < goal.min_dihedral_deg;
-      if (q.min_dihedral_deg < a->min_dihedral) a->worst_angle_tet = e;
-      if (q.length < a->min_length) a->min_length = q.length, a->shortest_tet = e;
-      a->min_dihedral = std::min(a->min_dihedral, q.min_dihedral_deg);
-      a->max_dihedral = std::max(a->max_dihedral, q.max_dihedral_deg);
-      a->min_radius_ratio = std::min(a->min_radius_ratio, q.radius_ratio);
-      a->max_edge_ratio = std::max(a->max_edge_ratio, q.edge_ratio);
-      a->lengths.push_back(q.length);
-      ++a->dihedral_hist[static_cast<std::size_t>(std::clamp(q.min_dihedral_deg / 10.0, 0.0, 17.0))];
-    }
+namespace {
+
+// One subdomain's (or the whole mesh's) quality figures, accumulated tet by tet.
+struct Acc {
+  std::size_t tets = 0, slivers = 0, below10 = 0, inverted = 0, below_goal_angle = 0;
+  std::size_t worst_angle_tet = 0, shortest_tet = 0;
+  double volume = 0, min_dihedral = 180, max_dihedral = 0, min_radius_ratio = 1, max_edge_ratio = 0, min_length = 1e300;
+  std::vector<double> lengths;
+  std::array<std::size_t, 18> dihedral_hist{};  // 10-degree bins of the minimum dihedral angle
+  void add(const TetQuality& q, std::size_t e, double sliver_deg, const QualityGuarantees& goal) {
+    ++tets;
+    volume += q.volume;
+    inverted += q.volume <= 0;
+    slivers += q.min_dihedral_deg < sliver_deg;
+    below10 += q.min_dihedral_deg < 10;
+    below_goal_angle += q.min_dihedral_deg < goal.min_dihedral_deg;
+    if (q.min_dihedral_deg < min_dihedral) worst_angle_tet = e;
+    if (q.length < min_length) min_length = q.length, shortest_tet = e;
+    min_dihedral = std::min(min_dihedral, q.min_dihedral_deg);
+    max_dihedral = std::max(max_dihedral, q.max_dihedral_deg);
+    min_radius_ratio = std::min(min_radius_ratio, q.radius_ratio);
+    max_edge_ratio = std::max(max_edge_ratio, q.edge_ratio);
+    lengths.push_back(q.length);
+    ++dihedral_hist[static_cast<std::size_t>(std::clamp(q.min_dihedral_deg / 10.0, 0.0, 17.0))];
   }
-  auto to_json = [](Acc& a) {
-    std::sort(a.lengths.begin(), a.lengths.end());
-    const double median = a.lengths.empty() ? 0 : a.lengths[a.lengths.size() / 2];
-    const double smallest = a.lengths.empty() ? 0 : a.lengths.front();
-    return nlohmann::json{{"tets", a.tets},
-                          {"volume_m3", a.volume},
-                          {"inverted", a.inverted},
-                          {"min_dihedral_deg", a.min_dihedral},
-                          {"max_dihedral_deg", a.max_dihedral},
-                          {"fraction_min_dihedral_below_10deg", a.tets ? static_cast<double>(a.below10) / static_cast<double>(a.tets) : 0},
-                          {"slivers", a.slivers},
-                          {"min_radius_ratio", a.min_radius_ratio},
-                          {"max_edge_ratio", a.max_edge_ratio},
-                          {"min_length_m", smallest},
-                          {"median_length_m", median},
-                          {"min_over_median_length", median > 0 ? smallest / median : 0},
-                          {"min_dihedral_histogram_10deg_bins", a.dihedral_hist}};
-  };
-  nlohmann::json j;
-  j["units"] = "SI (m, m^3, s); angles in degrees; length = L_e = (sum_a |grad N_a|^2)^(-1/2)";
-  j["nodes"] = mesh.nodes.size();
-  j["sliver_bound_deg"] = sliver_deg;
-  j["all"] = to_json(all);
-  j["groups"] = nlohmann::json::object();
-  // Per subdomain, its figures and the guarantees: each unmet one with its worst tet, where it
-  // is, and why.
-  std::vector<char> on_surface(mesh.nodes.size(), 0);
-  for (const auto& f : mesh.triangles)
-    for (int v : f) on_surface[static_cast<std::size_t>(v)] = 1;
+  // The figures as quality.json holds them (sorts the lengths for their median).
+  nlohmann::json to_json();
+};
+
+nlohmann::json Acc::to_json() {
+  std::sort(lengths.begin(), lengths.end());
+  const double median = lengths.empty() ? 0 : lengths[lengths.size() / 2];
+  const double smallest = lengths.empty() ? 0 : lengths.front();
+  return nlohmann::json{{"tets", tets},
+                        {"volume_m3", volume},
+                        {"inverted", inverted},
+                        {"min_dihedral_deg", min_dihedral},
+                        {"max_dihedral_deg", max_dihedral},
+                        {"fraction_min_dihedral_below_10deg", tets ? static_cast<double>(below10) / static_cast<double>(tets) : 0},
+                        {"slivers", slivers},
+                        {"min_radius_ratio", min_radius_ratio},
+                        {"max_edge_ratio", max_edge_ratio},
+                        {"min_length_m", smallest},
+                        {"median_length_m", median},
+                        {"min_over_median_length", median > 0 ? smallest / median : 0},
+                        {"min_dihedral_histogram_10deg_bins", dihedral_hist}};
+}
+
+// Each guarantee a subdomain misses, with its worst tet, where it is, and why.
+void add_unmet(const TetMesh& mesh, const std::string& name, const Acc& a, const std::vector<char>& on_surface, const QualityGuarantees& goal,
+               const QualityAdvice& advice, nlohmann::json& unmet) {
   const auto centroid = [&](std::size_t e) {
     std::array<double, 3> c{0, 0, 0};
     for (int v : mesh.tets[e])
       for (std::size_t i = 0; i < 3; ++i) c[i] += 0.25 * mesh.nodes[static_cast<std::size_t>(v)][i];
     return c;
   };
-  nlohmann::json unmet = nlohmann::json::array();
-  for (auto& [tag, a] : acc) {
-    const auto* g = mesh.find_group(3, tag);
-    const std::string name = g ? g->name : std::to_string(tag);
-    j["groups"][name] = to_json(a);  // sorts a.lengths
-    if (a.min_dihedral < goal.min_dihedral_deg) {
-      int surface = 0;
-      for (int v : mesh.tets[a.worst_angle_tet]) surface += on_surface[static_cast<std::size_t>(v)];
-      unmet.push_back({{"group", name},
-                       {"guarantee", "min_dihedral_deg"},
-                       {"value", a.min_dihedral},
-                       {"tets_below", a.below_goal_angle},
-                       {"element", a.worst_angle_tet + 1},
-                       {"at_m", centroid(a.worst_angle_tet)},
-                       {"nodes_on_surfaces", surface},
-                       {"why", surface == 4 ? advice.surface_angle : advice.interior_angle}});
-    }
-    const double median = a.lengths[a.lengths.size() / 2];
-    if (a.min_length < goal.min_length_ratio * median) {
-      const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median) - a.lengths.begin();
-      std::ostringstream why;
-      why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3 << " mm: " << advice.short_length;
-      unmet.push_back({{"group", name},
-                       {"guarantee", "min_over_median_length"},
-                       {"value", a.min_length / median},
-                       {"tets_below", below},
-                       {"element", a.shortest_tet + 1},
-                       {"at_m", centroid(a.shortest_tet)},
-                       {"why", why.str()}});
-    }
+  if (a.min_dihedral < goal.min_dihedral_deg) {
+    int surface = 0;
+    for (int v : mesh.tets[a.worst_angle_tet]) surface += on_surface[static_cast<std::size_t>(v)];
+    unmet.push_back({{"group", name},
+                     {"guarantee", "min_dihedral_deg"},
+                     {"value", a.min_dihedral},
+                     {"tets_below", a.below_goal_angle},
+                     {"element", a.worst_angle_tet + 1},
+                     {"at_m", centroid(a.worst_angle_tet)},
+                     {"nodes_on_surfaces", surface},
+                     {"why", surface == 4 ? advice.surface_angle : advice.interior_angle}});
   }
-  j["guarantees"] = {{"min_dihedral_deg", goal.min_dihedral_deg},
-                     {"min_over_median_length", goal.min_length_ratio},
-                     {"scope", "every subdomain (volume group); L_e over the subdomain's median L_e"},
-                     {"met", unmet.empty()},
-                     {"unmet", unmet}};
+  const double median = a.lengths[a.lengths.size() / 2];
+  if (a.min_length < goal.min_length_ratio * median) {
+    const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median) - a.lengths.begin();
+    std::ostringstream why;
+    why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3 << " mm: " << advice.short_length;
+    unmet.push_back({{"group", name},
+                     {"guarantee", "min_over_median_length"},
+                     {"value", a.min_length / median},
+                     {"tets_below", below},
+                     {"element", a.shortest_tet + 1},
+                     {"at_m", centroid(a.shortest_tet)},
+                     {"why", why.str()}});
+  }
+}
+
+// The critical step of the mesh for the given wave speeds (none: 1000 m/s), or null.
+nlohmann::json critical_step_report(const TetMesh& mesh, const std::map<int, double>& wave_speed) {
+  nlohmann::json out;
   const CriticalStep step = critical_time_step(mesh, [&](int tag) {
     auto it = wave_speed.find(tag);
     return it == wave_speed.end() ? 0.0 : it->second;
   });
   if (step.element >= 0) {
     const auto* g = mesh.find_group(3, step.group);
-    j["critical_time_step"] = {{"dt_s", step.dt},
-                               {"element", step.element + 1},
-                               {"group", g ? g->name : ""},
-                               {"length_m", step.length},
-                               {"wave_speed_m_per_s", wave_speed.at(step.group)},
-                               {"note",
-                                "for the wave speeds given with --wave-speed (1000 m/s everywhere when none: the step "
-                                "then scales as 1000 / speed)"}};
+    out = {{"dt_s", step.dt},
+           {"element", step.element + 1},
+           {"group", g ? g->name : ""},
+           {"length_m", step.length},
+           {"wave_speed_m_per_s", wave_speed.at(step.group)},
+           {"note",
+            "for the wave speeds given with --wave-speed (1000 m/s everywhere when none: the step "
+            "then scales as 1000 / speed)"}};
   }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& wave_speed, double sliver_deg, const QualityGuarantees& goal,
+                              const QualityAdvice& advice) {
+  std::map<int, Acc> acc;
+  Acc all;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    const auto& t = mesh.tets[e];
+    const TetQuality q = tet_quality(mesh.nodes[static_cast<std::size_t>(t[0])], mesh.nodes[static_cast<std::size_t>(t[1])],
+                                     mesh.nodes[static_cast<std::size_t>(t[2])], mesh.nodes[static_cast<std::size_t>(t[3])]);
+    for (Acc* a : {&acc[mesh.tet_group[e]], &all}) a->add(q, e, sliver_deg, goal);
+  }
+  nlohmann::json j;
+  j["units"] = "SI (m, m^3, s); angles in degrees; length = L_e = (sum_a |grad N_a|^2)^(-1/2)";
+  j["nodes"] = mesh.nodes.size();
+  j["sliver_bound_deg"] = sliver_deg;
+  j["all"] = all.to_json();
+  j["groups"] = nlohmann::json::object();
+  // Per subdomain, its figures and the guarantees: each unmet one with its worst tet, where it
+  // is, and why.
+  std::vector<char> on_surface(mesh.nodes.size(), 0);
+  for (const auto& f : mesh.triangles)
+    for (int v : f) on_surface[static_cast<std::size_t>(v)] = 1;
+  nlohmann::json unmet = nlohmann::json::array();
+  for (auto& [tag, a] : acc) {
+    const auto* g = mesh.find_group(3, tag);
+    const std::string name = g ? g->name : std::to_string(tag);
+    j["groups"][name] = a.to_json();  // sorts a.lengths
+    add_unmet(mesh, name, a, on_surface, goal, advice, unmet);
+  }
+  j["guarantees"] = {{"min_dihedral_deg", goal.min_dihedral_deg},
+                     {"min_over_median_length", goal.min_length_ratio},
+                     {"scope", "every subdomain (volume group); L_e over the subdomain's median L_e"},
+                     {"met", unmet.empty()},
+                     {"unmet", unmet}};
+  if (nlohmann::json step = critical_step_report(mesh, wave_speed); !step.is_null()) j["critical_time_step"] = step;
   return j;
 }
 

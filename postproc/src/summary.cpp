@@ -57,10 +57,13 @@ std::string body_of_node(const VtuContents& v, std::size_t node, const std::vect
 
 }  // namespace
 
-Summary summarize(const Results& r) {
-  Summary s;
-  const auto j = nlohmann::json::parse(r.run_json);
-  auto num = [&](const nlohmann::json& node, const char* key) { return node.contains(key) && node[key].is_number() ? node[key].get<double>() : 0.0; };
+namespace {
+
+double number_at(const nlohmann::json& node, const char* key) { return node.contains(key) && node[key].is_number() ? node[key].get<double>() : 0.0; }
+
+// The run's figures from run.json: status, sizes, steps, timing, energies, mass scaling.
+void read_run_figures(const nlohmann::json& j, Summary& s) {
+  const auto num = number_at;
   s.status = j.value(rk::status, "");
   if (j.contains(rk::message) && j[rk::message].is_string()) s.message = j[rk::message].get<std::string>();
   s.steps = j.value(rk::steps, std::size_t{0});
@@ -81,10 +84,11 @@ Summary summarize(const Results& r) {
     if (ms.contains("bodies") && ms["bodies"].is_object())
       for (const auto& [body, v] : ms["bodies"].items()) s.added_mass.push_back({body, num(v, "added_mass"), num(v, "fraction")});
   }
-  const History& h = r.history;
-  if (h.has(hc::kinetic_energy.name) && h.rows() > 0) s.initial_kinetic = h.column(hc::kinetic_energy.name).front();
+}
 
-  // Every step (history rows are every few steps; run.json holds the per-step peaks).
+// The contact figures of run.json, which hold every step's peaks (history rows are every few steps).
+void read_contact_figures(const nlohmann::json& j, Summary& s) {
+  const auto num = number_at;
   if (j.contains(rk::contact)) {
     const auto& c = j[rk::contact];
     if (c.contains("peak_pressure")) {
@@ -104,7 +108,11 @@ Summary summarize(const Results& r) {
                                    p.contains("peak_pressure") ? num(p["peak_pressure"], "value") : 0.0});
       }
   }
+}
 
+// The supports' reactions of run.json.
+void read_reactions(const nlohmann::json& j, Summary& s) {
+  const auto num = number_at;
   if (j.contains(rk::reactions) && j[rk::reactions].is_array())
     for (const auto& e : j[rk::reactions]) {
       ReactionSummary rs;
@@ -120,67 +128,89 @@ Summary summarize(const Results& r) {
       }
       s.reactions.push_back(rs);
     }
+}
 
+// The largest isochoric fibre stretch of state v (time t) so far, with the von Mises stress of
+// the fibre stress there.
+void track_fibre_stretch(const VtuContents& v, double t, Summary& s) {
+  const MeshField* fs2 = v.cell_field("fibre_stretch_isochoric");
+  if (!fs2 || fs2->components != 2) return;
+  const MeshField* stress = v.cell_field("fibre_stress");
+  for (std::size_t e = 0; 2 * e + 1 < fs2->values.size(); ++e)
+    for (int k = 0; k < 2; ++k)
+      if (fs2->values[2 * e + k] > s.fibre_stretch.value) {
+        s.fibre_stretch = {fs2->values[2 * e + k], t, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
+        s.fibre_family = k + 1;
+        s.fibre_stress_there = 0;
+        if (stress && stress->components == 6) {
+          const double* q = &stress->values[6 * e];
+          const double a = q[0] - q[1], b = q[1] - q[2], c = q[2] - q[0];
+          s.fibre_stress_there = std::sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * (q[3] * q[3] + q[4] * q[4] + q[5] * q[5]));
+        }
+      }
+}
+
+// One output state's figures (its per-material peaks, contact nodes and pressure, the contact
+// force of the nearest history row), and the run's peaks over the states so far.
+FrameSummary summarize_frame(const Results& r, const Frame& f, std::size_t M, Summary& s) {
+  const History& h = r.history;
+  const VtuContents v = read_vtu(f.file);
+  const std::string file = f.file.string();
+  // A state of another model (a file copied in, or a folder mixed from two runs) would be
+  // reported as this run's: its size must be the run's.
+  if ((s.nodes && v.mesh.nodes.size() != s.nodes) || (s.tets && v.mesh.tets.size() != s.tets))
+    throw InputError(file, "", "a state of this run's model (" + std::to_string(s.nodes) + " nodes, " + std::to_string(s.tets) + " tets, run.json)",
+                     std::to_string(v.mesh.nodes.size()) + " nodes, " + std::to_string(v.mesh.tets.size()) + " tets: a state of another model");
+  const MeshField& vm = need_cell(v, cc::von_mises.name, file);
+  const MeshField& mat = need_cell(v, cc::material.name, file);
+  FrameSummary fs;
+  fs.time = f.time;
+  fs.file = f.file.filename().string();
+  fs.von_mises_max.assign(M, 0.0);
+  for (std::size_t e = 0; e < vm.values.size(); ++e) {
+    const std::size_t m = static_cast<std::size_t>(mat.values[e]);
+    if (m >= M) throw InputError(file, "material", "indices below " + std::to_string(M) + " (run.json materials)", std::to_string(m));
+    if (vm.values[e] > fs.von_mises_max[m]) fs.von_mises_max[m] = vm.values[e];
+    if (vm.values[e] > s.von_mises[m].von_mises.value) {
+      s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
+    }
+  }
+  track_fibre_stretch(v, f.time, s);
+  if (const MeshField* p = v.point_field(cp::contact_pressure.name)) {
+    bool new_peak = false;  // in this state (possibly at the same node as before: its body is looked up again)
+    for (std::size_t i = 0; i < p->values.size(); ++i) {
+      const double pi = p->values[i];
+      if (pi > 0) ++fs.contact_nodes;
+      if (pi > fs.contact_pressure_max) fs.contact_pressure_max = pi;
+      if (pi > s.peak_pressure_outputs.value) {
+        s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1, ""};
+        new_peak = true;
+      }
+    }
+    if (new_peak) s.peak_pressure_outputs.body = body_of_node(v, static_cast<std::size_t>(s.peak_pressure_outputs.index - 1), r.bodies, file);
+  }
+  if (h.has(hc::contact_force.name) && h.rows() > 0) {  // nearest history row
+    const auto& t = h.column(hc::time.name);
+    const std::size_t k = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), f.time - 1e-15) - t.begin());
+    fs.contact_force = h.column(hc::contact_force.name)[std::min(k, t.size() - 1)];
+  }
+  return fs;
+}
+
+}  // namespace
+
+Summary summarize(const Results& r) {
+  Summary s;
+  const auto j = nlohmann::json::parse(r.run_json);
+  read_run_figures(j, s);
+  const History& h = r.history;
+  if (h.has(hc::kinetic_energy.name) && h.rows() > 0) s.initial_kinetic = h.column(hc::kinetic_energy.name).front();
+  read_contact_figures(j, s);
+  read_reactions(j, s);
   const std::size_t M = std::max<std::size_t>(r.materials.size(), 1);
   s.von_mises.resize(M);
   for (std::size_t m = 0; m < M; ++m) s.von_mises[m].material = m < r.materials.size() ? r.materials[m] : "material " + std::to_string(m);
-  for (const Frame& f : r.frames) {
-    const VtuContents v = read_vtu(f.file);
-    const std::string file = f.file.string();
-    // A state of another model (a file copied in, or a folder mixed from two runs) would be
-    // reported as this run's: its size must be the run's.
-    if ((s.nodes && v.mesh.nodes.size() != s.nodes) || (s.tets && v.mesh.tets.size() != s.tets))
-      throw InputError(file, "", "a state of this run's model (" + std::to_string(s.nodes) + " nodes, " + std::to_string(s.tets) + " tets, run.json)",
-                       std::to_string(v.mesh.nodes.size()) + " nodes, " + std::to_string(v.mesh.tets.size()) + " tets: a state of another model");
-    const MeshField& vm = need_cell(v, cc::von_mises.name, file);
-    const MeshField& mat = need_cell(v, cc::material.name, file);
-    FrameSummary fs;
-    fs.time = f.time;
-    fs.file = f.file.filename().string();
-    fs.von_mises_max.assign(M, 0.0);
-    for (std::size_t e = 0; e < vm.values.size(); ++e) {
-      const std::size_t m = static_cast<std::size_t>(mat.values[e]);
-      if (m >= M) throw InputError(file, "material", "indices below " + std::to_string(M) + " (run.json materials)", std::to_string(m));
-      if (vm.values[e] > fs.von_mises_max[m]) fs.von_mises_max[m] = vm.values[e];
-      if (vm.values[e] > s.von_mises[m].von_mises.value) {
-        s.von_mises[m].von_mises = {vm.values[e], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
-      }
-    }
-    if (const MeshField* fs2 = v.cell_field("fibre_stretch_isochoric"); fs2 && fs2->components == 2) {
-      const MeshField* stress = v.cell_field("fibre_stress");
-      for (std::size_t e = 0; 2 * e + 1 < fs2->values.size(); ++e)
-        for (int k = 0; k < 2; ++k)
-          if (fs2->values[2 * e + k] > s.fibre_stretch.value) {
-            s.fibre_stretch = {fs2->values[2 * e + k], f.time, centroid(v.mesh, e), static_cast<long>(e) + 1, ""};
-            s.fibre_family = k + 1;
-            s.fibre_stress_there = 0;
-            if (stress && stress->components == 6) {
-              const double* t = &stress->values[6 * e];
-              const double a = t[0] - t[1], b = t[1] - t[2], c = t[2] - t[0];
-              s.fibre_stress_there = std::sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * (t[3] * t[3] + t[4] * t[4] + t[5] * t[5]));
-            }
-          }
-    }
-    if (const MeshField* p = v.point_field(cp::contact_pressure.name)) {
-      bool new_peak = false;  // in this state (possibly at the same node as before: its body is looked up again)
-      for (std::size_t i = 0; i < p->values.size(); ++i) {
-        const double pi = p->values[i];
-        if (pi > 0) ++fs.contact_nodes;
-        if (pi > fs.contact_pressure_max) fs.contact_pressure_max = pi;
-        if (pi > s.peak_pressure_outputs.value) {
-          s.peak_pressure_outputs = {pi, f.time, {v.mesh.nodes[i][0], v.mesh.nodes[i][1], v.mesh.nodes[i][2]}, static_cast<long>(i) + 1, ""};
-          new_peak = true;
-        }
-      }
-      if (new_peak) s.peak_pressure_outputs.body = body_of_node(v, static_cast<std::size_t>(s.peak_pressure_outputs.index - 1), r.bodies, file);
-    }
-    if (h.has(hc::contact_force.name) && h.rows() > 0) {  // nearest history row
-      const auto& t = h.column(hc::time.name);
-      const std::size_t k = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), f.time - 1e-15) - t.begin());
-      fs.contact_force = h.column(hc::contact_force.name)[std::min(k, t.size() - 1)];
-    }
-    s.frames.push_back(fs);
-  }
+  for (const Frame& f : r.frames) s.frames.push_back(summarize_frame(r, f, M, s));
   return s;
 }
 

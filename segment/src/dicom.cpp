@@ -398,11 +398,10 @@ std::vector<DicomSeries> list_dicom_series(const fs::path& folder) {
   return out;
 }
 
-SliceStack read_dicom_series(const fs::path& folder, const std::string& series_uid) {
-  const std::string dir = folder.string();
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<DicomSeries> all = list_dicom_series(folder);
-  const double scan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+namespace {
+
+// The series asked for (--series), or the folder's only one; refuses naming the folder's series.
+DicomSeries& choose_series(std::vector<DicomSeries>& all, const std::string& series_uid, const std::string& dir) {
   std::string listing;
   for (const DicomSeries& s : all) listing += "\n  " + describe(s);
   DicomSeries* chosen = nullptr;
@@ -415,7 +414,12 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
   } else {
     chosen = &all.front();
   }
-  std::vector<DicomSlice>& slices = chosen->slices;
+  return *chosen;
+}
+
+// Every slice decodable and of the first one's size, pixel format, pixel size and orientation;
+// at least two (the slice spacing comes from their positions).
+void check_slices_alike(const std::vector<DicomSlice>& slices, const std::string& dir, const std::string& uid) {
   for (const DicomSlice& s : slices) check_image(s);
   const DicomSlice& first = slices.front();
   // Segmentation works in Hounsfield units; another modality has no such scale (an MR series
@@ -439,14 +443,12 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
       if (std::abs(s.orientation[i] - first.orientation[i]) > 1e-4)
         throw InputError(f, "(0020,0037) ImageOrientationPatient", "the orientation of " + first.file.filename().string(), "another");
   }
-  if (slices.size() < 2) throw InputError(dir, "series " + chosen->uid, "at least 2 slices (the slice spacing comes from their positions)", "1");
+  if (slices.size() < 2) throw InputError(dir, "series " + uid, "at least 2 slices (the slice spacing comes from their positions)", "1");
+}
 
-  // Volume axes: x along the row cosine (column index), y along the column cosine (row index),
-  // z along their cross product, the slice normal; any orthonormal orientation is carried as the
-  // volume's direction (through labels.h5 to the mesh's coordinates).
-  const double* r = first.orientation.data();
-  const double* c = first.orientation.data() + 3;
-  const double n[3] = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
+// Sorts the slices along the normal n and returns their spacing (mm), refusing uneven spacing, a
+// missing slice or a gantry tilt.
+double stack_along_normal(std::vector<DicomSlice>& slices, const double n[3], const std::string& dir) {
   std::sort(slices.begin(), slices.end(),
             [&](const DicomSlice& a, const DicomSlice& b) { return dot(a.position.data(), n) < dot(b.position.data(), n); });
   std::vector<double> gaps;
@@ -470,16 +472,13 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
                        "slices stacked along their normal (no gantry tilt: resample a tilted series first)",
                        "an offset of " + std::to_string(std::sqrt(dot(d, d))) + " mm across the normal from " + a.file.filename().string());
   }
-  const int nx = first.columns, ny = first.rows, nz = static_cast<int>(slices.size());
-  const std::array<double, 3> spacing{first.pixel_spacing[1] * 1e-3, first.pixel_spacing[0] * 1e-3, dz * 1e-3};
-  const std::array<double, 3> origin{slices[0].position[0] * 1e-3, slices[0].position[1] * 1e-3, slices[0].position[2] * 1e-3};
-  validate_volume_geometry({nx, ny, nz}, spacing, origin, sizeof(float) + sizeof(std::uint16_t), dir, "DICOM series " + chosen->uid);
+  return dz;
+}
 
-  // GDCM decodes the (walked, checked) files in a child process; the stored values come back.
-  std::vector<fs::path> paths;
-  for (const DicomSlice& s : slices) paths.push_back(s.file);
-  const std::size_t per_slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
-  const int bytes_per_pixel = first.bits_allocated / 8;
+// The stored pixel values of every slice, decoded by GDCM in a child process (the walked, checked
+// files), slice after slice.
+std::vector<std::uint16_t> decode_stored_values(const std::vector<fs::path>& paths, std::size_t per_slice, int bytes_per_pixel,
+                                                const std::string& dir) {
   const std::string bytes = run_isolated(
       dir, "DICOM image",
       [&](ByteWriter& w) {
@@ -515,22 +514,17 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
       },
       IsolationLimits{30.0 + 0.5 * static_cast<double>(paths.size()), 0});
   ByteReader reader(bytes);
-  const std::vector<std::uint16_t> stored = reader.get_vector<std::uint16_t>();
-  log::verbose() << "DICOM: walked " << all.size() << " series in " << scan_s << " s, decoded " << paths.size() << " slices in "
-                 << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - scan_s << " s";
-  SliceStack out;
-  out.hu = Volume<float>({nx, ny, nz}, spacing, origin);
-  out.hu.direction = {r[0], c[0], n[0], r[1], c[1], n[1], r[2], c[2], n[2]};  // columns: row, column, slice normal
-  validate_direction(out.hu.direction, first.file.string(), "(0020,0037) ImageOrientationPatient");
-  if (stored.size() != out.hu.size()) throw InputError(dir, "", "slices of one size", "a malformed read");
-  out.bit_depth = first.bits_allocated;
-  out.files = slices.size();
-  out.source = "DICOM series " + chosen->uid;
-  // Per-slice rescale: a series may carry a different slope/intercept on each image.
+  return reader.get_vector<std::uint16_t>();
+}
+
+// The stored values to Hounsfield units, slice by slice: a series may carry a different
+// slope/intercept on each image.
+void rescale_to_hounsfield(const std::vector<DicomSlice>& slices, const std::vector<std::uint16_t>& stored, std::size_t per_slice, float* hu_of) {
+  const DicomSlice& first = slices.front();
   for (std::size_t k = 0; k < slices.size(); ++k) {
     const double slope = slices[k].slope, intercept = slices[k].intercept;
     const std::uint16_t* in = stored.data() + k * per_slice;
-    float* hu = out.hu.data.data() + k * per_slice;
+    float* hu = hu_of + k * per_slice;
     // Only the low BitsStored bits are the pixel (the rest may hold anything, e.g. retired
     // overlays); a signed pixel's sign is its bit BitsStored - 1.
     const int stored_bits = first.bits_stored > 0 ? first.bits_stored : first.bits_allocated;
@@ -542,6 +536,46 @@ SliceStack read_dicom_series(const fs::path& folder, const std::string& series_u
       hu[i] = static_cast<float>(slope * v + intercept);
     }
   }
+}
+
+}  // namespace
+
+SliceStack read_dicom_series(const fs::path& folder, const std::string& series_uid) {
+  const std::string dir = folder.string();
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<DicomSeries> all = list_dicom_series(folder);
+  const double scan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  DicomSeries& chosen = choose_series(all, series_uid, dir);
+  std::vector<DicomSlice>& slices = chosen.slices;
+  check_slices_alike(slices, dir, chosen.uid);
+  const DicomSlice& first = slices.front();
+  // Volume axes: x along the row cosine (column index), y along the column cosine (row index),
+  // z along their cross product, the slice normal; any orthonormal orientation is carried as the
+  // volume's direction (through labels.h5 to the mesh's coordinates).
+  const double* r = first.orientation.data();
+  const double* c = first.orientation.data() + 3;
+  const double n[3] = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2], r[0] * c[1] - r[1] * c[0]};
+  const double dz = stack_along_normal(slices, n, dir);
+  const DicomSlice& lowest = slices.front();  // (sorted now)
+  const int nx = lowest.columns, ny = lowest.rows, nz = static_cast<int>(slices.size());
+  const std::array<double, 3> spacing{lowest.pixel_spacing[1] * 1e-3, lowest.pixel_spacing[0] * 1e-3, dz * 1e-3};
+  const std::array<double, 3> origin{slices[0].position[0] * 1e-3, slices[0].position[1] * 1e-3, slices[0].position[2] * 1e-3};
+  validate_volume_geometry({nx, ny, nz}, spacing, origin, sizeof(float) + sizeof(std::uint16_t), dir, "DICOM series " + chosen.uid);
+  std::vector<fs::path> paths;
+  for (const DicomSlice& s : slices) paths.push_back(s.file);
+  const std::size_t per_slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const std::vector<std::uint16_t> stored = decode_stored_values(paths, per_slice, lowest.bits_allocated / 8, dir);
+  log::verbose() << "DICOM: walked " << all.size() << " series in " << scan_s << " s, decoded " << paths.size() << " slices in "
+                 << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() - scan_s << " s";
+  SliceStack out;
+  out.hu = Volume<float>({nx, ny, nz}, spacing, origin);
+  out.hu.direction = {r[0], c[0], n[0], r[1], c[1], n[1], r[2], c[2], n[2]};  // columns: row, column, slice normal
+  validate_direction(out.hu.direction, lowest.file.string(), "(0020,0037) ImageOrientationPatient");
+  if (stored.size() != out.hu.size()) throw InputError(dir, "", "slices of one size", "a malformed read");
+  out.bit_depth = lowest.bits_allocated;
+  out.files = slices.size();
+  out.source = "DICOM series " + chosen.uid;
+  rescale_to_hounsfield(slices, stored, per_slice, out.hu.data.data());
   return out;
 }
 

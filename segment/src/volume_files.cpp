@@ -170,24 +170,67 @@ constexpr std::uint64_t kMaxBytes = std::uint64_t{16} << 30;
 
 // ---- NIfTI-1 ---------------------------------------------------------------------------------
 
+// The first `bytes` bytes of a gzip stream (fewer when it is shorter).
+std::string inflate_prefix(std::string& compressed, std::size_t bytes) {
+  std::string part(bytes, '\0');
+  z_stream z{};
+  inflateInit2(&z, 15 + 32);
+  z.next_in = reinterpret_cast<Bytef*>(compressed.data());
+  z.avail_in = static_cast<uInt>(std::min<std::size_t>(compressed.size(), 0xFFFFFFFFu));
+  z.next_out = reinterpret_cast<Bytef*>(part.data());
+  z.avail_out = static_cast<uInt>(bytes);
+  inflate(&z, Z_SYNC_FLUSH);
+  const std::size_t got = bytes - z.avail_out;
+  inflateEnd(&z);
+  return part.substr(0, got);
+}
+
+// The voxel-to-world affine of a NIfTI-1 header (M: columns per voxel axis, o: the first voxel's
+// centre, both in mm), from its sform, else its qform, else the voxel sizes alone; i16 and f32
+// read the header's fields at a byte offset. Returns whether the frame is RAS (false: no
+// transform given, axis-aligned at the origin).
+template <class I16, class F32>
+bool nifti_affine(const I16& i16, const F32& f32, const double pixdim[4], int units, const std::string& file, double M[3][3], double o[3]) {
+  const double to_mm = units == 1 ? 1e3 : units == 3 ? 1e-3 : 1.0;  // metres, micrometres; mm or unknown: mm
+  bool ras = true;
+  if (i16(254) > 0) {  // sform: the affine itself
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) M[r][c] = f32(280 + 16 * static_cast<std::size_t>(r) + 4 * static_cast<std::size_t>(c));
+      o[r] = f32(280 + 16 * static_cast<std::size_t>(r) + 12);
+    }
+  } else if (i16(252) > 0) {  // qform: a quaternion rotation, the voxel sizes, qfac for the third axis
+    const double b = f32(256), c = f32(260), d = f32(264), bcd = b * b + c * c + d * d;
+    // a = sqrt(1 - b^2 - c^2 - d^2): (b, c, d) past the unit sphere is no rotation (seen: a spacing of
+    // 36 um for 3 mm voxels). A few ulps over 1 from float rounding is a = 0, as NIfTI's reference code does.
+    if (!std::isfinite(bcd) || bcd > 1 + 1e-5)
+      throw InputError(file, "quatern_b/c/d", "the vector part of a unit quaternion (b^2 + c^2 + d^2 <= 1)",
+                       "b^2 + c^2 + d^2 = " + std::to_string(bcd));
+    const double a = std::sqrt(std::max(0.0, 1 - bcd));
+    const double R[3][3] = {{a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)},
+                            {2 * (b * c + a * d), a * a + c * c - b * b - d * d, 2 * (c * d - a * b)},
+                            {2 * (b * d - a * c), 2 * (c * d + a * b), a * a + d * d - c * c - b * b}};
+    const double step[3] = {pixdim[1], pixdim[2], pixdim[3] * (pixdim[0] < 0 ? -1 : 1)};
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col) M[r][col] = R[r][col] * step[col];
+    o[0] = f32(268), o[1] = f32(272), o[2] = f32(276);
+  } else {  // no transform (NIfTI's method 1): the voxel sizes only, axis-aligned
+    for (int a = 0; a < 3; ++a) M[a][a] = pixdim[a + 1];
+    ras = false;
+    log::info() << file << ": no qform or sform; axis-aligned voxels at the origin";
+  }
+  for (int r = 0; r < 3; ++r) {
+    o[r] *= to_mm;
+    for (int c = 0; c < 3; ++c) M[r][c] *= to_mm;
+  }
+  return ras;
+}
+
 SliceStack read_nifti(const fs::path& path) {
   const std::string file = path.string();
   std::string raw = read_bytes(path, kMaxBytes, "NIfTI file");
   const bool gz = raw.size() >= 2 && static_cast<unsigned char>(raw[0]) == 0x1F && static_cast<unsigned char>(raw[1]) == 0x8B;
-  std::string head = raw;
-  if (gz) {  // the header first (to know how many voxel bytes to expect), then all of it
-    std::string part(352, '\0');
-    z_stream z{};
-    inflateInit2(&z, 15 + 32);
-    z.next_in = reinterpret_cast<Bytef*>(raw.data());
-    z.avail_in = static_cast<uInt>(std::min<std::size_t>(raw.size(), 0xFFFFFFFFu));
-    z.next_out = reinterpret_cast<Bytef*>(part.data());
-    z.avail_out = 352;
-    inflate(&z, Z_SYNC_FLUSH);
-    const std::size_t got = 352 - z.avail_out;
-    inflateEnd(&z);
-    head = part.substr(0, got);
-  }
+  // The header first (to know how many voxel bytes to expect), then all of it.
+  const std::string head = gz ? inflate_prefix(raw, 352) : raw;
   if (head.size() < 348) throw InputError(file, "header", "a 348-byte NIfTI-1 header", std::to_string(head.size()) + " bytes (truncated)");
   const auto* h = reinterpret_cast<const unsigned char*>(head.data());
   std::int32_t sizeof_hdr;
@@ -235,39 +278,8 @@ SliceStack read_nifti(const fs::path& path) {
   double slope = f32(112), intercept = f32(116);
   if (!std::isfinite(slope) || slope == 0) slope = 1, intercept = 0;  // the standard: 0 means no scaling
   if (!std::isfinite(intercept)) intercept = 0;
-  const int units = h[123] & 7;
-  const double to_mm = units == 1 ? 1e3 : units == 3 ? 1e-3 : 1.0;  // metres, micrometres; mm or unknown: mm
   double M[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, o[3] = {0, 0, 0};
-  bool ras = true;
-  if (i16(254) > 0) {  // sform: the affine itself
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) M[r][c] = f32(280 + 16 * static_cast<std::size_t>(r) + 4 * static_cast<std::size_t>(c));
-      o[r] = f32(280 + 16 * static_cast<std::size_t>(r) + 12);
-    }
-  } else if (i16(252) > 0) {  // qform: a quaternion rotation, the voxel sizes, qfac for the third axis
-    const double b = f32(256), c = f32(260), d = f32(264), bcd = b * b + c * c + d * d;
-    // a = sqrt(1 - b^2 - c^2 - d^2): (b, c, d) past the unit sphere is no rotation (seen: a spacing of
-    // 36 um for 3 mm voxels). A few ulps over 1 from float rounding is a = 0, as NIfTI's reference code does.
-    if (!std::isfinite(bcd) || bcd > 1 + 1e-5)
-      throw InputError(file, "quatern_b/c/d", "the vector part of a unit quaternion (b^2 + c^2 + d^2 <= 1)",
-                       "b^2 + c^2 + d^2 = " + std::to_string(bcd));
-    const double a = std::sqrt(std::max(0.0, 1 - bcd));
-    const double R[3][3] = {{a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)},
-                            {2 * (b * c + a * d), a * a + c * c - b * b - d * d, 2 * (c * d - a * b)},
-                            {2 * (b * d - a * c), 2 * (c * d + a * b), a * a + d * d - c * c - b * b}};
-    const double step[3] = {pixdim[1], pixdim[2], pixdim[3] * (pixdim[0] < 0 ? -1 : 1)};
-    for (int r = 0; r < 3; ++r)
-      for (int col = 0; col < 3; ++col) M[r][col] = R[r][col] * step[col];
-    o[0] = f32(268), o[1] = f32(272), o[2] = f32(276);
-  } else {  // no transform (NIfTI's method 1): the voxel sizes only, axis-aligned
-    for (int a = 0; a < 3; ++a) M[a][a] = pixdim[a + 1];
-    ras = false;
-    log::info() << file << ": no qform or sform; axis-aligned voxels at the origin";
-  }
-  for (int r = 0; r < 3; ++r) {
-    o[r] *= to_mm;
-    for (int c = 0; c < 3; ++c) M[r][c] *= to_mm;
-  }
+  const bool ras = nifti_affine(i16, f32, pixdim, h[123] & 7, file, M, o);
   // The declared size against the file's before anything of that size is allocated.
   const std::size_t n = voxel_count(dims), bytes = n * scalar_size(type->second), offset = static_cast<std::size_t>(vox_offset);
   if (gz) raw = inflate_exactly(raw, offset + bytes, file, "voxels");
@@ -329,13 +341,41 @@ struct TextHeader {
   std::size_t data_start = 0;                               // byte after the header
 };
 
-SliceStack read_nrrd(const fs::path& path) {
-  const std::string file = path.string();
-  const std::string raw = read_bytes(path, kMaxBytes, "NRRD file");
-  if (raw.compare(0, 7, "NRRD000") != 0 || raw.size() < 9) throw InputError(file, "", "a NRRD file (NRRD0001..5 on the first line)", "no NRRD magic");
+// NRRD's scalar type names.
+const std::map<std::string, Scalar> kNrrdTypes{{"signed char", Scalar::i8},
+                                               {"int8", Scalar::i8},
+                                               {"int8_t", Scalar::i8},
+                                               {"uchar", Scalar::u8},
+                                               {"unsigned char", Scalar::u8},
+                                               {"uint8", Scalar::u8},
+                                               {"uint8_t", Scalar::u8},
+                                               {"short", Scalar::i16},
+                                               {"short int", Scalar::i16},
+                                               {"signed short", Scalar::i16},
+                                               {"signed short int", Scalar::i16},
+                                               {"int16", Scalar::i16},
+                                               {"int16_t", Scalar::i16},
+                                               {"ushort", Scalar::u16},
+                                               {"unsigned short", Scalar::u16},
+                                               {"unsigned short int", Scalar::u16},
+                                               {"uint16", Scalar::u16},
+                                               {"uint16_t", Scalar::u16},
+                                               {"int", Scalar::i32},
+                                               {"signed int", Scalar::i32},
+                                               {"int32", Scalar::i32},
+                                               {"int32_t", Scalar::i32},
+                                               {"uint", Scalar::u32},
+                                               {"unsigned int", Scalar::u32},
+                                               {"uint32", Scalar::u32},
+                                               {"uint32_t", Scalar::u32},
+                                               {"float", Scalar::f32},
+                                               {"double", Scalar::f64}};
+
+// The header fields of a NRRD file (lower-case names), up to the empty line that ends them;
+// data_start: the byte after it (npos when there is none, as with a detached data file).
+std::map<std::string, std::string> nrrd_fields(const std::string& raw, const std::string& file, std::size_t& data_start) {
   std::map<std::string, std::string> f;
   std::size_t pos = raw.find('\n');
-  std::size_t data_start = std::string::npos;
   while (pos != std::string::npos && pos + 1 <= raw.size() && pos < (1u << 16)) {
     const std::size_t next = raw.find('\n', pos + 1);
     std::string line = raw.substr(pos + 1, next == std::string::npos ? std::string::npos : next - pos - 1);
@@ -350,56 +390,13 @@ SliceStack read_nrrd(const fs::path& path) {
     if (colon == std::string::npos) throw InputError(file, "header", "\"field: value\" lines", line.substr(0, 60));
     f[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 2));
   }
-  const bool detached = f.count("data file") || f.count("datafile");
-  if (data_start == std::string::npos && !detached)
-    throw InputError(file, "header", "a header ended by an empty line, then the voxels", "no end of header (truncated)");
-  auto need = [&](const char* key) -> const std::string& {
-    if (!f.count(key)) throw InputError(file, key, "a \"" + std::string(key) + "\" field", "missing");
-    return f.at(key);
-  };
-  static const std::map<std::string, Scalar> types{{"signed char", Scalar::i8},
-                                                   {"int8", Scalar::i8},
-                                                   {"int8_t", Scalar::i8},
-                                                   {"uchar", Scalar::u8},
-                                                   {"unsigned char", Scalar::u8},
-                                                   {"uint8", Scalar::u8},
-                                                   {"uint8_t", Scalar::u8},
-                                                   {"short", Scalar::i16},
-                                                   {"short int", Scalar::i16},
-                                                   {"signed short", Scalar::i16},
-                                                   {"signed short int", Scalar::i16},
-                                                   {"int16", Scalar::i16},
-                                                   {"int16_t", Scalar::i16},
-                                                   {"ushort", Scalar::u16},
-                                                   {"unsigned short", Scalar::u16},
-                                                   {"unsigned short int", Scalar::u16},
-                                                   {"uint16", Scalar::u16},
-                                                   {"uint16_t", Scalar::u16},
-                                                   {"int", Scalar::i32},
-                                                   {"signed int", Scalar::i32},
-                                                   {"int32", Scalar::i32},
-                                                   {"int32_t", Scalar::i32},
-                                                   {"uint", Scalar::u32},
-                                                   {"unsigned int", Scalar::u32},
-                                                   {"uint32", Scalar::u32},
-                                                   {"uint32_t", Scalar::u32},
-                                                   {"float", Scalar::f32},
-                                                   {"double", Scalar::f64}};
-  const auto type = types.find(lower(need("type")));
-  if (type == types.end()) throw InputError(file, "type", "a scalar type (int8..uint32, float, double)", need("type"));
-  if (trim(need("dimension")) != "3") throw InputError(file, "dimension", "3", need("dimension"));
-  const std::array<int, 3> dims = sizes(need("sizes"), file, "sizes");
-  const std::string encoding = lower(need("encoding"));
-  if (encoding != "raw" && encoding != "gzip" && encoding != "gz") throw InputError(file, "encoding", "raw or gzip", encoding);
-  bool big = false;
-  if (scalar_size(type->second) > 1) {
-    const std::string e = lower(need("endian"));
-    if (e != "little" && e != "big") throw InputError(file, "endian", "little or big", e);
-    big = e == "big";
-  }
-  for (const char* key : {"byte skip", "byteskip", "line skip", "lineskip"})
-    if (f.count(key) && trim(f.at(key)) != "0") throw InputError(file, key, "0 (skips are not supported)", f.at(key));
-  double M[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, o[3] = {0, 0, 0};
+  return f;
+}
+
+// The voxel-to-world affine of a NRRD header (M: columns per voxel axis, o: the first voxel's
+// centre, mm), from its space directions, or its spacings alone; whether its space is RAS.
+template <class Need>
+bool nrrd_affine(const std::map<std::string, std::string>& f, const Need& need, const std::string& file, double M[3][3], double o[3]) {
   bool ras = false;
   if (f.count("space directions")) {
     const std::vector<double> v = numbers(f.at("space directions"), 9, file, "space directions");
@@ -423,6 +420,38 @@ SliceStack read_nrrd(const fs::path& path) {
     const std::vector<double> v = numbers(need("spacings"), 3, file, "spacings");
     for (int a = 0; a < 3; ++a) M[a][a] = v[static_cast<std::size_t>(a)];
   }
+  return ras;
+}
+
+SliceStack read_nrrd(const fs::path& path) {
+  const std::string file = path.string();
+  const std::string raw = read_bytes(path, kMaxBytes, "NRRD file");
+  if (raw.compare(0, 7, "NRRD000") != 0 || raw.size() < 9) throw InputError(file, "", "a NRRD file (NRRD0001..5 on the first line)", "no NRRD magic");
+  std::size_t data_start = std::string::npos;
+  const std::map<std::string, std::string> f = nrrd_fields(raw, file, data_start);
+  const bool detached = f.count("data file") || f.count("datafile");
+  if (data_start == std::string::npos && !detached)
+    throw InputError(file, "header", "a header ended by an empty line, then the voxels", "no end of header (truncated)");
+  auto need = [&](const char* key) -> const std::string& {
+    if (!f.count(key)) throw InputError(file, key, "a \"" + std::string(key) + "\" field", "missing");
+    return f.at(key);
+  };
+  const auto type = kNrrdTypes.find(lower(need("type")));
+  if (type == kNrrdTypes.end()) throw InputError(file, "type", "a scalar type (int8..uint32, float, double)", need("type"));
+  if (trim(need("dimension")) != "3") throw InputError(file, "dimension", "3", need("dimension"));
+  const std::array<int, 3> dims = sizes(need("sizes"), file, "sizes");
+  const std::string encoding = lower(need("encoding"));
+  if (encoding != "raw" && encoding != "gzip" && encoding != "gz") throw InputError(file, "encoding", "raw or gzip", encoding);
+  bool big = false;
+  if (scalar_size(type->second) > 1) {
+    const std::string e = lower(need("endian"));
+    if (e != "little" && e != "big") throw InputError(file, "endian", "little or big", e);
+    big = e == "big";
+  }
+  for (const char* key : {"byte skip", "byteskip", "line skip", "lineskip"})
+    if (f.count(key) && trim(f.at(key)) != "0") throw InputError(file, key, "0 (skips are not supported)", f.at(key));
+  double M[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, o[3] = {0, 0, 0};
+  const bool ras = nrrd_affine(f, need, file, M, o);
   SliceStack s = make_stack(dims, M, o, ras, file, "space directions");
   std::string data;
   if (detached) {

@@ -221,97 +221,88 @@ LocalContactResult bipotential_local_solve(const Vec3& u_free, const Vec3& n, do
   return out;
 }
 
-ContactStepReport solve_rows(ContactRows& rows, double* v, WarmStart& last, const RowSolveInput& in) {
-  ContactStepReport rep;
-  const std::size_t K = rows.size();
-  rep.candidates = K;
-  rows.reaction.assign(3 * K, 0.0);
-  rows.compliance.assign(K, 0.0);
-  rows.status.assign(K, ContactStatus::open);
-  if (K == 0) return rep;
-  const double c = in.velocity_per_force;
-  const double* inv_mass = in.inv_mass;
+namespace {
+
+Vec3 row_normal(const ContactRows& rows, std::size_t k) { return Vec3{rows.normal[3 * k], rows.normal[3 * k + 1], rows.normal[3 * k + 2]}; }
+Vec3 row_reaction(const ContactRows& rows, std::size_t k) { return Vec3{rows.reaction[3 * k], rows.reaction[3 * k + 1], rows.reaction[3 * k + 2]}; }
+
+// A slave node with two rows (in a concave corner) keeps its first row's warm start.
+bool first_of_node(const ContactRows& rows, std::size_t k) {
+  return k == 0 || rows.pair[k - 1] != rows.pair[k] || rows.slave_index[k - 1] != rows.slave_index[k];
+}
+
+// Warm start: the previous step's reaction of the same slave node, projected on the new cone and
+// applied to v; the previous step's entries are then cleared.
+void warm_start(ContactRows& rows, double* v, WarmStart& last, const RowSolveInput& in) {
   const auto& pairs = *in.pairs;
-  auto normal = [&](std::size_t k) { return Vec3{rows.normal[3 * k], rows.normal[3 * k + 1], rows.normal[3 * k + 2]}; };
-
-  // Compliances: w = c sum_a w_a^2 n.D_a n, D the inverse masses (0 on prescribed dofs), with the
-  // rigid bodies' coupled terms (row_compliance).
-  RigidRows* rigid = in.rigid;
-#pragma omp parallel for num_threads(in.threads) schedule(static) if (K >= 1024)
-  for (std::size_t k = 0; k < K; ++k) rows.compliance[k] = c * row_compliance(rows, k, &rows.normal[3 * k], inv_mass, rigid);
-
-  // Warm start: the previous step's reaction of the same slave node, projected on the new cone
-  // (a node with two rows, in a concave corner, keeps its first row's).
-  auto first_of_node = [&](std::size_t k) { return k == 0 || rows.pair[k - 1] != rows.pair[k] || rows.slave_index[k - 1] != rows.slave_index[k]; };
-  for (std::size_t k = 0; k < K; ++k) {
-    if (!first_of_node(k)) continue;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    if (!first_of_node(rows, k)) continue;
     const std::size_t pi = static_cast<std::size_t>(rows.pair[k]);
     const double* prev = &last.reaction[pi][3 * static_cast<std::size_t>(rows.slave_index[k])];
     if (prev[0] == 0 && prev[1] == 0 && prev[2] == 0) continue;
-    const Vec3 r0 = coulomb_cone_projection({prev[0], prev[1], prev[2]}, normal(k), pairs[pi].friction);
+    const Vec3 r0 = coulomb_cone_projection({prev[0], prev[1], prev[2]}, row_normal(rows, k), pairs[pi].friction);
     for (int d = 0; d < 3; ++d) rows.reaction[3 * k + d] = r0[d];
-    apply(rows, k, r0, c, inv_mass, v, rigid);
+    apply(rows, k, r0, in.velocity_per_force, in.inv_mass, v, in.rigid);
   }
   for (std::size_t i = 0; i < last.written.size(); i += 2)  // the previous step's entries (the rest are 0)
     std::fill_n(&last.reaction[static_cast<std::size_t>(last.written[i])][3 * static_cast<std::size_t>(last.written[i + 1])], 3, 0.0);
   last.written.clear();
+}
 
-  // The gap folded into the normal velocity below closes a row's gap within the step. A gap the
-  // previous step's correction left is zero (to the Uzawa tolerance); one below -recovery_speed dt
-  // is a penetration that step did not make (a node that slid back over a master's edge, where it
-  // was held only from in front; a row that just appeared) and would be closed at depth / dt:
-  // 0.1 mm at dt = 4e-8 s is 2,500 m/s, an explosion. Such a row is pushed out at recovery_speed
-  // and cannot go deeper; the ordinary approach of a node within one step is unchanged.
-  const double deepest_allowed = -in.settings->recovery_speed * in.dt;
-  for (std::size_t k = 0; k < K; ++k)
-    if (rows.gap[k] < deepest_allowed) {
-      ++rep.recovering;
-      if (rows.gap[k] < rep.deepest_gap) rep.deepest_gap = rows.gap[k], rep.deepest_node = rows.slave(k);
-    }
+// This step's reactions, per pair and slave node, for the next step's warm start.
+void keep_for_warm_start(const ContactRows& rows, WarmStart& last) {
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    if (!first_of_node(rows, k)) continue;
+    double* prev = &last.reaction[static_cast<std::size_t>(rows.pair[k])][3 * static_cast<std::size_t>(rows.slave_index[k])];
+    for (int d = 0; d < 3; ++d) prev[d] = rows.reaction[3 * k + d];
+    last.written.push_back(rows.pair[k]), last.written.push_back(rows.slave_index[k]);
+  }
+}
 
-  // Uzawa iterations, Gauss-Seidel over the rows (eqs. 11-12 with rho = 1/w: one iteration is
-  // exact for an isolated frictionless node). update(k) takes row k one step and returns its
-  // change and its new reaction's size.
-  const double inv_dt = in.dt > 0 ? 1.0 / in.dt : 0.0;
-  auto update = [&](std::size_t k) -> std::pair<double, double> {
-    const double w = rows.compliance[k];
-    if (!(w > 0)) return {0.0, 0.0};
-    const Vec3 n = normal(k);
-    const double mu = pairs[static_cast<std::size_t>(rows.pair[k])].friction;
-    const Vec3 uu = relative_velocity(rows, k, v, rigid);
-    const double un_vel = dot(uu, n);
-    const Vec3 ut{uu[0] - un_vel * n[0], uu[1] - un_vel * n[1], uu[2] - un_vel * n[2]};
-    const double un = un_vel + std::max(rows.gap[k], deepest_allowed) * inv_dt;  // the gap folded in (above)
-    double* r = &rows.reaction[3 * k];
-    const Vec3 rk{r[0], r[1], r[2]};
-    const Vec3 next = coulomb_cone_projection(augmented_traction(rk, ut, un, n, mu, 1.0 / w), n, mu);
-    const Vec3 dr{next[0] - rk[0], next[1] - rk[1], next[2] - rk[2]};
-    const double drn = norm(dr);
-    if (drn > 0) {
-      for (int d = 0; d < 3; ++d) r[d] = next[d];
-      apply(rows, k, dr, c, inv_mass, v, rigid);
-    }
-    return {drn, norm(next)};
-  };
-  // Rows that are nearly one constraint (a light skin node pressed between a heavier one and the
-  // block: their coupling c gives the sweep a contraction of c^2, 0.993 seen) creep while the rest
-  // has long converged. Every kFocusEvery sweeps without convergence, the rows that still changed
-  // are swept alone, up to kFocusSweeps times (a few rows: cheap), until their change is 100 times
-  // below the tolerance; the full sweeps then go on. A step converged within kFocusEvery sweeps is
-  // unchanged by this.
-  constexpr int kFocusEvery = 30, kFocusSweeps = 2000;
-  std::vector<std::size_t>& creeping = rows.creeping;
-  std::vector<double>& change = rows.change;
-  change.assign(K, 0.0);
-  // The sweep: in row order, or slab by slab in parallel, the even slabs then the odd ones (slabs
-  // of one parity share no node, so each is its own Gauss-Seidel sweep and the result does not
-  // depend on which thread took which), then the rows left over in order.
-  std::int32_t top = -1;  // the largest node id in the rows: the size of the per-node tables below
-  for (const std::int32_t node : rows.nodes) top = std::max(top, node);
-  const int blocks = cut_sweep_blocks(rows, in.X, in.settings->sweep_blocks, rigid, top);
-  rep.sweep_blocks = blocks;
-  rep.rows_in_order = blocks > 1 ? rows.between_blocks.size() : K;
-  rows.block_change.assign(2 * static_cast<std::size_t>(blocks), 0.0);
+// The Uzawa iterations of one step (eqs. 11-12 with rho = 1/w: one iteration is exact for an
+// isolated frictionless node), Gauss-Seidel over the rows, in row order or slab by slab.
+class UzawaSweep {
+ public:
+  UzawaSweep(ContactRows& rows, double* v, const RowSolveInput& in, ContactStepReport& rep)
+      : rows_(rows),
+        v_(v),
+        in_(in),
+        rigid_(in.rigid),
+        deepest_allowed_(-in.settings->recovery_speed * in.dt),
+        inv_dt_(in.dt > 0 ? 1.0 / in.dt : 0.0),
+        skip_unchanged_(in.rigid == nullptr) {
+    // The gap folded into the normal velocity closes a row's gap within the step. A gap the
+    // previous step's correction left is zero (to the Uzawa tolerance); one below -recovery_speed dt
+    // is a penetration that step did not make (a node that slid back over a master's edge, where it
+    // was held only from in front; a row that just appeared) and would be closed at depth / dt:
+    // 0.1 mm at dt = 4e-8 s is 2,500 m/s, an explosion. Such a row is pushed out at recovery_speed
+    // and cannot go deeper; the ordinary approach of a node within one step is unchanged.
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (rows.gap[k] < deepest_allowed_) {
+        ++rep.recovering;
+        if (rows.gap[k] < rep.deepest_gap) rep.deepest_gap = rows.gap[k], rep.deepest_node = rows.slave(k);
+      }
+  }
+
+  // Sweeps until the largest change is within the tolerance of the largest reaction; the number
+  // of sweeps and that ratio into rep.
+  void run(ContactStepReport& rep);
+
+ private:
+  // Row k one step; its change and its new reaction's size.
+  std::pair<double, double> update(std::size_t k);
+  // update(k) unless the row cannot change (below); `now` orders the visits.
+  std::pair<double, double> visit(std::size_t k, std::int64_t now);
+  void sweep(const std::int32_t* order, std::size_t n, std::size_t position, double& max_dr, double& max_r);
+  // The slabs and the per-node tables of the skip logic; the number of slabs.
+  int prepare(ContactStepReport& rep);
+  void focus(double max_r);
+
+  ContactRows& rows_;
+  double* v_;
+  const RowSolveInput& in_;
+  RigidRows* rigid_;
+  const double deepest_allowed_, inv_dt_;
   // A row whose last update changed nothing and none of whose nodes' velocities changed since
   // would change nothing again (update is a function of its reaction and those velocities): it
   // is skipped, with the same result (the same bits). Most rows are open (on the hand-block demo
@@ -320,150 +311,221 @@ ContactStepReport solve_rows(ContactRows& rows, double* v, WarmStart& last, cons
   // sweep `it`, position p in the sweep (slabs of one parity share no node, so their rows'
   // positions need not follow the threads' order), it (K + 1) + p; the focused sweeps at
   // it (K + 1) + K. Not with free rigid bodies, whose rows all move through the body.
-  std::vector<std::int64_t>& node_time = rows.node_time;
-  std::vector<std::int64_t>& row_time = rows.row_time;
-  std::vector<char>& quiet = rows.quiet;
-  const bool skip_unchanged = rigid == nullptr;
-  if (skip_unchanged) {
-    if (node_time.size() <= static_cast<std::size_t>(top)) node_time.resize(static_cast<std::size_t>(top) + 1);
-    for (const std::int32_t node : rows.nodes) node_time[static_cast<std::size_t>(node)] = -1;
-    row_time.assign(K, -1);
-    quiet.assign(K, 0);
+  const bool skip_unchanged_;
+  std::int64_t sweep_start_ = 0;  // it (K + 1)
+};
+
+std::pair<double, double> UzawaSweep::update(std::size_t k) {
+  const double w = rows_.compliance[k];
+  if (!(w > 0)) return {0.0, 0.0};
+  const Vec3 n = row_normal(rows_, k);
+  const double mu = (*in_.pairs)[static_cast<std::size_t>(rows_.pair[k])].friction;
+  const Vec3 uu = relative_velocity(rows_, k, v_, rigid_);
+  const double un_vel = dot(uu, n);
+  const Vec3 ut{uu[0] - un_vel * n[0], uu[1] - un_vel * n[1], uu[2] - un_vel * n[2]};
+  const double un = un_vel + std::max(rows_.gap[k], deepest_allowed_) * inv_dt_;  // the gap folded in (above)
+  double* r = &rows_.reaction[3 * k];
+  const Vec3 rk{r[0], r[1], r[2]};
+  const Vec3 next = coulomb_cone_projection(augmented_traction(rk, ut, un, n, mu, 1.0 / w), n, mu);
+  const Vec3 dr{next[0] - rk[0], next[1] - rk[1], next[2] - rk[2]};
+  const double drn = norm(dr);
+  if (drn > 0) {
+    for (int d = 0; d < 3; ++d) r[d] = next[d];
+    apply(rows_, k, dr, in_.velocity_per_force, in_.inv_mass, v_, rigid_);
   }
-  auto visit = [&](std::size_t k, std::int64_t now) -> std::pair<double, double> {
-    if (skip_unchanged) {
-      if (quiet[k]) {
-        bool moved = false;
-        for (auto a = rows.start[k]; a < rows.start[k + 1] && !moved; ++a)
-          moved = node_time[static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)])] >= row_time[k];
-        if (!moved) return {0.0, norm({rows.reaction[3 * k], rows.reaction[3 * k + 1], rows.reaction[3 * k + 2]})};
-      }
-      const auto result = update(k);
-      row_time[k] = now, quiet[k] = result.first == 0;
-      if (result.first > 0)
-        for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a) node_time[static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)])] = now;
-      return result;
-    }
-    return update(k);
-  };
+  return {drn, norm(next)};
+}
+
+std::pair<double, double> UzawaSweep::visit(std::size_t k, std::int64_t now) {
+  if (!skip_unchanged_) return update(k);
+  std::vector<std::int64_t>& node_time = rows_.node_time;
+  if (rows_.quiet[k]) {
+    bool moved = false;
+    for (auto a = rows_.start[k]; a < rows_.start[k + 1] && !moved; ++a)
+      moved = node_time[static_cast<std::size_t>(rows_.nodes[static_cast<std::size_t>(a)])] >= rows_.row_time[k];
+    if (!moved) return {0.0, norm(row_reaction(rows_, k))};
+  }
+  const auto result = update(k);
+  rows_.row_time[k] = now, rows_.quiet[k] = result.first == 0;
+  if (result.first > 0)
+    for (auto a = rows_.start[k]; a < rows_.start[k + 1]; ++a) node_time[static_cast<std::size_t>(rows_.nodes[static_cast<std::size_t>(a)])] = now;
+  return result;
+}
+
+void UzawaSweep::sweep(const std::int32_t* order, std::size_t n, std::size_t position, double& max_dr, double& max_r) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(order ? order[i] : static_cast<std::int32_t>(i));
+    const auto [drn, rn] = visit(k, sweep_start_ + static_cast<std::int64_t>(position + i));
+    rows_.change[k] = drn;
+    max_dr = std::max(max_dr, drn);
+    max_r = std::max(max_r, rn);
+  }
+}
+
+int UzawaSweep::prepare(ContactStepReport& rep) {
+  const std::size_t K = rows_.size();
+  rows_.change.assign(K, 0.0);
+  // The sweep: in row order, or slab by slab in parallel, the even slabs then the odd ones (slabs
+  // of one parity share no node, so each is its own Gauss-Seidel sweep and the result does not
+  // depend on which thread took which), then the rows left over in order.
+  std::int32_t top = -1;  // the largest node id in the rows: the size of the per-node tables below
+  for (const std::int32_t node : rows_.nodes) top = std::max(top, node);
+  const int blocks = cut_sweep_blocks(rows_, in_.X, in_.settings->sweep_blocks, rigid_, top);
+  rep.sweep_blocks = blocks;
+  rep.rows_in_order = blocks > 1 ? rows_.between_blocks.size() : K;
+  rows_.block_change.assign(2 * static_cast<std::size_t>(blocks), 0.0);
+  if (skip_unchanged_) {
+    if (rows_.node_time.size() <= static_cast<std::size_t>(top)) rows_.node_time.resize(static_cast<std::size_t>(top) + 1);
+    for (const std::int32_t node : rows_.nodes) rows_.node_time[static_cast<std::size_t>(node)] = -1;
+    rows_.row_time.assign(K, -1);
+    rows_.quiet.assign(K, 0);
+  }
+  return blocks;
+}
+
+// Rows that are nearly one constraint (a light skin node pressed between a heavier one and the
+// block: their coupling c gives the sweep a contraction of c^2, 0.993 seen) creep while the rest
+// has long converged. Every kFocusEvery sweeps without convergence, the rows that still changed
+// are swept alone, up to kFocusSweeps times (a few rows: cheap), until their change is 100 times
+// below the tolerance; the full sweeps then go on. A step converged within kFocusEvery sweeps is
+// unchanged by this.
+constexpr int kFocusEvery = 30, kFocusSweeps = 2000;
+
+void UzawaSweep::focus(double max_r) {
+  const double tolerance = in_.settings->tolerance;
+  rows_.creeping.clear();
+  for (std::size_t k = 0; k < rows_.size(); ++k)
+    if (rows_.change[k] > tolerance * max_r) rows_.creeping.push_back(k);
+  for (int pass = 0; pass < kFocusSweeps; ++pass) {
+    double focus_dr = 0;
+    for (std::size_t k : rows_.creeping) focus_dr = std::max(focus_dr, visit(k, sweep_start_ + static_cast<std::int64_t>(rows_.size())).first);
+    if (focus_dr <= 1e-2 * tolerance * max_r) break;
+  }
+}
+
+void UzawaSweep::run(ContactStepReport& rep) {
+  const std::size_t K = rows_.size();
+  const int blocks = prepare(rep);
   const auto sweep_length = static_cast<std::int64_t>(K) + 1;
-  std::int64_t sweep_start = 0;  // it (K + 1)
-  auto sweep_rows = [&](const std::int32_t* order, std::size_t n, std::size_t position, double& max_dr, double& max_r) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(order ? order[i] : static_cast<std::int32_t>(i));
-      const auto [drn, rn] = visit(k, sweep_start + static_cast<std::int64_t>(position + i));
-      change[k] = drn;
-      max_dr = std::max(max_dr, drn);
-      max_r = std::max(max_r, rn);
-    }
-  };
   double residual = 0;
   int it = 0;
-  for (it = 1; it <= in.settings->max_iterations; ++it) {
+  for (it = 1; it <= in_.settings->max_iterations; ++it) {
     double max_dr = 0, max_r = 0;
-    sweep_start = it * sweep_length;
+    sweep_start_ = it * sweep_length;
     if (blocks == 1) {
-      sweep_rows(nullptr, K, 0, max_dr, max_r);
+      sweep(nullptr, K, 0, max_dr, max_r);
     } else {
-      double* block_change = rows.block_change.data();
+      double* block_change = rows_.block_change.data();
       for (int parity = 0; parity < 2; ++parity) {  // the even slabs, then the odd ones
-#pragma omp parallel for num_threads(in.threads) schedule(dynamic, 1)
+#pragma omp parallel for num_threads(in_.threads) schedule(dynamic, 1)
         for (int b = parity; b < blocks; b += 2) {
-          const auto first = static_cast<std::size_t>(rows.block_start[static_cast<std::size_t>(b)]);
-          const auto last_row = static_cast<std::size_t>(rows.block_start[static_cast<std::size_t>(b) + 1]);
+          const auto first = static_cast<std::size_t>(rows_.block_start[static_cast<std::size_t>(b)]);
+          const auto last_row = static_cast<std::size_t>(rows_.block_start[static_cast<std::size_t>(b) + 1]);
           double dr = 0, r = 0;
-          sweep_rows(rows.block_rows.data() + first, last_row - first, first, dr, r);
+          sweep(rows_.block_rows.data() + first, last_row - first, first, dr, r);
           block_change[2 * b] = dr, block_change[2 * b + 1] = r;
         }
       }
       for (int b = 0; b < blocks; ++b) max_dr = std::max(max_dr, block_change[2 * b]), max_r = std::max(max_r, block_change[2 * b + 1]);
-      sweep_rows(rows.between_blocks.data(), rows.between_blocks.size(), rows.block_rows.size(), max_dr, max_r);
+      sweep(rows_.between_blocks.data(), rows_.between_blocks.size(), rows_.block_rows.size(), max_dr, max_r);
     }
     residual = max_r > 0 ? max_dr / max_r : 0.0;
-    if (residual <= in.settings->tolerance) break;
-    if (it % kFocusEvery == 0) {
-      creeping.clear();
-      for (std::size_t k = 0; k < K; ++k)
-        if (change[k] > in.settings->tolerance * max_r) creeping.push_back(k);
-      for (int sweep = 0; sweep < kFocusSweeps; ++sweep) {
-        double focus_dr = 0;
-        for (std::size_t k : creeping) focus_dr = std::max(focus_dr, visit(k, sweep_start + static_cast<std::int64_t>(K)).first);
-        if (focus_dr <= 1e-2 * in.settings->tolerance * max_r) break;
-      }
-    }
+    if (residual <= in_.settings->tolerance) break;
+    if (it % kFocusEvery == 0) focus(max_r);
   }
-  rep.iterations = std::min(it, in.settings->max_iterations);
-  for (std::size_t k = 0; k < K; ++k) {
-    if (!first_of_node(k)) continue;
-    double* prev = &last.reaction[static_cast<std::size_t>(rows.pair[k])][3 * static_cast<std::size_t>(rows.slave_index[k])];
-    for (int d = 0; d < 3; ++d) prev[d] = rows.reaction[3 * k + d];
-    last.written.push_back(rows.pair[k]), last.written.push_back(rows.slave_index[k]);
-  }
+  rep.iterations = std::min(it, in_.settings->max_iterations);
   rep.residual = residual;
-  rep.converged = residual <= in.settings->tolerance;
-  if (rigid)  // the rigid bodies' nodes in the rows take their bodies' velocities (for the work below)
-    for (std::size_t a = 0; a < rows.nodes.size(); ++a)
-      if (const int b = rigid->body(rows.nodes[a]); b >= 0) {
-        const Vec3 vb = rigid->velocity(rows.nodes[a], b);
-        for (int d = 0; d < 3; ++d) v[3 * static_cast<std::size_t>(rows.nodes[a]) + static_cast<std::size_t>(d)] = vb[static_cast<std::size_t>(d)];
-      }
+  rep.converged = residual <= in_.settings->tolerance;
+}
 
-  // Status, resultants and the work of the reactions (trapezoid halves over du^{n-1/2}, du^{n+1/2}).
+// Row k's share of the report: its status and resultants, and the work of its reaction
+// (trapezoid halves over du^{n-1/2}, du^{n+1/2}), its prescribed dofs' share to their supports.
+void report_row(ContactRows& rows, std::size_t k, const double* v, const RowSolveInput& in, double max_rn, ContactStepReport& rep) {
+  const Vec3 r = row_reaction(rows, k);
+  const Vec3 n = row_normal(rows, k);
+  const double rn = dot(r, n);
+  if (!(rn > 1e-12 * max_rn) || max_rn == 0) {
+    rows.status[k] = ContactStatus::open;
+    return;
+  }
+  const Vec3 rt{r[0] - rn * n[0], r[1] - rn * n[1], r[2] - rn * n[2]};
+  const ContactPair& pair = (*in.pairs)[static_cast<std::size_t>(rows.pair[k])];
+  rows.status[k] = norm(rt) < pair.friction * rn * (1 - 1e-6) ? ContactStatus::stick : ContactStatus::slip;
+  ++rep.active;
+  (rows.status[k] == ContactStatus::stick ? rep.sticking : rep.slipping)++;
+  if (!pair.self_contact)  // a self-contact reaction is internal to its body
+    for (int d = 0; d < 3; ++d) rep.force[d] += pair.report_sign * r[d];
+  rep.normal_force += rn;
+  if (!in.per_pair) rep.area += (pair.self_contact ? 0.5 : 1.0) * rows.area[k];  // both sides of a self-contact are slaves
+  const double pressure = rn / rows.area[k];
+  if (pressure > rep.peak_pressure) rep.peak_pressure = pressure, rep.peak_node = rows.slave(k);
+  if (in.per_pair) {
+    PairStepReport& p = (*in.per_pair)[static_cast<std::size_t>(rows.pair[k])];
+    for (int d = 0; d < 3; ++d) p.force[d] += r[d];
+    p.normal_force += rn, p.area += (pair.self_contact ? 0.5 : 1.0) * rows.area[k], p.peak_pressure = std::max(p.peak_pressure, pressure), ++p.active;
+  }
+  const Vec3 u_new = relative_velocity(rows, k, v), u_old = relative_velocity(rows, k, in.v_old);
+  const double un_new = dot(u_new, n), un_old = dot(u_old, n);
+  rep.normal_work_forward += in.dt * rn * un_new;
+  rep.normal_work_back += in.dt_prev * rn * un_old;
+  rep.friction_work_forward += in.dt * (dot(r, u_new) - rn * un_new);
+  rep.friction_work_back += in.dt_prev * (dot(r, u_old) - rn * un_old);
+  for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a)
+    for (int d = 0; d < 3; ++d) {
+      const std::size_t dof = 3 * static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)]) + d;
+      if (in.inv_mass[dof] != 0 || (in.rigid && in.rigid->body(rows.nodes[static_cast<std::size_t>(a)]) >= 0))
+        continue;  // a prescribed dof: its support takes this share
+      const double support = -rows.weights[static_cast<std::size_t>(a)] * r[d];
+      rep.support_work_forward += in.dt * support * v[dof];
+      rep.support_work_back += in.dt_prev * support * in.v_old[dof];
+    }
+}
+
+// The step's report over all rows; the area per [[contact]] entry is its larger pass's (both
+// passes see one interface).
+void report_rows(ContactRows& rows, const double* v, const RowSolveInput& in, ContactStepReport& rep) {
   double max_rn = 0;
   if (in.per_pair) std::fill(in.per_pair->begin(), in.per_pair->end(), PairStepReport{});
-  for (std::size_t k = 0; k < K; ++k)
-    max_rn = std::max(max_rn, dot({rows.reaction[3 * k], rows.reaction[3 * k + 1], rows.reaction[3 * k + 2]}, normal(k)));
-  for (std::size_t k = 0; k < K; ++k) {
-    const Vec3 r{rows.reaction[3 * k], rows.reaction[3 * k + 1], rows.reaction[3 * k + 2]};
-    const Vec3 n = normal(k);
-    const double rn = dot(r, n);
-    if (!(rn > 1e-12 * max_rn) || max_rn == 0) {
-      rows.status[k] = ContactStatus::open;
-      continue;
-    }
-    const Vec3 rt{r[0] - rn * n[0], r[1] - rn * n[1], r[2] - rn * n[2]};
-    const ContactPair& pair = pairs[static_cast<std::size_t>(rows.pair[k])];
-    rows.status[k] = norm(rt) < pair.friction * rn * (1 - 1e-6) ? ContactStatus::stick : ContactStatus::slip;
-    ++rep.active;
-    (rows.status[k] == ContactStatus::stick ? rep.sticking : rep.slipping)++;
-    if (!pair.self_contact)  // a self-contact reaction is internal to its body
-      for (int d = 0; d < 3; ++d) rep.force[d] += pair.report_sign * r[d];
-    rep.normal_force += rn;
-    if (!in.per_pair) rep.area += (pair.self_contact ? 0.5 : 1.0) * rows.area[k];  // both sides of a self-contact are slaves
-    const double pressure = rn / rows.area[k];
-    if (pressure > rep.peak_pressure) rep.peak_pressure = pressure, rep.peak_node = rows.slave(k);
-    if (in.per_pair) {
-      PairStepReport& p = (*in.per_pair)[static_cast<std::size_t>(rows.pair[k])];
-      for (int d = 0; d < 3; ++d) p.force[d] += r[d];
-      p.normal_force += rn, p.area += (pair.self_contact ? 0.5 : 1.0) * rows.area[k], p.peak_pressure = std::max(p.peak_pressure, pressure),
-                                                                                      ++p.active;
-    }
-    const Vec3 u_new = relative_velocity(rows, k, v), u_old = relative_velocity(rows, k, in.v_old);
-    const double un_new = dot(u_new, n), un_old = dot(u_old, n);
-    rep.normal_work_forward += in.dt * rn * un_new;
-    rep.normal_work_back += in.dt_prev * rn * un_old;
-    rep.friction_work_forward += in.dt * (dot(r, u_new) - rn * un_new);
-    rep.friction_work_back += in.dt_prev * (dot(r, u_old) - rn * un_old);
-    for (auto a = rows.start[k]; a < rows.start[k + 1]; ++a)
-      for (int d = 0; d < 3; ++d) {
-        const std::size_t dof = 3 * static_cast<std::size_t>(rows.nodes[static_cast<std::size_t>(a)]) + d;
-        if (inv_mass[dof] != 0 || (rigid && rigid->body(rows.nodes[static_cast<std::size_t>(a)]) >= 0))
-          continue;  // a prescribed dof: its support takes this share
-        const double support = -rows.weights[static_cast<std::size_t>(a)] * r[d];
-        rep.support_work_forward += in.dt * support * v[dof];
-        rep.support_work_back += in.dt_prev * support * in.v_old[dof];
+  for (std::size_t k = 0; k < rows.size(); ++k) max_rn = std::max(max_rn, dot(row_reaction(rows, k), row_normal(rows, k)));
+  for (std::size_t k = 0; k < rows.size(); ++k) report_row(rows, k, v, in, max_rn, rep);
+  if (!in.per_pair) return;
+  const auto& pairs = *in.pairs;
+  const std::vector<PairStepReport>& per_pair = *in.per_pair;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    bool larger = true;
+    for (std::size_t q = 0; q < pairs.size(); ++q)
+      if (q != p && pairs[q].entry == pairs[p].entry && (per_pair[q].area > per_pair[p].area || (per_pair[q].area == per_pair[p].area && q < p)))
+        larger = false;
+    if (larger) rep.area += per_pair[p].area;
+  }
+}
+
+}  // namespace
+
+ContactStepReport solve_rows(ContactRows& rows, double* v, WarmStart& last, const RowSolveInput& in) {
+  ContactStepReport rep;
+  const std::size_t K = rows.size();
+  rep.candidates = K;
+  rows.reaction.assign(3 * K, 0.0);
+  rows.compliance.assign(K, 0.0);
+  rows.status.assign(K, ContactStatus::open);
+  if (K == 0) return rep;
+  // Compliances: w = c sum_a w_a^2 n.D_a n, D the inverse masses (0 on prescribed dofs), with the
+  // rigid bodies' coupled terms (row_compliance).
+  const double c = in.velocity_per_force;
+#pragma omp parallel for num_threads(in.threads) schedule(static) if (K >= 1024)
+  for (std::size_t k = 0; k < K; ++k) rows.compliance[k] = c * row_compliance(rows, k, &rows.normal[3 * k], in.inv_mass, in.rigid);
+  warm_start(rows, v, last, in);
+  UzawaSweep sweep(rows, v, in, rep);
+  sweep.run(rep);
+  keep_for_warm_start(rows, last);
+  if (in.rigid)  // the rigid bodies' nodes in the rows take their bodies' velocities (for the work below)
+    for (std::size_t a = 0; a < rows.nodes.size(); ++a)
+      if (const int b = in.rigid->body(rows.nodes[a]); b >= 0) {
+        const Vec3 vb = in.rigid->velocity(rows.nodes[a], b);
+        for (int d = 0; d < 3; ++d) v[3 * static_cast<std::size_t>(rows.nodes[a]) + static_cast<std::size_t>(d)] = vb[static_cast<std::size_t>(d)];
       }
-  }
-  if (in.per_pair) {  // the area per [[contact]] entry: its larger pass's (both passes see one interface)
-    for (std::size_t p = 0; p < pairs.size(); ++p) {
-      bool larger = true;
-      for (std::size_t q = 0; q < pairs.size(); ++q)
-        if (q != p && pairs[q].entry == pairs[p].entry &&
-            ((*in.per_pair)[q].area > (*in.per_pair)[p].area || ((*in.per_pair)[q].area == (*in.per_pair)[p].area && q < p)))
-          larger = false;
-      if (larger) rep.area += (*in.per_pair)[p].area;
-    }
-  }
+  report_rows(rows, v, in, rep);
   return rep;
 }
 

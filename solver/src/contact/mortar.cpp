@@ -223,11 +223,182 @@ class MortarSurface final : public ContactMaster {
                    const DetectionScratch::Grid& g, std::vector<std::size_t>& seen, SegmentChunk& w) const;
 };
 
+// A slave triangle at x: its vertices, normal (twice the area long) and area.
+struct SlaveTriangle {
+  const std::int32_t* v;
+  const double* xs[3];
+  Vec3 ns;
+  double area;
+};
+
+// Master triangle t (triangles: 3 node ids each) as a candidate of slave triangle s, when it lies
+// within the band (sb: the slave's box), faces it, and its projection can overlap the slave's.
+bool master_candidate(const SlaveTriangle& s, const double sb[6], std::size_t t, const std::vector<std::int32_t>& triangles, const double* x,
+                      double band, const DetectionScratch::Grid& g, Candidate& out) {
+  const double* mb = &g.extent[6 * t];  // most candidates of a cell are beyond the band: their boxes tell
+  if (mb[0] > sb[3] + band || mb[3] < sb[0] - band || mb[1] > sb[4] + band || mb[4] < sb[1] - band || mb[2] > sb[5] + band || mb[5] < sb[2] - band)
+    return false;
+  const std::int32_t* mv = &triangles[3 * t];
+  const std::int32_t* sv = s.v;
+  if (mv[0] == sv[0] || mv[0] == sv[1] || mv[0] == sv[2] || mv[1] == sv[0] || mv[1] == sv[1] || mv[1] == sv[2] || mv[2] == sv[0] || mv[2] == sv[1] ||
+      mv[2] == sv[2])
+    return false;  // a neighbour on the same surface
+  const double* tn = &g.normal[4 * t];
+  if (tn[3] == 0) return false;
+  const Vec3 n{tn[0], tn[1], tn[2]};
+  // The surfaces must face each other (both outward): a slave triangle pairs only with
+  // master faces within 60 degrees of opposite, not with the side faces at an edge.
+  if (dot(s.ns, n) > -0.5 * 2 * s.area) return false;
+  const double* m0 = x + 3 * mv[0];
+  double h[3];
+  for (int a = 0; a < 3; ++a) h[a] = dot(sub(s.xs[a], m0), n);
+  if (std::min({h[0], h[1], h[2]}) > band || std::max({h[0], h[1], h[2]}) < -band) return false;
+  // The master plane's frame: e1 along the first edge, e2 = n x e1 (counter-clockwise about n).
+  const Vec3 e1r = sub(x + 3 * mv[1], m0);
+  const double l1 = norm(e1r);
+  const Vec3 e1{e1r[0] / l1, e1r[1] / l1, e1r[2] / l1}, e2 = cross(n, e1);
+  auto to2 = [&](const double* q) {
+    const Vec3 d = sub(q, m0);
+    return P2{dot(d, e1), dot(d, e2)};
+  };
+  const std::array<P2, 3> mt{P2{0, 0}, to2(x + 3 * mv[1]), to2(x + 3 * mv[2])};
+  const std::array<P2, 3> sq{to2(s.xs[0]), to2(s.xs[1]), to2(s.xs[2])};
+  // Most candidates do not overlap at all: their boxes in the plane tell before clipping.
+  for (int c = 0; c < 2; ++c) {
+    auto coord = [c](const P2& q) { return c == 0 ? q.u : q.v; };
+    if (std::max({coord(sq[0]), coord(sq[1]), coord(sq[2])}) < std::min({coord(mt[0]), coord(mt[1]), coord(mt[2])}) ||
+        std::min({coord(sq[0]), coord(sq[1]), coord(sq[2])}) > std::max({coord(mt[0]), coord(mt[1]), coord(mt[2])}))
+      return false;
+  }
+  if (!(0.5 * std::abs(cross2(sq[0], sq[1], sq[2])) > 1e-12 * s.area)) return false;
+  out = {t, m0, n, e1, e2, mt, sq, {h[0], h[1], h[2]}};
+  return true;
+}
+
+// The quadrature of one slave triangle over its candidates. Each point of the slave triangle
+// belongs to one master triangle. Where its projections onto two master faces that are not
+// coplanar overlap (a skin triangle wrapped round a convex edge of the block projects onto both
+// faces), it belongs to the face it is nearer to, |gap| smaller by more than round-off (coplanar
+// neighbours tie and keep their exact partition). Counting it on both added the far face's depth
+// to the weighted gap: a skin node lying on the block's face 1.9 mm from its edge got a gap of
+// -0.3 mm and was pushed out at the recovery speed, and its pressure was the run's peak.
+class SegmentQuadrature {
+ public:
+  SegmentQuadrature(const SlaveTriangle& s, const std::vector<Candidate>& candidates, const std::vector<std::int32_t>& triangles,
+                    std::vector<QuadraturePoint>& points)
+      : s_(s), candidates_(candidates), triangles_(triangles), points_(points), tie_(1e-6 * std::sqrt(s.area)) {}
+
+  // The points of candidate ci's overlap with the slave triangle, and whether each slave vertex is
+  // over its master triangle (and not nearer another) into `over`.
+  void integrate(std::size_t ci, std::array<bool, 3>& over);
+
+ private:
+  Vec3 slave_point(const std::array<double, 3>& l) const {
+    const double* const* xs = s_.xs;
+    return Vec3{l[0] * xs[0][0] + l[1] * xs[1][0] + l[2] * xs[2][0], l[0] * xs[0][1] + l[1] * xs[1][1] + l[2] * xs[2][1],
+                l[0] * xs[0][2] + l[1] * xs[1][2] + l[2] * xs[2][2]};
+  }
+  bool nearer_elsewhere(std::size_t self, const Vec3& xq, double depth) const {
+    for (std::size_t o = 0; o < candidates_.size(); ++o) {
+      const Candidate& c = candidates_[o];
+      if (o == self) continue;
+      const Vec3 d = sub(xq.data(), c.m0);
+      if (!(std::abs(dot(d, c.n)) < depth - tie_)) continue;
+      const auto b = barycentric(P2{dot(d, c.e1), dot(d, c.e2)}, c.mt);
+      if (std::min({b[0], b[1], b[2]}) >= 0) return true;
+    }
+    return false;
+  }
+  static double height(const Candidate& c, const std::array<double, 3>& l) { return l[0] * c.h[0] + l[1] * c.h[1] + l[2] * c.h[2]; }
+  // The point of the slave triangle over q (in ci's plane) is ci's.
+  bool belongs(std::size_t ci, const P2& q) const {
+    const auto l = barycentric(q, candidates_[ci].sq);
+    return !nearer_elsewhere(ci, slave_point(l), std::abs(height(candidates_[ci], l)));
+  }
+  void add_point(const Candidate& c, const P2& q, double dA) {
+    QuadraturePoint qpnt;
+    qpnt.lambda = barycentric(q, c.sq), qpnt.mu = barycentric(q, c.mt);
+    qpnt.gap = height(c, qpnt.lambda);  // (x_s(q) - x_m(q)) . n
+    qpnt.dA = dA;
+    qpnt.n = c.n;
+    std::copy(&triangles_[3 * c.t], &triangles_[3 * c.t] + 3, qpnt.master.begin());
+    points_.push_back(qpnt);
+  }
+  void fan_triangle(std::size_t ci, bool contested, double to_slave, const P2& a0, const P2& b0, const P2& c0);
+
+  const SlaveTriangle& s_;
+  const std::vector<Candidate>& candidates_;
+  const std::vector<std::int32_t>& triangles_;
+  std::vector<QuadraturePoint>& points_;
+  const double tie_;
+};
+
+void SegmentQuadrature::integrate(std::size_t ci, std::array<bool, 3>& over) {
+  const Candidate& cand = candidates_[ci];
+  const std::array<P2, 3>&mt = cand.mt, &sq = cand.sq;
+  std::array<P2, 12> poly;
+  const int nv = clip_by_triangle(sq.data(), 3, mt, poly);
+  if (nv < 3) return;
+  const double to_slave = s_.area / (0.5 * std::abs(cross2(sq[0], sq[1], sq[2])));  // dA on the slave per dA in the plane
+  bool contested = false;                                                           // is another candidate's plane not this one's?
+  for (const Candidate& o : candidates_) contested = contested || dot(o.n, cand.n) < 1 - 1e-9;
+  for (int f = 1; f + 1 < nv; ++f)
+    fan_triangle(ci, contested, to_slave, poly[0], poly[static_cast<std::size_t>(f)], poly[static_cast<std::size_t>(f + 1)]);
+  for (std::size_t v = 0; v < 3; ++v) {  // is the slave vertex itself over this master triangle (and not nearer another)?
+    const auto b = barycentric(sq[v], mt);
+    if (std::min({b[0], b[1], b[2]}) >= -kOverMasterReach &&
+        !(contested && nearer_elsewhere(ci, Vec3{s_.xs[v][0], s_.xs[v][1], s_.xs[v][2]}, std::abs(cand.h[v]))))
+      over[v] = true;
+  }
+}
+
+// One triangle of the clipped polygon's fan, by the edge-midpoint rule (exact: the integrands are
+// quadratic). Where the boundary to a nearer face crosses one (its corners and edge midpoints
+// disagree), it is split in four, down to kNearerSplits levels, so the quadrature follows the
+// boundary. A piece carries whether its corners are this candidate's: its children's corners are
+// its corners and edge midpoints, so each split evaluates only the three new midpoints.
+void SegmentQuadrature::fan_triangle(std::size_t ci, bool contested, double to_slave, const P2& a0, const P2& b0, const P2& c0) {
+  const Candidate& cand = candidates_[ci];
+  auto mid = [](const P2& x0, const P2& x1) { return P2{0.5 * (x0.u + x1.u), 0.5 * (x0.v + x1.v)}; };
+  struct Piece {
+    P2 a, b, c;
+    std::array<bool, 3> in;
+    int level;
+  };
+  std::array<Piece, 3 * kNearerSplits + 4> stack;
+  int pending = 0;
+  stack[static_cast<std::size_t>(pending++)] = {
+      a0, b0, c0, contested ? std::array<bool, 3>{belongs(ci, a0), belongs(ci, b0), belongs(ci, c0)} : std::array<bool, 3>{true, true, true}, 0};
+  while (pending > 0) {
+    const Piece piece = stack[static_cast<std::size_t>(--pending)];
+    const double dA = 0.5 * std::abs(cross2(piece.a, piece.b, piece.c)) / 3.0 * to_slave;
+    if (!(dA > 0)) continue;
+    const P2 m[3] = {mid(piece.a, piece.b), mid(piece.b, piece.c), mid(piece.c, piece.a)};
+    if (!contested) {
+      for (const P2& q : m) add_point(cand, q, dA);
+      continue;
+    }
+    const std::array<bool, 3> in{belongs(ci, m[0]), belongs(ci, m[1]), belongs(ci, m[2])};
+    const bool same = in[0] == in[1] && in[1] == in[2] && piece.in[0] == in[0] && piece.in[1] == in[0] && piece.in[2] == in[0];
+    if (same || piece.level == kNearerSplits) {
+      for (std::size_t k = 0; k < 3; ++k)
+        if (in[k]) add_point(cand, m[k], dA);
+      continue;
+    }
+    const int next = piece.level + 1;
+    for (const Piece& child :
+         {Piece{piece.a, m[0], m[2], {piece.in[0], in[0], in[2]}, next}, Piece{m[0], piece.b, m[1], {in[0], piece.in[1], in[1]}, next},
+          Piece{m[2], m[1], piece.c, {in[2], in[1], piece.in[2]}, next}, Piece{m[0], m[1], m[2], in, next}})
+      stack[static_cast<std::size_t>(pending++)] = child;
+  }
+}
+
 // The mortar segments of slave triangle st with the master triangles near it, integrated.
 void MortarSurface::segments_of(const ContactPair& p, const std::vector<std::size_t>& slave_local, std::size_t st, const double* x, double band,
                                 const DetectionScratch::Grid& g, std::vector<std::size_t>& seen, SegmentChunk& w) const {
   const std::int32_t* sv = &p.slave_triangles[3 * st];
-  const double* xs[3] = {x + 3 * sv[0], x + 3 * sv[1], x + 3 * sv[2]};
+  SlaveTriangle s{sv, {x + 3 * sv[0], x + 3 * sv[1], x + 3 * sv[2]}, {}, 0};
+  const double* const* xs = s.xs;
   int lo[3], hi[3];
   double sb[6];  // the slave triangle's box
   bool outside = false;
@@ -237,11 +408,12 @@ void MortarSurface::segments_of(const ContactPair& p, const std::vector<std::siz
     if (!outside) lo[c] = g.cell_of(sb[c], c), hi[c] = g.cell_of(sb[3 + c], c);
   }
   if (outside) return;  // far from every master triangle
-  const Vec3 ns = cross(sub(xs[1], xs[0]), sub(xs[2], xs[0]));
-  const double slave_area = 0.5 * norm(ns);
-  if (!(slave_area > 0)) return;
+  s.ns = cross(sub(xs[1], xs[0]), sub(xs[2], xs[0]));
+  s.area = 0.5 * norm(s.ns);
+  if (!(s.area > 0)) return;
   std::vector<Candidate>& candidates = w.candidates;
   candidates.clear();
+  Candidate found;
   for (int k = lo[2]; k <= hi[2]; ++k)
     for (int j = lo[1]; j <= hi[1]; ++j)
       for (int i = lo[0]; i <= hi[0]; ++i) {
@@ -252,148 +424,19 @@ void MortarSurface::segments_of(const ContactPair& p, const std::vector<std::siz
           const auto t = static_cast<std::size_t>(g.items[static_cast<std::size_t>(it)]);
           if (seen[t] == st) continue;
           seen[t] = st;
-          const double* mb = &g.extent[6 * t];  // most candidates of a cell are beyond the band: their boxes tell
-          if (mb[0] > sb[3] + band || mb[3] < sb[0] - band || mb[1] > sb[4] + band || mb[4] < sb[1] - band || mb[2] > sb[5] + band ||
-              mb[5] < sb[2] - band)
-            continue;
-          const std::int32_t* mv = &triangles_[3 * t];
-          if (mv[0] == sv[0] || mv[0] == sv[1] || mv[0] == sv[2] || mv[1] == sv[0] || mv[1] == sv[1] || mv[1] == sv[2] || mv[2] == sv[0] ||
-              mv[2] == sv[1] || mv[2] == sv[2])
-            continue;  // a neighbour on the same surface
-          const double* tn = &g.normal[4 * t];
-          if (tn[3] == 0) continue;
-          const Vec3 n{tn[0], tn[1], tn[2]};
-          // The surfaces must face each other (both outward): a slave triangle pairs only with
-          // master faces within 60 degrees of opposite, not with the side faces at an edge.
-          if (dot(ns, n) > -0.5 * 2 * slave_area) continue;
-          const double* m0 = x + 3 * mv[0];
-          double h[3];
-          for (int a = 0; a < 3; ++a) h[a] = dot(sub(xs[a], m0), n);
-          if (std::min({h[0], h[1], h[2]}) > band || std::max({h[0], h[1], h[2]}) < -band) continue;
-          // The master plane's frame: e1 along the first edge, e2 = n x e1 (counter-clockwise about n).
-          const Vec3 e1r = sub(x + 3 * mv[1], m0);
-          const double l1 = norm(e1r);
-          const Vec3 e1{e1r[0] / l1, e1r[1] / l1, e1r[2] / l1}, e2 = cross(n, e1);
-          auto to2 = [&](const double* q) {
-            const Vec3 d = sub(q, m0);
-            return P2{dot(d, e1), dot(d, e2)};
-          };
-          const std::array<P2, 3> mt{P2{0, 0}, to2(x + 3 * mv[1]), to2(x + 3 * mv[2])};
-          const std::array<P2, 3> sq{to2(xs[0]), to2(xs[1]), to2(xs[2])};
-          // Most candidates do not overlap at all: their boxes in the plane tell before clipping.
-          bool apart = false;
-          for (int c = 0; c < 2 && !apart; ++c) {
-            auto coord = [c](const P2& q) { return c == 0 ? q.u : q.v; };
-            apart = std::max({coord(sq[0]), coord(sq[1]), coord(sq[2])}) < std::min({coord(mt[0]), coord(mt[1]), coord(mt[2])}) ||
-                    std::min({coord(sq[0]), coord(sq[1]), coord(sq[2])}) > std::max({coord(mt[0]), coord(mt[1]), coord(mt[2])});
-          }
-          if (apart) continue;
-          if (!(0.5 * std::abs(cross2(sq[0], sq[1], sq[2])) > 1e-12 * slave_area)) continue;
-          candidates.push_back({t, m0, n, e1, e2, mt, sq, {h[0], h[1], h[2]}});
+          if (master_candidate(s, sb, t, triangles_, x, band, g, found)) candidates.push_back(found);
         }
       }
   if (candidates.empty()) return;
-  // Each point of the slave triangle belongs to one master triangle. Where its projections onto
-  // two master faces that are not coplanar overlap (a skin triangle wrapped round a convex edge of
-  // the block projects onto both faces), it belongs to the face it is nearer to, |gap| smaller by
-  // more than round-off (coplanar neighbours tie and keep their exact partition). Counting it on
-  // both added the far face's depth to the weighted gap: a skin node lying on the block's face
-  // 1.9 mm from its edge got a gap of -0.3 mm and was pushed out at the recovery speed, and its
-  // pressure was the run's peak.
-  const double tie = 1e-6 * std::sqrt(slave_area);
-  auto slave_point = [&](const std::array<double, 3>& l) {
-    return Vec3{l[0] * xs[0][0] + l[1] * xs[1][0] + l[2] * xs[2][0], l[0] * xs[0][1] + l[1] * xs[1][1] + l[2] * xs[2][1],
-                l[0] * xs[0][2] + l[1] * xs[1][2] + l[2] * xs[2][2]};
-  };
-  auto nearer_elsewhere = [&](std::size_t self, const Vec3& xq, double depth) {
-    for (std::size_t o = 0; o < candidates.size(); ++o) {
-      const Candidate& c = candidates[o];
-      if (o == self) continue;
-      const Vec3 d = sub(xq.data(), c.m0);
-      if (!(std::abs(dot(d, c.n)) < depth - tie)) continue;
-      const auto b = barycentric(P2{dot(d, c.e1), dot(d, c.e2)}, c.mt);
-      if (std::min({b[0], b[1], b[2]}) >= 0) return true;
-    }
-    return false;
-  };
-  auto height = [](const Candidate& c, const std::array<double, 3>& l) { return l[0] * c.h[0] + l[1] * c.h[1] + l[2] * c.h[2]; };
-  auto belongs = [&](std::size_t ci, const P2& q) {  // the point of the slave triangle over q (in ci's plane) is ci's
-    const auto l = barycentric(q, candidates[ci].sq);
-    return !nearer_elsewhere(ci, slave_point(l), std::abs(height(candidates[ci], l)));
-  };
-  auto mid = [](const P2& x0, const P2& x1) { return P2{0.5 * (x0.u + x1.u), 0.5 * (x0.v + x1.v)}; };
-  std::vector<QuadraturePoint>& points = w.points;
-  points.clear();
-  auto add_point = [&](const Candidate& c, const P2& q, double dA) {
-    QuadraturePoint qpnt;
-    qpnt.lambda = barycentric(q, c.sq), qpnt.mu = barycentric(q, c.mt);
-    qpnt.gap = height(c, qpnt.lambda);  // (x_s(q) - x_m(q)) . n
-    qpnt.dA = dA;
-    qpnt.n = c.n;
-    std::copy(&triangles_[3 * c.t], &triangles_[3 * c.t] + 3, qpnt.master.begin());
-    points.push_back(qpnt);
-  };
+  w.points.clear();
+  SegmentQuadrature quadrature(s, candidates, triangles_, w.points);
   std::array<bool, 3> over{false, false, false};
-  for (std::size_t ci = 0; ci < candidates.size(); ++ci) {
-    const Candidate& cand = candidates[ci];
-    const std::array<P2, 3>&mt = cand.mt, &sq = cand.sq;
-    std::array<P2, 12> poly;
-    const int nv = clip_by_triangle(sq.data(), 3, mt, poly);
-    if (nv < 3) continue;
-    const double to_slave = slave_area / (0.5 * std::abs(cross2(sq[0], sq[1], sq[2])));  // dA on the slave per dA in the plane
-    bool contested = false;                                                              // is another candidate's plane not this one's?
-    for (const Candidate& o : candidates) contested = contested || dot(o.n, cand.n) < 1 - 1e-9;
-    for (int f = 1; f + 1 < nv; ++f) {
-      // The fan's sub-triangles by the edge-midpoint rule (exact: the integrands are quadratic).
-      // Where the boundary to a nearer face crosses one (its corners and edge midpoints disagree),
-      // it is split in four, down to kNearerSplits levels, so the quadrature follows the boundary.
-      // A piece carries whether its corners are this candidate's: its children's corners are its
-      // corners and edge midpoints, so each split evaluates only the three new midpoints.
-      struct Piece {
-        P2 a, b, c;
-        std::array<bool, 3> in;
-        int level;
-      };
-      std::array<Piece, 3 * kNearerSplits + 4> stack;
-      int pending = 0;
-      const P2 &a0 = poly[0], &b0 = poly[static_cast<std::size_t>(f)], &c0 = poly[static_cast<std::size_t>(f + 1)];
-      stack[static_cast<std::size_t>(pending++)] = {
-          a0, b0, c0, contested ? std::array<bool, 3>{belongs(ci, a0), belongs(ci, b0), belongs(ci, c0)} : std::array<bool, 3>{true, true, true}, 0};
-      while (pending > 0) {
-        const Piece piece = stack[static_cast<std::size_t>(--pending)];
-        const double dA = 0.5 * std::abs(cross2(piece.a, piece.b, piece.c)) / 3.0 * to_slave;
-        if (!(dA > 0)) continue;
-        const P2 m[3] = {mid(piece.a, piece.b), mid(piece.b, piece.c), mid(piece.c, piece.a)};
-        if (!contested) {
-          for (const P2& q : m) add_point(cand, q, dA);
-          continue;
-        }
-        const std::array<bool, 3> in{belongs(ci, m[0]), belongs(ci, m[1]), belongs(ci, m[2])};
-        const bool same = in[0] == in[1] && in[1] == in[2] && piece.in[0] == in[0] && piece.in[1] == in[0] && piece.in[2] == in[0];
-        if (same || piece.level == kNearerSplits) {
-          for (std::size_t k = 0; k < 3; ++k)
-            if (in[k]) add_point(cand, m[k], dA);
-          continue;
-        }
-        const int next = piece.level + 1;
-        for (const Piece& child :
-             {Piece{piece.a, m[0], m[2], {piece.in[0], in[0], in[2]}, next}, Piece{m[0], piece.b, m[1], {in[0], piece.in[1], in[1]}, next},
-              Piece{m[2], m[1], piece.c, {in[2], in[1], piece.in[2]}, next}, Piece{m[0], m[1], m[2], in, next}})
-          stack[static_cast<std::size_t>(pending++)] = child;
-      }
-    }
-    for (std::size_t v = 0; v < 3; ++v) {  // is the slave vertex itself over this master triangle (and not nearer another)?
-      const auto b = barycentric(sq[v], mt);
-      if (std::min({b[0], b[1], b[2]}) >= -kOverMasterReach &&
-          !(contested && nearer_elsewhere(ci, Vec3{xs[v][0], xs[v][1], xs[v][2]}, std::abs(cand.h[v]))))
-        over[v] = true;
-    }
-  }
-  if (points.empty()) return;
+  for (std::size_t ci = 0; ci < candidates.size(); ++ci) quadrature.integrate(ci, over);
+  if (w.points.empty()) return;
   TriangleIntegrals ti;
   for (std::size_t v = 0; v < 3; ++v) ti.node[v] = slave_local[3 * st + v];
   ti.over = over;
-  integrate_segments(points, ti, w.terms);
+  integrate_segments(w.points, ti, w.terms);
   w.triangles.push_back(ti);
 }
 

@@ -25,6 +25,7 @@
 #include <type_traits>
 
 #include "lanes.hpp"
+#include "step_bound.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/material.hpp"
 
@@ -208,27 +209,10 @@ inline constexpr std::size_t element_data_size() {
     return 1;
 }
 
-template <class Law, bool kViscous, bool kAnp, class T>
-TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& mat, std::size_t e, LaneResults<T>& out, LaneResults<double>& scalar) {
-  constexpr int L = lanes::lanes_of<T>;
-  const std::int32_t* c = a.conn + 4 * e;
-  const LaneDeformation<T> d = deformation_lanes<T>(a.grad, a.conn, a.u, e);
-  const T* g = d.g;
-  const M3<T>&F = d.F, &cof = d.cof;
-  const T& J = d.J;
-  if constexpr (L > 1) {
-    if (!all_positive(J)) {  // an inverted tet: lane by lane, so it is recorded and skipped as alone
-      for (int l = 0; l < L; ++l) element_lanes<Law, kViscous, kAnp, double>(a, mat, e + static_cast<std::size_t>(l), scalar, scalar);
-      return;
-    }
-  }
-  const LaneIndex<T> index = lane_indices<T>(e);
-  const auto J_smaller = J < out.min_J;
-  out.min_J = J_smaller ? J : out.min_J;
-  out.min_J_element = J_smaller ? index : out.min_J_element;
-  if constexpr (L == 1)
-    if (!(J > 0)) return;  // reported by the caller; the step is abandoned
-
+// The lanes' law stress at F: the element data gathered lane by lane, then the law (ANP: its
+// isochoric part plus the mean of the tet's nodal pressures times cof F, the J pass's result).
+template <class Law, bool kAnp, class T>
+TACTUS_KERNEL_INLINE LawStress<T> lane_law_stress(const StressKernelArgs& a, const Law& mat, std::size_t e, const LaneDeformation<T>& d) {
   constexpr std::size_t kData = element_data_size<Law>();
   T data[kData];
   if constexpr (requires { Law::kElementData; }) {
@@ -237,25 +221,27 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
   } else {
     data[0] = lanes::splat<T>(0.0);
   }
-  LawStress<T> sp;
   if constexpr (kAnp) {
-    sp = mat.evaluate_isochoric(F, cof, J, data);
+    LawStress<T> sp = mat.evaluate_isochoric(d.F, d.cof, d.J, data);
+    const std::int32_t* c = a.conn + 4 * e;
     const double* np = a.nodal_pressure;  // the mean of the tet's nodal pressures: its energy is the nodes' (J pass)
     const T p = lanes::make_lanes<T>([&](int l) {
       const std::int32_t* cl = c + 4 * l;
       return 0.25 * (np[cl[0]] + np[cl[1]] + np[cl[2]] + np[cl[3]]);
     });
-    sp.P += p * cof;
+    sp.P += p * d.cof;
+    return sp;
   } else {
-    sp = evaluate_law(mat, F, cof, J, data);
+    return evaluate_law(mat, d.F, d.cof, d.J, data);
   }
-  const T V0 = load_strided<T>(a.volume + e, 1);
-  out.energy += V0 * sp.W;
+}
 
-  // Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J;
-  // s = sum_a |grad_x N_a|^2 is accumulated unscaled (J^2 s) to keep divisions out of the loop.
-  // cg[b] = cof grad_X N_b = J grad_x N_b, node 0's as minus the others' sum.
-  T sJ2 = lanes::splat<T>(0.0), cg[4][3];
+// Current shape-function gradients grad_x N_a = F^{-T} grad_X N_a = cof grad_X N_a / J;
+// s = sum_a |grad_x N_a|^2 is returned unscaled (J^2 s) to keep divisions out of the loop.
+// cg[b] = cof grad_X N_b = J grad_x N_b, node 0's as minus the others' sum.
+template <class T>
+TACTUS_KERNEL_INLINE T current_gradients(const M3<T>& cof, const T* g, T cg[4][3]) {
+  T sJ2 = lanes::splat<T>(0.0);
   for (int i = 0; i < 3; ++i) cg[0][i] = sJ2;
   for (int k = 0; k < 3; ++k)
     for (int i = 0; i < 3; ++i) {
@@ -265,33 +251,48 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
       cg[0][i] -= h;
     }
   sJ2 += cg[0][0] * cg[0][0] + cg[0][1] * cg[0][1] + cg[0][2] * cg[0][2];
-  // dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J):
-  // dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M).
-  T dt2 = mat.density * J / (sJ2 * sp.modulus);
+  return sJ2;
+}
+
+// Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
+// D = sym(Fdot F^{-1}); its first Piola stress is J sigma_v F^{-T} = sigma_v cof. Added to P; its
+// power Pv : Fdot V0 to the lanes' viscous power.
+template <class Law, class T>
+TACTUS_KERNEL_INLINE void add_viscous_stress(const StressKernelArgs& a, const Law& mat, std::size_t e, const LaneDeformation<T>& d, const T& V0,
+                                             M3<T>& P, LaneResults<T>& out) {
+  const double visc_mu = mat.small_strain_shear(), visc_lambda = mat.small_strain_bulk() - 2.0 * visc_mu / 3.0;
+  const M3<T>& cof = d.cof;
+  const M3<T> Fdot = nodal_gradient_lanes(a.v, a.conn + 4 * e, d.g);
+  M3<T> D;
+  const T inv_J = 1.0 / d.J;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const T Lij = Fdot(i, 0) * cof(j, 0) + Fdot(i, 1) * cof(j, 1) + Fdot(i, 2) * cof(j, 2);
+      const T Lji = Fdot(j, 0) * cof(i, 0) + Fdot(j, 1) * cof(i, 1) + Fdot(j, 2) * cof(i, 2);
+      D(i, j) = 0.5 * inv_J * (Lij + Lji);
+    }
+  const M3<T> sigma_v = a.beta * (2.0 * visc_mu * D + lanes::identity_times<T>(visc_lambda * lanes::trace(D)));
+  const M3<T> Pv = sigma_v * cof;
+  P += Pv;
+  T power = Pv.a[0] * Fdot.a[0];
+  for (int k = 1; k < 9; ++k) power += Pv.a[k] * Fdot.a[k];
+  out.viscous_power += V0 * power;
+}
+
+// The lanes' stable step (paper's critical time step of the central difference scheme, eq. 35):
+// dt_e = L_e / c_e with L_e^2 = 1/s and c_e^2 = M J / rho0 (current density rho0 / J), so
+// dt_e^2 = rho0 / (s M J) = rho0 J / (sJ2 M); with mass scaling its unscaled square is stored and
+// the step lengthened as sqrt(m); with beta > 0 the damped mode's limit. The smallest (and its
+// element) kept per lane.
+template <bool kViscous, class T>
+TACTUS_KERNEL_INLINE void record_element_step(const StressKernelArgs& a, double density, std::size_t e, const T& J, const T& sJ2, const T& modulus,
+                                              const LaneIndex<T>& index, LaneResults<T>& out) {
+  T dt2 = density * J / (sJ2 * modulus);
   if (a.element_dt2) {  // mass scaling on: the element's added mass lengthens its step as sqrt(m)
-    for (int l = 0; l < L; ++l) a.element_dt2[e + static_cast<std::size_t>(l)] = lanes::lane(dt2, l);
+    for (int l = 0; l < lanes::lanes_of<T>; ++l) a.element_dt2[e + static_cast<std::size_t>(l)] = lanes::lane(dt2, l);
     dt2 *= load_strided<T>(a.mass_factor + e, 1);
   }
-
   if constexpr (kViscous) {
-    // Rayleigh beta K v as a viscous stress: sigma_v = beta (lambda tr(D) I + 2 mu D),
-    // D = sym(Fdot F^{-1}); its first Piola stress is J sigma_v F^{-T} = sigma_v cof.
-    const double visc_mu = mat.small_strain_shear(), visc_lambda = mat.small_strain_bulk() - 2.0 * visc_mu / 3.0;
-    const M3<T> Fdot = nodal_gradient_lanes(a.v, c, g);
-    M3<T> D;
-    const T inv_J = 1.0 / J;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) {
-        const T Lij = Fdot(i, 0) * cof(j, 0) + Fdot(i, 1) * cof(j, 1) + Fdot(i, 2) * cof(j, 2);
-        const T Lji = Fdot(j, 0) * cof(i, 0) + Fdot(j, 1) * cof(i, 1) + Fdot(j, 2) * cof(i, 2);
-        D(i, j) = 0.5 * inv_J * (Lij + Lji);
-      }
-    const M3<T> sigma_v = a.beta * (2.0 * visc_mu * D + lanes::identity_times<T>(visc_lambda * lanes::trace(D)));
-    const M3<T> Pv = sigma_v * cof;
-    sp.P += Pv;
-    T power = Pv.a[0] * Fdot.a[0];
-    for (int k = 1; k < 9; ++k) power += Pv.a[k] * Fdot.a[k];
-    out.viscous_power += V0 * power;
     const T omega = 2.0 / lanes::sqrt_of(dt2);
     const T xi = 0.5 * a.beta * omega;
     const T dt = 2.0 / omega * (lanes::sqrt_of(1.0 + xi * xi) - xi);
@@ -303,55 +304,61 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     out.dt2 = smaller ? dt2 : out.dt2;
     out.dt_element = smaller ? index : out.dt_element;
   }
+}
 
-  T bound[4]{};  // the nodal step bound's row sums at the tet's nodes, scattered with the forces
-  if (a.nodal_bound) {
-    // The nodal step bound's row sums (design.md, "Stable step"): node b of the tet gets
-    // |d_b| (M / J + q_e) t_e / V0, d_b = dv_e/dx_b = V0 cg[b], t_e = sum_b |d_b|; M the P-wave
-    // modulus (ANP: its deviatoric part) and q_e the ANP tet's constant volumetric factor (else 0).
-    T t = lanes::splat<T>(0.0);
-    for (int k = 0; k < 4; ++k) bound[k] = lanes::sqrt_of(cg[k][0] * cg[k][0] + cg[k][1] * cg[k][1] + cg[k][2] * cg[k][2]), t += bound[k];
-    T row = (kAnp ? sp.modulus - a.anp_bulk : sp.modulus) * t / J;
-    if constexpr (kAnp) {
-      const T q = load_strided<T>(a.anp_bound_factor + (e - a.block_begin), 1);
-      row += q * t;
-      if (a.anp_tiles) {
-        // c^2 >= |cof F - I|_2^2, the smaller of its Frobenius norm's square and the product of its
-        // largest column and row sums (|A|_2^2 <= |A|_1 |A|_inf), its largest over the lanes into the
-        // tile: |cof F grad_X N_b - grad_X N_b| <= c |grad_X N_b|.
-        T frobenius = lanes::splat<T>(0.0), column_sum[3], row_sum[3];
-        for (int i = 0; i < 3; ++i) column_sum[i] = row_sum[i] = frobenius;
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            const T moved = i == j ? cof(i, j) - 1.0 : cof(i, j), size = lanes::abs_of(moved);
-            frobenius += moved * moved, row_sum[i] += size, column_sum[j] += size;
-          }
-        const T max_column = lanes::max_of(column_sum[0], lanes::max_of(column_sum[1], column_sum[2])),
-                max_row = lanes::max_of(row_sum[0], lanes::max_of(row_sum[1], row_sum[2]));
-        const T c2 = lanes::min_of(frobenius, max_column * max_row);
-        double largest = lanes::lane(c2, 0);
-        for (int l = 1; l < L; ++l) largest = std::max(largest, lanes::lane(c2, l));
-        double& tile = a.anp_tiles[(e - a.begin) / kAnpTile];
-        tile = std::max(tile, largest);
-      }
-    }
-    row *= V0;
-    for (int k = 0; k < 4; ++k) bound[k] *= row;
-  }
-
+// f_a = -V0 P grad_X N_a (paper eq. 31), node 0's as minus the others' sum, scattered lane by lane
+// in element order, node 1, 2, 3 then 0, as the scalar loop always added them; the nodal step
+// bound's rows (step_bound.hpp) after each node's force, in the same cache line.
+template <class T>
+TACTUS_KERNEL_INLINE void scatter_forces(const StressKernelArgs& a, std::size_t e, const M3<T>& P, const T* g, const T& V0, const T bound[4]) {
+  const std::int32_t* c = a.conn + 4 * e;
   T h[4][3];
   for (int i = 0; i < 3; ++i) h[0][i] = lanes::splat<T>(0.0);
   for (int k = 0; k < 3; ++k)
     for (int i = 0; i < 3; ++i) {
-      h[k + 1][i] = -V0 * (sp.P(i, 0) * g[3 * k] + sp.P(i, 1) * g[3 * k + 1] + sp.P(i, 2) * g[3 * k + 2]);
+      h[k + 1][i] = -V0 * (P(i, 0) * g[3 * k] + P(i, 1) * g[3 * k + 1] + P(i, 2) * g[3 * k + 2]);
       h[0][i] -= h[k + 1][i];
     }
-  for (int l = 0; l < L; ++l)  // in element order, node 1, 2, 3 then 0, as the scalar loop always added them
+  for (int l = 0; l < lanes::lanes_of<T>; ++l)
     for (int k : {1, 2, 3, 0}) {
       double* fa = a.f + kForceStride * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
       for (int i = 0; i < 3; ++i) fa[i] += lanes::lane(h[k][i], l);
       if (a.nodal_bound) fa[3] += lanes::lane(bound[k], l);
     }
+}
+
+// One group of lanes: deformation, stress, energy, step, nodal step bound rows, forces.
+template <class Law, bool kViscous, bool kAnp, class T>
+TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& mat, std::size_t e, LaneResults<T>& out, LaneResults<double>& scalar) {
+  constexpr int L = lanes::lanes_of<T>;
+  const LaneDeformation<T> d = deformation_lanes<T>(a.grad, a.conn, a.u, e);
+  if constexpr (L > 1) {
+    if (!all_positive(d.J)) {  // an inverted tet: lane by lane, so it is recorded and skipped as alone
+      for (int l = 0; l < L; ++l) element_lanes<Law, kViscous, kAnp, double>(a, mat, e + static_cast<std::size_t>(l), scalar, scalar);
+      return;
+    }
+  }
+  const LaneIndex<T> index = lane_indices<T>(e);
+  const auto J_smaller = d.J < out.min_J;
+  out.min_J = J_smaller ? d.J : out.min_J;
+  out.min_J_element = J_smaller ? index : out.min_J_element;
+  if constexpr (L == 1)
+    if (!(d.J > 0)) return;  // reported by the caller; the step is abandoned
+
+  LawStress<T> sp = lane_law_stress<Law, kAnp, T>(a, mat, e, d);
+  const T V0 = load_strided<T>(a.volume + e, 1);
+  out.energy += V0 * sp.W;
+  T cg[4][3];
+  const T sJ2 = current_gradients(d.cof, d.g, cg);
+  record_element_step<kViscous, T>(a, mat.density, e, d.J, sJ2, sp.modulus, index, out);
+  if constexpr (kViscous) add_viscous_stress(a, mat, e, d, V0, sp.P, out);
+  T bound[4]{};  // the nodal step bound's row sums at the tet's nodes, scattered with the forces
+  if (a.nodal_bound) {
+    AnpBoundLanes anp;
+    if constexpr (kAnp) anp = {a.anp_bound_factor + (e - a.block_begin), a.anp_bulk, a.anp_tiles ? &a.anp_tiles[(e - a.begin) / kAnpTile] : nullptr};
+    nodal_bound_rows<kAnp, T>(d.cof, d.J, cg, sp.modulus, V0, anp, bound);
+  }
+  scatter_forces(a, e, sp.P, d.g, V0, bound);
 }
 
 }  // namespace kernel_detail

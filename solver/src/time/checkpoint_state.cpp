@@ -147,9 +147,9 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"v_half", &v_half_},
                          {"v_prev_half", &v_prev_half_},
                          {"force", &f_},
-                         {"inverse_mass", &inv_mass_},
-                         {"contact_inverse_mass", &contact_inv_mass_},
-                         {"nodal_mass", &mass_},
+                         {"inverse_mass", &masses_.inverse_mass},
+                         {"contact_inverse_mass", &masses_.contact_inverse_mass},
+                         {"nodal_mass", &masses_.mass},
                          {"prescribed_velocity", &prescribed_v_},
                          {"pressure_force", &pressure_force_},
                          {"support_force", &support_force_},
@@ -157,18 +157,18 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"curve_increment", &curve_increment_},
                          {"reaction_force", &reactions_.force},
                          {"reaction_moment", &reactions_.moment},
-                         {"pending_added_mass", &pending_added_mass_},
-                         {"added_mass_body", &added_mass_body_},
-                         {"body_mass", &body_mass_}})
+                         {"pending_added_mass", &masses_.pending_added},
+                         {"added_mass_body", &masses_.added_to_body},
+                         {"body_mass", &masses_.body_mass}})
     a.io(std::string("integrator.") + name, *v, v->size());
   if (mass_scaling()) a.io("integrator.mass_factor", forces_.mass_factor(), model_.num_elements);
-  a.io_record("integrator.added_momentum", added_momentum_);
+  a.io_record("integrator.added_momentum", masses_.added_momentum);
   a.io_record("integrator.stress_pass", pass_);
-  a.io_record("integrator.energies", energy_);
+  a.io_record("integrator.energies", audit_.energy);
   a.io_record("integrator.contact_report", contact_report_);
   for (auto [name, x] : {std::pair<const char*, double*>{"gravity_factor", &gravity_factor_},
-                         {"pending_contact_normal", &pending_contact_normal_},
-                         {"pending_contact_friction", &pending_contact_friction_},
+                         {"pending_contact_normal", &audit_.pending_contact_normal},
+                         {"pending_contact_friction", &audit_.pending_contact_friction},
                          {"stress_seconds", &stress_seconds_},
                          {"contact_seconds", &contact_seconds_},
                          {"detection_ahead_seconds", &detection_ahead_seconds_},
@@ -179,8 +179,8 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"nominal_next", &nominal_next_},
                          {"min_step_ratio", &min_step_ratio_},
                          {"initial_critical", &initial_critical_},
-                         {"pending_external", &pending_external_},
-                         {"pending_damping", &pending_damping_}})
+                         {"pending_external", &audit_.pending_external},
+                         {"pending_damping", &audit_.pending_damping}})
     a.io(std::string("integrator.") + name, *x);
   a.io("integrator.step", step_);
   a.io("integrator.next_target", next_target_);
@@ -202,13 +202,14 @@ void ExplicitSolver::validate_restored(const StateArchive& a) {
                          {"v_half", &v_half_},
                          {"v_prev_half", &v_prev_half_},
                          {"force", &f_},
-                         {"inverse_mass", &inv_mass_},
-                         {"nodal_mass", &mass_},
+                         {"inverse_mass", &masses_.inverse_mass},
+                         {"nodal_mass", &masses_.mass},
                          {"prescribed_velocity", &prescribed_v_},
-                         {"body_mass", &body_mass_}})
+                         {"body_mass", &masses_.body_mass}})
     a.require_finite(std::string("integrator.") + name, *v);
-  for (std::size_t i = 0; i < mass_.size(); ++i)
-    if (!(mass_[i] >= 0) || !(inv_mass_[3 * i] >= 0)) a.invalid("integrator.nodal_mass", "masses >= 0", "node " + std::to_string(i));
+  for (std::size_t i = 0; i < masses_.mass.size(); ++i)
+    if (!(masses_.mass[i] >= 0) || !(masses_.inverse_mass[3 * i] >= 0))
+      a.invalid("integrator.nodal_mass", "masses >= 0", "node " + std::to_string(i));
   if (pass_.limiting_element >= model_.num_elements || pass_.min_jacobian_element >= model_.num_elements || pass_.limiting_node >= model_.num_nodes)
     a.invalid("integrator.stress_pass", "an element and a node of this model", "an index out of range");
   // Times against the run: a step that never reaches the end, or an end already passed, hangs or
@@ -241,7 +242,7 @@ void ExplicitSolver::validate_restored(const StateArchive& a) {
   std::vector<double> force(f_.size());
   const StressPassResult again = forces_.compute(u_.data(), v_half_.data(), force.data());
   const double stored = pass_.strain_energy;
-  const double scale = std::max({std::abs(stored), energy_.scale(), 1e-300});
+  const double scale = std::max({std::abs(stored), audit_.energy.scale(), 1e-300});
   if (!(again.min_jacobian > 0) || !std::isfinite(again.strain_energy) || std::abs(again.strain_energy - stored) > 1e-8 * scale)
     a.invalid("integrator.u", "displacements whose strain energy is the stored " + std::to_string(stored) + " J",
               "displacements giving " + std::to_string(again.strain_energy) + " J (min J " + std::to_string(again.min_jacobian) + ")");

@@ -14,7 +14,9 @@
 #include <vector>
 
 #include "tactus/solver/contact.hpp"
+#include "tactus/solver/energy.hpp"
 #include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/mass_scaling.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/rigid.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -24,21 +26,6 @@ class StateArchive;
 }
 
 namespace tactus::solver {
-
-struct Energies {
-  double kinetic = 0, internal = 0, damping_work = 0, external_work = 0, initial = 0;
-  // Energy taken out by the contact reactions (minus their work on the relative motion): normal
-  // (velocity-level impact losses) and frictional (Coulomb sliding) parts.
-  double contact_normal_work = 0, contact_friction_work = 0;
-  double peak = 0;  // largest kinetic + internal seen, for relative errors
-  // Mass scaling: the kinetic energy the added mass brought (1/2 dm v^2 when it was added).
-  double added_mass_kinetic = 0;
-  double contact_work() const { return contact_normal_work + contact_friction_work; }
-  // kinetic + internal + damping work + contact work - external work - initial - added mass's
-  // kinetic energy: zero for an exact integrator.
-  double balance_error() const { return kinetic + internal + damping_work + contact_work() - external_work - initial - added_mass_kinetic; }
-  double scale() const;
-};
 
 class ExplicitSolver {
  public:
@@ -65,7 +52,7 @@ class ExplicitSolver {
   double critical_step() const { return pass_.critical_step; }
   std::size_t limiting_element() const { return pass_.limiting_element; }
   const StressPassResult& stress_pass() const { return pass_; }
-  const Energies& energies() const { return energy_; }
+  const Energies& energies() const { return audit_.energy; }
   const std::vector<double>& displacement() const { return u_; }
   std::vector<double> velocity_at_step() const;  // v^n (after advance_velocity)
   const std::vector<double>& half_step_velocity() const { return v_half_; }
@@ -92,11 +79,11 @@ class ExplicitSolver {
   std::string describe_step_limit() const;
   // Mass scaling (run.minimum_time_step > 0): mass added so far per body (model.bodies order), kg,
   // each body's own mass, and the momentum the added mass brought (dm v when it was added).
-  bool mass_scaling() const { return run_.minimum_time_step > 0; }
-  const std::vector<double>& added_mass() const { return added_mass_body_; }
-  const std::vector<double>& body_mass() const { return body_mass_; }
-  const Vec3& added_momentum() const { return added_momentum_; }
-  const std::vector<double>& nodal_mass() const { return mass_; }  // the model's plus the added, per node
+  bool mass_scaling() const { return masses_.on(); }
+  const std::vector<double>& added_mass() const { return masses_.added_to_body; }
+  const std::vector<double>& body_mass() const { return masses_.body_mass; }
+  const Vec3& added_momentum() const { return masses_.added_momentum; }
+  const std::vector<double>& nodal_mass() const { return masses_.mass; }  // the model's plus the added, per node
   // Rigid bodies (rigid.hpp): centre and rotation at t^n, momenta at t^{n+1/2} after advance_velocity.
   const std::vector<RigidBody>& rigid_bodies() const { return rigid_.bodies(); }
   // The seam for joint-driven motion (rigid.hpp): rigid piece k moves as `motion` says.
@@ -117,13 +104,16 @@ class ExplicitSolver {
   // detect_ahead: the next step's contact detection runs on one thread during the pass (it reads
   // the same u), off the step's critical path.
   void stress_pass(bool detect_ahead = false);
-  // Mass scaling after a stress pass: raises the mass of every tet whose step is below
-  // run.minimum_time_step until it is met, updates the critical step, and stops the run (a
-  // NumericalError naming the body) when a body's added mass exceeds run.added_mass_limit.
+  // Mass scaling after a stress pass (mass_scaling.hpp); stops the run (a NumericalError naming
+  // the body) when a body's added mass exceeds run.added_mass_limit.
   void scale_mass();
+  // The constructor's refusals: a user time_step above the stable limit without force_time_step,
+  // output times (or the run) shorter than half a step.
+  void check_user_step();
+  void check_schedule() const;
   void choose_step();  // sets dt_next_ and whether it lands on the next scheduled time
-  double external_force(std::size_t dof) const {
-    return gravity_factor_ * gravity_force_[dof] + (pressure_force_.empty() ? 0.0 : pressure_force_[dof]);
+  ExternalForces external_forces() const {
+    return {gravity_force_.data(), gravity_factor_, pressure_force_.empty() ? nullptr : pressure_force_.data()};
   }
   // Loading at t^n for the step to t_next (loading.cpp): the prescribed velocities of the driven
   // dofs, the gravity factor and the follower pressures on the current surface.
@@ -137,27 +127,19 @@ class ExplicitSolver {
   DampingSpec damping_;
   InternalForces forces_;
   StressPassResult pass_;
-  std::vector<double> u_, v_half_, v_prev_half_, f_, inv_mass_;
-  std::vector<double> mass_;                         // per node: the model's lumped mass plus any added by mass scaling
-  std::vector<double> pending_added_mass_;           // per node, added since the last kinetic energy (for its 1/2 dm v^2)
-  std::vector<double> added_mass_body_, body_mass_;  // per body, kg
-  std::vector<std::int32_t> element_body_;           // per tet (model numbering), its body
-  Vec3 added_momentum_{0, 0, 0};
+  std::vector<double> u_, v_half_, v_prev_half_, f_;
+  MassScaling masses_;                 // the masses the run integrates with, and what mass scaling added
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
   double gravity_factor_ = 1;
-  std::vector<double> prescribed_v_;                 // per dof: the velocity a constrained dof takes over the step
-  std::vector<std::int32_t> constrained_dofs_;       // every constrained dof, for the reactions
-  std::vector<std::int32_t> driven_dofs_;            // those whose velocity changes in time (curve or displacement)
-  std::vector<double> pressure_force_;               // follower pressure forces at t^n (empty without [[load]])
-  std::vector<double> support_force_;                // per constrained dof (constrained_dofs_ order), at t^n
-  static constexpr std::size_t kEnergyChunk = 4096;  // dofs per partial energy sum (fixed: thread-count independent)
-  std::vector<std::array<double, 5>> energy_chunks_;
+  std::vector<double> prescribed_v_;                     // per dof: the velocity a constrained dof takes over the step
+  std::vector<std::int32_t> constrained_dofs_;           // every constrained dof, for the reactions
+  std::vector<std::int32_t> driven_dofs_;                // those whose velocity changes in time (curve or displacement)
+  std::vector<double> pressure_force_;                   // follower pressure forces at t^n (empty without [[load]])
+  std::vector<double> support_force_;                    // per constrained dof (constrained_dofs_ order), at t^n
   std::vector<double> curve_at_next_, curve_increment_;  // per curve, this step: C(t^{n+1}), I(t^{n+1}) - I(t^n)
   Reactions reactions_;
   ContactSolver contact_;
   ContactStepReport contact_report_;
-  std::vector<double> contact_inv_mass_;  // 1/m per dof, 0 on prescribed dofs (their supports take the reaction)
-  double pending_contact_normal_ = 0, pending_contact_friction_ = 0;
   double stress_seconds_ = 0, contact_seconds_ = 0;
   double detection_ahead_seconds_ = 0;  // inside stress_seconds_: contact detection run during the stress passes
   double time_ = 0, dt_prev_ = 0, dt_next_ = 0, user_dt_ = 0;
@@ -165,10 +147,9 @@ class ExplicitSolver {
   std::size_t next_target_ = 0;  // first scheduled time > time_
   bool next_lands_ = false;
   double nominal_next_ = 0, min_step_ratio_ = 1, initial_critical_ = 0;
-  double pending_external_ = 0, pending_damping_ = 0;  // F^{n-1} . du^{n-1/2} halves (Belytschko's trapezoid)
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
-  Energies energy_;
+  EnergyAudit audit_;  // energies at t^n and the work halves carried to the next step (energy.hpp)
   RigidBodies rigid_;  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
 };
 

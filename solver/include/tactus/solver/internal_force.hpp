@@ -195,6 +195,10 @@ class InternalForces {
   std::vector<double> chunk_anp_energy_;
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);
+  // The nodal step bound's reduction (kernels/step_bound.cpp): one node chunk's largest rows, then
+  // the step they give into r.
+  void nodal_bound_of_chunk(std::size_t chunk);
+  void nodal_critical_step(StressPassResult& r) const;
   // Node chunk c of `out` (kWidth values per node) = the arrays of the partitions meeting it that
   // `use` accepts (each from its `offset` in `arrays`, kStride values per node: the first kWidth
   // to `out`, and value kWidth to `extra` when given), summed in partition order.

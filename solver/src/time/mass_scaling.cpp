@@ -1,0 +1,96 @@
+#include "tactus/solver/mass_scaling.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/model.hpp"
+#include "tactus/solver/rigid.hpp"
+
+namespace tactus::solver {
+
+MassScaling::MassScaling(const Model& model, double floor) : model_(model), floor_(floor) {
+  const std::size_t ndof = 3 * model.num_nodes;
+  mass = model.mass;
+  inverse_mass.resize(ndof);
+  contact_inverse_mass.resize(ndof);
+  for (std::size_t i = 0; i < ndof; ++i) {
+    inverse_mass[i] = 1.0 / model.mass[i / 3];
+    contact_inverse_mass[i] = model.constrained[i] ? 0.0 : inverse_mass[i];
+  }
+  if (!on()) return;
+  pending_added.assign(model.num_nodes, 0.0);
+  added_to_body.assign(model.bodies.size(), 0.0);
+  body_mass.assign(model.bodies.size(), 0.0);
+  element_body_.resize(model.num_elements);
+  for (std::size_t e = 0; e < model.num_elements; ++e) {
+    element_body_[e] = model.tet_body[static_cast<std::size_t>(model.input_element[e])];
+    body_mass[static_cast<std::size_t>(element_body_[e])] += model.block_of(e).material.density() * model.volume[e];
+  }
+}
+
+void MassScaling::scale(InternalForces& forces, StressPassResult& pass, const RigidBodies& rigid, double beta) {
+  const double floor2 = floor_ * floor_;
+  std::vector<double>& factor = forces.mass_factor();
+  const std::vector<double>& dt2 = forces.element_dt2();
+  for (const MaterialBlock& b : model_.blocks) {
+    if (b.material.rigid()) continue;  // no step of their own
+    const double rho = b.material.density();
+    for (std::size_t e = b.begin; e < b.end; ++e) {
+      if (!(dt2[e] * factor[e] < floor2)) continue;
+      // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
+      const double target = floor2 / dt2[e];
+      const double added = rho * model_.volume[e] * (target - factor[e]);
+      factor[e] = target;
+      for (int k = 0; k < 4; ++k) {
+        const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
+        if (rigid.holds(n)) {
+          added_to_body[static_cast<std::size_t>(element_body_[e])] -= 0.25 * added;
+          continue;
+        }
+        mass[n] += 0.25 * added;
+        pending_added[n] += 0.25 * added;
+        for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
+          inverse_mass[d] = 1.0 / mass[n];
+          contact_inverse_mass[d] = model_.constrained[d] ? 0.0 : inverse_mass[d];
+        }
+      }
+      added_to_body[static_cast<std::size_t>(element_body_[e])] += added;
+    }
+  }
+  // The step with the new masses (every scaled tet now sits at the floor), as the kernel computes it.
+  double best = std::numeric_limits<double>::infinity();
+  for (const MaterialBlock& b : model_.blocks)
+    for (std::size_t e = b.begin; e < b.end && !b.material.rigid(); ++e) {
+      double dt = std::sqrt(dt2[e] * factor[e]);
+      if (beta > 0) {
+        const double omega = 2.0 / dt, xi = 0.5 * beta * omega;
+        dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+      }
+      if (dt < best) best = dt, pass.limiting_element = e;
+    }
+  // The nodal bound of the pass holds a fortiori with the added mass.
+  pass.element_critical_step = best;
+  pass.limited_by_node = pass.nodal_critical_step > best;
+  pass.critical_step = std::max(best, pass.nodal_critical_step);
+}
+
+std::ptrdiff_t MassScaling::body_over(double limit) const {
+  for (std::size_t b = 0; b < body_mass.size(); ++b)
+    if (added_to_body[b] > limit * body_mass[b]) return static_cast<std::ptrdiff_t>(b);
+  return -1;
+}
+
+void MassScaling::book_added(const double* v_old, const double* v_new, bool first, double& kinetic) {
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    if (pending_added[n] == 0) continue;
+    for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
+      const double v_n = first ? v_old[d] : 0.5 * (v_old[d] + v_new[d]);
+      kinetic += 0.5 * pending_added[n] * v_n * v_n;
+      added_momentum[d % 3] += pending_added[n] * v_old[d];
+    }
+    pending_added[n] = 0;
+  }
+}
+
+}  // namespace tactus::solver
