@@ -26,6 +26,7 @@
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "tactus/solver/run.hpp"
 
 using namespace tactus;

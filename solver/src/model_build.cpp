@@ -10,7 +10,7 @@
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
-#include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 
 namespace tactus::solver {
 
@@ -459,7 +459,7 @@ Model build_model(const Scenario& sc) {
   lump_mass(m);
   add_rigid_motion(sc, m);
   reorder_for_locality(m);
-  add_scenario_contacts(m, sc);
+  add_contacts(m, sc.contacts);
   add_pressure_loads(sc, m);
   m.contact_settings = sc.contact_solver;
   return m;

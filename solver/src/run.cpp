@@ -1,6 +1,7 @@
 // A whole run: scenario -> model -> explicit steps -> the results folder (run.hpp), in named
 // steps: the runaway guards, the step loop with its outputs and history, and the summary.
 #include "tactus/solver/run.hpp"
+#include "tactus/solver/model_build.hpp"
 
 #include <chrono>
 #include <cmath>

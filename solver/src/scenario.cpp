@@ -336,9 +336,6 @@ const Section<MeshPlanEntry>& pipeline_section() {
 const char* boundary_type_name(BoundaryType t) {
   return t == BoundaryType::fixed ? "fixed" : t == BoundaryType::velocity ? "velocity" : "displacement";
 }
-const char* contact_method_name(ContactMethod m) {
-  return m == ContactMethod::mortar ? "mortar" : m == ContactMethod::node_to_surface ? "node_to_surface" : "automatic";
-}
 const char* mesh_kind_name(MeshKind k) {
   switch (k) {
     case MeshKind::labels:
@@ -724,12 +721,5 @@ std::string mesh_plan_json(const Scenario& sc) {
   }
   return plan.dump(2) + "\n";
 }
-
-ContactMethod contact_method(const ContactSpec& c) {
-  if (c.method != ContactMethod::automatic) return c.method;
-  return c.plane || is_self_contact(c) || c.two_pass ? ContactMethod::node_to_surface : ContactMethod::mortar;
-}
-
-bool is_self_contact(const ContactSpec& c) { return !c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface; }
 
 }  // namespace tactus::solver

@@ -40,6 +40,7 @@
 #include "tactus/segment/volume_files.hpp"
 #include "tactus/solver/checkpoint.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
 

@@ -4,6 +4,7 @@
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 
 int main() {
   using namespace tactus;

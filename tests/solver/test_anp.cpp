@@ -21,6 +21,7 @@
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;

@@ -16,6 +16,7 @@
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;

@@ -14,6 +14,7 @@
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;

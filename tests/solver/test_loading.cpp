@@ -10,6 +10,7 @@
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;

@@ -11,6 +11,7 @@
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
 #include "temp_dir.hpp"

@@ -13,6 +13,7 @@
 #include "tactus/core/stable_step.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/explicit.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "tactus/solver/run.hpp"
 #include "temp_dir.hpp"
 

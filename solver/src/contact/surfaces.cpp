@@ -31,8 +31,9 @@ double mean_edge(const Model& m, const std::vector<std::array<int, 3>>& tris) {
 }
 
 // Triangles of a body's physical surface group, in internal numbering.
-std::vector<std::array<int, 3>> group_triangles(const Model& m, std::size_t body, const std::string& group, const std::string& file,
-                                                const std::string& key) {
+using Triangles = std::vector<std::array<int, 3>>;
+
+Triangles group_triangles(const Model& m, std::size_t body, const std::string& group, const std::string& file, const std::string& key) {
   const PhysicalGroup* g = m.body_group(body, 2, group);
   if (!g) {
     std::string names;
@@ -216,61 +217,90 @@ void add_edge_pass(Model& m, const ContactSpec& cs, int entry, const std::string
   m.contact_pairs.push_back(std::move(p));
 }
 
+// One directed surface-to-surface pair of an entry (swap: the second pass, master's nodes against
+// the slave surface), with a mortar or a node-to-surface master.
+void add_surface_pair(Model& m, const ContactSpec& cs, int k, const std::string& key, bool swap, const Triangles& slave_tris,
+                      const Triangles& master_tris, bool mortar) {
+  ContactPair p;
+  const std::string& s_body = swap ? cs.master_body : cs.slave_body;
+  const std::string& s_surf = swap ? cs.master_surface : cs.slave_surface;
+  const std::string& m_body = swap ? cs.slave_body : cs.master_body;
+  const std::string& m_surf = swap ? cs.slave_surface : cs.master_surface;
+  p.name = key + " " + s_body + "/" + s_surf + " -> " + m_body + "/" + m_surf;
+  p.friction = cs.friction;
+  p.report_sign = swap ? -1.0 : 1.0;
+  p.entry = k;
+  set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"), mortar);
+  set_slave_surface(p, m, swap ? master_tris : slave_tris);
+  log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master->describe() << ", mean master edge "
+                 << p.search_scale * 1e3 << " mm";
+  m.contact_pairs.push_back(std::move(p));
+}
+
 }  // namespace
 
-void add_scenario_contacts(Model& m, const Scenario& sc) {
-  const std::string file = sc.file.string();
+const char* contact_method_name(ContactMethod m) {
+  return m == ContactMethod::mortar ? "mortar" : m == ContactMethod::node_to_surface ? "node_to_surface" : "automatic";
+}
+
+ContactMethod contact_method(const ContactSpec& c) {
+  if (c.method != ContactMethod::automatic) return c.method;
+  return c.plane || is_self_contact(c) || c.two_pass ? ContactMethod::node_to_surface : ContactMethod::mortar;
+}
+
+bool is_self_contact(const ContactSpec& c) { return !c.plane && c.master_body == c.slave_body && c.master_surface == c.slave_surface; }
+
+namespace {
+
+// A node-to-surface entry: the slave's nodes against a rigid plane, against their own surface
+// (self-contact), or against the master surface (and, two_pass, the master's nodes against the
+// slave surface).
+void add_node_to_surface(Model& m, const ContactSpec& cs, int k, const std::string& key, const Triangles& slave_tris, const Triangles& master_tris) {
+  ContactPair p;
+  p.friction = cs.friction;
+  p.entry = k;
+  if (cs.plane) {
+    p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " -> rigid plane";
+    set_rigid_plane(p, (*cs.plane)[0], (*cs.plane)[1]);
+    set_slave_surface(p, m, slave_tris);
+    m.contact_pairs.push_back(std::move(p));
+    return;
+  }
+  if (is_self_contact(cs)) {
+    p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " self-contact";
+    set_self_contact_surface(p, m, slave_tris, key + ".slave_surface");
+    log::verbose() << p.name << ": " << p.slave_nodes.size() << " nodes, " << p.master->describe();
+    m.contact_pairs.push_back(std::move(p));
+    return;
+  }
+  for (int pass = 0; pass < (cs.two_pass ? 2 : 1); ++pass) add_surface_pair(m, cs, k, key, pass == 1, slave_tris, master_tris, false);
+}
+
+}  // namespace
+
+void add_contacts(Model& m, const std::vector<ContactSpec>& contacts) {
   auto body_index = [&](const std::string& name) {
-    for (std::size_t b = 0; b < sc.bodies.size(); ++b)
-      if (sc.bodies[b].name == name) return b;
-    return sc.bodies.size();
+    for (std::size_t b = 0; b < m.bodies.size(); ++b)
+      if (m.bodies[b].name == name) return b;
+    return m.bodies.size();
   };
-  for (std::size_t k = 0; k < sc.contacts.size(); ++k) {
-    const ContactSpec& cs = sc.contacts[k];
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    const ContactSpec& cs = contacts[k];
     const std::string key = "contact[" + std::to_string(k) + "]";
-    const std::size_t sb = body_index(cs.slave_body);
-    const auto slave_tris = group_triangles(m, sb, cs.slave_surface, file, key + ".slave_surface");
-    if (cs.plane) {
-      ContactPair p;
-      p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " -> rigid plane";
-      p.friction = cs.friction;
-      p.entry = static_cast<int>(k);
-      set_rigid_plane(p, (*cs.plane)[0], (*cs.plane)[1]);
-      set_slave_surface(p, m, slave_tris);
-      m.contact_pairs.push_back(std::move(p));
-      continue;
+    const auto slave_tris = group_triangles(m, body_index(cs.slave_body), cs.slave_surface, m.source, key + ".slave_surface");
+    const bool surface_master = !cs.plane && !is_self_contact(cs);
+    const Triangles master_tris =
+        surface_master ? group_triangles(m, body_index(cs.master_body), cs.master_surface, m.source, key + ".master_surface") : Triangles();
+    switch (contact_method(cs)) {  // the one place the method is chosen
+      case ContactMethod::mortar:
+        add_surface_pair(m, cs, static_cast<int>(k), key, false, slave_tris, master_tris, true);
+        if (cs.edge_pass) add_edge_pass(m, cs, static_cast<int>(k), key, slave_tris, master_tris, m.contact_pairs.back().master->triangles());
+        break;
+      case ContactMethod::node_to_surface:
+      case ContactMethod::automatic:  // (contact_method resolves it)
+        add_node_to_surface(m, cs, static_cast<int>(k), key, slave_tris, master_tris);
+        break;
     }
-    if (is_self_contact(cs)) {
-      ContactPair p;
-      p.name = key + " " + cs.slave_body + "/" + cs.slave_surface + " self-contact";
-      p.friction = cs.friction;
-      p.entry = static_cast<int>(k);
-      set_self_contact_surface(p, m, slave_tris, key + ".slave_surface");
-      log::verbose() << p.name << ": " << p.slave_nodes.size() << " nodes, " << p.master->describe();
-      m.contact_pairs.push_back(std::move(p));
-      continue;
-    }
-    const auto master_tris = group_triangles(m, body_index(cs.master_body), cs.master_surface, file, key + ".master_surface");
-    for (int pass = 0; pass < (cs.two_pass ? 2 : 1); ++pass) {
-      ContactPair p;
-      const bool swap = pass == 1;
-      const std::string& s_body = swap ? cs.master_body : cs.slave_body;
-      const std::string& s_surf = swap ? cs.master_surface : cs.slave_surface;
-      const std::string& m_body = swap ? cs.slave_body : cs.master_body;
-      const std::string& m_surf = swap ? cs.slave_surface : cs.master_surface;
-      p.name = key + " " + s_body + "/" + s_surf + " -> " + m_body + "/" + m_surf;
-      p.friction = cs.friction;
-      p.report_sign = swap ? -1.0 : 1.0;
-      p.entry = static_cast<int>(k);
-      set_master_surface(p, m, swap ? slave_tris : master_tris, key + (swap ? ".slave_surface" : ".master_surface"),
-                         contact_method(cs) == ContactMethod::mortar);
-      set_slave_surface(p, m, swap ? master_tris : slave_tris);
-      log::verbose() << p.name << ": " << p.slave_nodes.size() << " slave nodes, " << p.master->describe() << ", mean master edge "
-                     << p.search_scale * 1e3 << " mm";
-      m.contact_pairs.push_back(std::move(p));
-    }
-    if (cs.edge_pass && contact_method(cs) == ContactMethod::mortar)
-      add_edge_pass(m, cs, static_cast<int>(k), key, slave_tris, master_tris, m.contact_pairs.back().master->triangles());
   }
 }
 

@@ -17,6 +17,7 @@
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/rigid.hpp"
+#include "tactus/solver/scenario.hpp"
 
 namespace tactus::solver {
 

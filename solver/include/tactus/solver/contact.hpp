@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "tactus/solver/scenario.hpp"
+#include "tactus/solver/contact_settings.hpp"
 
 namespace tactus {
 class StateArchive;
@@ -164,8 +164,11 @@ std::vector<std::int32_t> outward_triangles(const Model& model, const std::vecto
 // input mesh, in internal numbering.
 std::vector<std::array<int, 3>> surface_triangles(const Model& model, std::size_t body, int tag);
 std::vector<std::array<int, 3>> surface_triangles(const Model& model, int tag);
-// The scenario's [[contact]] entries as directed pairs (two per two_pass entry) on model.contact_pairs.
-void add_scenario_contacts(Model& model, const Scenario& scenario);
+// The contact entries as directed pairs on model.contact_pairs, each made by its method
+// (contact_method, chosen once per entry): node to surface (two per two_pass entry; a rigid plane;
+// self-contact) or mortar (with its edge pass). Bodies and surface groups are named as in
+// model.bodies; errors name "contact[k]" in model.source.
+void add_contacts(Model& model, const std::vector<ContactSpec>& contacts);
 
 // The closed-form projection on the Coulomb cone K_mu in the frame of n (docs/design.md, eq. 12):
 // r = tau inside the cone; 0 in the polar cone (mu |tau_t| <= -tau_n); otherwise onto its surface

@@ -19,7 +19,7 @@
 #include "tactus/solver/mass_scaling.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/rigid.hpp"
-#include "tactus/solver/scenario.hpp"
+#include "tactus/solver/run_settings.hpp"
 
 namespace tactus {
 class StateArchive;

@@ -37,10 +37,10 @@ class MassScaling {
   // is what the added mass brought).
   void book_added(const double* v_old, const double* v_new, bool first, double& kinetic);
 
-  std::vector<double> mass;                  // per node: the model's plus the added, kg
-  std::vector<double> inverse_mass;          // per dof
-  std::vector<double> contact_inverse_mass;  // per dof, 0 on prescribed dofs
-  std::vector<double> pending_added;         // per node, added since the last book_added
+  std::vector<double> mass;                      // per node: the model's plus the added, kg
+  std::vector<double> inverse_mass;              // per dof
+  std::vector<double> contact_inverse_mass;      // per dof, 0 on prescribed dofs
+  std::vector<double> pending_added;             // per node, added since the last book_added
   std::vector<double> added_to_body, body_mass;  // per body, kg (empty when off)
   Vec3 added_momentum{0, 0, 0};
 

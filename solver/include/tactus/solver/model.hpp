@@ -9,9 +9,9 @@
 
 #include "tactus/core/mesh.hpp"
 #include "tactus/solver/contact.hpp"
+#include "tactus/solver/curve.hpp"
 #include "tactus/solver/loading.hpp"
 #include "tactus/solver/material.hpp"
-#include "tactus/solver/scenario.hpp"
 
 namespace tactus::solver {
 
@@ -100,11 +100,7 @@ struct Model {
   std::size_t body_of_node(std::size_t input_node) const;
 };
 
-// Reads every body's mesh, places it, assigns materials and constraints, lumps mass and
-// reorders for locality. Throws InputError on anything inconsistent, naming scenario keys.
-Model build_model(const Scenario& scenario);
-
-// Same, from an in-memory mesh (tests and benchmarks): one body, one material for every group.
+// A model from an in-memory mesh (tests and benchmarks; a scenario's: build_model in model_build.hpp): one body, one material for every group.
 Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name = "material",
                   const Vec3& initial_velocity = {0, 0, 0}, bool reorder = true);
 

@@ -9,7 +9,7 @@
 // the stable limit); when it is less than two nominal steps it is split into two equal steps.
 #include <vector>
 
-#include "tactus/solver/scenario.hpp"
+#include "tactus/solver/run_settings.hpp"
 
 namespace tactus::solver {
 
