@@ -24,7 +24,6 @@ namespace tactus::solver {
 using keys::bind_count;
 using keys::bind_custom;
 using keys::bind_key;
-using keys::Choice;
 using keys::declare;
 using keys::Reader;
 using keys::Section;

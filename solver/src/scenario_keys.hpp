@@ -191,21 +191,6 @@ Key<S> bind_key(std::optional<std::array<Vec3, 2>> S::*m, ValueSpec s, std::stri
           }};
 }
 
-// The values an enumeration key takes, as written in the file, with what each means.
-template <class E>
-struct Choice {
-  E value;
-  const char* name;
-  const char* doc;
-};
-
-template <class E>
-std::string name_of(E value, const std::vector<Choice<E>>& choices) {
-  for (const Choice<E>& c : choices)
-    if (c.value == value) return c.name;
-  return "";
-}
-
 // An enumeration, validated once here: the member holds the enum, never the string.
 template <class S, class E>
 Key<S> bind_key(E S::*m, ValueSpec s, std::vector<Choice<E>> choices, const std::string& note = {}) {

@@ -26,32 +26,35 @@ struct Hgo {
   static constexpr const char* kName = "hgo";
   static constexpr std::size_t kElementData = 6;  // a_1, a_2
   static constexpr bool kElementDataAreDirections = true;
+  static constexpr const char* kDoc = "Holzapfel-Gasser-Ogden with two fibre families (paper eqs. 20-26); fibres carry load only in tension.";
   double c1 = 0, k1 = 0, k2 = 0, k = 0, density = 0;
 
-  static SectionSpec parameters() {
+  static std::vector<LawParameter<Hgo>> parameters() {
+    return {{&Hgo::c1, number("c1", "Pa", "matrix shear parameter (shear modulus = 2 c1)", 0, true)},
+            {&Hgo::k1, number("k1", "Pa", "fibre stiffness", 0, false)},
+            {&Hgo::k2, number("k2", "", "fibre exponential stiffening", 0, true)},
+            {&Hgo::k, number("k", "Pa", "bulk (volumetric penalty) modulus in k/2 (J-1)^2", 0, true)},
+            {&Hgo::density, number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
+  }
+  static std::vector<ValueSpec> extra_keys() {
     ValueSpec fibres;
     fibres.key = "fibres";
     fibres.type = ValueType::vec3_list;
     fibres.doc =
         "the two fibre directions a_1, a_2 in the reference frame (normalised); required unless every body "
         "using the material gives per-element fibres";
-    return {
-        "",
-        "Holzapfel-Gasser-Ogden with two fibre families (paper eqs. 20-26); fibres carry load only in tension.",
-        {number("c1", "Pa", "matrix shear parameter (shear modulus = 2 c1)", 0, true), number("k1", "Pa", "fibre stiffness", 0, false),
-         number("k2", "", "fibre exponential stiffening", 0, true), number("k", "Pa", "bulk (volumetric penalty) modulus in k/2 (J-1)^2", 0, true),
-         number("density", "kg/m^3", "mass density in the reference configuration", 0, true), fibres}};
+    return {fibres};
   }
-  static Hgo create(const MaterialValues& v, const std::string& where, std::vector<double>& constants) {
-    if (auto it = v.vectors.find("fibres"); it != v.vectors.end()) {
-      const auto& f = it->second;
-      if (f.size() != 2)
-        throw InputError(v.source, where + ".fibres", "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
-                         std::to_string(f.size()) + " directions");
-      constants.resize(6);
-      for (int i = 0; i < 2; ++i) unit(f[i].data(), constants.data() + 3 * i, v.source, where + ".fibres[" + std::to_string(i) + "]");
-    }
-    return {parameter(v, "c1"), parameter(v, "k1"), parameter(v, "k2"), parameter(v, "k"), parameter(v, "density")};
+  // The material's own fibre directions (when it gives them) as its constant element data.
+  void finish(const MaterialValues& v, const std::string& where, std::vector<double>& constants) const {
+    auto it = v.vectors.find("fibres");
+    if (it == v.vectors.end()) return;
+    const auto& f = it->second;
+    if (f.size() != 2)
+      throw InputError(v.source, where + ".fibres", "two fibre directions [[ax, ay, az], [bx, by, bz]] (the paper gives none: choose them)",
+                       std::to_string(f.size()) + " directions");
+    constants.resize(6);
+    for (int i = 0; i < 2; ++i) unit(f[i].data(), constants.data() + 3 * i, v.source, where + ".fibres[" + std::to_string(i) + "]");
   }
   static std::vector<std::pair<std::string, int>> element_fields() { return {{"fibre_1", 3}, {"fibre_2", 3}}; }
   static void element_data_from_fields(const double* fields, double* data, const std::string& where) {

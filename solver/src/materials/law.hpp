@@ -2,9 +2,9 @@
 // What a material law file provides, and the registration that turns it into a MaterialType
 // (docs/adding-a-material.md walks through a whole example). A law is a struct with
 //   static constexpr const char* kName;                       the scenario's `type`
-//   static SectionSpec parameters();                          its keys, with unit, range, default, doc
-//   static Law create(const MaterialValues&, const std::string& where, std::vector<double>& constants);
-//   double density;                                           kg/m^3, reference configuration
+//   static constexpr const char* kDoc;                        what it is, for the reference
+//   static std::vector<LawParameter<Law>> parameters();       each number key bound to its member, with unit, range, doc
+//   double density;                                           kg/m^3, reference configuration (one of the members)
 //   double small_strain_bulk() const, small_strain_shear() const;   Pa
 //   template <class T> TACTUS_KERNEL_INLINE LawStress<T> evaluate(const M3<T>& F, const M3<T>& cof, const T& J, const T* data) const;
 // or, when W = W_iso(F) + U(J) (then the law can also run as ANP tets), instead of evaluate:
@@ -22,6 +22,9 @@
 // and, when it adds result fields:
 //   static std::vector<ResultFieldSpec> result_fields();
 //   void result_values(const Mat3& F, const double* data, double* out) const;
+// and, when it derives constants, validates a combination or reads a key that is not a number:
+//   static std::vector<ValueSpec> extra_keys();               (hgo's fibres)
+//   void finish(const MaterialValues&, const std::string& where, std::vector<double>& constants);
 // The file ends with TACTUS_MATERIAL(Law); registry.cpp lists it once.
 #include "../kernels/element_loop.hpp"
 #include "tactus/core/error.hpp"
@@ -58,11 +61,32 @@ T penalty_pressure(double K, const T& J) {
   return K * (J - 1.0);
 }
 
+// A number key of a law bound to the member it sets: one declaration gives the reference's text
+// and the law's value (FEBio's ADD_PARAMETER), so create() looks up no key by string.
+template <class Law>
+struct LawParameter {
+  double Law::*member;
+  ValueSpec spec;
+};
+
+// The law from validated values (MaterialType::create): each bound member set from its key, then
+// the law's own finish (derived constants, combined checks, keys that are not numbers).
+template <class Law>
+Law create_law(const MaterialValues& values, const std::string& where, std::vector<double>& constants) {
+  Law law{};
+  for (const LawParameter<Law>& p : Law::parameters()) law.*p.member = values.numbers.at(p.spec.key);
+  if constexpr (requires { law.finish(values, where, constants); }) law.finish(values, where, constants);
+  return law;
+}
+
 template <class Law>
 MaterialType make_material_type() {
   MaterialType t;
   t.name = Law::kName;
-  t.parameters = Law::parameters();
+  t.parameters.doc = Law::kDoc;
+  for (const LawParameter<Law>& p : Law::parameters()) t.parameters.keys.push_back(p.spec);
+  if constexpr (requires { Law::extra_keys(); })
+    for (const ValueSpec& k : Law::extra_keys()) t.parameters.keys.push_back(k);
   t.parameters.name = std::string("materials.<name> with type = \"") + Law::kName + "\"";
   if constexpr (requires { Law::kElementData; }) {
     t.element_data_size = Law::kElementData;
@@ -78,7 +102,7 @@ MaterialType make_material_type() {
     };
   }
   t.create = [](const MaterialValues& values, const std::string& where, std::vector<double>& constants) -> std::shared_ptr<const void> {
-    return std::make_shared<const Law>(Law::create(values, where, constants));
+    return std::make_shared<const Law>(create_law<Law>(values, where, constants));
   };
   t.evaluate = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
     return to_stress_point(evaluate_law(*static_cast<const Law*>(law), to_m3(F), to_m3(cof), J, data));
@@ -105,7 +129,7 @@ MaterialType make_material_type() {
     ValueSpec formulation;
     formulation.key = "formulation";
     formulation.type = ValueType::string;
-    formulation.choices = {"standard", "anp"};
+    for (const Choice<Formulation>& c : formulation_choices()) formulation.choices.push_back(c.name);
     formulation.default_text = "\"anp\" when bulk / shear > 100, else \"standard\"";
     formulation.doc =
         "standard: one-point linear tets; anp: average nodal pressure tets (volumetric part from nodal volumes of this "
@@ -138,9 +162,6 @@ MaterialType make_material_type() {
   }
   return t;
 }
-
-// A number parameter of `values`, validated by the reader already (present, in range).
-inline double parameter(const MaterialValues& values, const std::string& key) { return values.numbers.at(key); }
 
 }  // namespace tactus::solver
 

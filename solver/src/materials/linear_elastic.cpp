@@ -8,20 +8,18 @@ namespace {
 
 struct LinearElastic {
   static constexpr const char* kName = "linear_elastic";
+  static constexpr const char* kDoc = "St Venant-Kirchhoff (linear S(E) in the total-Lagrangian frame); bone, the block.";
   double youngs = 0, poisson = 0, density = 0;
-  double lambda = 0, mu = 0;
+  double lambda = 0, mu = 0;  // derived (finish)
 
-  static SectionSpec parameters() {
-    return {"",
-            "St Venant-Kirchhoff (linear S(E) in the total-Lagrangian frame); bone, the block.",
-            {number("E", "Pa", "Young's modulus", 0, true), number("nu", "", "Poisson's ratio", -1, true, 0.5, true),
-             number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
+  static std::vector<LawParameter<LinearElastic>> parameters() {
+    return {{&LinearElastic::youngs, number("E", "Pa", "Young's modulus", 0, true)},
+            {&LinearElastic::poisson, number("nu", "", "Poisson's ratio", -1, true, 0.5, true)},
+            {&LinearElastic::density, number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
   }
-  static LinearElastic create(const MaterialValues& v, const std::string&, std::vector<double>&) {
-    LinearElastic m{parameter(v, "E"), parameter(v, "nu"), parameter(v, "density")};
-    m.mu = m.youngs / (2.0 * (1.0 + m.poisson));
-    m.lambda = m.youngs * m.poisson / ((1.0 + m.poisson) * (1.0 - 2.0 * m.poisson));
-    return m;
+  void finish(const MaterialValues&, const std::string&, std::vector<double>&) {
+    mu = youngs / (2.0 * (1.0 + poisson));
+    lambda = youngs * poisson / ((1.0 + poisson) * (1.0 - 2.0 * poisson));
   }
   double small_strain_bulk() const { return lambda + 2.0 * mu / 3.0; }
   double small_strain_shear() const { return mu; }

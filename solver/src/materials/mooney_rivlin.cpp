@@ -12,18 +12,17 @@ namespace {
 
 struct MooneyRivlin {
   static constexpr const char* kName = "mooney_rivlin";
+  static constexpr const char* kDoc = "Compressible Mooney-Rivlin: W = c10 (I1bar - 3) + c01 (I2bar - 3) + bulk/2 (J - 1)^2.";
   double c10 = 0, c01 = 0, bulk = 0, density = 0;
 
-  static SectionSpec parameters() {
-    return {"",
-            "Compressible Mooney-Rivlin: W = c10 (I1bar - 3) + c01 (I2bar - 3) + bulk/2 (J - 1)^2.",
-            {number("c10", "Pa", "first-invariant coefficient", 0, false), number("c01", "Pa", "second-invariant coefficient", 0, false),
-             number("bulk", "Pa", "bulk modulus", 0, true), number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
+  static std::vector<LawParameter<MooneyRivlin>> parameters() {
+    return {{&MooneyRivlin::c10, number("c10", "Pa", "first-invariant coefficient", 0, false)},
+            {&MooneyRivlin::c01, number("c01", "Pa", "second-invariant coefficient", 0, false)},
+            {&MooneyRivlin::bulk, number("bulk", "Pa", "bulk modulus", 0, true)},
+            {&MooneyRivlin::density, number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
   }
-  static MooneyRivlin create(const MaterialValues& v, const std::string& where, std::vector<double>&) {
-    MooneyRivlin m{parameter(v, "c10"), parameter(v, "c01"), parameter(v, "bulk"), parameter(v, "density")};
-    if (!(m.c10 + m.c01 > 0)) throw InputError(v.source, where, "c10 + c01 > 0 (a positive shear modulus)", "0");
-    return m;
+  void finish(const MaterialValues& v, const std::string& where, std::vector<double>&) const {
+    if (!(c10 + c01 > 0)) throw InputError(v.source, where, "c10 + c01 > 0 (a positive shear modulus)", "0");
   }
   double small_strain_bulk() const { return bulk; }
   double small_strain_shear() const { return 2.0 * (c10 + c01); }

@@ -7,16 +7,13 @@ namespace {
 
 struct NeoHookean {
   static constexpr const char* kName = "neo_hookean";
+  static constexpr const char* kDoc = "Compressible neo-Hookean: W = mu/2 (I1bar - 3) + bulk/2 (J - 1)^2.";
   double mu = 0, bulk = 0, density = 0;
 
-  static SectionSpec parameters() {
-    return {"",
-            "Compressible neo-Hookean: W = mu/2 (I1bar - 3) + bulk/2 (J - 1)^2.",
-            {number("mu", "Pa", "shear modulus", 0, true), number("bulk", "Pa", "bulk modulus", 0, true),
-             number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
-  }
-  static NeoHookean create(const MaterialValues& v, const std::string&, std::vector<double>&) {
-    return {parameter(v, "mu"), parameter(v, "bulk"), parameter(v, "density")};
+  static std::vector<LawParameter<NeoHookean>> parameters() {
+    return {{&NeoHookean::mu, number("mu", "Pa", "shear modulus", 0, true)},
+            {&NeoHookean::bulk, number("bulk", "Pa", "bulk modulus", 0, true)},
+            {&NeoHookean::density, number("density", "kg/m^3", "mass density in the reference configuration", 0, true)}};
   }
   double small_strain_bulk() const { return bulk; }
   double small_strain_shear() const { return mu; }

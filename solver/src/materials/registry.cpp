@@ -1,4 +1,5 @@
 // The registered material laws: one line each (a law is its own file, materials/<law>.cpp).
+#include <algorithm>
 #include "tactus/core/error.hpp"
 #include "tactus/solver/material.hpp"
 
@@ -14,6 +15,12 @@ TACTUS_MATERIALS(TACTUS_DECLARE)
 #undef TACTUS_DECLARE
 
 namespace tactus::solver {
+
+const std::vector<Choice<Formulation>>& formulation_choices() {
+  static const std::vector<Choice<Formulation>> choices{{Formulation::standard, "standard", "one-point linear tets"},
+                                                        {Formulation::anp, "anp", "average nodal pressure tets"}};
+  return choices;
+}
 
 const std::vector<const MaterialType*>& material_types() {
 #define TACTUS_LIST(Law) &tactus_material_##Law(),
@@ -59,10 +66,10 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
   if (auto it = values.strings.find("formulation"); it != values.strings.end()) {
     if (!m.type_->volumetric_split())
       throw InputError(values.source, where + ".formulation", "no formulation key (" + type + " has one formulation)", "\"" + it->second + "\"");
-    if (it->second == "anp")
-      m.formulation_ = Formulation::anp;
-    else if (it->second != "standard")
-      throw InputError(values.source, where + ".formulation", "\"anp\" or \"standard\"", "\"" + it->second + "\"");
+    const auto& choices = formulation_choices();
+    const auto chosen = std::find_if(choices.begin(), choices.end(), [&](const Choice<Formulation>& c) { return it->second == c.name; });
+    if (chosen == choices.end()) throw InputError(values.source, where + ".formulation", "\"standard\" or \"anp\"", "\"" + it->second + "\"");
+    m.formulation_ = chosen->value;
   } else if (m.type_->volumetric_split() && m.small_strain_bulk() > kAnpDefaultBulkToShear * m.small_strain_shear()) {
     m.formulation_ = Formulation::anp;
   }

@@ -10,15 +10,12 @@ namespace {
 struct Rigid {
   static constexpr const char* kName = "rigid";
   static constexpr bool kRigid = true;
+  static constexpr const char* kDoc =
+      "Rigid: each connected piece of these tets is one rigid body (6 degrees of freedom; mass, centre and inertia from the "
+      "tets); no stress, no limit on the time step.";
   double density = 0;
 
-  static SectionSpec parameters() {
-    return {"",
-            "Rigid: each connected piece of these tets is one rigid body (6 degrees of freedom; mass, centre and inertia from the "
-            "tets); no stress, no limit on the time step.",
-            {number("density", "kg/m^3", "mass density", 0, true)}};
-  }
-  static Rigid create(const MaterialValues& v, const std::string&, std::vector<double>&) { return {parameter(v, "density")}; }
+  static std::vector<LawParameter<Rigid>> parameters() { return {{&Rigid::density, number("density", "kg/m^3", "mass density", 0, true)}}; }
   double small_strain_bulk() const { return 0; }
   double small_strain_shear() const { return 0; }
   template <class T>

@@ -119,6 +119,8 @@ struct MaterialType {
 
 // How a law's tets are integrated: one-point linear tets, or average nodal pressure tets.
 enum class Formulation { standard, anp };
+// The formulations as the material's `formulation` key writes them (a law with a volumetric split).
+const std::vector<Choice<Formulation>>& formulation_choices();
 // The `formulation` key: bulk / shear above this makes ANP the default for a law that can use it.
 inline constexpr double kAnpDefaultBulkToShear = 100.0;
 // The `pressure_smoothing` key of ANP tets: node -> tet -> node averaging passes applied to the

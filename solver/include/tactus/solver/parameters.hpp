@@ -34,6 +34,22 @@ struct SectionSpec {
   const ValueSpec* find(const std::string& key) const;
 };
 
+// The values an enumeration key takes, as written in the file, with what each means (the
+// scenario reader binds them to enum members, scenario_keys.hpp; a material its formulation).
+template <class E>
+struct Choice {
+  E value;
+  const char* name;
+  const char* doc;
+};
+
+template <class E>
+std::string name_of(E value, const std::vector<Choice<E>>& choices) {
+  for (const Choice<E>& c : choices)
+    if (c.value == value) return c.name;
+  return "";
+}
+
 // Convenience builders for the declaration tables.
 ValueSpec number(std::string key, std::string unit, std::string doc, double min = -std::numeric_limits<double>::infinity(),
                  bool min_exclusive = false, double max = std::numeric_limits<double>::infinity(), bool max_exclusive = false);
