@@ -68,7 +68,7 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
       throw InputError(values.source, where + ".formulation", "no formulation key (" + type + " has one formulation)", "\"" + it->second + "\"");
     const auto& choices = formulation_choices();
     const auto chosen = std::find_if(choices.begin(), choices.end(), [&](const Choice<Formulation>& c) { return it->second == c.name; });
-    if (chosen == choices.end()) throw InputError(values.source, where + ".formulation", "\"standard\" or \"anp\"", "\"" + it->second + "\"");
+    if (chosen == choices.end()) throw InputError(values.source, where + ".formulation", "\"anp\" or \"standard\"", "\"" + it->second + "\"");
     m.formulation_ = chosen->value;
   } else if (m.type_->volumetric_split() && m.small_strain_bulk() > kAnpDefaultBulkToShear * m.small_strain_shear()) {
     m.formulation_ = Formulation::anp;
