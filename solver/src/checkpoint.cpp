@@ -3,7 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/file_io.hpp"
@@ -35,31 +39,137 @@ RunIdentity run_identity(const Scenario& sc, const fs::path& mesh_dir) {
   return id;
 }
 
-std::optional<RestartPoint> find_restart_point(const fs::path& output) {
-  // Every checkpoint of every killed run writing `output`, newest (highest step) first.
-  std::vector<std::pair<std::size_t, fs::path>> found;
-  for (const fs::path& staging : resumable_staging(output, "tactus-solve")) {
+namespace {
+
+constexpr const char* kManifestKind = "tactus-solve checkpoint manifest";
+
+std::string part_name(std::size_t step, int part, int parts) {
+  char name[64];
+  std::snprintf(name, sizeof name, "checkpoint_%012zu.part%dof%d.h5", step, part, parts);
+  return name;
+}
+std::string manifest_name(std::size_t step) {
+  char name[48];
+  std::snprintf(name, sizeof name, "checkpoint_%012zu.json", step);
+  return name;
+}
+
+// The listing a manifest gives, checked: its kind, its step, and each part present with its size.
+// InputError naming the manifest otherwise.
+CheckpointListing read_manifest(const fs::path& file) {
+  const std::string where = file.string();
+  require_regular_file(file, "a checkpoint manifest (JSON)");
+  if (fs::file_size(file) > (1u << 20)) throw InputError(where, "", "a checkpoint manifest (a few hundred bytes)", "over 1 MB");
+  std::ifstream in(file);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (!j.is_object() || j.value("kind", "") != kManifestKind) throw InputError(where, "kind", kManifestKind, "another file");
+  if (!j.contains("step") || !j["step"].is_number_unsigned() || !j.contains("time") || !j["time"].is_number() || !j.contains("parts") ||
+      !j["parts"].is_array() || j["parts"].empty() || j["parts"].size() > 65536)
+    throw InputError(where, "", "step, time and a list of parts", "a manifest without them");
+  CheckpointListing c;
+  c.manifest = file;
+  c.step = j["step"].get<std::size_t>();
+  c.time = j["time"].get<double>();
+  const auto parts = static_cast<int>(j["parts"].size());
+  for (int k = 0; k < parts; ++k) {
+    const nlohmann::json& p = j["parts"][static_cast<std::size_t>(k)];
+    const std::string expected = part_name(c.step, k, parts);
+    if (!p.is_object() || p.value("file", "") != expected || !p.contains("bytes") || !p["bytes"].is_number_unsigned())
+      throw InputError(where, "parts[" + std::to_string(k) + "]", "the file " + expected + " and its size", "another entry");
+    const fs::path part = file.parent_path() / expected;
     std::error_code ec;
-    for (auto it = fs::directory_iterator(staging / kResumableDir, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
-      const std::string name = it->path().filename().string();
-      std::size_t step = 0;
-      char tail = 0;
-      // checkpoint_<step>.h5 exactly: a half-written one still has its .partial-<pid> suffix.
-      if (std::sscanf(name.c_str(), "checkpoint_%zu.h%c", &step, &tail) == 2 && tail == '5' && name.size() > 3 &&
-          name.compare(name.size() - 3, 3, ".h5") == 0)
-        found.emplace_back(step, it->path());
+    const auto bytes = fs::file_size(part, ec);
+    if (ec || bytes != p["bytes"].get<std::uintmax_t>())
+      throw InputError(where, "parts[" + std::to_string(k) + "]", expected + " of " + std::to_string(p["bytes"].get<std::uintmax_t>()) + " bytes",
+                       ec ? "missing" : std::to_string(bytes) + " bytes");
+    c.parts.push_back(part);
+  }
+  return c;
+}
+
+}  // namespace
+
+CheckpointStore::CheckpointStore(fs::path folder, int part, int parts) : folder_(std::move(folder)), part_(part), parts_(parts) {}
+
+fs::path CheckpointStore::write(std::size_t step, double time, const StateArrays& part, const std::function<void(const char*)>& phase,
+                                std::size_t keep) const {
+  fs::create_directories(folder_);
+  const fs::path file = folder_ / part_name(step, part_, parts_);
+  write_state_file(file, part, phase);
+  const fs::path manifest = folder_ / manifest_name(step);
+  if (part_ != 0) return manifest;  // (with several parts, part 0 writes the manifest once all are down)
+  if (phase) phase("manifest");
+  nlohmann::json parts = nlohmann::json::array();
+  for (int k = 0; k < parts_; ++k) {
+    const std::string name = part_name(step, k, parts_);
+    parts.push_back({{"file", name}, {"bytes", fs::file_size(folder_ / name)}});
+  }
+  const nlohmann::json j{{"kind", kManifestKind}, {"step", step}, {"time", time}, {"parts", parts}};
+  const fs::path temporary = manifest.string() + ".partial-" + unique_suffix();
+  write_file(temporary, j.dump(1) + "\n");
+  fs::rename(temporary, manifest);
+  sync_directory(folder_);
+  // The newest `keep` complete checkpoints stay; older manifests go first, then every part no
+  // kept manifest lists (an older checkpoint's, or one a killed run left without its manifest).
+  const std::vector<CheckpointListing> complete = list_checkpoints(folder_);
+  std::vector<fs::path> kept;
+  for (std::size_t i = 0; i < complete.size(); ++i) {
+    if (i < keep) {
+      kept.insert(kept.end(), complete[i].parts.begin(), complete[i].parts.end());
+      kept.push_back(complete[i].manifest);
+    } else {
+      fs::remove(complete[i].manifest);
     }
   }
-  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  for (const auto& [step, file] : found) {
+  for (const auto& e : fs::directory_iterator(folder_)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("checkpoint_", 0) == 0 && name.find(".partial-") == std::string::npos &&
+        std::find(kept.begin(), kept.end(), e.path()) == kept.end())
+      fs::remove(e.path());
+  }
+  return manifest;
+}
+
+std::vector<CheckpointListing> list_checkpoints(const fs::path& folder) {
+  std::vector<CheckpointListing> found;
+  std::error_code ec;
+  for (auto it = fs::directory_iterator(folder, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::size_t step = 0;
+    char tail[8] = {};
+    // checkpoint_<step>.json exactly: a half-written one still has its .partial-<pid> suffix.
+    if (std::sscanf(name.c_str(), "checkpoint_%zu.%7s", &step, tail) != 2 || std::string(tail) != "json") continue;
     try {
+      found.push_back(read_manifest(it->path()));
+    } catch (const InputError& e) {
+      log::warn(std::string("checkpoint not usable: ") + e.what());
+    }
+  }
+  std::sort(found.begin(), found.end(), [](const CheckpointListing& a, const CheckpointListing& b) { return a.step > b.step; });
+  return found;
+}
+
+std::optional<RestartPoint> find_restart_point(const fs::path& output) {
+  // Every complete checkpoint of every killed run writing `output`, newest (highest step) first.
+  std::vector<CheckpointListing> found;
+  for (const fs::path& staging : resumable_staging(output, "tactus-solve")) {
+    std::vector<CheckpointListing> here = list_checkpoints(staging / kResumableDir);
+    found.insert(found.end(), here.begin(), here.end());
+  }
+  std::stable_sort(found.begin(), found.end(), [](const CheckpointListing& a, const CheckpointListing& b) { return a.step > b.step; });
+  for (const CheckpointListing& c : found) {
+    try {
+      if (c.parts.size() != 1)  // a run of several processes (MPI ranks) wrote it
+        throw InputError(c.manifest.string(), "parts", "one part (a run of one process)", std::to_string(c.parts.size()) + " parts");
       RestartPoint p;
-      p.file = file;
-      p.staging = file.parent_path().parent_path();
-      StateArchive a(read_state_file(file, kCheckpointKind), file.string());
+      p.file = c.parts.front();
+      p.staging = c.manifest.parent_path().parent_path();
+      StateArchive a(read_state_file(p.file, kCheckpointKind), p.file.string());
       p.identity.io(a);
       a.io("integrator.step", p.step);
       a.io("integrator.time", p.time);
+      if (p.step != c.step)
+        throw InputError(p.file.string(), "integrator.step", "step " + std::to_string(c.step) + " (its manifest's)", std::to_string(p.step));
       p.state = std::move(a.arrays());
       return p;
     } catch (const InputError& e) {

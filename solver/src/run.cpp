@@ -196,16 +196,12 @@ class RunLoop {
   // A write that failed (a full disk, say) ends the run, but not its work: the newest checkpoint
   // stays in the staging folder, and the error says how to continue once the cause is mended.
   WriteError keep_checkpoints(const WriteError& e) {
-    std::vector<fs::path> kept;
-    std::error_code ec;
-    for (auto it = fs::directory_iterator(folder_ / kResumableDir, ec); !ec && it != fs::directory_iterator(); it.increment(ec))
-      if (it->path().extension() == ".h5") kept.push_back(it->path());
+    const std::vector<CheckpointListing> kept = list_checkpoints(folder_ / kResumableDir);
     if (kept.empty())
       return e.with_note(sc_.run.checkpoints() ? "; no checkpoint was written yet, so the run must start again"
                                                : "; free some space and run again (with run.checkpoint_interval, such a run can be continued)");
     out_.keep_for_resume();
-    std::sort(kept.begin(), kept.end());
-    return e.with_note("; the run's newest checkpoint (" + kept.back().filename().string() + ") is kept in " + out_.path().string() +
+    return e.with_note("; the run's newest checkpoint (" + kept.front().manifest.filename().string() + ") is kept in " + out_.path().string() +
                        (e.no_space() ? ": free some space, then" : ": mend the cause, then") + " tactus-solve --restart " +
                        out_.final_path().string() + " continues the run from it");
   }
@@ -269,18 +265,12 @@ class RunLoop {
     identity_.io(a);
     solver_.checkpoint(a);
     loop_state(a);
-    const fs::path dir = folder_ / kResumableDir;
-    fs::create_directories(dir);
-    char name[48];
-    std::snprintf(name, sizeof name, "checkpoint_%012zu.h5", solver_.step_index());
-    write_state_file(dir / name, a.arrays(), [&](const char* phase) { kill_.at_checkpoint(k, phase); });
-    std::vector<fs::path> all;
-    for (const auto& e : fs::directory_iterator(dir))
-      if (e.path().extension() == ".h5") all.push_back(e.path());
-    std::sort(all.begin(), all.end());
-    for (std::size_t i = 0; i + 2 < all.size(); ++i) fs::remove(all[i]);
+    const fs::path manifest =
+        CheckpointStore(folder_ / kResumableDir).write(solver_.step_index(), solver_.time(), a.arrays(), [&](const char* phase) {
+          kill_.at_checkpoint(k, phase);
+        });
     last_checkpoint_wall_ = std::chrono::steady_clock::now();
-    log::debug() << "checkpoint at step " << solver_.step_index() << ", t = " << solver_.time() << " s: " << (dir / name).string();
+    log::debug() << "checkpoint at step " << solver_.step_index() << ", t = " << solver_.time() << " s: " << manifest.string();
   }
 
   // The loop's own part of a checkpoint (both directions).

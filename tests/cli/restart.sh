@@ -114,8 +114,9 @@ rc=$?
 { [ "$rc" = 1 ] && grep -q "none: nothing to continue" <<<"$err"; } || bad "restart without a checkpoint: rc $rc, $err"
 echo "  killed at step 20 (before the first checkpoint): restart refused: $(tail -1 <<<"$err")"
 
-# 2. Killed in each phase of a checkpoint write (the second one, so a complete one exists).
-for phase in begin data written renamed; do
+# 2. Killed in each phase of a checkpoint write (the second one, so a complete one exists): before
+#    it, arrays written, closed, renamed, and with the part down but no manifest yet.
+for phase in begin data written renamed manifest; do
   killed_then_restarted "p_$phase" "checkpoint:1:$phase" || continue
   "$S" --restart "p_$phase" -q || { bad "restart after a kill in checkpoint phase '$phase' failed"; continue; }
   same_as_full "p_$phase" "killed while writing a checkpoint ($phase)"

@@ -1,10 +1,14 @@
 #pragma once
 // Restart checkpoints of a run (docs/design.md "Checkpoints and restart").
 //
-// Where: `<OUT>.partial-<pid>-<token>/checkpoints/checkpoint_<step>.h5`, inside the staging folder of the
-// run writing OUT (core/output.hpp), so a killed run and its checkpoints are found from OUT alone.
-// The newest two are kept: a new one is written under a temporary name, flushed and renamed
-// (core/state_file.hpp) before the older goes, so a complete one is on the disk at every moment.
+// Where: `<OUT>.partial-<pid>-<token>/checkpoints/`, inside the staging folder of the run writing
+// OUT (core/output.hpp), so a killed run and its checkpoints are found from OUT alone. A checkpoint
+// is its state in parts, `checkpoint_<step>.part<k>of<n>.h5` (one part per process of the run: one
+// today, one per MPI rank later), and a manifest, `checkpoint_<step>.json`, written last, naming the
+// parts and their sizes: a checkpoint is complete exactly when its manifest is there
+// (CheckpointStore). Each file is written under a temporary name, flushed and renamed
+// (core/state_file.hpp); the newest two complete ones are kept, the older removed only after the
+// new manifest has its name, so a complete one is on the disk at every moment.
 // What: the integrator's and the contact solver's state (ExplicitSolver::checkpoint), the run
 // loop's bookkeeping (history length, states written, peaks) and the run's identity below.
 //
@@ -14,8 +18,10 @@
 // for bit, as an uninterrupted run of the same binary.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "tactus/core/state_file.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -36,9 +42,41 @@ struct RunIdentity {
 };
 RunIdentity run_identity(const Scenario& scenario, const std::filesystem::path& mesh_dir);
 
+// One complete checkpoint on the disk, as its manifest lists it.
+struct CheckpointListing {
+  std::size_t step = 0;
+  double time = 0;
+  std::filesystem::path manifest;
+  std::vector<std::filesystem::path> parts;  // part k of parts.size(), in order
+};
+
+// The checkpoints of one run (its staging folder's checkpoints/), written part by part.
+class CheckpointStore {
+ public:
+  // This process writes part `part` of `parts` (0 of 1 for a run in one process).
+  explicit CheckpointStore(std::filesystem::path folder, int part = 0, int parts = 1);
+  const std::filesystem::path& folder() const { return folder_; }
+  // Writes this process's part of the checkpoint of `step` (time t); part 0 then writes the
+  // manifest (with several parts: once every part is on the disk) and keeps the newest `keep`
+  // complete checkpoints, removing the older and any incomplete one before the newest. `phase` is
+  // told each stage of the write (write_state_file's, then "manifest" before the manifest goes
+  // down): the points where the restart tests kill the process. Returns the manifest's path.
+  std::filesystem::path write(std::size_t step, double time, const StateArrays& part, const std::function<void(const char*)>& phase = {},
+                              std::size_t keep = 2) const;
+
+ private:
+  std::filesystem::path folder_;
+  int part_, parts_;
+};
+
+// The complete checkpoints in `folder` (a manifest whose parts are all there with their sizes),
+// newest (highest step) first; a manifest that does not parse or whose parts are missing is
+// named in a warning and left out.
+std::vector<CheckpointListing> list_checkpoints(const std::filesystem::path& folder);
+
 struct RestartPoint {
   std::filesystem::path staging;  // the interrupted run's staging folder
-  std::filesystem::path file;     // the checkpoint
+  std::filesystem::path file;     // the checkpoint's (first) part
   StateArrays state;
   RunIdentity identity;
   std::size_t step = 0;

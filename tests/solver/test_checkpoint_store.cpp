@@ -1,0 +1,89 @@
+// solver/checkpoint: a checkpoint is its parts plus a manifest written last (CheckpointStore). The
+// listing takes only complete ones (every part there, at its listed size), newest first; a write
+// keeps the newest two and removes what no kept manifest lists; a checkpoint of several parts (a
+// run of several processes, as MPI ranks will write) is complete only once its last part and the
+// manifest are down.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "tactus/solver/checkpoint.hpp"
+#include "temp_dir.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+using tactus::testkit::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+StateArrays part_state(double value) {
+  StateArrays s;
+  s.kind = kCheckpointKind;
+  s.reals["u"] = {value, 2 * value};
+  return s;
+}
+
+std::size_t files_in(const fs::path& folder) {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(folder)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST(CheckpointStore, KeepsTheNewestTwoCompleteCheckpoints) {
+  TempDir dir;
+  const fs::path folder = dir.path() / "checkpoints";
+  const CheckpointStore store(folder);
+  for (std::size_t step : {10, 20, 30}) store.write(step, 1e-3 * static_cast<double>(step), part_state(static_cast<double>(step)));
+  const std::vector<CheckpointListing> found = list_checkpoints(folder);
+  std::printf("listed steps:");
+  for (const auto& c : found) std::printf(" %zu (%zu part)", c.step, c.parts.size());
+  std::printf("; files in the folder: %zu (expected 4: two parts, two manifests)\n", files_in(folder));
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0].step, 30u);
+  EXPECT_EQ(found[1].step, 20u);
+  EXPECT_DOUBLE_EQ(found[0].time, 0.030);
+  EXPECT_EQ(files_in(folder), 4u);
+  EXPECT_EQ(read_state_file(found[0].parts[0], kCheckpointKind).reals.at("u")[1], 60.0);
+}
+
+TEST(CheckpointStore, APartWithoutItsManifestOrOfTheWrongSizeIsNotACheckpoint) {
+  TempDir dir;
+  const fs::path folder = dir.path() / "checkpoints";
+  const CheckpointStore store(folder);
+  store.write(10, 0.01, part_state(1));
+  const fs::path manifest = store.write(20, 0.02, part_state(2));
+  // A killed write: step 30's part is down, its manifest never came.
+  write_state_file(folder / "checkpoint_000000000030.part0of1.h5", part_state(3));
+  EXPECT_EQ(list_checkpoints(folder).front().step, 20u) << "a part without a manifest was listed";
+  // Step 20's part cut short: its manifest no longer describes it, so step 10 is the newest.
+  const fs::path part20 = list_checkpoints(folder).front().parts[0];
+  fs::resize_file(part20, fs::file_size(part20) / 2);
+  const std::vector<CheckpointListing> found = list_checkpoints(folder);
+  std::printf("after a manifest-less step 30 and a truncated step 20: newest listed %zu, %zu listed\n", found.front().step, found.size());
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found.front().step, 10u);
+  // A manifest of another kind is refused (warned about) and left out.
+  std::ofstream(manifest) << R"({"kind": "something else", "step": 20, "time": 0.02, "parts": []})";
+  EXPECT_EQ(list_checkpoints(folder).size(), 1u);
+}
+
+TEST(CheckpointStore, APartedCheckpointIsCompleteOnceEveryPartAndTheManifestAreDown) {
+  TempDir dir;
+  const fs::path folder = dir.path() / "checkpoints";
+  // Part 1 of 2 first (another process's), then part 0, which writes the manifest.
+  CheckpointStore(folder, 1, 2).write(40, 0.04, part_state(41));
+  EXPECT_TRUE(list_checkpoints(folder).empty()) << "one part of two listed as a checkpoint";
+  CheckpointStore(folder, 0, 2).write(40, 0.04, part_state(40));
+  const std::vector<CheckpointListing> found = list_checkpoints(folder);
+  ASSERT_EQ(found.size(), 1u);
+  ASSERT_EQ(found[0].parts.size(), 2u);
+  const double u0 = read_state_file(found[0].parts[0], kCheckpointKind).reals.at("u")[0];
+  const double u1 = read_state_file(found[0].parts[1], kCheckpointKind).reals.at("u")[0];
+  std::printf("two-part checkpoint of step %zu: part 0 holds %g, part 1 holds %g\n", found[0].step, u0, u1);
+  EXPECT_EQ(u0, 40.0);
+  EXPECT_EQ(u1, 41.0);
+}
