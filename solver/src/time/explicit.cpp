@@ -184,9 +184,7 @@ void ExplicitSolver::advance_velocity() {
 #pragma omp parallel for num_threads(forces_.threads()) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i)
     v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i]);
-  if (!rigid_.empty())
-    rigid_.kick(
-        model_, f_.data(), [&external](std::size_t i) { return external.at(i); }, u_.data(), time_, t_next, h.dt, h.dtbar, h.c_minus, h.c_plus);
+  if (!rigid_.empty()) rigid_.kick(model_, f_.data(), external, u_.data(), time_, t_next, h.dt, h.dtbar, h.c_minus, h.c_plus);
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();

@@ -239,8 +239,8 @@ void RigidBodies::prescribe(std::size_t piece, const RigidMotion& motion) {
   for (std::int32_t a : b.nodes) piece_of_node_[static_cast<std::size_t>(a)] = kPrescribed;
 }
 
-void RigidBodies::kick(const Model& model, const double* f, const std::function<double(std::size_t)>& external, const double* u, double time,
-                       double t_next, double dt, double dtbar, double c_minus, double c_plus) {
+void RigidBodies::kick(const Model& model, const double* f, const ExternalForces& external, const double* u, double time, double t_next, double dt,
+                       double dtbar, double c_minus, double c_plus) {
   RigidRows& rows = *rows_;
   rows.u = u;
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
@@ -252,7 +252,7 @@ void RigidBodies::kick(const Model& model, const double* f, const std::function<
       const auto a = static_cast<std::size_t>(node);
       Vec3d fa, r;
       for (std::size_t d = 0; d < 3; ++d) {
-        fa[static_cast<Eigen::Index>(d)] = f[3 * a + d] + external(3 * a + d);
+        fa[static_cast<Eigen::Index>(d)] = f[3 * a + d] + external.at(3 * a + d);
         r[static_cast<Eigen::Index>(d)] = model.X[3 * a + d] + u[3 * a + d] - b.centre[static_cast<Eigen::Index>(d)];
       }
       F += fa, T += r.cross(fa);

@@ -19,12 +19,12 @@
 // are its reaction.
 #include <array>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "tactus/solver/energy.hpp"
 #include "tactus/solver/material.hpp"
 #include "tactus/solver/model.hpp"
 
@@ -124,8 +124,8 @@ class RigidBodies {
   // P, L to t^{n+1/2} from the force and moment at t^n on each piece's nodes (internal forces f
   // plus external(dof)), with the mass damping factors c_minus, c_plus; a prescribed piece gets
   // the momenta of its motion over [time, t_next] and the reaction that makes them.
-  void kick(const Model& model, const double* f, const std::function<double(std::size_t)>& external, const double* u, double time, double t_next,
-            double dt, double dtbar, double c_minus, double c_plus);
+  void kick(const Model& model, const double* f, const ExternalForces& external, const double* u, double time, double t_next, double dt, double dtbar,
+            double c_minus, double c_plus);
   // After the contact sweep: its impulses taken back, the centre and rotation at t^{n+1}, and the
   // nodes' secant velocities over the step in v_half.
   void drift(const Model& model, const double* u, double dt, double* v_half);
