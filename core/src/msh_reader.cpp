@@ -86,7 +86,7 @@ class Cursor {
     double v = 0;
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (ec != std::errc() || end != t.data() + t.size() || !std::isfinite(v))
-      fail(where, "a finite number", "\"" + std::string(t.substr(0, 40)) + "\"");
+      fail(where, "a finite number", std::string("\"").append(t.substr(0, 40)).append("\""));
     return v;
   }
   template <class T>

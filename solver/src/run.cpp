@@ -444,7 +444,7 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
                 << (b.material.anp() ? "average-nodal-pressure (ANP) tets" : "standard tets");
   ExplicitSolver solver(model, sc.run, sc.damping);
   log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; " << solver.describe_step_limit() << "), "
-              << solver.threads() << " threads";
+              << solver.threads() << " threads" << (sc.run.threads == 0 && solver.threads() > 1 ? " (or 1 while that is faster: automatic)" : "");
   const double est_steps = check_runaway(sc, model, solver, staged);
 
   fs::create_directories(staged.path() / "results");
@@ -461,6 +461,9 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   log::info() << summary.status << ": " << summary.steps << " steps to t = " << summary.end_time << " s in " << summary.wall_seconds
               << " s; energy balance error " << std::abs(en.balance_error()) / en.scale() * 100 << " % of the largest energy; " << summary.outputs
               << " states; results in " << staged.final_path().string();
+  if (const ThreadTuner& t = solver.thread_tuner(); t.probes() > 0)
+    log::verbose() << "automatic threads: " << t.probes() << " probe(s) of " << solver.threads() << " threads against 1, " << t.probes_choosing_one()
+                   << " found 1 thread faster (thread_tuner.hpp)";
   if (summary.status == "failed")
     throw NumericalError(failure.get<std::string>() + " (last good state and history written to " + staged.final_path().string() + ")");
   return summary;

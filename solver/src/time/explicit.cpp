@@ -13,7 +13,14 @@
 namespace tactus::solver {
 
 ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping)
-    : model_(model), run_(run), damping_(damping), forces_(model, damping.beta, run.threads), masses_(model, run.minimum_time_step), contact_(model) {
+    : model_(model),
+      run_(run),
+      damping_(damping),
+      forces_(model, damping.beta, run.threads),
+      masses_(model, run.minimum_time_step),
+      max_threads_(forces_.threads()),
+      tuner_(max_threads_, run.threads == 0),
+      contact_(model) {
   const std::size_t ndof = 3 * model.num_nodes;
   u_.assign(ndof, 0.0);
   f_.assign(ndof, 0.0);
@@ -172,6 +179,8 @@ std::string ExplicitSolver::describe_step_limit() const {
 // rigid bodies' kick, the contact reactions' correction, the rigid bodies' drift, then the
 // supports' reactions and the energy audit at t^n.
 void ExplicitSolver::advance_velocity() {
+  const auto started = std::chrono::steady_clock::now();
+  if (const int n = tuner_.threads(); n != forces_.threads()) forces_.set_threads(n), contact_.set_threads(n);
   const std::size_t ndof = 3 * model_.num_nodes;
   const HalfStep h(dt_prev_, dt_next_, damping_.alpha, step_ == 0);
   const double t_next = next_lands_ ? schedule_[next_target_] : time_ + h.dt;
@@ -203,6 +212,7 @@ void ExplicitSolver::advance_velocity() {
   audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_,
                     forces_.threads());
   velocity_advanced_ = true;
+  step_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 }
 
 void ExplicitSolver::check_energy() const {
@@ -225,6 +235,7 @@ void ExplicitSolver::check_energy() const {
 }
 
 void ExplicitSolver::advance_position() {
+  const auto started = std::chrono::steady_clock::now();
   const std::size_t ndof = 3 * model_.num_nodes;
   const double dt = dt_next_;
 #pragma omp parallel for num_threads(forces_.threads()) schedule(static)
@@ -249,6 +260,7 @@ void ExplicitSolver::advance_position() {
     throw NumericalError(o.str());
   }
   choose_step();
+  tuner_.step_took(step_seconds_ + std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
 }
 
 std::size_t ExplicitSolver::memory_bytes() const {

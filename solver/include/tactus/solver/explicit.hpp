@@ -20,6 +20,7 @@
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/rigid.hpp"
 #include "tactus/solver/run_settings.hpp"
+#include "tactus/solver/thread_tuner.hpp"
 
 namespace tactus {
 class StateArchive;
@@ -60,7 +61,9 @@ class ExplicitSolver {
   std::vector<double> previous_displacement() const;
   const Model& model() const { return model_; }
   std::size_t memory_bytes() const;  // integrator state + per-thread force buffers (not the model)
-  int threads() const { return forces_.threads(); }
+  int threads() const { return max_threads_; }
+  // The automatic thread count's probes (thread_tuner.hpp): how many, and how many chose one thread.
+  const ThreadTuner& thread_tuner() const { return tuner_; }
   // Contact at t^n (after advance_velocity): candidates with their reactions, and the step's report.
   const ContactSolver& contact() const { return contact_; }
   const ContactStepReport& contact_report() const { return contact_report_; }
@@ -128,7 +131,10 @@ class ExplicitSolver {
   InternalForces forces_;
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_;
-  MassScaling masses_;                 // the masses the run integrates with, and what mass scaling added
+  MassScaling masses_;  // the masses the run integrates with, and what mass scaling added
+  int max_threads_;
+  ThreadTuner tuner_;                  // run.threads = 0: one thread or all, whichever steps faster now
+  double step_seconds_ = 0;            // wall time of the step in progress (both halves)
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
   double gravity_factor_ = 1;
   std::vector<double> prescribed_v_;                     // per dof: the velocity a constrained dof takes over the step

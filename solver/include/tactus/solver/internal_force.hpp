@@ -124,6 +124,8 @@ class InternalForces {
   // step's contact detection, which reads the same u); that thread then joins them.
   StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side = StressSideTask{});
   int threads() const { return threads_; }
+  // The threads of the next passes (the sums do not depend on them: ThreadTuner changes them as a run goes).
+  void set_threads(int threads) { threads_ = threads; }
   std::size_t memory_bytes() const;
   // Mass scaling: from now on every pass stores each tet's unscaled squared stable step (no beta)
   // in element_dt2() and computes the step with mass_factor() (1 + added / (rho V), per tet, which
