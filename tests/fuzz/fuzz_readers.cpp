@@ -58,6 +58,8 @@ void write_file(const fs::path& p, const std::string& s) { std::ofstream(p, std:
 // One reader under test: a folder with a valid input, the file in it that gets mutated, and the
 // call that reads it.
 struct Target {
+  Target(std::string target_name, fs::path target_file, bool is_text, std::function<void()> reader)
+      : name(std::move(target_name)), file(std::move(target_file)), text(is_text), read(std::move(reader)) {}
   std::string name;
   fs::path file;               // mutated in place (the seed restored before each mutation)
   bool text = false;           // text mutations (numbers, lines) in addition to bytes

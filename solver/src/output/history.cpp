@@ -79,14 +79,14 @@ HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vecto
   }
   out_ = std::make_unique<FileWriter>(file);
   std::string header;
-  for (std::size_t k = 0; k < kColumns.size(); ++k) header += (k ? "," : "") + std::string(kColumns[k].spec->name);
+  for (std::size_t k = 0; k < kColumns.size(); ++k) header.append(k ? "," : "").append(kColumns[k].spec->name);
   for (const auto& b : boundaries)
     for (const auto* family : h::per_boundary)
-      for (const char* axis : {"_x", "_y", "_z"}) header += "," + std::string(family->prefix) + b.name + axis;
-  for (const auto& body : mass_scaled_bodies) header += "," + std::string(h::added_mass.prefix) + body;
+      for (const char* axis : {"_x", "_y", "_z"}) header.append(",").append(family->prefix).append(b.name).append(axis);
+  for (const auto& body : mass_scaled_bodies) header.append(",").append(h::added_mass.prefix).append(body);
   for (const auto& body : rigid_bodies)
     for (const auto* family : h::per_rigid_body)
-      for (const char* axis : {"_x", "_y", "_z"}) header += "," + std::string(family->prefix) + rigid_column_name(body) + axis;
+      for (const char* axis : {"_x", "_y", "_z"}) header.append(",").append(family->prefix).append(rigid_column_name(body)).append(axis);
   out_->write(header + '\n');
 }
 
