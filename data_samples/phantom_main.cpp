@@ -1,5 +1,6 @@
 // tactus-phantom: writes a synthetic hand CT, a slice stack (slice_NNNN.png + stack.json) or a
-// DICOM series (IM_NNNN.dcm), and its ground truth (truth.h5, truth.vti) into the output folder.
+// DICOM series (IM_NNNN.dcm), and its ground truth (truth.h5, truth.vti, and joints.json: the
+// skeleton its bones are built from) into the output folder.
 #include <chrono>
 
 #include "tactus/core/cli.hpp"
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
       samples::write_slice_stack(ph.ct, out.path());
     write_h5(out.path() / "truth.h5", "/labels", ph.truth, &ph.labels);
     write_vti(out.path() / "truth.vti", ph.truth, "labels");
+    write_skeleton(out.path() / "joints.json", ph.skeleton);
     out.commit();
     log::info() << "phantom: " << ph.ct.dims[0] << " x " << ph.ct.dims[1] << " x " << ph.ct.dims[2] << " voxels (" << p.voxel_mm << " x "
                 << p.voxel_mm << " x " << p.slice_mm << " mm), " << ph.labels.size() - 2 << " bones, written to " << common.output << " in "

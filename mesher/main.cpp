@@ -1,6 +1,7 @@
 // tactus-mesh: labels.h5 -> conforming multi-material tet mesh (CGAL Mesh_3), and object meshes
 // with gmsh (`box`, `stl`). Writes mesh.msh (gmsh 4.1), mesh.vtu and quality.json. `fibres`
-// writes rule-based hgo fibre directions of a mesh as the .vtu that bodies.fibres reads.
+// writes rule-based hgo fibre directions of a mesh as the .vtu that bodies.fibres reads;
+// `skeleton` the hand's bones, parents and joints of a mesh as skeleton.json.
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -19,6 +20,7 @@
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/objects.hpp"
 #include "tactus/mesher/quality.hpp"
+#include "tactus/mesher/skeleton.hpp"
 #include "tactus/mesher/small_regions.hpp"
 
 namespace {
@@ -219,18 +221,37 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   output.write(mesh, wave_speeds(mesh, o.speed_args), {{"absorbed_regions", absorbed}});
 }
 
-// The subcommands: the paper's block and an STL object (gmsh), and the fibre field of a mesh.
+// skeleton.json of a hand mesh's bone groups.
+void write_skeleton_of(const std::filesystem::path& mesh_file, const std::string& names_file, double gap_mm, const std::filesystem::path& out,
+                       const tactus::OutputRules& rules) {
+  using namespace tactus;
+  if (!(gap_mm > 0 && gap_mm <= 50)) throw InputError("command line", "--neighbour-gap", "a gap from 0 to 50 mm", std::to_string(gap_mm));
+  const std::filesystem::path file = out.extension() == ".json" ? out : out / "skeleton.json";
+  OutputFiles files({file}, rules);
+  mesher::SkeletonOptions options;
+  options.neighbour_gap_m = gap_mm * 1e-3;
+  options.source = mesh_file.string();
+  if (!names_file.empty()) options.names = mesher::read_bone_names(names_file);
+  const Skeleton skeleton = mesher::extract_skeleton(read_msh(mesh_file), options);
+  write_skeleton(files.staged(0), skeleton);
+  files.commit();
+  log::info() << "wrote " << file.string();
+}
+
+// The subcommands: the paper's block and an STL object (gmsh), the fibre field and the skeleton of a mesh.
 struct ObjectTools {
-  CLI::App *box, *fibres, *stl;
+  CLI::App *box, *fibres, *stl, *skeleton;
   std::array<double, 3> size{0.1, 0.1, 0.05}, origin{0, 0, 0};
   double h = 0.01, edge_radius = 0, stl_scale = 1.0;
-  std::string fib_mesh, fib_axis = "z", stl_file;
+  std::string fib_mesh, fib_axis = "z", stl_file, skeleton_mesh, names_file;
+  double neighbour_gap_mm = 3.5;
   mesher::FibreFieldOptions fo;
 
   explicit ObjectTools(CLI::App& app)
       : box(app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh")),
         fibres(app.add_subcommand("fibres", "rule-based hgo fibre directions of a mesh, as the .vtu bodies.fibres reads")),
-        stl(app.add_subcommand("stl", "a closed STL object, meshed with gmsh")) {
+        stl(app.add_subcommand("stl", "a closed STL object, meshed with gmsh")),
+        skeleton(app.add_subcommand("skeleton", "the bones, their parents and the joints (centre, flexion and abduction axes) of a hand mesh")) {
     box->add_option("--size", size, "edge lengths, m")->capture_default_str();
     box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
     box->add_option("--element-size", h, "element size, m")->capture_default_str();
@@ -245,6 +266,9 @@ struct ObjectTools {
     stl->add_option("file", stl_file, "closed STL surface")->required();
     stl->add_option("--element-size", h, "element size, m")->capture_default_str();
     stl->add_option("--scale", stl_scale, "factor from STL units to m (1e-3 for mm)")->capture_default_str();
+    skeleton->add_option("mesh", skeleton_mesh, "the hand mesh (.msh) whose volume groups 2.. are bones")->required();
+    skeleton->add_option("--names", names_file, "a JSON file {\"labels\": {\"<label>\": \"<bone name>\"}} naming the bones");
+    skeleton->add_option("--neighbour-gap", neighbour_gap_mm, "bones whose surfaces come this close are neighbours, mm")->capture_default_str();
   }
 
   // False when no subcommand was given (a label volume is to be meshed).
@@ -255,6 +279,10 @@ struct ObjectTools {
       mesher::FibreFieldOptions options = fo;
       options.axis = fib_axis[0] - 'x';
       write_fibres(fib_mesh, options, out, common.output_rules({fib_mesh}));
+    } else if (skeleton->parsed()) {
+      std::vector<std::filesystem::path> inputs{skeleton_mesh};
+      if (!names_file.empty()) inputs.push_back(names_file);
+      write_skeleton_of(skeleton_mesh, names_file, neighbour_gap_mm, out, common.output_rules(inputs));
     } else if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
       const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", o.p.max_elements, edge_radius);

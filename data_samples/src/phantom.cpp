@@ -70,20 +70,63 @@ double smin(double a, double b, double k) {
   return std::min(a, b) - h * h * k * 0.25;
 }
 
-// Rotates direction d towards the palm (-y) by angle (radians) about the axis perpendicular to d
-// in the y-z plane (finger flexion).
-V3 flex(V3 d, double angle) {
+V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+
+// Turns direction d by angle (radians) about the unit axis a (Rodrigues).
+V3 rotate(V3 d, V3 a, double angle) {
   const double c = std::cos(angle), s = std::sin(angle);
-  return unit({d.x, c * d.y - s * d.z, s * d.y + c * d.z});
+  return c * d + s * cross(a, d) + ((1 - c) * dot(a, d)) * a;
 }
+
+// The palm faces -y: fingers flex towards it.
+constexpr V3 kPalmNormal{0, -1, 0};
 
 struct Anatomy {
   std::vector<Bone> bones;
-  std::vector<Capsule> envelope;  // finger and thumb sleeves
+  std::vector<std::string> parents;   // per bone; empty for the carpals (the roots)
+  std::vector<SkeletonJoint> joints;  // in mm
+  std::vector<Capsule> envelope;      // finger and thumb sleeves
   RoundedBox wrist, palm;
 };
 
 double cortex_for(double r) { return std::clamp(0.32 * r, 1.0, 1.8); }
+
+Vec3 vec3(V3 v) { return {v.x, v.y, v.z}; }
+
+// One finger or the thumb, from its carpal outwards.
+struct Chain {
+  std::string carpal, digit;  // the carpal its metacarpal sits on; "index", ..., "thumb"
+  V3 base, dir;               // the metacarpal's base centre and its direction
+  std::vector<double> length, radius;
+  std::vector<std::string> bones, joints;  // bone and joint names without the digit
+  double flexion = 0;                      // of each joint after the first, radians
+  double sleeve = 0;                       // soft tissue around each bone's radius, mm
+  bool sleeve_on_metacarpal = false;       // the thumb's metacarpal stands out of the palm
+};
+
+// Each joint after the first turns by `flexion` about the chain's own flexion axis
+// a = d x n / |d x n| (in the palm's plane, across the digit) through the proximal bone's head
+// centre (its capsule's end), so a flexed phantom is the straight one with each joint turned.
+// Records the bones' parents and the joints' truth; the carpometacarpal joint's centre is the
+// metacarpal's base centre (the carpal has no head facing it).
+void add_chain(Anatomy& h, const Chain& c, double gap) {
+  const V3 axis = unit(cross(c.dir, kPalmNormal));
+  V3 head = c.base, start = c.base, dir = c.dir;
+  for (std::size_t s = 0; s < c.length.size(); ++s) {
+    if (s > 0) {
+      dir = rotate(c.dir, axis, static_cast<double>(s) * c.flexion);
+      start = head + (c.radius[s - 1] + gap + c.radius[s]) * dir;
+    }
+    const V3 end = start + c.length[s] * dir;
+    const std::string name = c.bones[s] + "_" + c.digit;
+    const std::string parent = s == 0 ? c.carpal : h.bones.back().name;
+    h.joints.push_back({c.joints[s] + "_" + c.digit, parent, name, vec3(s == 0 ? start : head), vec3(axis), vec3(unit(cross(axis, dir)))});
+    h.bones.push_back({name, {start, end, c.radius[s]}, cortex_for(c.radius[s])});
+    h.parents.push_back(parent);
+    if (s > 0 || c.sleeve_on_metacarpal) h.envelope.push_back({start - (s == 0 ? 0.0 : c.radius[s] + 1.0) * dir, end, c.radius[s] + c.sleeve});
+    head = end;
+  }
+}
 
 Anatomy build_anatomy(double flexion) {
   Anatomy h;
@@ -97,49 +140,70 @@ Anatomy build_anatomy(double flexion) {
     const double y = i == 3 ? -3.0 : 0.0;
     h.bones.push_back({proximal[i], {{x - carpal_half, y, 34}, {x + carpal_half, y, 34}, carpal_r}, cortex_for(carpal_r)});
     h.bones.push_back({distal[i], {{x - carpal_half, 0, 34 + row_dz}, {x + carpal_half, 0, 34 + row_dz}, carpal_r}, cortex_for(carpal_r)});
+    h.parents.insert(h.parents.end(), 2, std::string());
   }
   const double carpal_top = 34 + row_dz + carpal_r;
+  // The distal-row carpal a metacarpal's base sits on.
+  auto carpal_under = [&](double x) { return std::string(distal[std::clamp(static_cast<int>(std::lround((x + 21.0) / 14.0)), 0, 3)]); };
   // Fingers 2-5: metacarpal, proximal, middle, distal phalanx; fanned in x, flexed towards -y.
   const char* finger[4] = {"index", "middle", "ring", "little"};
   const double base_x[4] = {-22, -7.5, 7.5, 22}, fan_deg[4] = {-7, -2, 3, 7};
-  const double len[4][4] = {{62, 37, 22, 16}, {60, 40, 25, 17}, {55, 38, 24, 17}, {50, 31, 18, 15}};
-  const double rad[4][4] = {{4.6, 4.1, 3.5, 3.1}, {4.7, 4.3, 3.6, 3.2}, {4.4, 4.0, 3.4, 3.0}, {4.0, 3.6, 3.1, 2.8}};
-  const char* seg_name[4] = {"metacarpal", "proximal_phalanx", "middle_phalanx", "distal_phalanx"};
+  const std::vector<std::vector<double>> len = {{62, 37, 22, 16}, {60, 40, 25, 17}, {55, 38, 24, 17}, {50, 31, 18, 15}};
+  const std::vector<std::vector<double>> rad = {{4.6, 4.1, 3.5, 3.1}, {4.7, 4.3, 3.6, 3.2}, {4.4, 4.0, 3.4, 3.0}, {4.0, 3.6, 3.1, 2.8}};
   for (int f = 0; f < 4; ++f) {
     const double fan = fan_deg[f] * M_PI / 180;
-    V3 dir = unit({std::sin(fan), 0, std::cos(fan)});
-    V3 start{base_x[f], 0, carpal_top + gap + rad[f][0]};
-    for (int s = 0; s < 4; ++s) {
-      if (s > 0) {
-        dir = flex(dir, flexion);
-        start = start + (rad[f][s - 1] + gap + rad[f][s]) * dir;
-      }
-      const V3 end = start + len[f][s] * dir;
-      h.bones.push_back({std::string(seg_name[s]) + "_" + finger[f], {start, end, rad[f][s]}, cortex_for(rad[f][s])});
-      if (s > 0) h.envelope.push_back({start - (rad[f][s] + 1.0) * dir, end, rad[f][s] + 5.6});
-      start = end;
-    }
+    add_chain(h,
+              {carpal_under(base_x[f]),
+               finger[f],
+               {base_x[f], 0, carpal_top + gap + rad[f][0]},
+               unit({std::sin(fan), 0, std::cos(fan)}),
+               len[f],
+               rad[f],
+               {"metacarpal", "proximal_phalanx", "middle_phalanx", "distal_phalanx"},
+               {"cmc", "mcp", "pip", "dip"},
+               flexion,
+               5.6,
+               false},
+              gap);
   }
-  // Thumb: metacarpal from the trapezium outwards and palmwards, then two phalanges.
-  {
-    V3 dir = unit({-0.56, -0.22, 0.76});
-    V3 start{-31, -6, carpal_top + 1.5};
-    const double tl[3] = {40, 32, 24}, tr[3] = {4.6, 4.2, 3.5};
-    const char* tn[3] = {"metacarpal_thumb", "proximal_phalanx_thumb", "distal_phalanx_thumb"};
-    for (int s = 0; s < 3; ++s) {
-      if (s > 0) {
-        dir = flex(dir, 0.8 * flexion);
-        start = start + (tr[s - 1] + gap + tr[s]) * dir;
-      }
-      const V3 end = start + tl[s] * dir;
-      h.bones.push_back({tn[s], {start, end, tr[s]}, cortex_for(tr[s])});
-      h.envelope.push_back({start - (s == 0 ? 0.0 : tr[s] + 1.0) * dir, end, tr[s] + 6.5});
-      start = end;
-    }
-  }
+  // Thumb: metacarpal from the trapezium outwards and palmwards (its direction chosen so the hand
+  // keeps the paper's width and thickness at the default flexion), then two phalanges; its joints
+  // flex by 0.8 of the fingers' angle about its own axis.
+  add_chain(h,
+            {"trapezium",
+             "thumb",
+             {-31, -6, carpal_top + 1.5},
+             unit({-0.60, -0.16, 0.76}),
+             {40, 32, 24},
+             {4.6, 4.2, 3.5},
+             {"metacarpal", "proximal_phalanx", "distal_phalanx"},
+             {"cmc", "mcp", "ip"},
+             0.8 * flexion,
+             6.5,
+             true},
+            gap);
   h.wrist = {{0, 0, 14}, {22, 10, 20}, 9};
   h.palm = {{2, 0, 80}, {30, 12, 42}, 9};
   return h;
+}
+
+// The truth in the mesh frame (metres): capsule bones have their centroid at the axis' midpoint.
+Skeleton skeleton_of(const Anatomy& h) {
+  auto metres = [](const Vec3& v) { return Vec3{v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3}; };
+  Skeleton sk;
+  sk.source = "tactus-phantom (the truth it builds the bones from)";
+  sk.palm_normal = vec3(kPalmNormal);
+  for (std::size_t b = 0; b < h.bones.size(); ++b) {
+    const Capsule& c = h.bones[b].shape;
+    sk.bones.push_back({h.bones[b].name, h.parents[b], static_cast<int>(b) + contracts::kFirstBoneLabel, metres(vec3(0.5 * (c.a + c.b))),
+                        vec3(unit(c.b - c.a)), (norm(c.b - c.a) + 2 * c.r) * 1e-3});
+  }
+  for (SkeletonJoint j : h.joints) {
+    j.centre = metres(j.centre);
+    sk.joints.push_back(j);
+  }
+  validate_skeleton(sk, "tactus-phantom");
+  return sk;
 }
 
 }  // namespace
@@ -154,16 +218,28 @@ Phantom make_hand_phantom(const PhantomParams& p) {
     throw InputError("phantom parameters", "--flexion", "an angle within +-90 degrees", std::to_string(p.flexion_deg));
   const Anatomy h = build_anatomy(p.flexion_deg * M_PI / 180);
 
-  // Bounding box of the envelope, sampled on a coarse grid, plus the margin.
   auto envelope = [&](V3 q) {
     double d = smin(h.wrist.distance(q), h.palm.distance(q), 8.0);
     for (const auto& c : h.envelope) d = smin(d, c.distance(q), 7.0);
     return d;
   };
+  // Bounding box of the envelope, sampled on a 1.5 mm lattice over the primitives' own bounds (the
+  // smooth union reaches at most k/4 = 2 mm past them) plus the margin, so no posture is clipped.
+  double reach_lo[3] = {1e9, 1e9, 0}, reach_hi[3] = {-1e9, -1e9, -1e9};
+  auto reach = [&](V3 lo_corner, V3 hi_corner) {
+    const double l[3] = {lo_corner.x, lo_corner.y, lo_corner.z}, u[3] = {hi_corner.x, hi_corner.y, hi_corner.z};
+    for (int a = 0; a < 3; ++a) reach_lo[a] = std::min(reach_lo[a], l[a] - 3), reach_hi[a] = std::max(reach_hi[a], u[a] + 3);
+  };
+  for (const RoundedBox& box : {h.wrist, h.palm})
+    reach(box.centre - box.half - V3{box.round, box.round, box.round}, box.centre + box.half + V3{box.round, box.round, box.round});
+  for (const auto& c : h.envelope)
+    reach({std::min(c.a.x, c.b.x) - c.r, std::min(c.a.y, c.b.y) - c.r, std::min(c.a.z, c.b.z) - c.r},
+          {std::max(c.a.x, c.b.x) + c.r, std::max(c.a.y, c.b.y) + c.r, std::max(c.a.z, c.b.z) + c.r});
+  auto lattice = [](double anchor, double v) { return anchor + 1.5 * std::floor((v - anchor) / 1.5); };  // the lattice point below v
   double lo[3] = {1e9, 1e9, 0}, hi[3] = {-1e9, -1e9, -1e9};
-  for (double x = -120; x <= 120; x += 1.5)
-    for (double y = -80; y <= 80; y += 1.5)
-      for (double z = 0; z <= 260; z += 1.5)
+  for (double x = lattice(-120, reach_lo[0]); x <= reach_hi[0]; x += 1.5)
+    for (double y = lattice(-80, reach_lo[1]); y <= reach_hi[1]; y += 1.5)
+      for (double z = 0; z <= reach_hi[2]; z += 1.5)
         if (envelope({x, y, z}) <= 0) {
           lo[0] = std::min(lo[0], x), hi[0] = std::max(hi[0], x);
           lo[1] = std::min(lo[1], y), hi[1] = std::max(hi[1], y);
@@ -188,6 +264,7 @@ Phantom make_hand_phantom(const PhantomParams& p) {
   out.labels[contracts::kBackgroundLabel] = "background";
   out.labels[contracts::kSoftTissueLabel] = contracts::kSoftTissueName;
   for (std::size_t b = 0; b < h.bones.size(); ++b) out.labels[static_cast<int>(b) + contracts::kFirstBoneLabel] = h.bones[b].name;
+  out.skeleton = skeleton_of(h);
 
   Volume<float> hu_volume(dims, spacing_m, origin_m, 0.0f);
   std::vector<float>& hu = hu_volume.data;

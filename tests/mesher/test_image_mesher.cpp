@@ -12,9 +12,11 @@
 
 #include "expect_error.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
 #include "tactus/data_samples/phantom.hpp"
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/quality.hpp"
+#include "tactus/mesher/skeleton.hpp"
 #include "tactus/mesher/small_regions.hpp"
 #include "temp_dir.hpp"
 
@@ -421,4 +423,78 @@ TEST(ImageMesherErrors, RefineBoxUpsideDown) {
   p.refine_size_mm = 1;
   p.refine_box_m = {0.01, 0, 0, 0.0, 0.01, 0.01};
   expect_input_error([&] { mesher::mesh_label_volume(small_labels(), {}, p); }, {"refine_box x", "lower corner"});
+}
+
+namespace {
+double degrees_between(const Vec3& a, const Vec3& b) { return std::acos(std::clamp(dot(a, b) / (norm(a) * norm(b)), -1.0, 1.0)) * 180 / M_PI; }
+
+// Every joint of `got` against the truth: centre distance and flexion / abduction axis angles.
+void expect_joints_match(const Skeleton& got, const Skeleton& truth) {
+  ASSERT_EQ(got.joints.size(), truth.joints.size());
+  for (const SkeletonJoint& t : truth.joints) {
+    const SkeletonJoint* j = got.joint(t.name);
+    ASSERT_NE(j, nullptr) << t.name;
+    // The same bones (by label: a carpal keeps its label's name when the chains name the digits).
+    EXPECT_EQ(got.bone(j->proximal)->label, truth.bone(t.proximal)->label) << t.name;
+    EXPECT_EQ(j->distal, t.distal) << t.name;
+    const bool thumb = t.name.find("thumb") != std::string::npos;
+    const double off = norm(j->centre - t.centre) * 1e3, flex = degrees_between(j->flexion_axis, t.flexion_axis),
+                 abd = degrees_between(j->abduction_axis, t.abduction_axis);
+    std::printf("  %-12s centre off %.2f mm, flexion axis %.2f deg, abduction axis %.2f deg\n", t.name.c_str(), off, flex, abd);
+    EXPECT_LT(off, thumb ? 2.0 : 1.0) << t.name;
+    EXPECT_LT(flex, thumb ? 10.0 : 5.0) << t.name;
+    EXPECT_LT(abd, thumb ? 10.0 : 5.0) << t.name;
+  }
+}
+}  // namespace
+
+// Oracle: the phantom's own joints (joints.json: the centres and axes it builds the bones from).
+// Finger joints within 1 mm and 5 degrees, the thumb's within 2 mm and 10 degrees.
+TEST(ImageMesher, SkeletonMatchesThePhantomsJoints) {
+  const auto& r = meshed();
+  const Skeleton sk = mesher::extract_skeleton(r.mesh, {});
+  std::printf("skeleton of the 12-degree phantom (bones named by their labels):\n");
+  expect_joints_match(sk, r.phantom.skeleton);
+  EXPECT_LT(degrees_between(sk.palm_normal, r.phantom.skeleton.palm_normal), 2.0);
+}
+
+// Oracle: the same joints when the groups carry no names: the chains name the bones.
+TEST(ImageMesher, SkeletonNamesTheBonesByTheirChains) {
+  TetMesh mesh = meshed().mesh;
+  for (auto& g : mesh.groups)
+    if (g.dim == 3 && g.tag >= 2) g.name = "label_" + std::to_string(g.tag);
+  const Skeleton sk = mesher::extract_skeleton(mesh, {});
+  std::printf("skeleton of the unnamed phantom (bones named by their chains):\n");
+  expect_joints_match(sk, meshed().phantom.skeleton);
+  // Too small a neighbour gap leaves no chain: refused, naming the labels.
+  mesher::SkeletonOptions tight;
+  tight.neighbour_gap_m = 0.5e-3;
+  expect_input_error([&] { mesher::extract_skeleton(mesh, tight); }, {"bones", "--names"});
+}
+
+// Oracle: the 40-degree phantom's bones. The 12-degree hand's extracted skeleton, every finger
+// joint (mcp, pip, dip) driven by +28 degrees and the thumb's mcp and ip by 0.8 x 28 (the
+// phantom's thumb rule), must put each bone's centroid within 1 mm of the 40-degree truth.
+TEST(ImageMesher, SkeletonDrivesTheHandToAnotherPosture) {
+  const auto& r = meshed();
+  const Skeleton sk = mesher::extract_skeleton(r.mesh, {});
+  samples::PhantomParams p;
+  p.voxel_mm = p.slice_mm = 1.4;
+  p.flexion_deg = 40;
+  p.noise_hu = 0;
+  const Skeleton at40 = samples::make_hand_phantom(p).skeleton;
+  std::vector<JointAngles> drive;
+  for (const auto& j : sk.joints)
+    if (j.name.rfind("cmc", 0) != 0) drive.push_back({j.name, (j.name.find("thumb") != std::string::npos ? 0.8 : 1.0) * 28 * M_PI / 180, 0});
+  const auto placed = forward_kinematics(sk, drive);
+  double worst = 0;
+  std::string worst_bone;
+  for (std::size_t b = 0; b < sk.bones.size(); ++b) {
+    const SkeletonBone* truth = at40.bone(sk.bones[b].name);
+    ASSERT_NE(truth, nullptr) << sk.bones[b].name;
+    const double off = norm(placed[b].apply(sk.bones[b].centroid) - truth->centroid) * 1e3;
+    if (off > worst) worst = off, worst_bone = sk.bones[b].name;
+    EXPECT_LT(off, 1.0) << sk.bones[b].name;
+  }
+  std::printf("12 -> 40 degrees through the extracted skeleton: largest centroid miss %.2f mm (%s)\n", worst, worst_bone.c_str());
 }

@@ -3,12 +3,14 @@
 // long along the slice axis, L3 = 78 mm thick), with its ground truth. 27 bones as in the paper
 // (8 carpals, 5 metacarpals, 14 phalanges, thumb with 2), each a cortical shell around a
 // lower-density trabecular core, separated at the joints by soft-tissue gaps, inside a
-// soft-tissue envelope with a skin layer; fingers slightly flexed towards the palm.
+// soft-tissue envelope with a skin layer; fingers slightly flexed towards the palm, each joint
+// about its digit's own flexion axis through the proximal bone's head centre (skeleton).
 // CT realism: Hounsfield values per tissue, partial-volume blur, Gaussian noise, seeded.
 #include <cstdint>
 #include <filesystem>
 #include <string>
 
+#include "tactus/core/skeleton.hpp"
 #include "tactus/core/volume.hpp"
 
 namespace tactus::samples {
@@ -33,6 +35,7 @@ struct Phantom {
   Volume<std::int16_t> ct;     // HU
   Volume<std::uint8_t> truth;  // 0 air, 1 soft tissue (incl. skin), 2..28 bones
   LabelTable labels;           // id -> bone name
+  Skeleton skeleton;           // the bones' parents and the joints it flexes about (joints.json)
 };
 
 Phantom make_hand_phantom(const PhantomParams& params);
