@@ -463,7 +463,8 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
               << " states; results in " << staged.final_path().string();
   if (const ThreadTuner& t = solver.thread_tuner(); t.probes() > 0)
     log::verbose() << "automatic threads: " << t.probes() << " probe(s) of " << solver.threads() << " threads against 1, " << t.probes_choosing_one()
-                   << " found 1 thread faster (thread_tuner.hpp)";
+                   << " found 1 thread faster for the stress passes, " << solver.contact_thread_tuner().probes_choosing_one() << " of "
+                   << solver.contact_thread_tuner().probes() << " for the contact sweep (thread_tuner.hpp)";
   if (summary.status == "failed")
     throw NumericalError(failure.get<std::string>() + " (last good state and history written to " + staged.final_path().string() + ")");
   return summary;

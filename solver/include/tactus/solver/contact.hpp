@@ -231,6 +231,7 @@ class ContactSolver {
   ~ContactSolver();
   bool empty() const { return pairs_.empty(); }
   void set_threads(int threads) { threads_ = threads; }  // detection runs in parallel over slave nodes
+  int threads() const { return threads_; }
 
   // Throws InputError when, at displacement u, a slave node lies deeper than 1e-3 of the search
   // scale inside a master (used at t = 0).

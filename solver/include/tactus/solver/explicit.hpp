@@ -63,7 +63,9 @@ class ExplicitSolver {
   std::size_t memory_bytes() const;  // integrator state + per-thread force buffers (not the model)
   int threads() const { return max_threads_; }
   // The automatic thread count's probes (thread_tuner.hpp): how many, and how many chose one thread.
+  // The stress passes' and the contact sweep's tuners apart.
   const ThreadTuner& thread_tuner() const { return tuner_; }
+  const ThreadTuner& contact_thread_tuner() const { return contact_tuner_; }
   // Contact at t^n (after advance_velocity): candidates with their reactions, and the step's report.
   const ContactSolver& contact() const { return contact_; }
   const ContactStepReport& contact_report() const { return contact_report_; }
@@ -133,7 +135,8 @@ class ExplicitSolver {
   std::vector<double> u_, v_half_, v_prev_half_, f_;
   MassScaling masses_;  // the masses the run integrates with, and what mass scaling added
   int max_threads_;
-  ThreadTuner tuner_;                  // run.threads = 0: one thread or all, whichever steps faster now
+  ThreadTuner tuner_;                  // run.threads = 0: one thread or all, whichever steps faster now (all but the contact sweep)
+  ThreadTuner contact_tuner_;          // the same for the contact sweep, timed apart
   double step_seconds_ = 0;            // wall time of the step in progress (both halves)
   std::vector<double> gravity_force_;  // m g per dof (before the ramp)
   double gravity_factor_ = 1;
