@@ -54,8 +54,8 @@ RigidTransform rotation_about(const Vec3& centre, const Vec3& axis, double angle
   const double c = std::cos(angle), s = std::sin(angle), v = 1 - c;
   const double x = axis[0], y = axis[1], z = axis[2];
   RigidTransform t;
-  t.rotation = {c + v * x * x, v * x * y - s * z, v * x * z + s * y,  //
-                v * x * y + s * z, c + v * y * y, v * y * z - s * x,  //
+  t.rotation = {c + v * x * x,     v * x * y - s * z, v * x * z + s * y,  //
+                v * x * y + s * z, c + v * y * y,     v * y * z - s * x,  //
                 v * x * z - s * y, v * y * z + s * x, c + v * z * z};
   t.translation = centre - t.turn(centre);
   return t;
@@ -105,7 +105,8 @@ std::vector<RigidTransform> forward_kinematics(const Skeleton& sk, const std::ve
     if (!j) throw InputError("skeleton", "bone '" + bone.name + "'", "a joint into it from its parent '" + bone.parent + "'", "none");
     RigidTransform local;
     if (const auto it = by_joint.find(j->name); it != by_joint.end())
-      local = rotation_about(j->centre, j->flexion_axis, it->second->flexion).then(rotation_about(j->centre, j->abduction_axis, it->second->abduction));
+      local =
+          rotation_about(j->centre, j->flexion_axis, it->second->flexion).then(rotation_about(j->centre, j->abduction_axis, it->second->abduction));
     placed[b] = local.then(placed[index.at(bone.parent)]);
   }
   return placed;
@@ -114,7 +115,8 @@ std::vector<RigidTransform> forward_kinematics(const Skeleton& sk, const std::ve
 void validate_skeleton(const Skeleton& sk, const std::string& file) {
   std::set<std::string> names;
   for (const auto& b : sk.bones) {
-    if (b.name.empty() || !names.insert(b.name).second) throw InputError(file, "bones", "unique, non-empty bone names", "'" + b.name + "' twice or empty");
+    if (b.name.empty() || !names.insert(b.name).second)
+      throw InputError(file, "bones", "unique, non-empty bone names", "'" + b.name + "' twice or empty");
   }
   for (const auto& b : sk.bones)
     if (!b.parent.empty() && !names.count(b.parent))
@@ -122,19 +124,22 @@ void validate_skeleton(const Skeleton& sk, const std::string& file) {
   std::set<std::string> joint_names, entered;
   auto unit = [](const Vec3& v) { return std::abs(norm(v) - 1) < 1e-6; };
   for (const auto& j : sk.joints) {
-    if (j.name.empty() || !joint_names.insert(j.name).second) throw InputError(file, "joints", "unique, non-empty joint names", "'" + j.name + "' twice or empty");
+    if (j.name.empty() || !joint_names.insert(j.name).second)
+      throw InputError(file, "joints", "unique, non-empty joint names", "'" + j.name + "' twice or empty");
     const SkeletonBone* distal = sk.bone(j.distal);
     if (!sk.bone(j.proximal) || !distal)
       throw InputError(file, "joint '" + j.name + "'", "proximal and distal bones of the skeleton", "'" + j.proximal + "' and '" + j.distal + "'");
     if (distal->parent != j.proximal)
       throw InputError(file, "joint '" + j.name + "'", "a distal bone whose parent is its proximal bone",
                        "'" + j.distal + "' has parent '" + distal->parent + "', not '" + j.proximal + "'");
-    if (!entered.insert(j.distal).second) throw InputError(file, "joint '" + j.name + "'", "one joint into each bone", "a second joint into '" + j.distal + "'");
+    if (!entered.insert(j.distal).second)
+      throw InputError(file, "joint '" + j.name + "'", "one joint into each bone", "a second joint into '" + j.distal + "'");
     if (!unit(j.flexion_axis) || !unit(j.abduction_axis) || std::abs(dot(j.flexion_axis, j.abduction_axis)) > 1e-6)
       throw InputError(file, "joint '" + j.name + "'", "unit, orthogonal flexion and abduction axes");
   }
   for (const auto& b : sk.bones)
-    if (!b.parent.empty() && !entered.count(b.name)) throw InputError(file, "bone '" + b.name + "'", "a joint into it from its parent '" + b.parent + "'", "none");
+    if (!b.parent.empty() && !entered.count(b.name))
+      throw InputError(file, "bone '" + b.name + "'", "a joint into it from its parent '" + b.parent + "'", "none");
   if (parents_first(sk).size() != sk.bones.size()) throw InputError(file, "bones", "parents that lead to a root", "a cycle");
 }
 

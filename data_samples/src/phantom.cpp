@@ -173,7 +173,7 @@ Anatomy build_anatomy(double flexion) {
             {"trapezium",
              "thumb",
              {-31, -6, carpal_top + 1.5},
-             unit({-0.60, -0.16, 0.76}),
+             unit({-0.60, -0.18, 0.76}),
              {40, 32, 24},
              {4.6, 4.2, 3.5},
              {"metacarpal", "proximal_phalanx", "distal_phalanx"},
@@ -206,6 +206,41 @@ Skeleton skeleton_of(const Anatomy& h) {
   return sk;
 }
 
+struct EnvelopeBounds {
+  double lo[3] = {1e9, 1e9, 0}, hi[3] = {-1e9, -1e9, -1e9};  // mm; the wrist is cut at z = 0
+};
+
+// Bounding box of the soft-tissue envelope, sampled on a 1.5 mm lattice over the primitives' own
+// bounds (the smooth union reaches at most k/4 = 2 mm past them), so no posture is clipped.
+EnvelopeBounds envelope_bounds(const Anatomy& h) {
+  auto envelope = [&](V3 q) {
+    double d = smin(h.wrist.distance(q), h.palm.distance(q), 8.0);
+    for (const auto& c : h.envelope) d = smin(d, c.distance(q), 7.0);
+    return d;
+  };
+  double reach_lo[3] = {1e9, 1e9, 0}, reach_hi[3] = {-1e9, -1e9, -1e9};
+  auto reach = [&](V3 lo_corner, V3 hi_corner) {
+    const double l[3] = {lo_corner.x, lo_corner.y, lo_corner.z}, u[3] = {hi_corner.x, hi_corner.y, hi_corner.z};
+    for (int a = 0; a < 3; ++a) reach_lo[a] = std::min(reach_lo[a], l[a] - 3), reach_hi[a] = std::max(reach_hi[a], u[a] + 3);
+  };
+  for (const RoundedBox& box : {h.wrist, h.palm})
+    reach(box.centre - box.half - V3{box.round, box.round, box.round}, box.centre + box.half + V3{box.round, box.round, box.round});
+  for (const auto& c : h.envelope)
+    reach({std::min(c.a.x, c.b.x) - c.r, std::min(c.a.y, c.b.y) - c.r, std::min(c.a.z, c.b.z) - c.r},
+          {std::max(c.a.x, c.b.x) + c.r, std::max(c.a.y, c.b.y) + c.r, std::max(c.a.z, c.b.z) + c.r});
+  auto lattice = [](double anchor, double v) { return anchor + 1.5 * std::floor((v - anchor) / 1.5); };  // the lattice point below v
+  EnvelopeBounds out;
+  for (double x = lattice(-120, reach_lo[0]); x <= reach_hi[0]; x += 1.5)
+    for (double y = lattice(-80, reach_lo[1]); y <= reach_hi[1]; y += 1.5)
+      for (double z = 0; z <= reach_hi[2]; z += 1.5)
+        if (envelope({x, y, z}) <= 0) {
+          out.lo[0] = std::min(out.lo[0], x), out.hi[0] = std::max(out.hi[0], x);
+          out.lo[1] = std::min(out.lo[1], y), out.hi[1] = std::max(out.hi[1], y);
+          out.hi[2] = std::max(out.hi[2], z);
+        }
+  return out;
+}
+
 }  // namespace
 
 Phantom make_hand_phantom(const PhantomParams& p) {
@@ -218,33 +253,9 @@ Phantom make_hand_phantom(const PhantomParams& p) {
     throw InputError("phantom parameters", "--flexion", "an angle within +-90 degrees", std::to_string(p.flexion_deg));
   const Anatomy h = build_anatomy(p.flexion_deg * M_PI / 180);
 
-  auto envelope = [&](V3 q) {
-    double d = smin(h.wrist.distance(q), h.palm.distance(q), 8.0);
-    for (const auto& c : h.envelope) d = smin(d, c.distance(q), 7.0);
-    return d;
-  };
-  // Bounding box of the envelope, sampled on a 1.5 mm lattice over the primitives' own bounds (the
-  // smooth union reaches at most k/4 = 2 mm past them) plus the margin, so no posture is clipped.
-  double reach_lo[3] = {1e9, 1e9, 0}, reach_hi[3] = {-1e9, -1e9, -1e9};
-  auto reach = [&](V3 lo_corner, V3 hi_corner) {
-    const double l[3] = {lo_corner.x, lo_corner.y, lo_corner.z}, u[3] = {hi_corner.x, hi_corner.y, hi_corner.z};
-    for (int a = 0; a < 3; ++a) reach_lo[a] = std::min(reach_lo[a], l[a] - 3), reach_hi[a] = std::max(reach_hi[a], u[a] + 3);
-  };
-  for (const RoundedBox& box : {h.wrist, h.palm})
-    reach(box.centre - box.half - V3{box.round, box.round, box.round}, box.centre + box.half + V3{box.round, box.round, box.round});
-  for (const auto& c : h.envelope)
-    reach({std::min(c.a.x, c.b.x) - c.r, std::min(c.a.y, c.b.y) - c.r, std::min(c.a.z, c.b.z) - c.r},
-          {std::max(c.a.x, c.b.x) + c.r, std::max(c.a.y, c.b.y) + c.r, std::max(c.a.z, c.b.z) + c.r});
-  auto lattice = [](double anchor, double v) { return anchor + 1.5 * std::floor((v - anchor) / 1.5); };  // the lattice point below v
-  double lo[3] = {1e9, 1e9, 0}, hi[3] = {-1e9, -1e9, -1e9};
-  for (double x = lattice(-120, reach_lo[0]); x <= reach_hi[0]; x += 1.5)
-    for (double y = lattice(-80, reach_lo[1]); y <= reach_hi[1]; y += 1.5)
-      for (double z = 0; z <= reach_hi[2]; z += 1.5)
-        if (envelope({x, y, z}) <= 0) {
-          lo[0] = std::min(lo[0], x), hi[0] = std::max(hi[0], x);
-          lo[1] = std::min(lo[1], y), hi[1] = std::max(hi[1], y);
-          hi[2] = std::max(hi[2], z);
-        }
+  const EnvelopeBounds bounds = envelope_bounds(h);
+  const double* lo = bounds.lo;
+  const double* hi = bounds.hi;
   const double step[3] = {p.voxel_mm, p.voxel_mm, p.slice_mm};
   std::array<int, 3> dims{};
   std::array<double, 3> origin_mm{};

@@ -35,7 +35,7 @@ struct BoneShape {
   std::string group;
   double volume = 0;
   V centroid = V::Zero(), axis = V::Zero();
-  double elongation = 1;  // sqrt(largest / middle principal spread): >= 2 for a long bone
+  double elongation = 1;   // sqrt(largest / middle principal spread): >= 2 for a long bone
   std::vector<V> surface;  // its boundary nodes
   V lo = V::Constant(1e300), hi = V::Constant(-1e300);
 };
@@ -125,8 +125,8 @@ struct Digit {
 };
 
 // The chains of the neighbour graph: four fingers and a thumb, or an InputError naming the labels.
-std::vector<Digit> chains(const std::vector<BoneShape>& bones, const std::vector<std::vector<std::size_t>>& near, const std::vector<std::vector<double>>& gap,
-                          const std::string& source) {
+std::vector<Digit> chains(const std::vector<BoneShape>& bones, const std::vector<std::vector<std::size_t>>& near,
+                          const std::vector<std::vector<double>>& gap, const std::string& source) {
   std::vector<Digit> fingers, thumbs;
   auto is_long = [&](std::size_t b) { return bones[b].elongation >= kLongBone; };
   for (std::size_t leaf = 0; leaf < bones.size(); ++leaf) {
@@ -204,19 +204,23 @@ std::vector<Digit> named_digits(const std::vector<BoneShape>& bones, const std::
   return digits;
 }
 
-// The centre of the sphere through points (algebraic least squares: |x|^2 = 2 c.x + k).
+// The centre of the sphere through points (algebraic least squares: |x|^2 = 2 c.x + k), by its
+// 4 x 4 normal equations. Fixed-size on purpose: a dynamic-size Eigen decomposition instantiated
+// here (-march=native) is a weak symbol that libgmsh's own calls bind to, with another ABI, and
+// gmsh's mesher then crashed (double free) in every executable that linked this file.
 V sphere_centre(const std::vector<V>& points) {
   V mean = V::Zero();
   for (const V& p : points) mean += p;
   mean /= static_cast<double>(points.size());
-  Eigen::MatrixXd a(points.size(), 4);
-  Eigen::VectorXd rhs(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const V q = points[i] - mean;
-    a.row(static_cast<Eigen::Index>(i)) << 2 * q.x(), 2 * q.y(), 2 * q.z(), 1;
-    rhs(static_cast<Eigen::Index>(i)) = q.squaredNorm();
+  Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d rhs = Eigen::Vector4d::Zero();
+  for (const V& p : points) {
+    const V q = p - mean;
+    const Eigen::Vector4d row(2 * q.x(), 2 * q.y(), 2 * q.z(), 1);
+    normal += row * row.transpose();
+    rhs += row * q.squaredNorm();
   }
-  const Eigen::Vector4d x = a.colPivHouseholderQr().solve(rhs);
+  const Eigen::Vector4d x = normal.fullPivLu().solve(rhs);
   return mean + x.head<3>();
 }
 
@@ -237,6 +241,28 @@ V end_centre(const BoneShape& bone, const V& axis, bool head) {
   for (std::size_t i = 0; i < t.size(); ++i)
     if (head ? t[i] >= hi - 0.8 * rho : t[i] <= lo + 0.8 * rho) cap.push_back(bone.surface[i]);
   return cap.size() >= 8 ? sphere_centre(cap) : bone.centroid + (head ? hi - rho : lo + rho) * axis;
+}
+
+// The palm: the plane of the finger metacarpals (centroids and head centres); its normal points to
+// the side the digits' tips lie on (they flex towards the palm).
+V palm_normal(const std::vector<BoneShape>& bones, const std::vector<Digit>& digits, const std::string& source) {
+  std::vector<V> palm;
+  for (int f = 0; f < 4; ++f) {
+    const BoneShape& mc = bones[digits[f].bones.back()];
+    palm.push_back(mc.centroid);
+    palm.push_back(end_centre(mc, mc.axis, true));
+  }
+  V mean = V::Zero();
+  for (const V& p : palm) mean += p / 8;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const V& p : palm) cov += (p - mean) * (p - mean).transpose();
+  V normal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+  double side = 0;
+  for (const auto& d : digits) side += (bones[d.bones.front()].centroid - mean).dot(normal);
+  if (std::abs(side) < 1e-3)
+    throw InputError(source, "palm", "digits whose tips lie on one side of the metacarpals' plane (a hand flexed a little)",
+                     "their tips lie in it: the palm cannot be told from the back");
+  return side < 0 ? V(-normal) : normal;
 }
 
 }  // namespace
@@ -270,26 +296,7 @@ Skeleton extract_skeleton(const TetMesh& mesh, const SkeletonOptions& options) {
       const std::size_t b = d.bones[s], parent = s + 1 < d.bones.size() ? d.bones[s + 1] : d.carpal;
       if (bones[b].axis.dot(bones[b].centroid - bones[parent].centroid) < 0) bones[b].axis = -bones[b].axis;
     }
-  // The palm: the plane of the finger metacarpals (centroids and heads); its normal points to the
-  // side the digits' tips lie on (they flex towards the palm).
-  std::vector<V> palm;
-  for (int f = 0; f < 4; ++f) {
-    const BoneShape& mc = bones[digits[f].bones.back()];
-    palm.push_back(mc.centroid);
-    palm.push_back(end_centre(mc, mc.axis, true));
-  }
-  V mean = V::Zero();
-  for (const V& p : palm) mean += p / 8;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const V& p : palm) cov += (p - mean) * (p - mean).transpose();
-  V normal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
-  double side = 0;
-  for (const auto& d : digits) side += (bones[d.bones.front()].centroid - mean).dot(normal);
-  if (std::abs(side) < 1e-3)
-    throw InputError(source, "palm", "digits whose tips lie on one side of the metacarpals' plane (a hand flexed a little)",
-                     "their tips lie in it: the palm cannot be told from the back");
-  if (side < 0) normal = -normal;
-
+  const V normal = palm_normal(bones, digits, source);
   Skeleton sk;
   sk.source = "tactus-mesh skeleton of " + source + (inferred ? " (bones named by their chains)" : " (bones named by their labels)");
   sk.palm_normal = arr(normal);

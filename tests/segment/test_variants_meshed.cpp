@@ -52,11 +52,14 @@ TEST(SegmentVariantsMeshed, WithinTheGuarantees) {
   // At 3 mm a phalanx is 2-3 voxels across and the 2 mm joint gaps are invisible: touching pieces
   // whose eroded core is a small part of them are kept as one bone (4 labels; 4 true bones were
   // split where they are thinnest before), and 3 carpals of 19-26 voxels fall below the bone
-  // threshold by partial volume. One true bone is still split: partial volume breaks it into two
-  // components of the mask that do not touch.
+  // threshold by partial volume. Two true bones are still split: partial volume breaks each into
+  // two components of the mask that do not touch. (Measured on the phantom whose joints flex about
+  // each digit's own axis, joints.json: 2 shattered and 4 lost; on the earlier phantom, flexed
+  // about the global x axis, 1 and 3. Nothing in segment changed: at 3 mm these counts follow the
+  // voxels' phase against a 6-8 mm wide phalanx.)
   const auto at_3mm = segment_and_mesh("coarse 3 mm", coarse);
-  EXPECT_LE(at_3mm.shattered, 1u);
-  EXPECT_LE(at_3mm.lost, 3u);
+  EXPECT_LE(at_3mm.shattered, 2u);
+  EXPECT_LE(at_3mm.lost, 4u);
   samples::PhantomParams noisy;
   noisy.voxel_mm = noisy.slice_mm = 1.0, noisy.noise_hu = 60, noisy.bias_hu = 100;
   const auto with_noise = segment_and_mesh("noise 60 HU, bias +-100 HU", noisy);

@@ -21,17 +21,17 @@ namespace tactus {
 
 struct SkeletonBone {
   std::string name;
-  std::string parent;   // empty: a root
-  int label = -1;       // its label in the labels volume and physical group in the mesh (-1: unknown)
-  Vec3 centroid{};      // of its volume
-  Vec3 long_axis{};     // unit, from its base towards its head (distal)
-  double length = 0;    // along the long axis
+  std::string parent;  // empty: a root
+  int label = -1;      // its label in the labels volume and physical group in the mesh (-1: unknown)
+  Vec3 centroid{};     // of its volume
+  Vec3 long_axis{};    // unit, from its base towards its head (distal)
+  double length = 0;   // along the long axis
 };
 
 struct SkeletonJoint {
-  std::string name;                // "mcp_index", "pip_index", "ip_thumb", ...
-  std::string proximal, distal;    // bone names; the distal bone's parent is the proximal one
-  Vec3 centre{};                   // the proximal bone's head centre (docs/design.md, the skeleton)
+  std::string name;                       // "mcp_index", "pip_index", "ip_thumb", ...
+  std::string proximal, distal;           // bone names; the distal bone's parent is the proximal one
+  Vec3 centre{};                          // the proximal bone's head centre (docs/design.md, the skeleton)
   Vec3 flexion_axis{}, abduction_axis{};  // unit, orthogonal
 };
 
@@ -53,7 +53,7 @@ struct RigidTransform {
   std::array<double, 9> rotation{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major
   Vec3 translation{};
   Vec3 apply(const Vec3& x) const;
-  Vec3 turn(const Vec3& d) const;  // rotation only
+  Vec3 turn(const Vec3& d) const;                         // rotation only
   RigidTransform then(const RigidTransform& next) const;  // next(this(x))
 };
 

@@ -8,8 +8,8 @@
 // metacarpals), compact otherwise (carpals, the pisiform). A chain starts at a long bone with one
 // neighbour (a distal phalanx) and steps to its one new long neighbour until a bone touches a
 // compact one, the carpal it sits on. A chain of four bones is a finger (distal, middle, proximal
-// phalanx, metacarpal), of three the thumb; the compact bones are roots. The fingers are ordered index to little by their metacarpals' distance from the thumb.
-// Bone groups already named so (the phantom's labels), or a user's names file, take precedence.
+// phalanx, metacarpal), of three the thumb; the compact bones are roots. The fingers are ordered index to little by their metacarpals' distance from
+// the thumb. Bone groups already named so (the phantom's labels), or a user's names file, take precedence.
 #include <filesystem>
 #include <map>
 #include <string>
@@ -20,9 +20,9 @@
 namespace tactus::mesher {
 
 struct SkeletonOptions {
-  double neighbour_gap_m = 3.5e-3;     // the phantom's joints are 2.2 mm apart, its carpals 1.6 mm
-  std::map<int, std::string> names;    // label -> bone name, from a names file; empty: the groups' own or inferred
-  std::string source = "mesh";         // the mesh's file, for messages
+  double neighbour_gap_m = 3.5e-3;   // the phantom's joints are 2.2 mm apart, its carpals 1.6 mm
+  std::map<int, std::string> names;  // label -> bone name, from a names file; empty: the groups' own or inferred
+  std::string source = "mesh";       // the mesh's file, for messages
 };
 
 // InputError naming the labels when the bones cannot be named (chains of the wrong length, not

@@ -26,7 +26,9 @@ class ThreadTuner {
     if (++in_block_ == kBlockSteps) {
       in_block_ = 0;
       if (++block_ == 2 * kBlocks) {
-        chosen_ = time_[1] < time_[0] ? 1 : max_;
+        // All the threads must win by a margin: one thread is the safe choice on a shared machine,
+        // where a preempted probe block makes the timings noisy.
+        chosen_ = time_[0] < kMargin * time_[1] ? max_ : 1;
         chosen_one_ += chosen_ == 1;
         ++probes_;
       }
@@ -39,6 +41,7 @@ class ThreadTuner {
  private:
   static constexpr int kBlockSteps = 5, kBlocks = 3;  // 3 blocks of 5 steps per configuration, interleaved
   static constexpr int kHoldSteps = 1500;             // then the choice holds this many steps
+  static constexpr double kMargin = 0.9;              // all threads kept only when 10 % faster than one
   bool probing() const { return block_ < 2 * kBlocks; }
   int max_;
   bool on_;
