@@ -109,15 +109,16 @@ Vec3 rotate(const BodySpec& body, const Vec3& x) {
   return out;
 }
 
-// Scale, rotate, translate, then `against`: moved along one axis to leave the gap to an earlier body.
-void place_body(const Scenario& sc, std::size_t bi, const Model& m, TetMesh& mesh) {
+// Scale, rotate, translate, then `against`: moved along one axis to leave the gap to an earlier
+// body. Returns what `against` moved it by.
+Vec3 place_body(const Scenario& sc, std::size_t bi, const Model& m, TetMesh& mesh) {
   const BodySpec& body = sc.bodies[bi];
   for (auto& x : mesh.nodes) {
     for (int c = 0; c < 3; ++c) x[c] *= body.scale;
     if (body.rotated) x = rotate(body, x);
     for (int c = 0; c < 3; ++c) x[c] += body.translate[c];
   }
-  if (body.against.empty()) return;
+  if (body.against.empty()) return {0, 0, 0};
   const int a = body.against_axis;
   std::size_t other = 0;
   while (sc.bodies[other].name != body.against) ++other;
@@ -129,6 +130,9 @@ void place_body(const Scenario& sc, std::size_t bi, const Model& m, TetMesh& mes
   for (auto& x : mesh.nodes) x[a] += shift;
   log::verbose() << "bodies[" << bi << "] '" << body.name << "' moved by " << shift << " m along "
                  << "xyz"[a] << " to lie " << body.against_gap << " m from '" << body.against << "'";
+  Vec3 moved{0, 0, 0};
+  moved[static_cast<std::size_t>(a)] = shift;
+  return moved;
 }
 
 // What the blocks need to know about every input tet.
@@ -147,11 +151,12 @@ void append_body(const Scenario& sc, std::size_t bi, Model& m, TetAssignment& te
   const auto fields = all_element_fields(sc, body);
   std::vector<std::vector<double>> field_values;
   if (!body.fibres.empty()) field_values = read_element_fields(body.fibres, mesh, key + ".fibres", fields);
-  place_body(sc, bi, m, mesh);
+  const Vec3 shift = place_body(sc, bi, m, mesh);
   TetMesh& all = m.input_mesh;
   const std::size_t node0 = all.nodes.size();
   m.bodies.push_back({body.name, node0, node0 + mesh.nodes.size(), all.tets.size(), all.tets.size() + mesh.tets.size(), all.triangles.size(),
                       all.triangles.size() + mesh.triangles.size(), all.groups.size(), all.groups.size() + mesh.groups.size()});
+  m.bodies.back().against_shift = shift;
   all.groups.insert(all.groups.end(), mesh.groups.begin(), mesh.groups.end());
   all.nodes.insert(all.nodes.end(), mesh.nodes.begin(), mesh.nodes.end());
   for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
@@ -422,6 +427,71 @@ void add_rigid_motion(const Scenario& sc, Model& m) {
   }
 }
 
+// The skeleton placed like its body (scale, rotation, translation, `against`), in radians.
+Skeleton placed_skeleton(const Scenario& sc, std::size_t bi, const Model& m) {
+  Skeleton sk = read_skeleton(sc.skeleton->file);
+  const BodySpec& body = sc.bodies[bi];
+  auto direction = [&](const Vec3& a) { return body.rotated ? rotated(body, a) : a; };
+  auto point = [&](Vec3 x) {
+    x = body.scale * x;
+    if (body.rotated) x = rotate(body, x);
+    return x + body.translate + m.bodies[bi].against_shift;
+  };
+  sk.palm_normal = direction(sk.palm_normal);
+  for (SkeletonBone& b : sk.bones) b.centroid = point(b.centroid), b.long_axis = direction(b.long_axis), b.length *= body.scale;
+  for (SkeletonJoint& j : sk.joints)
+    j.centre = point(j.centre), j.flexion_axis = direction(j.flexion_axis), j.abduction_axis = direction(j.abduction_axis);
+  return sk;
+}
+
+// [skeleton], [[joint]] and [grasp] into the model's joint drive (joint_settings.hpp).
+void add_joint_drive(const Scenario& sc, Model& m) {
+  if (!sc.skeleton) return;
+  JointDriveSetup& d = m.joint_drive;
+  std::size_t bi = 0;
+  while (sc.bodies[bi].name != sc.skeleton->body) ++bi;
+  d.body = bi;
+  d.file = sc.skeleton->file.string();
+  d.skeleton = placed_skeleton(sc, bi, m);
+  std::string names;
+  for (const SkeletonJoint& j : d.skeleton.joints) names += (names.empty() ? "" : ", ") + j.name;
+  auto joint_index = [&](const std::string& name, const std::string& key) {
+    for (std::size_t j = 0; j < d.skeleton.joints.size(); ++j)
+      if (d.skeleton.joints[j].name == name) return j;
+    throw InputError(sc.file.string(), key, "a joint of the skeleton " + d.file + " (" + names + ")", "\"" + name + "\"");
+  };
+  for (std::size_t k = 0; k < sc.joints.size(); ++k) {
+    const JointSpec& spec = sc.joints[k];
+    const std::string key = "joint[" + std::to_string(k) + "]";
+    JointDriveSetup::Kinematic kin;
+    kin.joint = joint_index(spec.name, key + ".name");
+    kin.flexion = spec.flexion * M_PI / 180, kin.abduction = spec.abduction * M_PI / 180;
+    kin.curve = curve_index(m, spec.curve);
+    if (const double c0 = m.curve_at(kin.curve, 0.0); c0 != 0)
+      throw InputError(sc.file.string(), key + ".curve", "a curve that is 0 at t = 0 (a posture cannot jump)",
+                       "'" + spec.curve + "' is " + std::to_string(c0) + " at t = 0");
+    d.kinematic.push_back(kin);
+  }
+  d.grasp = sc.grasp;
+  if (!d.grasp.on()) return;
+  for (const SkeletonJoint& j : d.skeleton.joints) {
+    const double w = grasp_weight(d.grasp, j.name);
+    if (w < 0)
+      throw InputError(d.file, "joint '" + j.name + "'",
+                       "a joint named <kind>_<digit> with kind mcp, pip, dip or cmc (ip, mcp or cmc for the thumb), whose [grasp] weight "
+                       "sets its torque",
+                       "\"" + j.name + "\"");
+    d.torque_weight.push_back(w);
+  }
+  for (std::size_t k = 0; k < sc.contacts.size(); ++k) {
+    const ContactSpec& c = sc.contacts[k];
+    if (!c.plane && (c.slave_body == d.grasp.handle) != (c.master_body == d.grasp.handle)) d.grip_entries.push_back(static_cast<int>(k));
+  }
+  if (d.grip_entries.empty())
+    throw InputError(sc.file.string(), "grasp.handle", "a [[contact]] entry between the handle '" + d.grasp.handle + "' and another body",
+                     "none: the grip force would always be 0");
+}
+
 }  // namespace
 
 Model build_model(const Scenario& sc) {
@@ -458,6 +528,7 @@ Model build_model(const Scenario& sc) {
   compute_element_geometry(m);
   lump_mass(m);
   add_rigid_motion(sc, m);
+  add_joint_drive(sc, m);
   reorder_for_locality(m);
   add_contacts(m, sc.contacts);
   add_pressure_loads(sc, m);

@@ -34,6 +34,7 @@ std::vector<fs::path> scenario_inputs(const Scenario& sc) {
     in.push_back(b.mesh);
     if (!b.fibres.empty()) in.push_back(b.fibres);
   }
+  if (sc.skeleton) in.push_back(sc.skeleton->file);
   return in;
 }
 

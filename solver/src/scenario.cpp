@@ -349,10 +349,61 @@ const char* mesh_kind_name(MeshKind k) {
   return "";
 }
 
+const Section<SkeletonSpec>& skeleton_section() {
+  static const Section<SkeletonSpec> s{
+      "skeleton",
+      "[skeleton]: the bones of one body and the joints between them, for [[joint]] and [grasp] to move. Each bone is the body's "
+      "rigid piece meshed from its label; it moves by forward kinematics down its chain, the soft tissue following through the "
+      "nodes it shares with the bones. The roots (carpals) are held.",
+      {bind_key(&SkeletonSpec::body, declare("body", "", "the body whose bones the skeleton names", true)),
+       bind_key(&SkeletonSpec::file, declare("file", "",
+                                             "skeleton.json (tactus-mesh skeleton, or tactus-phantom's joints.json), in the "
+                                             "body's mesh frame before its placement (relative to the scenario file)",
+                                             true))}};
+  return s;
+}
+
+const Section<JointSpec>& joint_section() {
+  static const Section<JointSpec> s{
+      "joint",
+      "[[joint]]: one joint's angles added to the mesh's posture, angle x curve(t); a joint with an entry moves by it, "
+      "not by the grasp's torque.",
+      {bind_key(&JointSpec::name, declare("name", "", "a joint of the skeleton (mcp_index, pip_middle, ip_thumb, ...)", true)),
+       bind_key(&JointSpec::flexion, keys::opt(keys::number("flexion", "deg", "flexion towards the palm", -180, false, 180))),
+       bind_key(&JointSpec::abduction, keys::opt(keys::number("abduction", "deg", "abduction about the joint's abduction axis", -180, false, 180))),
+       bind_key(&JointSpec::curve, declare("curve", "", "a [curves] name scaling both angles; it starts at 0 (a posture cannot jump)", true))}};
+  return s;
+}
+
+const Section<GraspSpec>& grasp_section() {
+  static const Section<GraspSpec> s{
+      "grasp",
+      "[grasp]: a torque-driven grip. Every joint no [[joint]] drives gets the flexion torque s(t) x its kind's weight; s comes "
+      "from a PI loop on the total grip force (the normal contact forces between the handle and the other bodies) against "
+      "the target, ramped from 0 over ramp_time and then held.",
+      {bind_key(&GraspSpec::handle, declare("handle", "", "the body the hand grips (its [[contact]] entries give the grip force)", true)),
+       bind_key(&GraspSpec::target_force, keys::number("target_force", "N", "grip force to reach and hold", 0, true)),
+       bind_key(&GraspSpec::ramp_time, keys::opt(keys::number("ramp_time", "s", "the target rises linearly from 0 over this time", 0))),
+       bind_key(&GraspSpec::gain_p, keys::opt(keys::number("gain_p", "m", "proportional gain: N m of drive per N of grip error", 0))),
+       bind_key(&GraspSpec::gain_i, keys::opt(keys::number("gain_i", "m/s", "integral gain: N m of drive per N s of grip error", 0))),
+       bind_key(&GraspSpec::max_torque, keys::opt(keys::number("max_torque", "N m", "the largest drive s (weight 1)", 0, true))),
+       bind_key(&GraspSpec::flexion_min, keys::opt(keys::number("flexion_min", "deg", "each torque-driven joint's extension stop", -90, false, 0))),
+       bind_key(&GraspSpec::flexion_max, keys::opt(keys::number("flexion_max", "deg", "each torque-driven joint's flexion stop", 0, true, 150))),
+       bind_key(&GraspSpec::weight_mcp, keys::opt(keys::number("weight_mcp", "", "torque weight of a finger's MCP joint", 0))),
+       bind_key(&GraspSpec::weight_pip, keys::opt(keys::number("weight_pip", "", "of a finger's PIP joint", 0))),
+       bind_key(&GraspSpec::weight_dip, keys::opt(keys::number("weight_dip", "", "of a finger's DIP joint", 0))),
+       bind_key(&GraspSpec::weight_cmc, keys::opt(keys::number("weight_cmc", "", "of a finger's CMC joint (0: held)", 0))),
+       bind_key(&GraspSpec::weight_thumb_cmc, keys::opt(keys::number("weight_thumb_cmc", "", "of the thumb's CMC joint", 0))),
+       bind_key(&GraspSpec::weight_thumb_mcp, keys::opt(keys::number("weight_thumb_mcp", "", "of the thumb's MCP joint", 0))),
+       bind_key(&GraspSpec::weight_thumb_ip, keys::opt(keys::number("weight_thumb_ip", "", "of the thumb's IP joint", 0)))}};
+  return s;
+}
+
 std::vector<SectionSpec> scenario_reference() {
   std::vector<SectionSpec> out{
       run_section().spec(),      damping_section().spec(), body_section().spec(),    material_common_section(),       curve_section().spec(),
-      boundary_section().spec(), load_section().spec(),    contact_section().spec(), contact_solver_section().spec(), pipeline_section().spec()};
+      boundary_section().spec(), load_section().spec(),    contact_section().spec(), contact_solver_section().spec(), pipeline_section().spec(),
+      skeleton_section().spec(), joint_section().spec(),   grasp_section().spec()};
   for (const MaterialType* m : material_types()) out.push_back(m->parameters);
   return out;
 }
@@ -658,6 +709,34 @@ void read_pipeline(const Reader& r, const toml::table& root, Scenario& sc) {
   }
 }
 
+// [skeleton], [[joint]] and [grasp]: the joints need the skeleton, the grasp its handle.
+void read_joints(const Reader& r, const toml::table& root, Scenario& sc, const fs::path& base) {
+  if (const toml::node* n = root.get("skeleton")) {
+    SkeletonSpec spec;
+    skeleton_section().read(r, r.table(*n, "skeleton"), "skeleton", spec);
+    require_body(r, sc, spec.body, "skeleton.body");
+    spec.file = base / spec.file;
+    sc.skeleton = spec;
+  }
+  if (const toml::node* n = root.get("joint")) {
+    if (!sc.skeleton) r.fail("joint", "a [skeleton] for the [[joint]] entries to name joints of", "none");
+    std::set<std::string> names;
+    r.each_table(*n, "joint", [&](const toml::table& t, const std::string& path) {
+      JointSpec j;
+      joint_section().read(r, t, path, j);
+      require_curve(r, sc, j.curve, path + ".curve");
+      if (!names.insert(j.name).second) r.fail(path + ".name", "one [[joint]] entry per joint", "\"" + j.name + "\" twice");
+      sc.joints.push_back(j);
+    });
+  }
+  if (const toml::node* n = root.get("grasp")) {
+    if (!sc.skeleton) r.fail("grasp", "a [skeleton] whose joints the grasp drives", "none");
+    grasp_section().read(r, r.table(*n, "grasp"), "grasp", sc.grasp);
+    require_body(r, sc, sc.grasp.handle, "grasp.handle");
+    if (sc.grasp.handle == sc.skeleton->body) r.fail("grasp.handle", "a body other than the hand", "\"" + sc.grasp.handle + "\"");
+  }
+}
+
 void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc) {
   if (const toml::node* n = root.get("contact_solver"))
     contact_solver_section().read(r, r.table(*n, "contact_solver"), "contact_solver", sc.contact_solver);
@@ -694,7 +773,9 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
        section("curves", ValueType::table, "[curves.<name>] sections", false),
        section("contact", ValueType::table_list, "[[contact]] sections", false),
        section("contact_solver", ValueType::table, "a [contact_solver] section", false),
-       section("pipeline", ValueType::table, "a [pipeline] section with [[pipeline.meshes]] entries", false)}};
+       section("pipeline", ValueType::table, "a [pipeline] section with [[pipeline.meshes]] entries", false),
+       section("skeleton", ValueType::table, "a [skeleton] section", false), section("joint", ValueType::table_list, "[[joint]] sections", false),
+       section("grasp", ValueType::table, "a [grasp] section", false)}};
   r.check_keys(root, top, "");
 
   read_run(r, root, sc);
@@ -707,6 +788,7 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
   read_contacts(r, root, sc);
   read_pipeline(r, root, sc);
   read_contact_solver(r, root, sc);
+  read_joints(r, root, sc, base);
   return sc;
 }
 
@@ -718,6 +800,7 @@ std::string mesh_plan_json(const Scenario& sc) {
     plan["inputs"].push_back(b.mesh.string());
     if (!b.fibres.empty()) plan["inputs"].push_back(b.fibres.string());
   }
+  if (sc.skeleton) plan["inputs"].push_back(sc.skeleton->file.string());
   return plan.dump(2) + "\n";
 }
 

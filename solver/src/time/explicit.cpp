@@ -34,6 +34,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   for (std::size_t i = 0; i < ndof; ++i) gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];  // on the physical mass, also under mass scaling
   if (mass_scaling()) forces_.enable_mass_scaling();
   rigid_.init(model_, v_half_.data(), v_prev_half_.data(), masses_.contact_inverse_mass.data());
+  if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
   contact_.set_threads(forces_.threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   schedule_ = output_schedule(run);
@@ -198,7 +199,12 @@ void ExplicitSolver::advance_velocity() {
 #pragma omp parallel for num_threads(forces_.threads()) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i)
     v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i]);
-  if (!rigid_.empty()) rigid_.kick(model_, f_.data(), external, u_.data(), time_, t_next, h.dt, h.dtbar, h.c_minus, h.c_plus);
+  if (!rigid_.empty()) {
+    rigid_.sum_loads(model_, f_.data(), external, u_.data());
+    // The joints set the bones' motion over the step from those loads (joint_drive.hpp).
+    if (drive_) drive_->steer(model_, rigid_, contact_.pair_reports(), contact_.pairs(), time_, t_next, h.dt, h.dtbar, h.c_minus, h.c_plus);
+    rigid_.kick(model_, u_.data(), time_, t_next, h.dt, h.dtbar, h.c_minus, h.c_plus);
+  }
   // Contact reactions at t^n correct it (paper eq. 35 with R): dv = dtbar c_plus M^-1 R.
   if (!contact_.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -218,6 +224,7 @@ void ExplicitSolver::advance_velocity() {
   accumulate_reactions();
   audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_,
                     forces_.threads());
+  if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
   velocity_advanced_ = true;
   step_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - contact_seconds;
 }

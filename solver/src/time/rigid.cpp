@@ -88,6 +88,9 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
       }
       // Mass and second moment of the tet about the origin, exactly: int x x^T dV = V/20 (sum_i x_i x_i^T + s s^T).
       RigidBody& r = out[it->second];
+      const std::int32_t group = m.input_mesh.tet_group[static_cast<std::size_t>(m.input_element[e])];
+      if (!std::binary_search(r.groups.begin(), r.groups.end(), group))
+        r.groups.insert(std::upper_bound(r.groups.begin(), r.groups.end(), group), group);
       const double rho = b.material.density(), V = m.volume[e];
       Vec3d s = Vec3d::Zero();
       Mat3 xx = Mat3::Zero();
@@ -234,19 +237,15 @@ void RigidBodies::prescribe(std::size_t piece, const RigidMotion& motion) {
     throw InputError("scenario", "rigid motion", "a rigid piece (" + std::to_string(bodies_.size()) + " in the model)",
                      "piece " + std::to_string(piece));
   RigidBody& b = bodies_[piece];
-  b.prescribed = true;
   b.motion = motion;
+  if (b.prescribed) return;  // (a joint drive prescribes its bones every step)
+  b.prescribed = true;
   for (std::int32_t a : b.nodes) piece_of_node_[static_cast<std::size_t>(a)] = kPrescribed;
 }
 
-void RigidBodies::kick(const Model& model, const double* f, const ExternalForces& external, const double* u, double time, double t_next, double dt,
-                       double dtbar, double c_minus, double c_plus) {
-  RigidRows& rows = *rows_;
-  rows.u = u;
-  for (std::size_t k = 0; k < bodies_.size(); ++k) {
-    RigidBody& b = bodies_[k];
-    // Force and moment about the centre at t^n: internal forces of the deformable tets on the
-    // shared nodes, gravity and follower pressures.
+void RigidBodies::sum_loads(const Model& model, const double* f, const ExternalForces& external, const double* u) {
+  for (RigidBody& b : bodies_) {
+    // Internal forces of the deformable tets on the shared nodes, gravity and follower pressures.
     Vec3d F = Vec3d::Zero(), T = Vec3d::Zero();
     for (std::int32_t node : b.nodes) {
       const auto a = static_cast<std::size_t>(node);
@@ -258,6 +257,15 @@ void RigidBodies::kick(const Model& model, const double* f, const ExternalForces
       F += fa, T += r.cross(fa);
     }
     b.force = F, b.moment = T;
+  }
+}
+
+void RigidBodies::kick(const Model& model, const double* u, double time, double t_next, double dt, double dtbar, double c_minus, double c_plus) {
+  RigidRows& rows = *rows_;
+  rows.u = u;
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    RigidBody& b = bodies_[k];
+    const Vec3d F = b.force, T = b.moment;
     b.momentum_before = b.momentum, b.angular_momentum_before = b.angular_momentum;
     if (b.prescribed) {
       // The given motion over the step (its integral, as velocity boundaries do), and the support

@@ -16,6 +16,7 @@
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/energy.hpp"
 #include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/joint_drive.hpp"
 #include "tactus/solver/mass_scaling.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/rigid.hpp"
@@ -57,6 +58,7 @@ class ExplicitSolver {
   const std::vector<double>& displacement() const { return u_; }
   std::vector<double> velocity_at_step() const;  // v^n (after advance_velocity)
   const std::vector<double>& half_step_velocity() const { return v_half_; }
+  const std::vector<double>& internal_force() const { return f_; }  // on the nodes at t^n (minus the tets' internal force vector)
   // u^{n-1} = u^n - dt^{n-1/2} v^{n-1/2}: the last good state when step n fails.
   std::vector<double> previous_displacement() const;
   const Model& model() const { return model_; }
@@ -93,6 +95,8 @@ class ExplicitSolver {
   const std::vector<RigidBody>& rigid_bodies() const { return rigid_.bodies(); }
   // The seam for joint-driven motion (rigid.hpp): rigid piece k moves as `motion` says.
   void prescribe_rigid_motion(std::size_t piece, const RigidMotion& motion) { rigid_.prescribe(piece, motion); }
+  // The joint drive ([skeleton], [[joint]], [grasp]; joint_drive.hpp), or nullptr.
+  const JointDrive* joint_drive() const { return drive_.get(); }
 
   // Saves (or, loading, restores) everything the next step reads: the state at t^n between
   // advance_position() and advance_velocity() - u^n, v^{n-1/2}, the forces and stress pass at u^n,
@@ -158,8 +162,9 @@ class ExplicitSolver {
   double nominal_next_ = 0, min_step_ratio_ = 1, initial_critical_ = 0;
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
-  EnergyAudit audit_;  // energies at t^n and the work halves carried to the next step (energy.hpp)
-  RigidBodies rigid_;  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
+  EnergyAudit audit_;                  // energies at t^n and the work halves carried to the next step (energy.hpp)
+  RigidBodies rigid_;                  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
+  std::unique_ptr<JointDrive> drive_;  // the bones' motion by their joints (joint_drive.hpp), or none
 };
 
 }  // namespace tactus::solver

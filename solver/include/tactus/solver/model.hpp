@@ -10,6 +10,7 @@
 #include "tactus/core/mesh.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/curve.hpp"
+#include "tactus/solver/joint_settings.hpp"
 #include "tactus/solver/loading.hpp"
 #include "tactus/solver/material.hpp"
 
@@ -45,6 +46,7 @@ struct BodyRange {
   bool rigid_prescribed = false;
   Vec3 rigid_velocity{0, 0, 0}, rigid_angular_velocity{0, 0, 0};
   std::int32_t rigid_curve = -1;
+  Vec3 against_shift{0, 0, 0};  // what `against` moved it by after scale, rotate and translate
 };
 
 struct Model {
@@ -87,6 +89,9 @@ struct Model {
   // Contact (internal numbering): directed slave -> master pairs and the iteration settings.
   std::vector<ContactPair> contact_pairs;
   ContactSettings contact_settings;
+
+  // The bones' motion by their joints (joint_settings.hpp); off without a [skeleton].
+  JointDriveSetup joint_drive;
 
   std::size_t memory_bytes() const;                          // everything held, including the input mesh copy
   std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"

@@ -47,10 +47,11 @@ struct RigidMotion {
 };
 
 struct RigidBody {
-  std::string name;                 // "hand/bone #3": the body, the material, the piece
-  std::size_t body = 0;             // model.bodies index
-  std::vector<std::int32_t> nodes;  // internal ids, ascending
-  std::vector<double> offset;       // per node, X_a - c_0 (3 each)
+  std::string name;                  // "hand/bone #3": the body, the material, the piece
+  std::size_t body = 0;              // model.bodies index
+  std::vector<std::int32_t> groups;  // the physical volume tags of its tets (file tags of its body), ascending
+  std::vector<std::int32_t> nodes;   // internal ids, ascending
+  std::vector<double> offset;        // per node, X_a - c_0 (3 each)
   double mass = 0;
   Vec3d centre0 = Vec3d::Zero();    // reference centre of mass
   Mat3 inertia0 = Mat3::Zero();     // about centre0, reference frame
@@ -121,11 +122,13 @@ class RigidBodies {
   const std::int32_t* piece_of_node() const { return piece_of_node_.empty() ? nullptr : piece_of_node_.data(); }
   RigidRows* contact_rows() { return rows_.get(); }
 
-  // P, L to t^{n+1/2} from the force and moment at t^n on each piece's nodes (internal forces f
-  // plus external(dof)), with the mass damping factors c_minus, c_plus; a prescribed piece gets
-  // the momenta of its motion over [time, t_next] and the reaction that makes them.
-  void kick(const Model& model, const double* f, const ExternalForces& external, const double* u, double time, double t_next, double dt, double dtbar,
-            double c_minus, double c_plus);
+  // The force and moment (about its centre) at t^n on each piece's nodes: internal forces f plus
+  // external(dof) (RigidBody::force, moment).
+  void sum_loads(const Model& model, const double* f, const ExternalForces& external, const double* u);
+  // P, L to t^{n+1/2} from those loads, with the mass damping factors c_minus, c_plus; a
+  // prescribed piece gets the momenta of its motion over [time, t_next] and the reaction that
+  // makes them.
+  void kick(const Model& model, const double* u, double time, double t_next, double dt, double dtbar, double c_minus, double c_plus);
   // After the contact sweep: its impulses taken back, the centre and rotation at t^{n+1}, and the
   // nodes' secant velocities over the step in v_half.
   void drift(const Model& model, const double* u, double dt, double* v_half);

@@ -15,6 +15,7 @@
 #include "tactus/core/vec3.hpp"
 #include "tactus/solver/contact_settings.hpp"
 #include "tactus/solver/curve.hpp"
+#include "tactus/solver/joint_settings.hpp"
 #include "tactus/solver/material.hpp"
 #include "tactus/solver/parameters.hpp"
 #include "tactus/solver/run_settings.hpp"
@@ -92,6 +93,13 @@ struct MeshPlanEntry {
   std::string file;  // kind = stl: the STL (relative to the scenario); kind = fibres: the mesh (relative to the work folder)
 };
 
+// [skeleton]: the bones of one body and the joints between them (tactus-mesh skeleton, or the
+// phantom's joints.json), for [[joint]] and [grasp] to move.
+struct SkeletonSpec {
+  std::string body;
+  std::filesystem::path file;  // skeleton.json (relative to the scenario file, or to --meshes)
+};
+
 struct Scenario {
   std::filesystem::path file;
   RunSpec run;
@@ -107,6 +115,9 @@ struct Scenario {
   std::vector<ContactSpec> contacts;
   ContactSettings contact_solver;
   std::vector<MeshPlanEntry> mesh_plan;  // [[pipeline.meshes]]
+  std::optional<SkeletonSpec> skeleton;
+  std::vector<JointSpec> joints;  // [[joint]]
+  GraspSpec grasp;                // [grasp] (off: no handle)
 };
 
 // Relative mesh and fibre paths are resolved against `mesh_dir` when given (tactus-solve --meshes,

@@ -1,0 +1,198 @@
+// Joint-driven bones and the grasp controller (joint_drive.hpp) on the synthetic finger
+// (finger_kit.hpp): kinematic angles against forward kinematics, the PI loop against its grip
+// targets, and the held grasp against the moment balance about each joint.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "finger_kit.hpp"
+#include "tactus/core/error.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/model_build.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+using namespace tactus::testkit;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+
+// The smallest det F over the tets, and the tet.
+std::pair<double, std::size_t> smallest_jacobian(const Model& m, const std::vector<double>& u) {
+  std::pair<double, std::size_t> worst{1e300, 0};
+  for (std::size_t e = 0; e < m.num_elements; ++e) {
+    Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
+    const double* g = &m.grad[9 * e];
+    for (int a = 0; a < 4; ++a) {
+      const Eigen::Vector3d grad = a == 0 ? -(Eigen::Vector3d(g) + Eigen::Vector3d(g + 3) + Eigen::Vector3d(g + 6)) : Eigen::Vector3d(g + 3 * (a - 1));
+      const Eigen::Vector3d ua(&u[3 * static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(a)])]);
+      F += ua * grad.transpose();
+    }
+    worst = std::min(worst, {F.determinant(), e});
+  }
+  return worst;
+}
+
+void run_to_end(ExplicitSolver& s) {
+  while (true) {
+    s.advance_velocity();
+    if (s.finished()) break;
+    s.advance_position();
+  }
+}
+
+// The finger over the handle: a rigid cylinder of radius 10 mm along y under the proximal
+// segment, 2 mm below the palm side, held; the skin against it by mortar with friction 0.3.
+Scenario grasp_scenario(const TempDir& dir, double target, double end_time) {
+  Scenario sc;
+  sc.file = dir.path() / "grasp.toml";
+  add_finger(sc, dir);
+  BodySpec handle = body_from_mesh(dir, "handle", cylinder_mesh(0.010, 0.030, 0.040, -0.012, 24, 4), "bone");
+  handle.rigid_velocity = Vec3{0, 0, 0}, handle.rigid_angular_velocity = Vec3{0, 0, 0};
+  sc.bodies.push_back(handle);
+  ContactSpec c;
+  c.slave_body = "finger", c.slave_surface = "surface", c.master_body = "handle", c.master_surface = "surface", c.friction = 0.3;
+  sc.contacts.push_back(c);
+  sc.grasp.handle = "handle";
+  sc.grasp.target_force = target;
+  sc.grasp.ramp_time = 0.05;
+  sc.grasp.max_torque = 5;
+  sc.grasp.gain_p = 0.01;
+  sc.grasp.gain_i = 3;
+  sc.run.end_time = end_time;
+  sc.damping.alpha = 200;
+  return sc;
+}
+
+}  // namespace
+
+// Oracle: forward kinematics (core/skeleton.hpp, itself checked against the closed form). The
+// finger's MCP joint flexes by 30 deg and its PIP by 45 deg with 5 deg of abduction, along a
+// smooth step over 20 ms; at 30 ms every bone's centre and rotation must be where forward
+// kinematics puts them for those angles (1e-9 m, 1e-9), and no tet of the tissue that follows
+// may reach J <= 0.2.
+TEST(Grasp, JointAnglesPlaceEveryBoneByForwardKinematics) {
+  TempDir dir;
+  Scenario sc;
+  sc.file = dir.path() / "finger.toml";
+  add_finger(sc, dir);
+  CurveSpec close;
+  close.name = "close", close.smooth_step = true, close.t0 = 0, close.t1 = 0.02;
+  sc.curves["close"] = close;
+  sc.joints = {{"mcp_finger", 30, 0, "close"}, {"pip_finger", 45, 5, "close"}};
+  sc.run.end_time = 0.03;
+  sc.damping.alpha = 100;
+  const Model model = build_model(sc);
+  ExplicitSolver s(model, sc.run, sc.damping);
+  run_to_end(s);
+  const std::vector<RigidTransform> expected =
+      forward_kinematics(finger_skeleton(), {{"mcp_finger", 30 * kDeg, 0}, {"pip_finger", 45 * kDeg, 5 * kDeg}});
+  double centre_error = 0, rotation_error = 0;
+  for (const RigidBody& b : s.rigid_bodies()) {
+    ASSERT_EQ(b.groups.size(), 1u);
+    const std::size_t bone = static_cast<std::size_t>(b.groups[0] - kFingerBones[0].label);
+    const Vec3 c = expected[bone].apply({b.centre0[0], b.centre0[1], b.centre0[2]});
+    const Mat3 R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(expected[bone].rotation.data());
+    centre_error = std::max(centre_error, (b.centre - Vec3d(c[0], c[1], c[2])).norm());
+    rotation_error = std::max(rotation_error, (b.rotation - R).norm());
+  }
+  const auto [J, tet] = smallest_jacobian(model, s.displacement());
+  std::printf("joint angles (mcp 30, pip 45 + 5 deg) after %zu steps: bones within %.2e m and %.2e of forward kinematics; smallest J %.3f at %s\n",
+              s.step_index(), centre_error, rotation_error, J, model.describe_element(tet).c_str());
+  EXPECT_LT(centre_error, 1e-9);
+  EXPECT_LT(rotation_error, 1e-9);
+  EXPECT_GT(J, 0.2);
+}
+
+// Oracle: the grip targets themselves. The finger closes on the handle under the torque law's
+// drive; the PI loop must bring the grip (the normal contact force on the handle) to 20, 50 and
+// 80 N and hold it: over the hold (t = 0.15 .. 0.25 s, the target reached at 0.05 s), the grip
+// averaged over each 5 ms stays within 3 % of the target.
+TEST(Grasp, ControllerSettlesOnEachGripTarget) {
+  for (const double target : {20.0, 50.0, 80.0}) {
+    TempDir dir;
+    const Scenario sc = grasp_scenario(dir, target, 0.25);
+    const Model model = build_model(sc);
+    ExplicitSolver s(model, sc.run, sc.damping);
+    const JointDrive& drive = *s.joint_drive();
+    double sum = 0, window_start = 0.15, lo = 1e300, hi = -1e300;
+    std::size_t n = 0;
+    while (true) {
+      s.advance_velocity();
+      if (s.time() >= 0.15) {
+        sum += drive.grip_force(), ++n;
+        if (s.time() >= window_start + 0.005 || s.finished()) {
+          lo = std::min(lo, sum / static_cast<double>(n)), hi = std::max(hi, sum / static_cast<double>(n));
+          sum = 0, n = 0, window_start = s.time();
+        }
+      }
+      if (s.finished()) break;
+      s.advance_position();
+    }
+    std::printf("grip target %.0f N: over the hold %.2f .. %.2f N (%.2f %% .. %.2f %%), drive %.4f N m, mcp %.1f deg, pip %.1f deg, KE/IE max %.2e, %zu steps\n",
+                target, lo, hi, 100 * (lo / target - 1), 100 * (hi / target - 1), drive.drive_scale(), drive.flexion()[0] / kDeg,
+                drive.flexion()[1] / kDeg, drive.max_kinetic_ratio_in_hold(), s.step_index());
+    EXPECT_NEAR(lo, target, 0.03 * target);
+    EXPECT_NEAR(hi, target, 0.03 * target);
+  }
+}
+
+// Oracle: statics. Once the 50 N grip is held (KE/IE < 1 %), each joint's distal part - the bones
+// beyond it and the tissue beyond the plane through its centre across the proximal bone - is a
+// free body in equilibrium: about the joint's flexion axis, the moment of the contact forces on
+// its skin, of the tissue's force across the cut (the internal nodal forces on its nodes: the
+// tets inside it are self-equilibrated, so only the cut ones remain) and the drive's torque
+// must sum to zero, within 2 % of the largest of them. The balance uses the nodal force vectors
+// and the contact rows, not the drive's own bookkeeping of the bones.
+TEST(Grasp, HeldGraspIsInStaticEquilibriumAboutEachJoint) {
+  TempDir dir;
+  const Scenario sc = grasp_scenario(dir, 50, 0.2);
+  const Model model = build_model(sc);
+  ExplicitSolver s(model, sc.run, sc.damping);
+  run_to_end(s);
+  const double ratio = s.energies().kinetic / s.energies().internal;
+  const JointDrive& drive = *s.joint_drive();
+  const Skeleton sk = finger_skeleton();
+  std::vector<double> contact(3 * model.num_nodes, 0.0);  // the contact force on each node at t^n
+  const ContactRows& rows = s.contact().rows();
+  for (std::size_t k = 0; k + 1 < rows.start.size(); ++k)
+    for (auto i = static_cast<std::size_t>(rows.start[k]); i < static_cast<std::size_t>(rows.start[k + 1]); ++i)
+      for (std::size_t d = 0; d < 3; ++d) contact[3 * static_cast<std::size_t>(rows.nodes[i]) + d] += rows.weights[i] * rows.reaction[3 * k + d];
+  // Each node's bone (-1: tissue or handle) and whether it is the finger's.
+  std::vector<int> bone_of(model.num_nodes, -1);
+  for (const RigidBody& b : s.rigid_bodies())
+    if (b.body == 0)
+      for (std::int32_t a : b.nodes) bone_of[static_cast<std::size_t>(a)] = b.groups[0] - kFingerBones[0].label;
+  const BodyRange& finger = model.bodies[0];
+  std::printf("held grasp at t = %.3f s: grip %.2f N, KE/IE %.2e\n", s.time(), drive.grip_force(), ratio);
+  EXPECT_LT(ratio, 0.01);
+  for (std::size_t j = 0; j < sk.joints.size(); ++j) {
+    const RigidBody* parent = nullptr;
+    for (const RigidBody& b : s.rigid_bodies())
+      if (b.body == 0 && b.groups[0] == kFingerBones[j].label) parent = &b;
+    ASSERT_NE(parent, nullptr);
+    const Vec3& c0 = sk.joints[j].centre;
+    const Vec3d p = parent->centre + parent->rotation * (Vec3d(c0[0], c0[1], c0[2]) - parent->centre0);
+    const Vec3d axis = parent->rotation * Vec3d(0, 1, 0), along = parent->rotation * Vec3d(1, 0, 0);
+    double tissue = 0, contact_moment = 0;
+    for (std::size_t a = 0; a < model.num_nodes; ++a) {
+      if (model.input_node(a) < finger.node_begin || model.input_node(a) >= finger.node_end) continue;
+      const Vec3d x = Vec3d(&model.X[3 * a]) + Vec3d(&s.displacement()[3 * a]);
+      const bool beyond = bone_of[a] >= 0 ? bone_of[a] > static_cast<int>(j) : (x - p).dot(along) > 0;
+      if (!beyond) continue;
+      tissue += axis.dot((x - p).cross(Vec3d(&s.internal_force()[3 * a])));
+      contact_moment += axis.dot((x - p).cross(Vec3d(&contact[3 * a])));
+    }
+    const double drive_torque = drive.torque(j), sum = tissue + contact_moment + drive_torque;
+    const double scale = std::max({std::abs(tissue), std::abs(contact_moment), std::abs(drive_torque)});
+    std::printf("  %s at %.1f deg: moments about its axis: contact %+.5f, tissue across the cut %+.5f, drive %+.5f N m; sum %+.2e = %.2f %%\n",
+                sk.joints[j].name.c_str(), drive.flexion()[j] / kDeg, contact_moment, tissue, drive_torque, sum, 100 * std::abs(sum) / scale);
+    EXPECT_LT(std::abs(sum), 0.02 * scale);
+  }
+  EXPECT_NEAR(drive.grip_force(), 50, 1.0);
+}
