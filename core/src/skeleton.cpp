@@ -112,6 +112,29 @@ std::vector<RigidTransform> forward_kinematics(const Skeleton& sk, const std::ve
   return placed;
 }
 
+Vec3 PalmFrame::point(const Vec3& l) const { return origin + l[0] * across + l[1] * along + l[2] * normal; }
+
+PalmFrame palm_frame(const Skeleton& s, const std::string& file) {
+  PalmFrame f;
+  f.normal = s.palm_normal;
+  Vec3 axis{0, 0, 0};
+  int n = 0;
+  for (const SkeletonJoint& j : s.joints) {
+    if (j.name.rfind("mcp_", 0) != 0 || j.name == "mcp_thumb") continue;
+    const SkeletonBone* metacarpal = s.bone(j.proximal);
+    f.origin = f.origin + j.centre;
+    if (metacarpal) axis = axis + metacarpal->long_axis;
+    ++n;
+  }
+  if (n == 0) throw InputError(file, "joints", "the fingers' MCP joints (mcp_index, mcp_middle, ...) for the palm frame", "none");
+  f.origin = (1.0 / n) * f.origin;
+  axis = axis - dot(axis, f.normal) * f.normal;
+  if (!(norm(axis) > 0)) throw InputError(file, "bones", "metacarpals along the palm (not along its normal) for the palm frame");
+  f.along = (1.0 / norm(axis)) * axis;
+  f.across = cross(f.along, f.normal);
+  return f;
+}
+
 void validate_skeleton(const Skeleton& sk, const std::string& file) {
   std::set<std::string> names;
   for (const auto& b : sk.bones) {

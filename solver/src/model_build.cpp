@@ -444,6 +444,40 @@ Skeleton placed_skeleton(const Scenario& sc, std::size_t bi, const Model& m) {
   return sk;
 }
 
+// [grasp].handle_centre: the handle's bounding box centred on that point of the palm frame, its
+// longest side turned across the palm (the rotation that takes one to the other, Rodrigues).
+void place_handle(const Scenario& sc, Model& m) {
+  if (!sc.skeleton || !sc.grasp.on() || !sc.grasp.handle_centre) return;
+  std::size_t hand = 0, handle = 0;
+  while (sc.bodies[hand].name != sc.skeleton->body) ++hand;
+  while (sc.bodies[handle].name != sc.grasp.handle) ++handle;
+  const PalmFrame frame = palm_frame(placed_skeleton(sc, hand, m), sc.skeleton->file.string());
+  const BodyRange& body = m.bodies[handle];
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::size_t i = body.node_begin; i < body.node_end; ++i)
+    for (std::size_t d = 0; d < 3; ++d) lo[d] = std::min(lo[d], m.input_mesh.nodes[i][d]), hi[d] = std::max(hi[d], m.input_mesh.nodes[i][d]);
+  std::size_t longest = 0;
+  for (std::size_t d = 1; d < 3; ++d)
+    if (hi[d] - lo[d] > hi[longest] - lo[longest]) longest = d;
+  Vec3 side{0, 0, 0};
+  side[longest] = 1;
+  const Vec3 centre = 0.5 * (lo + hi), target = frame.point(*sc.grasp.handle_centre);
+  // R = cos t I + sin t [k]x + (1 - cos t) k k^T about k = side x across (a half turn about any
+  // axis normal to `side` when they are opposite).
+  Vec3 k = cross(side, frame.across);
+  const double s = norm(k), c = dot(side, frame.across);
+  if (s < 1e-12) k = cross(side, std::abs(side[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0});
+  k = (1.0 / norm(k)) * k;
+  const double angle = std::atan2(s, c);
+  for (std::size_t i = body.node_begin; i < body.node_end; ++i) {
+    const Vec3 r = m.input_mesh.nodes[i] - centre;
+    const Vec3 turned = std::cos(angle) * r + std::sin(angle) * cross(k, r) + (1 - std::cos(angle)) * dot(k, r) * k;
+    m.input_mesh.nodes[i] = target + turned;
+  }
+  log::info() << "grasp: handle '" << sc.grasp.handle << "' centred at (" << target[0] << ", " << target[1] << ", " << target[2] << ") m, its "
+              << "xyz"[longest] << " side across the palm";
+}
+
 // [skeleton], [[joint]] and [grasp] into the model's joint drive (joint_settings.hpp).
 void add_joint_drive(const Scenario& sc, Model& m) {
   if (!sc.skeleton) return;
@@ -499,6 +533,7 @@ Model build_model(const Scenario& sc) {
   if (!sc.file.empty()) m.source = sc.file.string();
   TetAssignment tets;
   for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) append_body(sc, bi, m, tets);
+  place_handle(sc, m);
 
   m.num_nodes = m.input_mesh.nodes.size();
   m.num_elements = m.input_mesh.tets.size();

@@ -142,7 +142,8 @@ class RunLoop {
         out_(out),
         folder_(out.path()),
         identity_(identity),
-        history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from), rigid_body_names(solver)),
+        history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from), rigid_body_names(solver),
+                 solver.joint_drive()),
         history_every_(history_interval(sc, est_steps)),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1),
         next_checkpoint_time_(sc.run.checkpoint_interval),
@@ -175,6 +176,12 @@ class RunLoop {
         }
       }
       summary_.status = "completed";
+      if (const JointDrive* drive = solver_.joint_drive(); drive && drive->grasp() && drive->max_kinetic_ratio_in_hold() > 0.05) {
+        std::ostringstream w;
+        w << "grasp: the hold was dynamic, not quasi-static: kinetic energy reached " << 100 * drive->max_kinetic_ratio_in_hold()
+          << " % of the strain energy after t = " << sc_.grasp.ramp_time << " s (above 5 %; a longer ramp_time or more damping.alpha)";
+        log::warn(w.str());
+      }
       return nullptr;
     } catch (const Interrupted& e) {
       if (!sc_.run.checkpoints()) throw;
@@ -392,7 +399,7 @@ class RunLoop {
     }
     if (solver_.step_index() % history_every_ == 0 || scheduled() || solver_.finished())
       history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at, &solver_.reactions(),
-                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr, &solver_.rigid_bodies()});
+                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr, &solver_.rigid_bodies(), solver_.joint_drive()});
   }
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly

@@ -55,7 +55,8 @@ const std::vector<Choice<MeshKind>>& mesh_kinds() {
       {MeshKind::labels, "labels", "from the segmented CT"},
       {MeshKind::box, "box", ""},
       {MeshKind::stl, "stl", ""},
-      {MeshKind::fibres, "fibres", "rule-based hgo fibre directions of the mesh `file`: tactus-mesh fibres"}};
+      {MeshKind::fibres, "fibres", "rule-based hgo fibre directions of the mesh `file`: tactus-mesh fibres"},
+      {MeshKind::skeleton, "skeleton", "the bones and joints of the hand mesh `file` (a .json): tactus-mesh skeleton"}};
   return c;
 }
 
@@ -345,6 +346,8 @@ const char* mesh_kind_name(MeshKind k) {
       return "stl";
     case MeshKind::fibres:
       return "fibres";
+    case MeshKind::skeleton:
+      return "skeleton";
   }
   return "";
 }
@@ -395,7 +398,12 @@ const Section<GraspSpec>& grasp_section() {
        bind_key(&GraspSpec::weight_cmc, keys::opt(keys::number("weight_cmc", "", "of a finger's CMC joint (0: held)", 0))),
        bind_key(&GraspSpec::weight_thumb_cmc, keys::opt(keys::number("weight_thumb_cmc", "", "of the thumb's CMC joint", 0))),
        bind_key(&GraspSpec::weight_thumb_mcp, keys::opt(keys::number("weight_thumb_mcp", "", "of the thumb's MCP joint", 0))),
-       bind_key(&GraspSpec::weight_thumb_ip, keys::opt(keys::number("weight_thumb_ip", "", "of the thumb's IP joint", 0)))}};
+       bind_key(&GraspSpec::weight_thumb_ip, keys::opt(keys::number("weight_thumb_ip", "", "of the thumb's IP joint", 0))),
+       bind_key(&GraspSpec::handle_centre,
+                declare("handle_centre", "m",
+                        "[across, along, out]: the handle's bounding-box centre moved to this point of the skeleton's palm frame (origin the "
+                        "mean of the fingers' MCP joint centres, along their metacarpals, out of the palm), its longest side turned across "
+                        "the palm (default: the handle stays where its [[bodies]] keys put it)"))}};
   return s;
 }
 
@@ -697,12 +705,14 @@ void read_pipeline(const Reader& r, const toml::table& root, Scenario& sc) {
       r.each_table(*m, "pipeline.meshes", [&](const toml::table& e, const std::string& path) {
         MeshPlanEntry entry;
         pipeline_section().read(r, e, path, entry);
-        const std::string ext = entry.kind == MeshKind::fibres ? ".vtu" : ".msh";
+        const std::string ext = entry.kind == MeshKind::fibres ? ".vtu" : entry.kind == MeshKind::skeleton ? ".json" : ".msh";
         if (!inside_work_folder(entry.output) || fs::path(entry.output).extension() != ext)
           r.fail(path + ".output", "a " + ext + " path inside the work folder", "\"" + entry.output + "\"");
         if (entry.kind == MeshKind::stl && entry.file.empty()) r.fail(path + ".file", "the STL file of kind = stl", "missing");
-        if (entry.kind == MeshKind::fibres && !inside_work_folder(entry.file))
-          r.fail(path + ".file", "the mesh whose fibres kind = fibres makes (a .msh path inside the work folder)", "\"" + entry.file + "\"");
+        if ((entry.kind == MeshKind::fibres || entry.kind == MeshKind::skeleton) && !inside_work_folder(entry.file))
+          r.fail(path + ".file",
+                 "the mesh whose " + std::string(mesh_kind_name(entry.kind)) + " this entry makes (a .msh path inside the work folder)",
+                 "\"" + entry.file + "\"");
         sc.mesh_plan.push_back(entry);
       });
     }

@@ -23,9 +23,8 @@ struct FingerBone {
   int label;
   double x0, x1;  // m
 };
-inline constexpr std::array<FingerBone, 3> kFingerBones{{{"metacarpal_finger", 2, 0.003, 0.018},
-                                                         {"proximal_phalanx_finger", 3, 0.024, 0.042},
-                                                         {"middle_phalanx_finger", 4, 0.048, 0.066}}};
+inline constexpr std::array<FingerBone, 3> kFingerBones{
+    {{"metacarpal_finger", 2, 0.003, 0.018}, {"proximal_phalanx_finger", 3, 0.024, 0.042}, {"middle_phalanx_finger", 4, 0.048, 0.066}}};
 inline constexpr double kFingerAxisZ = 0.009;
 
 inline TetMesh finger_mesh() {

@@ -29,7 +29,8 @@ std::pair<double, std::size_t> smallest_jacobian(const Model& m, const std::vect
     Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
     const double* g = &m.grad[9 * e];
     for (int a = 0; a < 4; ++a) {
-      const Eigen::Vector3d grad = a == 0 ? -(Eigen::Vector3d(g) + Eigen::Vector3d(g + 3) + Eigen::Vector3d(g + 6)) : Eigen::Vector3d(g + 3 * (a - 1));
+      const Eigen::Vector3d grad =
+          a == 0 ? -(Eigen::Vector3d(g) + Eigen::Vector3d(g + 3) + Eigen::Vector3d(g + 6)) : Eigen::Vector3d(g + 3 * (a - 1));
       const Eigen::Vector3d ua(&u[3 * static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(a)])]);
       F += ua * grad.transpose();
     }
@@ -134,9 +135,11 @@ TEST(Grasp, ControllerSettlesOnEachGripTarget) {
       if (s.finished()) break;
       s.advance_position();
     }
-    std::printf("grip target %.0f N: over the hold %.2f .. %.2f N (%.2f %% .. %.2f %%), drive %.4f N m, mcp %.1f deg, pip %.1f deg, KE/IE max %.2e, %zu steps\n",
-                target, lo, hi, 100 * (lo / target - 1), 100 * (hi / target - 1), drive.drive_scale(), drive.flexion()[0] / kDeg,
-                drive.flexion()[1] / kDeg, drive.max_kinetic_ratio_in_hold(), s.step_index());
+    std::printf(
+        "grip target %.0f N: over the hold %.2f .. %.2f N (%.2f %% .. %.2f %%), drive %.4f N m, mcp %.1f deg, pip %.1f deg, KE/IE max %.2e, %zu "
+        "steps\n",
+        target, lo, hi, 100 * (lo / target - 1), 100 * (hi / target - 1), drive.drive_scale(), drive.flexion()[0] / kDeg, drive.flexion()[1] / kDeg,
+        drive.max_kinetic_ratio_in_hold(), s.step_index());
     EXPECT_NEAR(lo, target, 0.03 * target);
     EXPECT_NEAR(hi, target, 0.03 * target);
   }
@@ -195,4 +198,95 @@ TEST(Grasp, HeldGraspIsInStaticEquilibriumAboutEachJoint) {
     EXPECT_LT(std::abs(sum), 0.02 * scale);
   }
   EXPECT_NEAR(drive.grip_force(), 50, 1.0);
+}
+
+// Bad input: each refused before a step, naming what is wrong.
+TEST(Grasp, BadJointInputIsRefusedNamingIt) {
+  auto message = [](const Scenario& sc) {
+    try {
+      const Model model = build_model(sc);
+      ExplicitSolver s(model, sc.run, sc.damping);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  auto expect = [&](const Scenario& sc, const std::vector<std::string>& parts, const char* what) {
+    const std::string m = message(sc);
+    std::printf("%s: %s\n", what, m.c_str());
+    for (const std::string& p : parts) EXPECT_NE(m.find(p), std::string::npos) << what << ": '" << p << "' not in: " << m;
+  };
+  TempDir dir;
+  Scenario base = grasp_scenario(dir, 50, 0.1);
+  CurveSpec close;
+  close.name = "close", close.smooth_step = true, close.t0 = 0, close.t1 = 0.02;
+  base.curves["close"] = close;
+  {  // a [[joint]] naming no joint of the skeleton
+    Scenario sc = base;
+    sc.joints = {{"dip_finger", 10, 0, "close"}};
+    expect(sc, {"joint[0].name", "mcp_finger, pip_finger", "dip_finger"}, "unknown joint");
+  }
+  {  // an angle that would jump at t = 0
+    Scenario sc = base;
+    CurveSpec one;
+    one.name = "one", one.times = {0, 1}, one.values = {1, 1};
+    sc.curves["one"] = one;
+    sc.joints = {{"mcp_finger", 10, 0, "one"}};
+    expect(sc, {"joint[0].curve", "cannot jump"}, "jumping posture");
+  }
+  {  // a grip with no contact entry to measure it
+    Scenario sc = base;
+    sc.contacts.clear();
+    expect(sc, {"grasp.handle", "[[contact]]"}, "no grip contact");
+  }
+  {  // two bones meshed as one piece: the tissue between the root and the proximal bone made bone
+    Scenario sc = base;
+    TetMesh fused = finger_mesh();
+    for (std::size_t e = 0; e < fused.tets.size(); ++e) {
+      Vec3 c{0, 0, 0};
+      for (int v : fused.tets[e]) c = c + 0.25 * fused.nodes[static_cast<std::size_t>(v)];
+      if (std::abs(c[1]) < 0.003 && c[2] > 0.006 && c[2] < 0.012 && c[0] > 0.018 && c[0] < 0.024) fused.tet_group[e] = kFingerBones[1].label;
+    }
+    const TempDir fused_dir;  // (the other cases keep the finger's own mesh)
+    sc.bodies[0] = body_from_mesh(fused_dir, "finger", fused, "tissue");
+    for (const FingerBone& b : kFingerBones) sc.bodies[0].materials[b.name] = "bone";
+    expect(sc, {"finger_skeleton.json", "one rigid piece", "'metacarpal_finger' (group 2) 'proximal_phalanx_finger' (group 3)", "touch"},
+           "two bones in one piece");
+  }
+  {  // a bone whose label no rigid piece carries
+    Scenario sc = base;
+    Skeleton sk = finger_skeleton();
+    sk.bones[1].label = 99;
+    write_skeleton(dir.path() / "bad_skeleton.json", sk);
+    sc.skeleton->file = dir.path() / "bad_skeleton.json";
+    expect(sc, {"bone 'proximal_phalanx_finger'", "label 99", "none"}, "bone without a piece");
+  }
+  {  // a joint whose kind has no torque weight
+    Scenario sc = base;
+    Skeleton sk = finger_skeleton();
+    sk.joints[1].name = "knuckle";
+    write_skeleton(dir.path() / "odd_skeleton.json", sk);
+    sc.skeleton->file = dir.path() / "odd_skeleton.json";
+    expect(sc, {"joint 'knuckle'", "kind mcp, pip, dip or cmc"}, "joint without a weight");
+  }
+}
+
+// A target the finger cannot reach stops the run with a message, not a loop: 200 N with the
+// drive capped at 1 N m (about 40 N at this finger).
+TEST(Grasp, UnreachableGripTargetStopsTheRun) {
+  TempDir dir;
+  Scenario sc = grasp_scenario(dir, 200, 0.3);
+  sc.grasp.max_torque = 1;
+  const Model model = build_model(sc);
+  ExplicitSolver s(model, sc.run, sc.damping);
+  std::string message;
+  try {
+    run_to_end(s);
+  } catch (const NumericalError& e) {
+    message = e.what();
+  }
+  std::printf("unreachable target: stopped at t = %.3f s: %s\n", s.time(), message.c_str());
+  EXPECT_NE(message.find("grip target 200 N not reached"), std::string::npos);
+  EXPECT_NE(message.find("grasp.max_torque"), std::string::npos);
+  EXPECT_LT(s.time(), 0.2);
 }

@@ -64,8 +64,13 @@ static_assert(columns_follow_the_contract(), "history.csv columns must follow co
 
 HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
                              const std::vector<std::string>& mass_scaled_bodies, std::uintmax_t resume_at,
-                             const std::vector<std::string>& rigid_bodies)
-    : file_(file), boundaries_(boundaries.size()), mass_scaled_bodies_(mass_scaled_bodies.size()), rigid_bodies_(rigid_bodies.size()) {
+                             const std::vector<std::string>& rigid_bodies, const JointDrive* joints)
+    : file_(file),
+      boundaries_(boundaries.size()),
+      mass_scaled_bodies_(mass_scaled_bodies.size()),
+      rigid_bodies_(rigid_bodies.size()),
+      joints_(joints ? joints->skeleton().joints.size() : 0),
+      grasp_(joints && joints->grasp()) {
   if (resume_at != kNew) {
     std::error_code ec;
     const std::uintmax_t size = std::filesystem::file_size(file, ec);
@@ -87,6 +92,10 @@ HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vecto
   for (const auto& body : rigid_bodies)
     for (const auto* family : h::per_rigid_body)
       for (const char* axis : {"_x", "_y", "_z"}) header.append(",").append(family->prefix).append(rigid_column_name(body)).append(axis);
+  if (joints)
+    for (const SkeletonJoint& j : joints->skeleton().joints) header.append(",").append(h::joint_flexion.prefix).append(rigid_column_name(j.name));
+  if (grasp_)
+    for (const auto* column : h::grasp) header.append(",").append(column->name);
   out_->write(header + '\n');
 }
 
@@ -120,6 +129,9 @@ void HistoryWriter::write(const HistoryRow& row) {
     for (const Vec3d& v : values)
       for (int c = 0; c < 3; ++c) append_value(line, v[c]);
   }
+  for (std::size_t j = 0; j < joints_; ++j) append_value(line, row.joints->flexion_at_step()[j] * 180 / M_PI);
+  if (grasp_)  // in the order of h::grasp
+    for (double v : {row.joints->grip_force(), row.joints->grip_target(), row.joints->drive_scale()}) append_value(line, v);
   line += '\n';
   out_->write(std::string_view(line).substr(1));  // without the first value's comma
 }

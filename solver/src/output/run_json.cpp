@@ -1,4 +1,5 @@
 // run.json: the run's facts and figures, with the keys of core/contracts.hpp.
+#include <algorithm>
 #include <cmath>
 
 #include "results.hpp"
@@ -96,6 +97,36 @@ nlohmann::json reactions_json(const Model& model, const ExplicitSolver& solver, 
   return out;
 }
 
+// The joints' final angles and how each was driven; the grasp's grip and how quasi-static its
+// hold was (kinetic / strain energy, flagged above 5 %).
+nlohmann::json joints_json(const Scenario& sc, const JointDrive& drive) {
+  nlohmann::json joints = nlohmann::json::array();
+  for (std::size_t j = 0; j < drive.skeleton().joints.size(); ++j) {
+    const bool torque = drive.torque_driven(j);
+    const bool by_angle =
+        std::any_of(sc.joints.begin(), sc.joints.end(), [&](const JointSpec& s) { return s.name == drive.skeleton().joints[j].name; });
+    joints.push_back({{"name", drive.skeleton().joints[j].name},
+                      {"driven_by", by_angle ? "angle"
+                                    : torque ? "torque"
+                                             : "held"},
+                      {"final_flexion_deg", drive.flexion_at_step()[j] * 180 / M_PI},
+                      {"final_torque", torque ? drive.torque(j) : 0.0}});
+  }
+  nlohmann::json out = {{"skeleton", sc.skeleton->file.string()}, {"body", sc.skeleton->body}, {"joints", joints}};
+  if (drive.grasp()) {
+    const double ratio = drive.max_kinetic_ratio_in_hold();
+    out["grasp"] = {{"handle", sc.grasp.handle},
+                    {"target_force", sc.grasp.target_force},
+                    {"final_grip_force", drive.grip_force()},
+                    {"final_grip_error_relative", (drive.grip_force() - sc.grasp.target_force) / sc.grasp.target_force},
+                    {"final_drive", drive.drive_scale()},
+                    {"max_kinetic_to_strain_energy_in_hold", ratio},
+                    {"quasi_static", ratio <= 0.05},
+                    {"hold_from", sc.grasp.ramp_time}};
+  }
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
@@ -180,6 +211,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
     }
     j["rigid_bodies"] = rigid;
   }
+  if (const JointDrive* drive = solver.joint_drive()) j["joints"] = joints_json(sc, *drive);
   if (solver.mass_scaling()) {
     nlohmann::json bodies = nlohmann::json::object();
     for (std::size_t b = 0; b < model.bodies.size(); ++b)

@@ -60,6 +60,13 @@ JointDrive::JointDrive(const Model& model, RigidBodies& rigid) {
     for (std::int32_t g : piece.groups)
       for (std::size_t b = 0; b < nb; ++b)
         if (skeleton_.bones[b].label == g) bones.push_back(b);
+    // Roots fused in the mesh (carpals a coarse mesh bridges) are held together: nothing turns them.
+    const bool all_roots = std::all_of(bones.begin(), bones.end(), [&](std::size_t b) { return skeleton_.bones[b].parent.empty(); });
+    if (bones.size() > 1 && all_roots) {
+      for (std::size_t b : bones) fused_roots_.push_back(b);
+      loose_pieces_.push_back(k);
+      continue;
+    }
     if (bones.size() > 1) {
       std::ostringstream f;
       f << "one rigid piece, " << piece.name << ", holds bones";
@@ -74,7 +81,7 @@ JointDrive::JointDrive(const Model& model, RigidBodies& rigid) {
     }
   }
   for (std::size_t b = 0; b < nb; ++b)
-    if (pieces_[b].empty())
+    if (pieces_[b].empty() && std::find(fused_roots_.begin(), fused_roots_.end(), b) == fused_roots_.end())
       throw InputError(file_, "bone '" + skeleton_.bones[b].name + "'",
                        "a rigid piece of body '" + body + "' meshed from its label " + std::to_string(skeleton_.bones[b].label) +
                            " (a material of type rigid on that physical group)",
@@ -98,7 +105,8 @@ JointDrive::JointDrive(const Model& model, RigidBodies& rigid) {
   for (const auto& k : kinematic_spec_) kinematic_[k.joint] = 1;
   weight_ = setup.torque_weight;
   weight_.resize(nj, 0.0);
-  flexion_.assign(nj, 0.0), flexion_rate_.assign(nj, 0.0), abduction_.assign(nj, 0.0), generalised_force_.assign(nj, 0.0);
+  flexion_.assign(nj, 0.0), flexion_step_.assign(nj, 0.0), flexion_rate_.assign(nj, 0.0), abduction_.assign(nj, 0.0),
+      generalised_force_.assign(nj, 0.0);
   for (const SkeletonJoint& j : skeleton_.joints) angles_.push_back({j.name, 0, 0});
   // Every piece of the body is prescribed from now on: the bones each step, the rest held.
   for (std::size_t k : loose_pieces_) rigid.prescribe(k, RigidMotion{});
@@ -106,8 +114,8 @@ JointDrive::JointDrive(const Model& model, RigidBodies& rigid) {
     for (std::size_t k : list) rigid.prescribe(k, RigidMotion{});
   std::size_t driven = 0;
   for (std::size_t j = 0; j < nj; ++j) driven += torque_driven(j) ? 1 : 0;
-  log::info() << "joint drive: " << nb << " bones of body '" << body << "' (" << loose_pieces_.size() << " other rigid pieces held), "
-              << kinematic_spec_.size() << " joints by angle"
+  log::info() << "joint drive: " << nb << " bones of body '" << body << "' (" << loose_pieces_.size() << " other rigid pieces held, "
+              << fused_roots_.size() << " roots fused in them), " << kinematic_spec_.size() << " joints by angle"
               << (grasp_.on() ? ", " + std::to_string(driven) + " by the grasp's torque to " + std::to_string(grasp_.target_force) + " N" : "");
 }
 
@@ -177,6 +185,7 @@ void JointDrive::advance_torque_joints(const RigidBodies& rigid, const std::vect
 
 void JointDrive::steer(const Model& model, RigidBodies& rigid, const std::vector<PairStepReport>& pairs, const std::vector<ContactPair>& pair_info,
                        double time, double t_next, double dt, double dtbar, double c_minus, double c_plus) {
+  flexion_step_ = flexion_;
   auto placements = [&] {
     for (std::size_t j = 0; j < angles_.size(); ++j) angles_[j].flexion = flexion_[j], angles_[j].abduction = abduction_[j];
     return forward_kinematics(skeleton_, angles_);

@@ -138,6 +138,13 @@ inline constexpr ColumnFamily rigid_reaction{
 inline constexpr ColumnFamily rigid_moment{"rigid_moment_", "N m", "moment of that support about its centre"};
 inline constexpr std::array<const ColumnFamily*, 6> per_rigid_body{&rigid_centre,           &rigid_velocity, &rigid_rotation,
                                                                    &rigid_angular_velocity, &rigid_reaction, &rigid_moment};
+// Then, with a [skeleton], one column per joint (<name>: the skeleton's joint name).
+inline constexpr ColumnFamily joint_flexion{"flexion_", "deg", "the joint's flexion from the mesh's posture"};
+// Then, with a [grasp]:
+inline constexpr ColumnSpec grip_force{"grip_force", "N", "normal contact force between the handle and the other bodies (the last contact step)"};
+inline constexpr ColumnSpec grip_target{"grip_target", "N", "the grip force the controller is steering to (ramped)"};
+inline constexpr ColumnSpec grip_drive{"grip_drive", "N m", "the PI loop's drive s: each torque-driven joint gets s x its weight"};
+inline constexpr std::array<const ColumnSpec*, 3> grasp{&grip_force, &grip_target, &grip_drive};
 }  // namespace history
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------

@@ -72,6 +72,17 @@ struct JointAngles {
 // InputError naming the joint when an angle names no joint.
 std::vector<RigidTransform> forward_kinematics(const Skeleton& skeleton, const std::vector<JointAngles>& angles);
 
+// The palm frame: origin the mean of the four fingers' MCP joint centres (joints mcp_<digit>,
+// the thumb's left out), `along` the mean long axis of their metacarpals made orthogonal to the
+// palm normal (towards the fingers), `across` = along x normal (for a right hand seen from the
+// palm: index towards little finger), `normal` out of the palm. InputError naming `file` when
+// the skeleton has no finger MCP joint.
+struct PalmFrame {
+  Vec3 origin{}, across{}, along{}, normal{};
+  Vec3 point(const Vec3& local) const;  // origin + local[0] across + local[1] along + local[2] normal
+};
+PalmFrame palm_frame(const Skeleton& skeleton, const std::string& file);
+
 // Checks what a reader relies on: unique names, every parent a bone, every non-root bone entered
 // by exactly one joint from its parent, unit orthogonal axes, no cycle. InputError naming `file`
 // and the bone or joint otherwise.

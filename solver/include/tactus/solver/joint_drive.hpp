@@ -40,8 +40,8 @@ class JointDrive {
   // from the last contact step, the drive, the torque-driven angles' kick and drift, and every
   // bone piece prescribed to its placement at t_next. NumericalError when the grip target cannot
   // be reached (the drive at max_torque, or every driven joint at its stop, for ramp_time).
-  void steer(const Model& model, RigidBodies& rigid, const std::vector<PairStepReport>& pairs, const std::vector<ContactPair>& pair_info,
-             double time, double t_next, double dt, double dtbar, double c_minus, double c_plus);
+  void steer(const Model& model, RigidBodies& rigid, const std::vector<PairStepReport>& pairs, const std::vector<ContactPair>& pair_info, double time,
+             double t_next, double dt, double dtbar, double c_minus, double c_plus);
   // After the step's energies at t^n: the largest kinetic / strain energy ratio during the hold
   // (t >= ramp_time).
   void observe(double time, double kinetic, double internal);
@@ -50,8 +50,9 @@ class JointDrive {
   const Skeleton& skeleton() const { return skeleton_; }
   double grip_force() const { return grip_; }
   double grip_target() const { return target_now_; }
-  double drive_scale() const { return scale_; }  // s, N m
-  const std::vector<double>& flexion() const { return flexion_; }  // per skeleton joint, rad
+  double drive_scale() const { return scale_; }                                        // s, N m
+  const std::vector<double>& flexion() const { return flexion_; }                      // per skeleton joint, rad, at t^{n+1} once steered
+  const std::vector<double>& flexion_at_step() const { return flexion_step_; }         // at t^n
   const std::vector<double>& generalised_force() const { return generalised_force_; }  // Q per joint at t^n, N m
   double torque(std::size_t joint) const { return scale_ * weight_[joint]; }
   bool torque_driven(std::size_t joint) const { return weight_[joint] > 0 && !kinematic_[joint]; }
@@ -68,16 +69,17 @@ class JointDrive {
   std::string file_;
   GraspSpec grasp_;
   std::vector<int> grip_entries_;
-  std::vector<std::vector<std::size_t>> pieces_;   // per bone, its rigid pieces
-  std::vector<std::size_t> loose_pieces_;          // the body's pieces no bone claims: held
-  std::vector<std::vector<std::size_t>> distal_;   // per joint, the bones beyond it
-  std::vector<std::size_t> proximal_bone_;         // per joint
-  std::vector<char> kinematic_;                    // per joint
+  std::vector<std::vector<std::size_t>> pieces_;  // per bone, its rigid pieces
+  std::vector<std::size_t> loose_pieces_;         // the body's pieces no bone claims, or roots only: held
+  std::vector<std::size_t> fused_roots_;          // roots meshed into one piece with another root
+  std::vector<std::vector<std::size_t>> distal_;  // per joint, the bones beyond it
+  std::vector<std::size_t> proximal_bone_;        // per joint
+  std::vector<char> kinematic_;                   // per joint
   std::vector<JointDriveSetup::Kinematic> kinematic_spec_;
-  std::vector<double> weight_;                     // per joint: the torque law's w (0: held)
+  std::vector<double> weight_;  // per joint: the torque law's w (0: held)
   // State: per joint flexion (rad) at t^n and its rate at t^{n-1/2}; abduction at t^n; the PI's
   // integral, drive and grip; the hold's ratio; how long the drive has been unable to reach.
-  std::vector<double> flexion_, flexion_rate_, abduction_, generalised_force_;
+  std::vector<double> flexion_, flexion_rate_, abduction_, generalised_force_, flexion_step_;
   double integral_ = 0, scale_ = 0, grip_ = 0, target_now_ = 0, max_ratio_hold_ = 0, stuck_since_ = -1;
   std::vector<JointAngles> angles_;  // scratch for forward kinematics
 };

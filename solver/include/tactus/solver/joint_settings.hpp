@@ -4,6 +4,7 @@
 // the bones of one body and the joints between them; each bone is that body's rigid piece (or
 // pieces) meshed from the bone's label, and moves by forward kinematics down its chain.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,19 +27,23 @@ struct JointSpec {
 // forces between the handle and the other bodies) against the target, ramped from 0 over
 // ramp_time and held after.
 struct GraspSpec {
-  std::string handle;         // body; empty: no grasp
-  double target_force = 0;    // N
-  double ramp_time = 0.05;    // s
-  double gain_p = 2e-3;       // N m of drive per N of grip error
-  double gain_i = 0.2;        // N m per N s
-  double max_torque = 1.0;    // N m: the largest drive scale s
-  double flexion_min = -10;   // deg: each torque-driven joint's stops
-  double flexion_max = 90;    // deg
-  double weight_mcp = 1.0;    // finger metacarpophalangeal
-  double weight_pip = 0.75;   // proximal interphalangeal
-  double weight_dip = 0.5;    // distal interphalangeal
-  double weight_cmc = 0.0;    // a finger's carpometacarpal (nearly immobile: held)
+  std::string handle;        // body; empty: no grasp
+  double target_force = 0;   // N
+  double ramp_time = 0.05;   // s
+  double gain_p = 2e-3;      // N m of drive per N of grip error
+  double gain_i = 0.2;       // N m per N s
+  double max_torque = 1.0;   // N m: the largest drive scale s
+  double flexion_min = -10;  // deg: each torque-driven joint's stops
+  double flexion_max = 90;   // deg
+  double weight_mcp = 1.0;   // finger metacarpophalangeal
+  double weight_pip = 0.75;  // proximal interphalangeal
+  double weight_dip = 0.5;   // distal interphalangeal
+  double weight_cmc = 0.0;   // a finger's carpometacarpal (nearly immobile: held)
   double weight_thumb_cmc = 0.8, weight_thumb_mcp = 0.6, weight_thumb_ip = 0.4;
+  // Where the handle goes (model building): its bounding box's centre to this point of the palm
+  // frame (across, along, out of the palm; core/skeleton.hpp), its longest side turned across
+  // the palm. Unset: the handle body stays where its own keys put it.
+  std::optional<Vec3> handle_centre;
   bool on() const { return !handle.empty(); }
 };
 

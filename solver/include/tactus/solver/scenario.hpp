@@ -84,13 +84,13 @@ struct LoadSpec {
 };
 
 // [[pipeline.meshes]]: how tactus-pipeline makes a mesh (or fibre file) the scenario uses.
-enum class MeshKind { labels, box, stl, fibres };
+enum class MeshKind { labels, box, stl, fibres, skeleton };
 const char* mesh_kind_name(MeshKind k);
 struct MeshPlanEntry {
   std::string output;  // relative to the pipeline's work folder
   MeshKind kind = MeshKind::labels;
   std::string args;  // tactus-mesh options
-  std::string file;  // kind = stl: the STL (relative to the scenario); kind = fibres: the mesh (relative to the work folder)
+  std::string file;  // kind = stl: the STL (relative to the scenario); fibres, skeleton: the mesh (relative to the work folder)
 };
 
 // [skeleton]: the bones of one body and the joints between them (tactus-mesh skeleton, or the
