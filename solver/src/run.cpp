@@ -143,7 +143,7 @@ class RunLoop {
         folder_(out.path()),
         identity_(identity),
         history_(folder_ / "history.csv", model.boundaries, mass_scaled_bodies(model, solver), history_length(from), rigid_body_names(solver),
-                 solver.joint_drive()),
+                 solver.joint_drive(), solver.grip_regions()),
         history_every_(history_interval(sc, est_steps)),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1),
         next_checkpoint_time_(sc.run.checkpoint_interval),
@@ -397,9 +397,12 @@ class RunLoop {
       }
       ++peaks_.unconverged_steps;
     }
-    if (solver_.step_index() % history_every_ == 0 || scheduled() || solver_.finished())
+    if (solver_.step_index() % history_every_ == 0 || scheduled() || solver_.finished()) {
+      solver_.sum_grip_regions();
       history_.write({solver_.step_index(), t, solver_.last_step(), solver_.critical_step(), &en, &cr, peak_at, &solver_.reactions(),
-                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr, &solver_.rigid_bodies(), solver_.joint_drive()});
+                      solver_.mass_scaling() ? &solver_.added_mass() : nullptr, &solver_.rigid_bodies(), solver_.joint_drive(),
+                      solver_.grip_regions()});
+    }
   }
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly

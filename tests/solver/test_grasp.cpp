@@ -145,6 +145,47 @@ TEST(Grasp, ControllerSettlesOnEachGripTarget) {
   }
 }
 
+// The grip's regions (grip_regions.hpp) of the held finger: each handle-touching skin node in the
+// region of the bone nearest it, found here as the distance to each bone's box (the mesh puts
+// the bones' nodes on those boxes), the palm zone for the root; the regions' forces sum to the
+// grip the controller measured from the contact pairs' own reports.
+void expect_grip_regions(const Model& model, ExplicitSolver& s) {
+  s.sum_grip_regions();
+  const GripRegions& g = *s.grip_regions();
+  const std::vector<std::string> names{"proximal_phalanx_finger", "middle_phalanx_finger", "palm_thenar", "palm_central", "palm_hypothenar"};
+  EXPECT_EQ(g.names(), names);
+  auto box_distance = [](const FingerBone& b, const double* x) {
+    const double dx = std::max({b.x0 - x[0], 0.0, x[0] - b.x1}), dy = std::max(std::abs(x[1]) - 0.003, 0.0),
+                 dz = std::max({kFingerAxisZ - 0.003 - x[2], 0.0, x[2] - kFingerAxisZ - 0.003});
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+  };
+  std::size_t checked = 0, wrong = 0;
+  for (std::size_t a = 0; a < model.num_nodes; ++a) {
+    const std::int32_t r = g.region_of_node()[a];
+    if (r < 0) continue;
+    std::array<double, 3> d{};
+    for (std::size_t b = 0; b < 3; ++b) d[b] = box_distance(kFingerBones[b], &model.X[3 * a]);
+    std::array<double, 3> sorted = d;
+    std::sort(sorted.begin(), sorted.end());
+    if (sorted[1] - sorted[0] < 1e-9) continue;  // on the plane between two bones: either
+    const auto nearest = static_cast<std::size_t>(std::min_element(d.begin(), d.end()) - d.begin());
+    const std::string expected = nearest == 0 ? "palm_central" : kFingerBones[nearest].name;
+    ++checked, wrong += g.names()[static_cast<std::size_t>(r)] == expected ? 0 : 1;
+  }
+  double total = 0;
+  for (std::size_t r = 0; r < g.names().size(); ++r) {
+    total += g.force()[r];
+    std::printf("  region %-24s force %7.3f N, area %7.2f mm^2, peak %6.3f MPa\n", g.names()[r].c_str(), g.force()[r], 1e6 * g.area()[r],
+                1e-6 * g.peak_pressure()[r]);
+  }
+  std::printf("grip regions: %zu skin nodes checked against the nearest bone box, %zu wrong; regions sum %.6f N, grip %.6f N\n", checked, wrong,
+              total, s.joint_drive()->grip_force());
+  EXPECT_GT(checked, 100u);
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_NEAR(total, s.joint_drive()->grip_force(), 1e-9 * s.joint_drive()->grip_force());
+  EXPECT_NEAR(g.digit_force()[0] + g.digit_force()[1], total, 1e-12 * total);
+}
+
 // Oracle: statics. Once the 50 N grip is held (KE/IE < 1 %), each joint's distal part - the bones
 // beyond it and the tissue beyond the plane through its centre across the proximal bone - is a
 // free body in equilibrium: about the joint's flexion axis, the moment of the contact forces on
@@ -198,6 +239,7 @@ TEST(Grasp, HeldGraspIsInStaticEquilibriumAboutEachJoint) {
     EXPECT_LT(std::abs(sum), 0.02 * scale);
   }
   EXPECT_NEAR(drive.grip_force(), 50, 1.0);
+  expect_grip_regions(model, s);
 }
 
 // Bad input: each refused before a step, naming what is wrong.

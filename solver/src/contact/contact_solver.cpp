@@ -181,41 +181,46 @@ void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<doubl
   }
 }
 
-ContactSolver::AveragedPressure ContactSolver::averaged_peak_pressure(const double* u, double sensor_area) const {
+AveragedPressure ContactSolver::averaged_peak_pressure(const double* u, double sensor_area) const {
+  std::vector<std::int32_t> centres;
+  for (std::int32_t v : slave_union_)
+    if (windowed_pressure_[static_cast<std::size_t>(v)] > 0) centres.push_back(v);
+  std::vector<std::int32_t> triangles;
+  for (const ContactPair& p : pairs_) triangles.insert(triangles.end(), p.slave_triangles.begin(), p.slave_triangles.end());
+  return disc_averaged_peak(model_.X.data(), u, triangles, windowed_pressure_.data(), centres, sensor_area);
+}
+
+AveragedPressure disc_averaged_peak(const double* X, const double* u, const std::vector<std::int32_t>& surface, const double* nodal_pressure,
+                                    const std::vector<std::int32_t>& centres, double sensor_area) {
   AveragedPressure best;
-  if (!(sensor_area > 0)) return best;
+  if (!(sensor_area > 0) || centres.empty()) return best;
   const double radius = std::sqrt(sensor_area / M_PI);
   auto position = [&](std::int32_t node) {
     const std::size_t i = static_cast<std::size_t>(node);
-    return Vec3{model_.X[3 * i] + u[3 * i], model_.X[3 * i + 1] + u[3 * i + 1], model_.X[3 * i + 2] + u[3 * i + 2]};
+    return Vec3{X[3 * i] + u[3 * i], X[3 * i + 1] + u[3 * i + 1], X[3 * i + 2] + u[3 * i + 2]};
   };
-  auto pressure = [&](std::int32_t node) { return windowed_pressure_[static_cast<std::size_t>(node)]; };
-  // The centres: the pressed nodes; the box around them that a disc can reach.
-  std::vector<std::int32_t> centres;
-  for (std::int32_t v : slave_union_)
-    if (pressure(v) > 0) centres.push_back(v);
-  if (centres.empty()) return best;
+  auto pressure = [&](std::int32_t node) { return nodal_pressure[static_cast<std::size_t>(node)]; };
+  // The box around the centres that a disc can reach.
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (std::int32_t c : centres) {
     const Vec3 x = position(c);
     for (std::size_t d = 0; d < 3; ++d) lo[d] = std::min(lo[d], x[d] - radius), hi[d] = std::max(hi[d], x[d] + radius);
   }
-  // The slave triangles there (each once: a self-contact pair shares its surface), cut into
+  // The surface's triangles there (each once: a self-contact pair shares its surface), cut into
   // kCuts^2 sub-triangles whose centroids carry their area and the interpolated pressure.
   constexpr int kCuts = 8;
   std::vector<std::array<std::int32_t, 3>> triangles;
-  for (const ContactPair& p : pairs_)
-    for (std::size_t t = 0; t * 3 < p.slave_triangles.size(); ++t) {
-      std::array<std::int32_t, 3> tri{p.slave_triangles[3 * t], p.slave_triangles[3 * t + 1], p.slave_triangles[3 * t + 2]};
-      bool inside = false;
-      for (std::int32_t v : tri) {
-        const Vec3 x = position(v);
-        inside = inside || (x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2]);
-      }
-      if (!inside) continue;
-      std::sort(tri.begin(), tri.end());
-      triangles.push_back(tri);
+  for (std::size_t t = 0; t * 3 < surface.size(); ++t) {
+    std::array<std::int32_t, 3> tri{surface[3 * t], surface[3 * t + 1], surface[3 * t + 2]};
+    bool inside = false;
+    for (std::int32_t v : tri) {
+      const Vec3 x = position(v);
+      inside = inside || (x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2]);
     }
+    if (!inside) continue;
+    std::sort(tri.begin(), tri.end());
+    triangles.push_back(tri);
+  }
   std::sort(triangles.begin(), triangles.end());
   triangles.erase(std::unique(triangles.begin(), triangles.end()), triangles.end());
   struct Sample {

@@ -64,13 +64,15 @@ static_assert(columns_follow_the_contract(), "history.csv columns must follow co
 
 HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
                              const std::vector<std::string>& mass_scaled_bodies, std::uintmax_t resume_at,
-                             const std::vector<std::string>& rigid_bodies, const JointDrive* joints)
+                             const std::vector<std::string>& rigid_bodies, const JointDrive* joints, const GripRegions* regions)
     : file_(file),
       boundaries_(boundaries.size()),
       mass_scaled_bodies_(mass_scaled_bodies.size()),
       rigid_bodies_(rigid_bodies.size()),
       joints_(joints ? joints->skeleton().joints.size() : 0),
-      grasp_(joints && joints->grasp()) {
+      grasp_(joints && joints->grasp()),
+      regions_(regions ? regions->names().size() : 0),
+      digits_(regions ? regions->digits().size() : 0) {
   if (resume_at != kNew) {
     std::error_code ec;
     const std::uintmax_t size = std::filesystem::file_size(file, ec);
@@ -96,6 +98,11 @@ HistoryWriter::HistoryWriter(const std::filesystem::path& file, const std::vecto
     for (const SkeletonJoint& j : joints->skeleton().joints) header.append(",").append(h::joint_flexion.prefix).append(rigid_column_name(j.name));
   if (grasp_)
     for (const auto* column : h::grasp) header.append(",").append(column->name);
+  if (regions) {
+    for (const auto* family : h::per_grip_region)
+      for (const std::string& r : regions->names()) header.append(",").append(family->prefix).append(r);
+    for (const std::string& d : regions->digits()) header.append(",").append(h::digit_force.prefix).append(d);
+  }
   out_->write(header + '\n');
 }
 
@@ -132,6 +139,11 @@ void HistoryWriter::write(const HistoryRow& row) {
   for (std::size_t j = 0; j < joints_; ++j) append_value(line, row.joints->flexion_at_step()[j] * 180 / M_PI);
   if (grasp_)  // in the order of h::grasp
     for (double v : {row.joints->grip_force(), row.joints->grip_target(), row.joints->drive_scale()}) append_value(line, v);
+  if (regions_ > 0) {  // in the order of h::per_grip_region, then the digits
+    for (const std::vector<double>* values : {&row.regions->force(), &row.regions->area(), &row.regions->peak_pressure()})
+      for (double v : *values) append_value(line, v);
+    for (double v : row.regions->digit_force()) append_value(line, v);
+  }
   line += '\n';
   out_->write(std::string_view(line).substr(1));  // without the first value's comma
 }

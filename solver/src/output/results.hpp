@@ -37,6 +37,7 @@ struct HistoryRow {
   const std::vector<double>* added_mass = nullptr;  // mass scaling: kg per body (model.bodies), or none
   const std::vector<RigidBody>* rigid = nullptr;    // the rigid bodies (rigid.hpp), or none
   const JointDrive* joints = nullptr;               // the joint drive (joint_drive.hpp), or none
+  const GripRegions* regions = nullptr;             // the grasp's regions, summed for this row (grip_regions.hpp), or none
 };
 
 // A rigid body's name as it appears in column names: "hand/bone #3" -> "hand_bone_3".
@@ -52,7 +53,7 @@ class HistoryWriter {
   static constexpr std::uintmax_t kNew = static_cast<std::uintmax_t>(-1);
   HistoryWriter(const std::filesystem::path& file, const std::vector<BoundaryReactionSpec>& boundaries,
                 const std::vector<std::string>& mass_scaled_bodies = {}, std::uintmax_t resume_at = kNew,
-                const std::vector<std::string>& rigid_bodies = {}, const JointDrive* joints = nullptr);
+                const std::vector<std::string>& rigid_bodies = {}, const JointDrive* joints = nullptr, const GripRegions* regions = nullptr);
   void write(const HistoryRow& row);
   // Hands every row written so far to the file system and returns the file's length (a checkpoint's row).
   std::uintmax_t flush();
@@ -63,6 +64,7 @@ class HistoryWriter {
   std::filesystem::path file_;
   std::size_t boundaries_ = 0, mass_scaled_bodies_ = 0, rigid_bodies_ = 0, joints_ = 0;
   bool grasp_ = false;
+  std::size_t regions_ = 0, digits_ = 0;
   std::string line_;  // the row being written (its capacity kept: no allocation per step)
 };
 

@@ -99,7 +99,27 @@ nlohmann::json reactions_json(const Model& model, const ExplicitSolver& solver, 
 
 // The joints' final angles and how each was driven; the grasp's grip and how quasi-static its
 // hold was (kinetic / strain energy, flagged above 5 %).
-nlohmann::json joints_json(const Scenario& sc, const JointDrive& drive) {
+// The handle's load per region and per digit at the end, with each one's share of the grip.
+nlohmann::json regions_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const GripRegions& g) {
+  const std::vector<double> averaged = g.averaged_peak_pressure(model, solver.displacement().data(), sc.contact_solver.pressure_average_area);
+  double total = 0;
+  for (double f : g.force()) total += f;
+  auto share = [&](double f) { return total > 0 ? f / total : 0.0; };
+  nlohmann::json regions = nlohmann::json::array(), digits = nlohmann::json::array();
+  for (std::size_t r = 0; r < g.names().size(); ++r)
+    regions.push_back({{"name", g.names()[r]},
+                       {"digit", g.digits()[g.digit()[r]]},
+                       {"normal_force", g.force()[r]},
+                       {"share", share(g.force()[r])},
+                       {"area", g.area()[r]},
+                       {"peak_pressure", g.peak_pressure()[r]},
+                       {"averaged_peak_pressure", averaged[r]}});
+  for (std::size_t d = 0; d < g.digits().size(); ++d)
+    digits.push_back({{"name", g.digits()[d]}, {"normal_force", g.digit_force()[d]}, {"share", share(g.digit_force()[d])}});
+  return {{"regions", regions}, {"digits", digits}, {"pressure_average_area", sc.contact_solver.pressure_average_area}};
+}
+
+nlohmann::json joints_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const JointDrive& drive) {
   nlohmann::json joints = nlohmann::json::array();
   for (std::size_t j = 0; j < drive.skeleton().joints.size(); ++j) {
     const bool torque = drive.torque_driven(j);
@@ -123,6 +143,7 @@ nlohmann::json joints_json(const Scenario& sc, const JointDrive& drive) {
                     {"max_kinetic_to_strain_energy_in_hold", ratio},
                     {"quasi_static", ratio <= 0.05},
                     {"hold_from", sc.grasp.ramp_time}};
+    if (const GripRegions* g = solver.grip_regions()) out["grasp"]["regions"] = regions_json(sc, model, solver, *g);
   }
   return out;
 }
@@ -211,7 +232,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
     }
     j["rigid_bodies"] = rigid;
   }
-  if (const JointDrive* drive = solver.joint_drive()) j["joints"] = joints_json(sc, *drive);
+  if (const JointDrive* drive = solver.joint_drive()) j["joints"] = joints_json(sc, model, solver, *drive);
   if (solver.mass_scaling()) {
     nlohmann::json bodies = nlohmann::json::object();
     for (std::size_t b = 0; b < model.bodies.size(); ++b)

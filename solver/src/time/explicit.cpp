@@ -35,6 +35,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   if (mass_scaling()) forces_.enable_mass_scaling();
   rigid_.init(model_, v_half_.data(), v_prev_half_.data(), masses_.contact_inverse_mass.data());
   if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
+  if (drive_ && drive_->grasp()) regions_ = std::make_unique<GripRegions>(model_, rigid_, *drive_, contact_);
   contact_.set_threads(forces_.threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   schedule_ = output_schedule(run);

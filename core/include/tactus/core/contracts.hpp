@@ -145,6 +145,14 @@ inline constexpr ColumnSpec grip_force{"grip_force", "N", "normal contact force 
 inline constexpr ColumnSpec grip_target{"grip_target", "N", "the grip force the controller is steering to (ramped)"};
 inline constexpr ColumnSpec grip_drive{"grip_drive", "N m", "the PI loop's drive s: each torque-driven joint gets s x its weight"};
 inline constexpr std::array<const ColumnSpec*, 3> grasp{&grip_force, &grip_target, &grip_drive};
+// Then per grip region (<name>: a phalanx as the skeleton names it, or palm_thenar, palm_central,
+// palm_hypothenar; docs/design.md, "Joints and the grasp"), the handle's rows only:
+inline constexpr ColumnFamily region_force{"region_force_", "N", "normal contact force the handle puts on the region's skin"};
+inline constexpr ColumnFamily region_area{"region_area_", "m^2", "tributary area of the region's skin nodes the handle presses"};
+inline constexpr ColumnFamily region_peak_pressure{"region_peak_pressure_", "Pa", "largest nodal pressure of the handle on the region"};
+inline constexpr std::array<const ColumnFamily*, 3> per_grip_region{&region_force, &region_area, &region_peak_pressure};
+// Then per digit (thumb, index, middle, ring, little) and the palm: the sum of its regions' force.
+inline constexpr ColumnFamily digit_force{"digit_force_", "N", "normal contact force the handle puts on the digit (all its phalanges) or the palm"};
 }  // namespace history
 
 // --- results: run.json (the keys readers use) ---------------------------------------------------

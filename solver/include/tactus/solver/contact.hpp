@@ -224,6 +224,17 @@ struct WarmStart {
   void find_written();                // from the non-zero entries (a checkpoint read back)
 };
 
+// The largest pressure averaged over a disc of `sensor_area` (a pressure sensor's cell) centred
+// at one of `centres`: the mean of the nodal pressure, interpolated over the surface's triangles
+// (3 model nodes each) at x = X + u, inside the disc.
+struct AveragedPressure {
+  double value = 0;
+  std::int32_t node = -1;
+  Vec3 at{0, 0, 0};  // the centre node's current position
+};
+AveragedPressure disc_averaged_peak(const double* X, const double* u, const std::vector<std::int32_t>& surface, const double* nodal_pressure,
+                                    const std::vector<std::int32_t>& centres, double sensor_area);
+
 // The integrator's view of contact: one velocity correction per step.
 class ContactSolver {
  public:
@@ -272,11 +283,7 @@ class ContactSolver {
   // around each pressed node: the largest average and its centre node (internal); value 0 when
   // nothing presses. A node's own value grows as the mesh is refined under an edge load; this
   // average converges.
-  struct AveragedPressure {
-    double value = 0;
-    std::int32_t node = -1;
-    Vec3 at{0, 0, 0};  // the centre node's current position
-  };
+  using AveragedPressure = tactus::solver::AveragedPressure;
   AveragedPressure averaged_peak_pressure(const double* u, double sensor_area) const;
 
   // Saves or restores what the next step reads: the warm-start reactions, the windowed pressures,

@@ -15,6 +15,7 @@
 
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/energy.hpp"
+#include "tactus/solver/grip_regions.hpp"
 #include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/joint_drive.hpp"
 #include "tactus/solver/mass_scaling.hpp"
@@ -97,6 +98,12 @@ class ExplicitSolver {
   void prescribe_rigid_motion(std::size_t piece, const RigidMotion& motion) { rigid_.prescribe(piece, motion); }
   // The joint drive ([skeleton], [[joint]], [grasp]; joint_drive.hpp), or nullptr.
   const JointDrive* joint_drive() const { return drive_.get(); }
+  // The grasp's per-region sums (grip_regions.hpp), or none; sum_grip_regions refreshes them from
+  // the last contact step (the outputs call it: nothing is summed per step otherwise).
+  const GripRegions* grip_regions() const { return regions_.get(); }
+  void sum_grip_regions() {
+    if (regions_) regions_->sum(contact_);
+  }
 
   // Saves (or, loading, restores) everything the next step reads: the state at t^n between
   // advance_position() and advance_velocity() - u^n, v^{n-1/2}, the forces and stress pass at u^n,
@@ -165,6 +172,7 @@ class ExplicitSolver {
   EnergyAudit audit_;                  // energies at t^n and the work halves carried to the next step (energy.hpp)
   RigidBodies rigid_;                  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
   std::unique_ptr<JointDrive> drive_;  // the bones' motion by their joints (joint_drive.hpp), or none
+  std::unique_ptr<GripRegions> regions_;
 };
 
 }  // namespace tactus::solver

@@ -57,6 +57,9 @@ class JointDrive {
   double torque(std::size_t joint) const { return scale_ * weight_[joint]; }
   bool torque_driven(std::size_t joint) const { return weight_[joint] > 0 && !kinematic_[joint]; }
   double max_kinetic_ratio_in_hold() const { return max_ratio_hold_; }
+  const std::vector<int>& grip_entries() const { return grip_entries_; }                    // the handle's [[contact]] entries
+  const std::vector<std::size_t>& pieces(std::size_t bone) const { return pieces_[bone]; }  // its rigid pieces
+  const std::vector<std::size_t>& loose_pieces() const { return loose_pieces_; }            // held, no bone's own
 
   void checkpoint(StateArchive& archive);
 
