@@ -5,10 +5,12 @@
 #include <vtkActor.h>
 #include <vtkAxis.h>
 #include <vtkCamera.h>
+#include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkChartXY.h>
 #include <vtkContextActor.h>
 #include <vtkContextScene.h>
+#include <vtkCubeAxesActor.h>
 #include <vtkCutter.h>
 #include <vtkDataSetSurfaceFilter.h>
 #include <vtkDoubleArray.h>
@@ -465,6 +467,149 @@ std::vector<std::string> pressure_pictures(const Results& r, const Summary& s, c
   return written;
 }
 
+// grip_map.png: the handle's pressure on the hand at the last output, unrolled around the handle
+// as grip studies show it: arc length at the handle's surface around its axis against length
+// along it. The handle's axis is its longest principal axis through its centroid, its radius the
+// largest distance of its surface from that axis; the skin within 4 mm of its side is drawn (the
+// folds' self-contact further out is not the handle's, and a pad pressing an end cap is left out). The cut is placed where the least
+// pressure is, so the pressed band is whole.
+bool grip_map_picture(const Results& r, const Summary& s, const fs::path& file, const RenderOptions& opt) {
+  if (!s.grasp.on || r.frames.empty()) return false;
+  auto point = [](vtkPolyData* poly, vtkIdType i) {
+    Vec3 x;
+    poly->GetPoint(i, x.data());
+    return x;
+  };
+  int handle = -1, hand = -1;
+  for (std::size_t b = 0; b < r.bodies.size(); ++b)
+    if (r.bodies[b] == s.grasp.handle) handle = static_cast<int>(b);
+  if (handle < 0) return false;
+  hand = opt.pressure_body.empty() ? (handle == 0 ? 1 : 0) : body_index(r, opt.pressure_body);
+  const std::size_t k = r.frames.size() - 1;
+  auto grid = load(r.frames[k].file);
+  auto handle_surface = surface(body_cells(grid, handle));
+  auto skin = surface(body_cells(grid, hand));
+  vtkDataArray* p = skin->GetPointData()->GetArray(cp::contact_pressure.name);
+  if (!p || handle_surface->GetNumberOfPoints() == 0) return false;
+  const Vec3 axis = principal_axes(handle_surface->GetPoints())[2];
+  Vec3 c{0, 0, 0};
+  for (vtkIdType i = 0; i < handle_surface->GetNumberOfPoints(); ++i) c = c + point(handle_surface, i);
+  c = (1.0 / static_cast<double>(handle_surface->GetNumberOfPoints())) * c;
+  auto radial = [&](const Vec3& x) {
+    const Vec3 d = x - c;
+    return d - dot(d, axis) * axis;
+  };
+  double radius = 0, a_lo = 1e300, a_hi = -1e300;
+  for (vtkIdType i = 0; i < handle_surface->GetNumberOfPoints(); ++i) {
+    const Vec3 x = point(handle_surface, i);
+    radius = std::max(radius, norm(radial(x)));
+    a_lo = std::min(a_lo, dot(x - c, axis)), a_hi = std::max(a_hi, dot(x - c, axis));
+  }
+  // Angle 0 towards the hand's centroid; e2 completes a right-handed frame with the axis.
+  Vec3 hc{0, 0, 0};
+  for (vtkIdType i = 0; i < skin->GetNumberOfPoints(); ++i) hc = hc + point(skin, i);
+  Vec3 e1 = radial((1.0 / std::max<double>(1, static_cast<double>(skin->GetNumberOfPoints()))) * hc);
+  if (norm(e1) < 1e-12) e1 = std::abs(axis[0]) < 0.9 ? radial(c + Vec3{1, 0, 0}) : radial(c + Vec3{0, 1, 0});
+  e1 = (1.0 / norm(e1)) * e1;
+  const Vec3 e2 = cross(axis, e1);
+  const vtkIdType n = skin->GetNumberOfPoints();
+  std::vector<double> angle(static_cast<std::size_t>(n)), along(static_cast<std::size_t>(n));
+  std::vector<char> near(static_cast<std::size_t>(n), 0);
+  std::array<double, 36> load_in{};
+  double peak = 0;
+  vtkIdType peak_at = -1;
+  for (vtkIdType i = 0; i < n; ++i) {
+    const Vec3 x = point(skin, i), d = radial(x);
+    const auto u = static_cast<std::size_t>(i);
+    angle[u] = std::atan2(dot(d, e2), dot(d, e1)) + M_PI;  // [0, 2 pi)
+    along[u] = dot(x - c, axis);
+    near[u] = std::abs(norm(d) - radius) < 0.004 && along[u] > a_lo - 0.002 && along[u] < a_hi + 0.002;  // the side, not the ends
+    const double q = p->GetComponent(i, 0);
+    if (!near[u] || !(q > 0)) continue;
+    load_in[std::min<std::size_t>(35, static_cast<std::size_t>(angle[u] / (2 * M_PI) * 36))] += q;
+    if (q > peak) peak = q, peak_at = i;
+  }
+  if (peak_at < 0) return false;
+  const auto empty_bin = static_cast<std::size_t>(std::min_element(load_in.begin(), load_in.end()) - load_in.begin());
+  const double cut = (static_cast<double>(empty_bin) + 0.5) / 36 * 2 * M_PI;
+  // The flat map, in mm: x = R (angle from the cut), y = along the axis.
+  vtkNew<vtkPoints> flat;
+  vtkNew<vtkDoubleArray> pressure;
+  pressure->SetName(cp::contact_pressure.name);
+  for (vtkIdType i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    double a = angle[u] - cut;
+    if (a < 0) a += 2 * M_PI;
+    angle[u] = a;
+    flat->InsertNextPoint(1e3 * radius * a, 1e3 * along[u], 0);
+    pressure->InsertNextValue(near[u] ? p->GetComponent(i, 0) : 0.0);
+  }
+  vtkNew<vtkCellArray> triangles;
+  vtkIdList* ids = vtkIdList::New();
+  for (vtkIdType t = 0; t < skin->GetNumberOfCells(); ++t) {
+    skin->GetCellPoints(t, ids);
+    if (ids->GetNumberOfIds() != 3) continue;
+    bool keep = true;
+    double lo = 1e9, hi = -1e9;
+    for (vtkIdType v = 0; v < 3; ++v) {
+      const auto u = static_cast<std::size_t>(ids->GetId(v));
+      keep = keep && near[u];
+      lo = std::min(lo, angle[u]), hi = std::max(hi, angle[u]);
+    }
+    if (keep && hi - lo < M_PI) triangles->InsertNextCell(ids);  // a triangle across the cut is left out
+  }
+  ids->Delete();
+  vtkNew<vtkPolyData> map;
+  map->SetPoints(flat);
+  map->SetPolys(triangles);
+  map->GetPointData()->AddArray(pressure);
+  auto window = offscreen(opt.width, opt.height);
+  auto ren = white_renderer();
+  window->AddRenderer(ren);
+  auto lut = rainbow(0, peak, false);
+  lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
+  lut->SetTableRange(1e-9 * peak, peak);
+  ren->AddActor(colored(map, cp::contact_pressure.name, false, lut));
+  add_scalar_bar(ren, rainbow(0, peak, false), "contact pressure (Pa)");
+  vtkNew<vtkSphereSource> marker;
+  marker->SetCenter(flat->GetPoint(peak_at));
+  marker->SetRadius(1.5);
+  vtkNew<vtkPolyDataMapper> mm;
+  mm->SetInputConnection(marker->GetOutputPort());
+  vtkNew<vtkActor> ma;
+  ma->SetMapper(mm);
+  ma->GetProperty()->SetColor(0, 0, 0);
+  ren->AddActor(ma);
+  double b[6];
+  map->GetBounds(b);
+  b[0] = 0, b[1] = 1e3 * radius * 2 * M_PI, b[4] = -1, b[5] = 1;
+  vtkCamera* cam = ren->GetActiveCamera();
+  cam->ParallelProjectionOn();
+  cam->SetFocalPoint(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0);
+  cam->SetPosition(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 100);
+  cam->SetViewUp(0, 1, 0);
+  ren->ResetCamera(b);
+  cam->SetParallelScale(0.62 * std::max(b[3] - b[2], (b[1] - b[0]) * opt.height / opt.width));
+  vtkNew<vtkCubeAxesActor> ticks;
+  ticks->SetBounds(b);
+  ticks->SetCamera(cam);
+  ticks->SetXTitle("around the handle (mm of its surface)");
+  ticks->SetYTitle("along (mm)");
+  ticks->ZAxisVisibilityOff();
+  ticks->SetFlyModeToOuterEdges();
+  for (int a = 0; a < 3; ++a) ticks->GetTitleTextProperty(a)->SetColor(0, 0, 0), ticks->GetLabelTextProperty(a)->SetColor(0, 0, 0);
+  ticks->GetXAxesLinesProperty()->SetColor(0, 0, 0);
+  ticks->GetYAxesLinesProperty()->SetColor(0, 0, 0);
+  ren->AddActor(ticks);
+  std::ostringstream caption;
+  caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   " << r.bodies[static_cast<std::size_t>(hand)] << " on '"
+          << s.grasp.handle << "' (radius " << 1e3 * radius << " mm), unrolled; peak " << peak / 1e6 << " MPa (black dot); grip "
+          << s.grasp.final_grip << " N";
+  add_text(ren, caption.str(), 20, opt.height - 40, 18);
+  write_png(window, file);
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::string> render_report(const Results& r, const Summary& s, const fs::path& report, const RenderOptions& opt) {
@@ -491,6 +636,7 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
     if (section_picture(r, s, views, vm_lut, report, opt)) written.push_back("section.png");
     if (s.contact_occurred && s.peak_pressure_outputs.value > 0)
       for (std::string& name : pressure_pictures(r, s, chosen, views, report, opt)) written.push_back(std::move(name));
+    if (grip_map_picture(r, s, report / "grip_map.png", opt)) written.push_back("grip_map.png");
   }
   const History& h = r.history;
   const int pw = 900, ph = 600;
@@ -523,6 +669,12 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
     reactions.columns[hc::time.name] = h.column(hc::time.name);
     reactions.names.insert(reactions.names.begin(), hc::time.name);
     plot(reactions, report / "plot_reactions.png", "support reactions", "N", series, pw, ph);
+  }
+  if (s.grasp.on) {
+    std::vector<std::pair<std::string, double>> grip{{hc::grip_force.name, 1.0}, {hc::grip_target.name, 1.0}};
+    for (const auto& d : s.grasp.digits) grip.push_back({std::string(hc::digit_force.prefix) + d.name, 1.0});
+    plot(h, report / "plot_grip.png", "grip force and each digit's share", "N", grip, pw, ph);
+    written.push_back("plot_grip.png");
   }
   for (const char* f : {"plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png", "plot_reactions.png"})
     if (fs::exists(report / f)) written.push_back(f);

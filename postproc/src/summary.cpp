@@ -110,6 +110,30 @@ void read_contact_figures(const nlohmann::json& j, Summary& s) {
   }
 }
 
+// The grasp of run.json (joints.grasp): grip, hold and the regions' shares.
+void read_grasp(const nlohmann::json& j, Summary& s) {
+  const auto num = number_at;
+  if (!j.contains("joints") || !j["joints"].is_object() || !j["joints"].contains("grasp")) return;
+  const auto& g = j["joints"]["grasp"];
+  Summary::Grasp& out = s.grasp;
+  out.on = true;
+  out.handle = g.value("handle", "");
+  out.target = num(g, "target_force"), out.final_grip = num(g, "final_grip_force");
+  out.max_kinetic_ratio = num(g, "max_kinetic_to_strain_energy_in_hold"), out.hold_from = num(g, "hold_from");
+  out.quasi_static = g.value("quasi_static", true);
+  if (!g.contains("regions") || !g["regions"].is_object()) return;
+  const auto& r = g["regions"];
+  out.sensor_area = num(r, "pressure_average_area");
+  for (const char* list : {"regions", "digits"})
+    if (r.contains(list) && r[list].is_array())
+      for (const auto& e : r[list]) {
+        Summary::GripShare share{e.value("name", ""), e.value("digit", ""), num(e, "normal_force"), num(e, "share"), 0, 0, 0};
+        if (e.contains("area")) share.area = num(e, "area"), share.peak_pressure = num(e, "peak_pressure");
+        if (e.contains("averaged_peak_pressure")) share.averaged_peak_pressure = num(e, "averaged_peak_pressure");
+        (std::string(list) == "regions" ? out.regions : out.digits).push_back(share);
+      }
+}
+
 // The supports' reactions of run.json.
 void read_reactions(const nlohmann::json& j, Summary& s) {
   const auto num = number_at;
@@ -207,6 +231,7 @@ Summary summarize(const Results& r) {
   if (h.has(hc::kinetic_energy.name) && h.rows() > 0) s.initial_kinetic = h.column(hc::kinetic_energy.name).front();
   read_contact_figures(j, s);
   read_reactions(j, s);
+  read_grasp(j, s);
   const std::size_t M = std::max<std::size_t>(r.materials.size(), 1);
   s.von_mises.resize(M);
   for (std::size_t m = 0; m < M; ++m) s.von_mises[m].material = m < r.materials.size() ? r.materials[m] : "material " + std::to_string(m);
@@ -245,6 +270,16 @@ std::string summary_json(const Summary& s) {
     j["mass_scaling"] = {{"minimum_time_step_s", s.minimum_time_step}, {"bodies", nlohmann::json::object()}};
     for (const auto& a : s.added_mass) j["mass_scaling"]["bodies"][a.body] = {{"added_mass_kg", a.added}, {"fraction", a.fraction}};
   }
+  if (s.grasp.on) {
+    nlohmann::json shares = nlohmann::json::array();
+    for (const auto& d : s.grasp.digits) shares.push_back({{"digit", d.name}, {"normal_force_N", d.force}, {"share", d.share}});
+    j["grasp"] = {{"handle", s.grasp.handle},
+                  {"target_force_N", s.grasp.target},
+                  {"final_grip_N", s.grasp.final_grip},
+                  {"max_kinetic_to_strain_energy_in_hold", s.grasp.max_kinetic_ratio},
+                  {"quasi_static", s.grasp.quasi_static},
+                  {"digits", shares}};
+  }
   j["contact"] = {{"occurred", s.contact_occurred}};
   if (s.contact_occurred) {
     j["contact"]["peak_pressure_any_step"] = peak_json(s.peak_pressure_steps, "Pa");
@@ -275,6 +310,25 @@ std::string summary_json(const Summary& s) {
   j["outputs"] = frames;
   j["pictures"] = s.pictures;
   return j.dump(2) + "\n";
+}
+
+// The grasp's section: the grip against its target, the hold, and each region's and digit's share.
+void grasp_markdown(const Summary::Grasp& g, std::ostream& o) {
+  o << "\n## Grasp\n\nGrip on '" << g.handle << "': " << g.final_grip << " N at the end against a target of " << g.target << " N ("
+    << 100 * (g.final_grip - g.target) / g.target << " %). Hold from t = " << g.hold_from * 1e3 << " ms: largest kinetic / strain energy "
+    << 100 * g.max_kinetic_ratio << " %, "
+    << (g.quasi_static ? "quasi-static (at most 5 %)" : "**dynamic** (above 5 %: a longer ramp_time or more damping)") << ".\n";
+  if (g.regions.empty()) return;
+  o << "\n| digit | normal force (N) | share of the grip |\n|---|---|---|\n";
+  for (const auto& d : g.digits) o << "| " << d.name << " | " << d.force << " | " << 100 * d.share << " % |\n";
+  o << "\n| region | digit | normal force (N) | share | area (mm^2) | peak nodal pressure (MPa) | peak over " << g.sensor_area * 1e6
+    << " mm^2 (MPa) |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& r : g.regions)
+    o << "| " << r.name << " | " << r.digit << " | " << r.force << " | " << 100 * r.share << " % | " << r.area * 1e6 << " | " << r.peak_pressure / 1e6
+      << " | " << r.averaged_peak_pressure / 1e6 << " |\n";
+  o << "\nEach skin node the handle touches belongs to its nearest bone's segment, or, nearest a metacarpal or carpal, to a palm zone "
+       "(thenar, central, hypothenar) by its nearest metacarpal (docs/design.md, \"Joints and the grasp\"). grip_map.png unrolls the "
+       "pressure around the handle.\n";
 }
 
 std::string summary_markdown(const Summary& s) {
@@ -329,6 +383,7 @@ std::string summary_markdown(const Summary& s) {
         o << "| " << p.name << " | " << p.force << " | " << p.force_time * 1e3 << " | " << p.area * 1e6 << " | " << p.pressure / 1e6 << " |\n";
     }
   }
+  if (s.grasp.on) grasp_markdown(s.grasp, o);
   if (!s.reactions.empty()) {
     o << "\n## Support reactions\n\n| boundary | peak abs(R) (N) | at (ms) | R then (N) | R at the end (N) | moment at the end (N m) "
          "|\n|---|---|---|---|---|---|\n";

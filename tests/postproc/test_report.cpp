@@ -222,6 +222,53 @@ TEST(Summary, PeaksAndTimesAreTheWrittenOnes) {
       << md;
 }
 
+// A grasp's run.json (joints.grasp): the grip, the hold and each region's and digit's share come
+// into the summary and its tables as the solver wrote them.
+TEST(Summary, GraspSharesAreTheWrittenOnes) {
+  TempDir tmp;
+  write_results(tmp.path() / "solve");
+  auto j = nlohmann::json::parse(slurp(tmp.path() / "solve" / "run.json"));
+  nlohmann::json regions = nlohmann::json::array(), digits = nlohmann::json::array();
+  regions.push_back({{"name", "distal_phalanx_index"},
+                     {"digit", "index"},
+                     {"normal_force", 30.0},
+                     {"share", 0.6},
+                     {"area", 1.5e-4},
+                     {"peak_pressure", 4e5},
+                     {"averaged_peak_pressure", 3e5}});
+  regions.push_back({{"name", "palm_central"},
+                     {"digit", "palm"},
+                     {"normal_force", 20.0},
+                     {"share", 0.4},
+                     {"area", 4e-4},
+                     {"peak_pressure", 1e5},
+                     {"averaged_peak_pressure", 8e4}});
+  digits.push_back({{"name", "index"}, {"normal_force", 30.0}, {"share", 0.6}});
+  digits.push_back({{"name", "palm"}, {"normal_force", 20.0}, {"share", 0.4}});
+  j["joints"] = {{"joints", nlohmann::json::array()},
+                 {"grasp",
+                  {{"handle", "punch"},
+                   {"target_force", 50.0},
+                   {"final_grip_force", 49.0},
+                   {"max_kinetic_to_strain_energy_in_hold", 0.08},
+                   {"quasi_static", false},
+                   {"hold_from", 0.15},
+                   {"regions", {{"regions", regions}, {"digits", digits}, {"pressure_average_area", 2.5e-5}}}}}};
+  std::ofstream(tmp.path() / "solve" / "run.json") << j.dump(2);
+  const auto s = postproc::summarize(postproc::read_results(tmp.path() / "solve"));
+  ASSERT_TRUE(s.grasp.on);
+  EXPECT_DOUBLE_EQ(s.grasp.final_grip, 49.0);
+  ASSERT_EQ(s.grasp.regions.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.grasp.regions[0].averaged_peak_pressure, 3e5);
+  const std::string md = postproc::summary_markdown(s);
+  std::cout << md.substr(md.find("## Grasp"), 600) << "\n";
+  EXPECT_NE(md.find("49 N at the end against a target of 50 N (-2 %)"), std::string::npos) << md;
+  EXPECT_NE(md.find("**dynamic**"), std::string::npos) << md;
+  EXPECT_NE(md.find("| index | 30 | 60 % |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| distal_phalanx_index | index | 30 | 60 % | 150 | 0.4 | 0.3 |"), std::string::npos) << md;
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(postproc::summary_json(s))["grasp"]["digits"][1]["share"].get<double>(), 0.4);
+}
+
 TEST(Summary, NoContactIsSaid) {
   TempDir tmp;
   write_results(tmp.path() / "solve", false);

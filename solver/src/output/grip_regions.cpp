@@ -144,10 +144,13 @@ void GripRegions::sum(const ContactSolver& contact) {
   }
   pressed_.clear();
   const ContactRows& rows = contact.rows();
-  auto add = [&](std::int32_t node, double f) {
+  // A node's force, and its pressure as the run's pressure field has it (ContactSolver::update_windows):
+  // a row's r_n over the row's own area, an edge pass's share over the node's tributary area.
+  auto add = [&](std::int32_t node, double f, double area) {
     const auto i = static_cast<std::size_t>(node);
     if (!is_pressed_[i]) is_pressed_[i] = 1, pressed_.push_back(node);
     node_force_[i] += f;
+    if (area > 0) node_pressure_[i] += f / area;
   };
   for (std::size_t k = 0; k < rows.size(); ++k) {
     if (rows.status[k] == ContactStatus::open) continue;
@@ -157,10 +160,12 @@ void GripRegions::sum(const ContactSolver& contact) {
     const double* n = &rows.normal[3 * k];
     const double rn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
     if (pair.edge_pass) {  // -w_a r_n at each skin node of the master side (sum of -w_a = 1)
-      for (auto a = rows.start[k] + 1; a < rows.start[k + 1]; ++a)
-        add(rows.nodes[static_cast<std::size_t>(a)], -rows.weights[static_cast<std::size_t>(a)] * rn);
+      for (auto a = rows.start[k] + 1; a < rows.start[k + 1]; ++a) {
+        const std::int32_t node = rows.nodes[static_cast<std::size_t>(a)];
+        add(node, -rows.weights[static_cast<std::size_t>(a)] * rn, node_area_[static_cast<std::size_t>(node)]);
+      }
     } else {
-      add(rows.slave(k), rn);
+      add(rows.slave(k), rn, rows.area[k]);
     }
   }
   std::fill(force_.begin(), force_.end(), 0.0), std::fill(area_.begin(), area_.end(), 0.0), std::fill(peak_.begin(), peak_.end(), 0.0);
@@ -168,9 +173,11 @@ void GripRegions::sum(const ContactSolver& contact) {
   for (std::int32_t node : pressed_) {
     const auto i = static_cast<std::size_t>(node);
     const std::int32_t reg = region_[i];
-    if (reg < 0 || !(node_force_[i] > 0) || !(node_area_[i] > 0)) continue;
+    if (reg < 0 || !(node_force_[i] > 0)) {
+      node_pressure_[i] = 0;
+      continue;
+    }
     const auto r = static_cast<std::size_t>(reg);
-    node_pressure_[i] = node_force_[i] / node_area_[i];
     force_[r] += node_force_[i], area_[r] += node_area_[i], peak_[r] = std::max(peak_[r], node_pressure_[i]);
   }
   std::fill(digit_force_.begin(), digit_force_.end(), 0.0);

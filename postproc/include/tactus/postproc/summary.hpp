@@ -68,6 +68,18 @@ struct Summary {
     double added = 0, fraction = 0;
   };
   std::vector<AddedMass> added_mass;
+  // The grasp (run.json joints.grasp), when the run had one: the grip and the share of it each
+  // hand region and digit carries at the end.
+  struct GripShare {
+    std::string name, digit;
+    double force = 0, share = 0, area = 0, peak_pressure = 0, averaged_peak_pressure = 0;
+  };
+  struct Grasp {
+    bool on = false, quasi_static = true;
+    std::string handle;
+    double target = 0, final_grip = 0, max_kinetic_ratio = 0, hold_from = 0, sensor_area = 0;
+    std::vector<GripShare> regions, digits;
+  } grasp;
   std::vector<FrameSummary> frames;
   std::vector<std::string> pictures;  // file names in the report folder
 };

@@ -25,17 +25,17 @@ class GripRegions {
  public:
   GripRegions(const Model& model, const RigidBodies& rigid, const JointDrive& drive, const ContactSolver& contact);
 
-  const std::vector<std::string>& names() const { return names_; }    // per region
-  const std::vector<std::size_t>& digit() const { return digit_; }    // per region: its digit (digits())
-  const std::vector<std::string>& digits() const { return digits_; }  // "thumb", ..., and "palm" last
+  const std::vector<std::string>& names() const { return names_; }             // per region
+  const std::vector<std::size_t>& digit() const { return digit_; }             // per region: its digit (digits())
+  const std::vector<std::string>& digits() const { return digits_; }           // "thumb", ..., and "palm" last
   const std::vector<std::int32_t>& region_of_node() const { return region_; }  // per model node, -1: none
 
   // The sums of the last contact step (ContactSolver::rows after correct_velocities).
   void sum(const ContactSolver& contact);
-  const std::vector<double>& force() const { return force_; }                  // N, per region
-  const std::vector<double>& area() const { return area_; }                    // m^2, per region
-  const std::vector<double>& peak_pressure() const { return peak_; }           // Pa, per region
-  const std::vector<double>& digit_force() const { return digit_force_; }      // N, per digit
+  const std::vector<double>& force() const { return force_; }              // N, per region
+  const std::vector<double>& area() const { return area_; }                // m^2, per region
+  const std::vector<double>& peak_pressure() const { return peak_; }       // Pa, per region
+  const std::vector<double>& digit_force() const { return digit_force_; }  // N, per digit
   // The handle's pressure averaged over `sensor_area` (the run's pressure_average_area), per region.
   std::vector<double> averaged_peak_pressure(const Model& model, const double* u, double sensor_area) const;
 
@@ -46,7 +46,7 @@ class GripRegions {
   std::vector<std::int32_t> region_;
   std::vector<std::int32_t> surface_;  // the handle's slave triangles (3 nodes each)
   std::vector<double> force_, area_, peak_, digit_force_;
-  std::vector<double> node_area_;      // per model node, its tributary area in the handle's skin pass
+  std::vector<double> node_area_;                   // per model node, its tributary area in the handle's skin pass
   std::vector<double> node_force_, node_pressure_;  // per model node, the handle's rows only (kept: no allocation per sum)
   std::vector<char> is_pressed_;
   std::vector<std::int32_t> pressed_;  // the nodes node_force_ holds
