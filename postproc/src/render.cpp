@@ -229,6 +229,26 @@ Vec3 pressed_side(vtkPolyData* surface) {
   return norm(sum) > 0 ? sum : Vec3{1, 0, 0};
 }
 
+// A surface's contact pressure on a scale from 0 to `scale_max`, exactly 0 (no contact) grey, with
+// its bar and a black dot of radius `marker_radius` at `peak`.
+void add_pressure_map(vtkRenderer* ren, vtkPolyData* surface, double scale_max, const Vec3& peak, double marker_radius) {
+  auto lut = rainbow(0, scale_max, false);
+  lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
+  lut->SetTableRange(1e-9 * scale_max, scale_max);  // exactly 0 (no contact) is below the range: grey
+  ren->AddActor(colored(surface, cp::contact_pressure.name, false, lut));
+  vtkNew<vtkSphereSource> marker;
+  marker->SetCenter(peak.data());
+  marker->SetRadius(marker_radius);
+  vtkNew<vtkPolyDataMapper> mm;
+  mm->SetInputConnection(marker->GetOutputPort());
+  vtkNew<vtkActor> ma;
+  ma->SetMapper(mm);
+  ma->GetProperty()->SetColor(0, 0, 0);
+  ren->AddActor(ma);
+  // The bar reads from 0: the same colours, without the grey floor's offset in its labels.
+  add_scalar_bar(ren, rainbow(0, scale_max, false), "contact pressure (Pa)");
+}
+
 std::string ms(double t) {
   std::ostringstream o;
   o << std::fixed << std::setprecision(2) << t * 1e3;
@@ -411,21 +431,7 @@ bool pressure_picture(const Results& r, std::size_t k, int pb, vtkPolyData* body
   auto window = offscreen(opt.width, opt.height);
   auto ren = white_renderer();
   window->AddRenderer(ren);
-  auto p_lut = rainbow(0, scale_max, false);
-  p_lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
-  p_lut->SetTableRange(1e-9 * scale_max, scale_max);  // exactly 0 (no contact) is below the range: grey
-  ren->AddActor(colored(body, cp::contact_pressure.name, false, p_lut));
-  vtkNew<vtkSphereSource> marker;
-  marker->SetCenter(at.data());
-  marker->SetRadius(0.012 * v.span);
-  vtkNew<vtkPolyDataMapper> mm;
-  mm->SetInputConnection(marker->GetOutputPort());
-  vtkNew<vtkActor> ma;
-  ma->SetMapper(mm);
-  ma->GetProperty()->SetColor(0, 0, 0);
-  ren->AddActor(ma);
-  // The bar reads from 0: the same colours, without the grey floor's offset in its labels.
-  add_scalar_bar(ren, rainbow(0, scale_max, false), "contact pressure (Pa)");
+  add_pressure_map(ren, body, scale_max, at, 0.012 * v.span);
   std::ostringstream caption;
   const std::string name = static_cast<std::size_t>(pb) < r.bodies.size() ? r.bodies[static_cast<std::size_t>(pb)] : "body";
   caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   contact pressure on " << name << "; peak "
@@ -566,20 +572,9 @@ bool grip_map_picture(const Results& r, const Summary& s, const fs::path& file, 
   auto window = offscreen(opt.width, opt.height);
   auto ren = white_renderer();
   window->AddRenderer(ren);
-  auto lut = rainbow(0, peak, false);
-  lut->SetBelowRangeColor(0.85, 0.85, 0.85, 1.0);
-  lut->SetTableRange(1e-9 * peak, peak);
-  ren->AddActor(colored(map, cp::contact_pressure.name, false, lut));
-  add_scalar_bar(ren, rainbow(0, peak, false), "contact pressure (Pa)");
-  vtkNew<vtkSphereSource> marker;
-  marker->SetCenter(flat->GetPoint(peak_at));
-  marker->SetRadius(1.5);
-  vtkNew<vtkPolyDataMapper> mm;
-  mm->SetInputConnection(marker->GetOutputPort());
-  vtkNew<vtkActor> ma;
-  ma->SetMapper(mm);
-  ma->GetProperty()->SetColor(0, 0, 0);
-  ren->AddActor(ma);
+  Vec3 peak_point;
+  flat->GetPoint(peak_at, peak_point.data());
+  add_pressure_map(ren, map, peak, peak_point, 1.5);
   double b[6];
   map->GetBounds(b);
   b[0] = 0, b[1] = 1e3 * radius * 2 * M_PI, b[4] = -1, b[5] = 1;

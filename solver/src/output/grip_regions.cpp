@@ -10,10 +10,6 @@ namespace tactus::solver {
 
 namespace {
 
-bool grip_pair(const ContactPair& pair, const std::vector<int>& entries) {
-  return std::find(entries.begin(), entries.end(), pair.entry) != entries.end();
-}
-
 // The first pass of a handle entry: its slaves are the hand's skin (a two_pass entry's second
 // pass has its slaves on the handle; an edge pass reports onto the first pass's nodes).
 bool skin_pass(const ContactPair& pair) { return pair.report_sign > 0 && !pair.edge_pass; }
@@ -117,7 +113,7 @@ GripRegions::GripRegions(const Model& model, const RigidBodies& rigid, const Joi
   node_pressure_.assign(model.num_nodes, 0.0);
   is_pressed_.assign(model.num_nodes, 0);
   for (const ContactPair& pair : contact.pairs()) {
-    if (!grip_pair(pair, entries_) || !skin_pass(pair)) continue;
+    if (!counts_in_grip(pair, entries_) || !skin_pass(pair)) continue;
     surface_.insert(surface_.end(), pair.slave_triangles.begin(), pair.slave_triangles.end());
     for (std::size_t i = 0; i < pair.slave_nodes.size(); ++i) {
       const auto node = static_cast<std::size_t>(pair.slave_nodes[i]);
@@ -155,7 +151,7 @@ void GripRegions::sum(const ContactSolver& contact) {
   for (std::size_t k = 0; k < rows.size(); ++k) {
     if (rows.status[k] == ContactStatus::open) continue;
     const ContactPair& pair = contact.pairs()[static_cast<std::size_t>(rows.pair[k])];
-    if (!grip_pair(pair, entries_) || (pair.report_sign < 0 && !pair.edge_pass)) continue;
+    if (!counts_in_grip(pair, entries_)) continue;
     const double* r = &rows.reaction[3 * k];
     const double* n = &rows.normal[3 * k];
     const double rn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];

@@ -43,6 +43,10 @@ std::size_t bone_index(const Skeleton& s, const std::string& name) {
 
 }  // namespace
 
+bool counts_in_grip(const ContactPair& pair, const std::vector<int>& entries) {
+  return (pair.report_sign > 0 || pair.edge_pass) && std::find(entries.begin(), entries.end(), pair.entry) != entries.end();
+}
+
 JointDrive::JointDrive(const Model& model, RigidBodies& rigid) {
   const JointDriveSetup& setup = model.joint_drive;
   skeleton_ = setup.skeleton, file_ = setup.file, grasp_ = setup.grasp, grip_entries_ = setup.grip_entries;
@@ -124,9 +128,7 @@ void JointDrive::control(double time, double dt, const std::vector<PairStepRepor
   // two_pass entry's second pass sees the same interface and is left out).
   grip_ = 0;
   for (std::size_t p = 0; p < pairs.size() && p < pair_info.size(); ++p) {
-    const ContactPair& info = pair_info[p];
-    if (info.report_sign < 0 && !info.edge_pass) continue;
-    if (std::find(grip_entries_.begin(), grip_entries_.end(), info.entry) != grip_entries_.end()) grip_ += pairs[p].normal_force;
+    if (counts_in_grip(pair_info[p], grip_entries_)) grip_ += pairs[p].normal_force;
   }
   const double ramp = grasp_.ramp_time > 0 ? std::min(1.0, time / grasp_.ramp_time) : 1.0;
   target_now_ = grasp_.target_force * ramp;

@@ -30,6 +30,10 @@ class StateArchive;
 
 namespace tactus::solver {
 
+// Whether a contact pair's rows count in the grip: a pair of one of the handle's [[contact]]
+// `entries`, but not a two_pass entry's second pass, which sees the same interface from the handle.
+bool counts_in_grip(const ContactPair& pair, const std::vector<int>& entries);
+
 class JointDrive {
  public:
   // Matches every bone to the rigid pieces of its body meshed from its label (physical group);
