@@ -17,7 +17,7 @@ CENTRE=${2:-}
 W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
 mkdir -p "$W"
-cp "$ROOT/pipeline/scenarios/hand_grasp.toml" "$ROOT/pipeline/scenarios/handle_40mm.stl" "$W/"
+cp "$ROOT/pipeline/scenarios/hand_grasp.toml" "$W/"
 if [ -n "$CENTRE" ]; then
   sed -i "s/^handle_centre = .*/handle_centre = [$CENTRE]/" "$W/hand_grasp.toml"
 fi

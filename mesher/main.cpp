@@ -240,18 +240,21 @@ void write_skeleton_of(const std::filesystem::path& mesh_file, const std::string
 
 // The subcommands: the paper's block and an STL object (gmsh), the fibre field and the skeleton of a mesh.
 struct ObjectTools {
-  CLI::App *box, *fibres, *stl, *skeleton;
+  CLI::App *box, *fibres, *stl, *skeleton, *cylinder;
   std::array<double, 3> size{0.1, 0.1, 0.05}, origin{0, 0, 0};
   double h = 0.01, edge_radius = 0, stl_scale = 1.0;
   std::string fib_mesh, fib_axis = "z", stl_file, skeleton_mesh, names_file;
   double neighbour_gap_mm = 3.5;
   mesher::FibreFieldOptions fo;
+  mesher::CylinderSpec cyl;
+  std::string cyl_axis = "x";
 
   explicit ObjectTools(CLI::App& app)
       : box(app.add_subcommand("box", "the paper's parallelepiped block, meshed with gmsh")),
         fibres(app.add_subcommand("fibres", "rule-based hgo fibre directions of a mesh, as the .vtu bodies.fibres reads")),
         stl(app.add_subcommand("stl", "a closed STL object, meshed with gmsh")),
-        skeleton(app.add_subcommand("skeleton", "the bones, their parents and the joints (centre, flexion and abduction axes) of a hand mesh")) {
+        skeleton(app.add_subcommand("skeleton", "the bones, their parents and the joints (centre, flexion and abduction axes) of a hand mesh")),
+        cylinder(app.add_subcommand("cylinder", "a cylinder (a tool handle), optionally a deformable sleeve over a core, meshed with gmsh")) {
     box->add_option("--size", size, "edge lengths, m")->capture_default_str();
     box->add_option("--origin", origin, "lower corner, m")->capture_default_str();
     box->add_option("--element-size", h, "element size, m")->capture_default_str();
@@ -266,6 +269,14 @@ struct ObjectTools {
     stl->add_option("file", stl_file, "closed STL surface")->required();
     stl->add_option("--element-size", h, "element size, m")->capture_default_str();
     stl->add_option("--scale", stl_scale, "factor from STL units to m (1e-3 for mm)")->capture_default_str();
+    cylinder->add_option("--radius", cyl.radius, "outer radius, m")->capture_default_str();
+    cylinder->add_option("--length", cyl.length, "length along the axis, m")->capture_default_str();
+    cylinder->add_option("--axis", cyl_axis, "x, y or z")->capture_default_str();
+    cylinder->add_option("--centre", cyl.centre, "centre, m")->capture_default_str();
+    cylinder
+        ->add_option("--sleeve", cyl.sleeve, "thickness of a sleeve over a core, m: volume groups \"core\" and \"sleeve\" (0: one volume \"object\")")
+        ->capture_default_str();
+    cylinder->add_option("--element-size", cyl.element_size, "element size, m (the sleeve: at most half its thickness)")->capture_default_str();
     skeleton->add_option("mesh", skeleton_mesh, "the hand mesh (.msh) whose volume groups 2.. are bones")->required();
     skeleton->add_option("--names", names_file, "a JSON file {\"labels\": {\"<label>\": \"<bone name>\"}} naming the bones");
     skeleton->add_option("--neighbour-gap", neighbour_gap_mm, "bones whose surfaces come this close are neighbours, mm")->capture_default_str();
@@ -286,6 +297,13 @@ struct ObjectTools {
     } else if (box->parsed()) {
       MeshOutput output(out, common.output_rules({}));
       const TetMesh mesh = mesher::mesh_box(size, origin, h, "block", o.p.max_elements, edge_radius);
+      output.write(mesh, wave_speeds(mesh, o.speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
+    } else if (cylinder->parsed()) {
+      if (cyl_axis != "x" && cyl_axis != "y" && cyl_axis != "z") throw InputError("command line", "--axis", "x, y or z", "\"" + cyl_axis + "\"");
+      MeshOutput output(out, common.output_rules({}));
+      mesher::CylinderSpec spec = cyl;
+      spec.axis = cyl_axis[0] - 'x';
+      const TetMesh mesh = mesher::mesh_cylinder(spec, o.p.max_elements);
       output.write(mesh, wave_speeds(mesh, o.speed_args), nlohmann::json::object(), mesher::QualityAdvice::gmsh_object());
     } else if (stl->parsed()) {
       MeshOutput output(out, common.output_rules({stl_file}));

@@ -23,6 +23,7 @@ using namespace tactus;
 // The options of a run (the tool's main job).
 struct SolveOptions {
   std::string scenario_file, restart_dir, mesh_dir, check_file, write_reference;
+  std::vector<std::string> overrides;
   bool resume = false;
   double end_time = 0;
   CLI::Option* end_time_option = nullptr;
@@ -43,6 +44,11 @@ void add_solve_options(CLI::App& app, SolveOptions& o) {
   o.end_time_option = app.add_option("--end-time", o.end_time,
                                      "stop at this time (s) instead of the scenario's run.end_time; later "
                                      "output times are dropped");
+  app.add_option("--set", o.overrides,
+                 "KEY=VALUE: replace one scenario value (repeatable; e.g. --set grasp.target_force=30 --set pipeline.meshes.2.radius=0.015: "
+                 "a dotted path, a [[...]] entry by its 0-based index); run.json lists them")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   app.add_option("--check", o.check_file,
                  "compare the run's figures with a stored reference (JSON) and print each difference; "
                  "exit 5 when one is beyond its tolerance")
@@ -57,6 +63,7 @@ struct Tools {
   CLI::App *keys, *results_reference, *mesh_plan, *material_point;
   bool results_json = false;
   std::string plan_scenario, plan_meshes;
+  std::vector<std::string> plan_overrides;
   std::string mt_scenario, mt_material, mt_mode = "uniaxial", mt_output;
   double mt_max = 1.3;
   int mt_samples = 30;
@@ -70,6 +77,9 @@ struct Tools {
     results_reference->add_flag("--json", results_json, "as JSON (what the Python tools read)");
     mesh_plan->add_option("scenario", plan_scenario, "scenario.toml")->required();
     mesh_plan->add_option("--meshes", plan_meshes, "the folder the mesh and fibre paths are relative to (default: the scenario's)");
+    mesh_plan->add_option("--set", plan_overrides, "KEY=VALUE: replace one scenario value, as tactus-solve --set (repeatable)")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     material_point->alias("material-test");
     material_point->add_option("scenario", mt_scenario, "scenario.toml")->required()->check(CLI::ExistingFile);
     material_point->add_option("--material", mt_material, "material name in the scenario")->required();
@@ -86,7 +96,7 @@ struct Tools {
     } else if (results_reference->parsed()) {
       std::cout << (results_json ? solver::results_reference_json().dump(2) + "\n" : solver::results_reference_markdown());
     } else if (mesh_plan->parsed()) {
-      std::cout << solver::mesh_plan_json(solver::read_scenario(plan_scenario, plan_meshes));
+      std::cout << solver::mesh_plan_json(solver::read_scenario(plan_scenario, plan_meshes, plan_overrides));
     } else if (material_point->parsed()) {
       const std::string csv = solver::material_point_csv(solver::read_scenario(mt_scenario), mt_material, mt_mode, mt_max, mt_samples);
       if (mt_output.empty()) {
@@ -124,7 +134,7 @@ void check_against(const solver::RunSummary& summary, const nlohmann::json& refe
 }
 
 void solve(const SolveOptions& o, const cli::CommonOptions& common) {
-  solver::SolveRequest request{o.scenario_file, o.mesh_dir, common.output, o.restart_dir, std::nullopt, o.resume};
+  solver::SolveRequest request{o.scenario_file, o.mesh_dir, common.output, o.restart_dir, std::nullopt, o.resume, o.overrides};
   if (*o.end_time_option) request.end_time = o.end_time;
   if (o.restart_dir.empty() && o.scenario_file.empty()) throw CLI::RequiredError("scenario");
   solver::PreparedRun run = solver::prepare_run(request);  // a restart's scenario, output and checkpoint (checkpoint.hpp)

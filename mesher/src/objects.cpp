@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -257,6 +258,99 @@ TetMesh mesh_stl_object(const std::filesystem::path& stl, double h, double scale
   for (auto& x : mesh.nodes)
     for (double& c : x) c *= scale;
   return mesh;
+}
+
+namespace {
+std::string exact_text(double x) {  // every digit of x, for a gmsh MathEval expression
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
+}
+
+// The sleeve at sleeve_h, the core at h: a constant restricted to the sleeve, its faces and their
+// curves (gmsh 4.8 has no "Constant" field), under a Min with h everywhere.
+void size_sleeve(int sleeve, double sleeve_h, double h) {
+  gmsh::vectorpair sleeve_faces, sleeve_curves;
+  gmsh::model::getBoundary({{3, sleeve}}, sleeve_faces, false, false, false);
+  gmsh::model::getBoundary(sleeve_faces, sleeve_curves, false, false, false);
+  std::vector<double> face_tags, curve_tags;
+  for (const auto& [dim, tag] : sleeve_faces) face_tags.push_back(std::abs(tag));
+  for (const auto& [dim, tag] : sleeve_curves) curve_tags.push_back(std::abs(tag));
+  namespace field = gmsh::model::mesh::field;
+  field::add("MathEval", 1);
+  field::setString(1, "F", exact_text(sleeve_h));
+  field::add("Restrict", 2);
+  field::setNumber(2, "InField", 1);
+  field::setNumbers(2, "VolumesList", {static_cast<double>(sleeve)});
+  field::setNumbers(2, "SurfacesList", face_tags);
+  field::setNumbers(2, "CurvesList", curve_tags);
+  field::add("MathEval", 3);
+  field::setString(3, "F", exact_text(h));
+  field::add("Min", 4);
+  field::setNumbers(4, "FieldsList", {2, 3});
+  field::setAsBackgroundMesh(4);
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
+}
+}  // namespace
+
+TetMesh mesh_cylinder(const CylinderSpec& c, double max_elements) {
+  const double r = c.radius, len = c.length, t = c.sleeve, h = c.element_size;
+  if (!(r > 0) || !(r < 10)) throw InputError("cylinder", "radius", "a radius from 0 to 10 m", std::to_string(r));
+  if (!(len > 0) || !(len < 100)) throw InputError("cylinder", "length", "a length from 0 to 100 m", std::to_string(len));
+  if (!(t >= 0) || !(t < r))
+    throw InputError("cylinder", "sleeve", "a thickness from 0 to less than the radius", std::to_string(t) + " m of " + std::to_string(r));
+  if (!(h > 0) || h > 2 * std::max(r, len))
+    throw InputError("cylinder", "element size", "a size > 0 m and not larger than the cylinder", std::to_string(h));
+  if (c.axis < 0 || c.axis > 2) throw InputError("cylinder", "axis", "x, y or z", std::to_string(c.axis));
+  for (double x : c.centre)
+    if (!std::isfinite(x) || std::abs(x) > 1e3) throw InputError("cylinder", "centre", "a finite point within 1 km", std::to_string(x));
+  const double sleeve_h = t > 0 ? std::min(h, 0.5 * t) : h;
+  check_expected_tets(M_PI * r * r * len, h, max_elements, "cylinder");
+  if (t > 0) check_expected_tets(M_PI * (r * r - (r - t) * (r - t)) * len, sleeve_h, max_elements, "cylinder sleeve");
+  GmshSession session;
+  gmsh::model::add("cylinder");
+  Vec3 base = c.centre, along{0, 0, 0};
+  base[c.axis] -= 0.5 * len, along[c.axis] = len;
+  const int outer = gmsh::model::occ::addCylinder(base[0], base[1], base[2], along[0], along[1], along[2], r);
+  std::vector<std::pair<int, std::string>> volumes;  // tag, group name
+  if (t > 0) {
+    // The core cut into the outer cylinder by fragment: one shared interface, so the two
+    // volumes' meshes conform there (the sleeve bonded to its core).
+    const int core = gmsh::model::occ::addCylinder(base[0], base[1], base[2], along[0], along[1], along[2], r - t);
+    gmsh::vectorpair pieces;
+    std::vector<gmsh::vectorpair> map;
+    gmsh::model::occ::fragment({{3, outer}}, {{3, core}}, pieces, map);
+    gmsh::model::occ::synchronize();
+    for (const auto& [dim, tag] : pieces) {
+      if (dim != 3) continue;
+      double mass = 0;
+      gmsh::model::occ::getMass(3, tag, mass);
+      const bool is_core = std::abs(mass - M_PI * (r - t) * (r - t) * len) < 1e-3 * M_PI * r * r * len;
+      volumes.push_back({tag, is_core ? "core" : "sleeve"});
+    }
+    std::sort(volumes.begin(), volumes.end(), [](const auto& a, const auto& b) { return a.second < b.second; });  // core, sleeve
+    if (volumes.size() != 2 || volumes[0].second != "core" || volumes[1].second != "sleeve")
+      throw InputError("cylinder", "sleeve", "a core and a sleeve gmsh can build", std::to_string(volumes.size()) + " volumes");
+  } else {
+    gmsh::model::occ::synchronize();
+    volumes.push_back({outer, "object"});
+  }
+  gmsh::vectorpair all_volumes, outside;
+  for (std::size_t g = 0; g < volumes.size(); ++g) {
+    gmsh::model::addPhysicalGroup(3, {volumes[g].first}, static_cast<int>(g) + 1);
+    gmsh::model::setPhysicalName(3, static_cast<int>(g) + 1, volumes[g].second);
+    all_volumes.push_back({3, volumes[g].first});
+  }
+  gmsh::model::getBoundary(all_volumes, outside, true, false, false);  // combined: the interface drops out
+  std::vector<int> faces;
+  for (const auto& [dim, tag] : outside) faces.push_back(std::abs(tag));
+  gmsh::model::addPhysicalGroup(2, faces, kSurfaceTag);
+  gmsh::model::setPhysicalName(2, kSurfaceTag, "surface");
+  if (t > 0) size_sleeve(volumes[1].first, sleeve_h, h);
+  // Curved faces at about 16 elements around (a polygonal handle's contact pressure peaks at its edges).
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 16);
+  mesh_volume(h, "cylinder", sleeve_h);
+  return tet_mesh_from_gmsh_model("cylinder");
 }
 
 }  // namespace tactus::mesher

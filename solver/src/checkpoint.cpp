@@ -26,6 +26,11 @@ void RunIdentity::io(StateArchive& a) {
   a.io("run.end_time", end_time);
   a.io("run.inputs_digest", inputs_digest);
   a.io("run.version", version);
+  std::string joined;  // one "KEY=VALUE" per line (a value holds no newline: tactus-solve refuses one)
+  for (const std::string& o : overrides) joined += o + "\n";
+  a.io("run.overrides", joined);
+  overrides.clear();
+  for (std::size_t at = 0, nl; (nl = joined.find('\n', at)) != std::string::npos; at = nl + 1) overrides.push_back(joined.substr(at, nl - at));
 }
 
 RunIdentity run_identity(const Scenario& sc, const fs::path& mesh_dir) {
@@ -36,6 +41,7 @@ RunIdentity run_identity(const Scenario& sc, const fs::path& mesh_dir) {
   id.end_time = sc.run.end_time;
   id.inputs_digest = content_digest(scenario_inputs(sc));
   id.version = kVersion;
+  id.overrides = sc.overrides;
   return id;
 }
 
@@ -192,6 +198,14 @@ void check_restart_identity(const RestartPoint& p, const RunIdentity& id) {
     refuse("run.end_time", a.str(), b.str());
   }
   if (p.identity.version != id.version) refuse("run.version", "tactus " + p.identity.version, "tactus " + id.version);
+  if (p.identity.overrides != id.overrides) {
+    auto list = [](const std::vector<std::string>& v) {
+      std::string s;
+      for (const std::string& o : v) s += (s.empty() ? "--set " : " --set ") + o;
+      return s.empty() ? std::string("no --set") : s;
+    };
+    refuse("run.overrides", list(p.identity.overrides), list(id.overrides));
+  }
   if (p.identity.inputs_digest != id.inputs_digest)
     refuse("run.inputs_digest", "the scenario, meshes and fibre files as they were", "one of them has changed");
 }
@@ -199,8 +213,8 @@ void check_restart_identity(const RestartPoint& p, const RunIdentity& id) {
 PreparedRun prepare_run(SolveRequest q) {
   PreparedRun p;
   if (!q.restart.empty()) {
-    if (!q.scenario.empty() || !q.meshes.empty() || q.end_time || !q.output.empty())
-      throw InputError("command line", "--restart", "the output folder alone (the scenario, --meshes, --end-time and -o are the checkpoint's)",
+    if (!q.scenario.empty() || !q.meshes.empty() || q.end_time || !q.output.empty() || !q.overrides.empty())
+      throw InputError("command line", "--restart", "the output folder alone (the scenario, --meshes, --end-time, --set and -o are the checkpoint's)",
                        "more arguments");
     p.from = find_restart_point(q.restart);
     if (!p.from)
@@ -208,10 +222,13 @@ PreparedRun prepare_run(SolveRequest q) {
                        "none: nothing to continue");
     q.scenario = p.from->identity.scenario, q.meshes = p.from->identity.meshes, q.output = q.restart;
     q.end_time = p.from->identity.end_time;
+    q.overrides = p.from->identity.overrides;
   }
   if (q.scenario.empty()) throw InputError("command line", "scenario", "a scenario.toml", "none");
   p.scenario_file = q.scenario;
-  p.scenario = read_scenario(q.scenario, q.meshes);
+  for (const std::string& o : q.overrides)
+    if (o.find('\n') != std::string::npos) throw InputError("command line", "--set", "KEY=VALUE on one line", "a newline in \"" + o + "\"");
+  p.scenario = read_scenario(q.scenario, q.meshes, q.overrides);
   // --end-time (or the end time a restarted run was started with): later output times are dropped.
   if (q.end_time && (!(*q.end_time > 0) || !std::isfinite(*q.end_time)))
     throw InputError("command line", "--end-time", "a time > 0 in s", std::to_string(*q.end_time));

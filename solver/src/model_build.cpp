@@ -478,6 +478,84 @@ void place_handle(const Scenario& sc, Model& m) {
               << "xyz"[longest] << " side across the palm";
 }
 
+// The point of triangle abc closest to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double denom = 1 / (va + vb + vc);
+  return a + (vb * denom) * ab + (vc * denom) * ac;
+}
+
+// A grasp starts with the handle clear of the hand: a hand node inside the handle (its winding
+// number over the handle's outward boundary faces above 1/2, Van Oosterom-Strackee solid angles)
+// deeper than 1 % of the handle's smallest side would be pushed out at the recovery speed in the
+// first steps, a jolt no grip force explains. Refused naming the key that placed the handle.
+void refuse_handle_inside_hand(const Scenario& sc, const Model& m) {
+  if (!sc.skeleton || !sc.grasp.on()) return;
+  std::size_t hand = 0, handle = 0;
+  while (sc.bodies[hand].name != sc.skeleton->body) ++hand;
+  while (sc.bodies[handle].name != sc.grasp.handle) ++handle;
+  const BodyRange &hb = m.bodies[handle], &kb = m.bodies[hand];
+  const auto& X = m.input_mesh.nodes;
+  std::map<std::array<int, 3>, std::array<int, 4>> faces;  // sorted face -> face as in the tet, opposite vertex
+  for (std::size_t e = hb.tet_begin; e < hb.tet_end; ++e) {
+    const auto& t = m.input_mesh.tets[e];
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> f{t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4]}, key = f;
+      std::sort(key.begin(), key.end());
+      if (!faces.erase(key)) faces[key] = {f[0], f[1], f[2], t[k]};
+    }
+  }
+  std::vector<std::array<Vec3, 3>> outward;
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (const auto& [key, f] : faces) {
+    std::array<Vec3, 3> tri{X[f[0]], X[f[1]], X[f[2]]};
+    if (dot(cross(tri[1] - tri[0], tri[2] - tri[0]), X[f[3]] - tri[0]) > 0) std::swap(tri[1], tri[2]);
+    outward.push_back(tri);
+    for (const Vec3& v : tri)
+      for (std::size_t d = 0; d < 3; ++d) lo[d] = std::min(lo[d], v[d]), hi[d] = std::max(hi[d], v[d]);
+  }
+  const double tolerance = 0.01 * std::min({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+  std::size_t inside = 0;
+  double deepest = 0;
+  Vec3 where{0, 0, 0};
+  for (std::size_t i = kb.node_begin; i < kb.node_end; ++i) {
+    const Vec3& p = X[i];
+    if (p[0] < lo[0] || p[0] > hi[0] || p[1] < lo[1] || p[1] > hi[1] || p[2] < lo[2] || p[2] > hi[2]) continue;
+    double solid_angle = 0, depth = 1e300;
+    for (const auto& t : outward) {
+      const Vec3 a = t[0] - p, b = t[1] - p, c = t[2] - p;
+      const double la = norm(a), lb = norm(b), lc = norm(c);
+      solid_angle += 2 * std::atan2(dot(a, cross(b, c)), la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb);
+      depth = std::min(depth, norm(p - closest_on_triangle(p, t[0], t[1], t[2])));
+    }
+    if (solid_angle < 2 * M_PI || depth <= tolerance) continue;
+    ++inside;
+    if (depth > deepest) deepest = depth, where = p;
+  }
+  if (inside == 0) return;
+  std::ostringstream found;
+  found << inside << " nodes of '" << sc.bodies[hand].name << "' more than " << tolerance * 1e3 << " mm inside the handle '" << sc.grasp.handle
+        << "', the deepest " << deepest * 1e3 << " mm at (" << where[0] << ", " << where[1] << ", " << where[2]
+        << ") m; move the handle (across, along the fingers, out of the palm)";
+  throw InputError(sc.file.string(),
+                   sc.grasp.handle_centre ? "grasp.handle_centre" : "bodies[" + std::to_string(handle) + "] (the handle's placement)",
+                   "a handle clear of the hand at the start", found.str());
+}
+
 // [skeleton], [[joint]] and [grasp] into the model's joint drive (joint_settings.hpp).
 void add_joint_drive(const Scenario& sc, Model& m) {
   if (!sc.skeleton) return;
@@ -534,6 +612,7 @@ Model build_model(const Scenario& sc) {
   TetAssignment tets;
   for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) append_body(sc, bi, m, tets);
   place_handle(sc, m);
+  refuse_handle_inside_hand(sc, m);
 
   m.num_nodes = m.input_mesh.nodes.size();
   m.num_elements = m.input_mesh.tets.size();

@@ -7,6 +7,7 @@
 
 #include <toml++/toml.h>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -56,7 +57,8 @@ const std::vector<Choice<MeshKind>>& mesh_kinds() {
       {MeshKind::box, "box", ""},
       {MeshKind::stl, "stl", ""},
       {MeshKind::fibres, "fibres", "rule-based hgo fibre directions of the mesh `file`: tactus-mesh fibres"},
-      {MeshKind::skeleton, "skeleton", "the bones and joints of the hand mesh `file` (a .json): tactus-mesh skeleton"}};
+      {MeshKind::skeleton, "skeleton", "the bones and joints of the hand mesh `file` (a .json): tactus-mesh skeleton"},
+      {MeshKind::cylinder, "cylinder", "a cylinder of `radius` and `length`, with a `sleeve` over a core when > 0: tactus-mesh cylinder"}};
   return c;
 }
 
@@ -327,7 +329,15 @@ const Section<MeshPlanEntry>& pipeline_section() {
        bind_key(&MeshPlanEntry::args, declare("args", "", "tactus-mesh options (e.g. \"--size 0.04 0.08 0.16 --element-size 0.008\")"), "none"),
        bind_key(&MeshPlanEntry::file, declare("file", "",
                                               "kind = stl: the closed STL surface, relative to the scenario's folder; kind = fibres: the mesh, "
-                                              "relative to the work folder"))}};
+                                              "relative to the work folder")),
+       bind_key(&MeshPlanEntry::radius, keys::opt(keys::number("radius", "m", "kind = cylinder (required): the outer radius", 0, true)), "none"),
+       bind_key(&MeshPlanEntry::length, keys::opt(keys::number("length", "m", "kind = cylinder (required): the length", 0, true)), "none"),
+       bind_key(&MeshPlanEntry::sleeve,
+                keys::opt(keys::number("sleeve", "m",
+                                       "kind = cylinder: a deformable sleeve of this thickness over a core (volume groups \"core\" and "
+                                       "\"sleeve\"; 0 or none: one volume \"object\")",
+                                       0)),
+                "none")}};
   return s;
 }
 
@@ -348,6 +358,8 @@ const char* mesh_kind_name(MeshKind k) {
       return "fibres";
     case MeshKind::skeleton:
       return "skeleton";
+    case MeshKind::cylinder:
+      return "cylinder";
   }
   return "";
 }
@@ -709,6 +721,16 @@ void read_pipeline(const Reader& r, const toml::table& root, Scenario& sc) {
         if (!inside_work_folder(entry.output) || fs::path(entry.output).extension() != ext)
           r.fail(path + ".output", "a " + ext + " path inside the work folder", "\"" + entry.output + "\"");
         if (entry.kind == MeshKind::stl && entry.file.empty()) r.fail(path + ".file", "the STL file of kind = stl", "missing");
+        const bool cylinder = entry.kind == MeshKind::cylinder;
+        if (cylinder && !entry.radius) r.fail(path + ".radius", "the radius of kind = cylinder", "missing");
+        if (cylinder && !entry.length) r.fail(path + ".length", "the length of kind = cylinder", "missing");
+        if (cylinder && entry.sleeve && !(*entry.sleeve < *entry.radius))
+          r.fail(path + ".sleeve", "a thickness less than the radius (" + std::to_string(*entry.radius) + " m)", std::to_string(*entry.sleeve));
+        if (!cylinder && (entry.radius || entry.length || entry.sleeve))
+          r.fail(path + (entry.radius   ? ".radius"
+                         : entry.length ? ".length"
+                                        : ".sleeve"),
+                 "radius, length and sleeve only with kind = cylinder", std::string("kind = ") + mesh_kind_name(entry.kind));
         if ((entry.kind == MeshKind::fibres || entry.kind == MeshKind::skeleton) && !inside_work_folder(entry.file))
           r.fail(path + ".file",
                  "the mesh whose " + std::string(mesh_kind_name(entry.kind)) + " this entry makes (a .msh path inside the work folder)",
@@ -752,9 +774,53 @@ void read_contact_solver(const Reader& r, const toml::table& root, Scenario& sc)
     contact_solver_section().read(r, r.table(*n, "contact_solver"), "contact_solver", sc.contact_solver);
 }
 
+// One --set KEY=VALUE over the parsed file: KEY walks tables by name and [[...]] lists by 0-based
+// index; the last name is set (added when the file leaves it out, so an optional key can be
+// studied). VALUE is read as TOML (0.02, 3, true, [1, 2], "text"); a bare word is a string.
+void apply_override(toml::table& root, const std::string& item) {
+  const auto fail = [&](const std::string& expected, const std::string& found) {
+    throw InputError("command line", "--set " + item, expected, found);
+  };
+  const std::size_t eq = item.find('=');
+  if (eq == std::string::npos || eq == 0) fail("KEY=VALUE (e.g. grasp.target_force=30)", "no '='");
+  std::vector<std::string> path;
+  std::istringstream keys(item.substr(0, eq));
+  for (std::string k; std::getline(keys, k, '.');) path.push_back(k);
+  const std::string text = item.substr(eq + 1);
+  toml::table value_doc;
+  try {
+    value_doc = toml::parse("v = " + text);
+  } catch (const toml::parse_error&) {
+    value_doc.insert_or_assign("v", text);
+  }
+  toml::node* node = &root;
+  std::string walked;
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const std::string& k = path[i];
+    toml::node* next = nullptr;
+    if (toml::array* a = node->as_array()) {
+      std::size_t index = 0;
+      const auto [end, ec] = std::from_chars(k.data(), k.data() + k.size(), index);
+      if (ec != std::errc() || end != k.data() + k.size() || index >= a->size())
+        fail("an index from 0 to " + std::to_string(a->size() - 1) + " into " + walked + " (its entries in file order)", "\"" + k + "\"");
+      next = a->get(index);
+    } else if (toml::table* t = node->as_table()) {
+      next = t->get(k);
+      if (!next) fail("a section or list the scenario has", "no " + (walked.empty() ? "" : walked + ".") + k + " in the file");
+    }
+    if (!next || !(next->is_table() || next->is_array()))
+      fail("a path through sections and lists", (walked.empty() ? "" : walked + ".") + k + " is a value");
+    walked += (walked.empty() ? "" : ".") + k;
+    node = next;
+  }
+  toml::table* t = node->as_table();
+  if (!t || path.back().empty()) fail("a key of a section", walked.empty() ? "an empty key" : walked + " is a list; give an entry's index");
+  t->insert_or_assign(path.back(), *value_doc.get("v"));
+}
+
 }  // namespace
 
-Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
+Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir, const std::vector<std::string>& overrides) {
   const std::string fname = file.string();
   require_regular_file(file, "a scenario (.toml)");
   toml::table root;
@@ -765,9 +831,11 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
     where << "line " << e.source().begin.line << ", column " << e.source().begin.column;
     throw InputError(fname, where.str(), "valid TOML", std::string(e.description()));
   }
+  for (const std::string& item : overrides) apply_override(root, item);
   Reader r(fname);
   Scenario sc;
   sc.file = fs::absolute(file);
+  sc.overrides = overrides;
   const fs::path base = mesh_dir.empty() ? sc.file.parent_path() : fs::absolute(mesh_dir);
 
   auto section = [](std::string key, ValueType type, std::string doc, bool required) {
@@ -802,10 +870,24 @@ Scenario read_scenario(const fs::path& file, const fs::path& mesh_dir) {
   return sc;
 }
 
+namespace {
+// The shortest decimal text that reads back as exactly x (0.015, not 0.014999999999999999).
+std::string shortest_text(double x) {
+  char text[32];
+  const auto [end, ec] = std::to_chars(text, text + sizeof text, x);
+  return ec == std::errc() ? std::string(text, end) : std::to_string(x);
+}
+}  // namespace
+
 std::string mesh_plan_json(const Scenario& sc) {
   nlohmann::json plan{{"meshes", nlohmann::json::array()}, {"inputs", nlohmann::json::array()}};
-  for (const MeshPlanEntry& m : sc.mesh_plan)
-    plan["meshes"].push_back({{"output", m.output}, {"kind", mesh_kind_name(m.kind)}, {"args", m.args}, {"file", m.file}});
+  for (const MeshPlanEntry& m : sc.mesh_plan) {
+    std::string args = m.args;
+    if (m.kind == MeshKind::cylinder)  // its own keys first, as tactus-mesh cylinder options
+      args = "--radius " + shortest_text(*m.radius) + " --length " + shortest_text(*m.length) + " --sleeve " + shortest_text(m.sleeve.value_or(0.0)) +
+             (args.empty() ? "" : " " + args);
+    plan["meshes"].push_back({{"output", m.output}, {"kind", mesh_kind_name(m.kind)}, {"args", args}, {"file", m.file}});
+  }
   for (const BodySpec& b : sc.bodies) {
     plan["inputs"].push_back(b.mesh.string());
     if (!b.fibres.empty()) plan["inputs"].push_back(b.fibres.string());

@@ -167,6 +167,12 @@ Key<S> bind_key(std::optional<Vec3> S::*m, ValueSpec s, const std::string& note 
   s = with_default(std::move(s), ValueType::vec3, "", note);
   return {s, [m, s](const Reader& r, const toml::table& t, const std::string& p, S& o) { o.*m = r.vec3(t, s, p, Vec3{0, 0, 0}); }};
 }
+// A number given or not (absent: "not given", e.g. a cylinder's radius on another kind of mesh).
+template <class S>
+Key<S> bind_key(std::optional<double> S::*m, ValueSpec s, const std::string& note = {}) {
+  s = with_default(std::move(s), ValueType::number, "", note);
+  return {s, [m, s](const Reader& r, const toml::table& t, const std::string& p, S& o) { o.*m = r.number(t, s, p, 0.0); }};
+}
 template <class S>
 Key<S> bind_key(std::vector<double> S::*m, ValueSpec s, const std::string& note = {}) {
   std::string text = "[";

@@ -2,6 +2,7 @@
 // planar-faced domains, the physical groups, and refusal of open or unreadable STL files.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -221,4 +222,79 @@ TEST(Objects, SmoothClosedStlMeshes) {
   std::printf("sphere: %zu tets, volume %.6e m^3 (facets enclose %.6e)\n", m.tets.size(), volume(m), enclosed * 1e-9);
   EXPECT_NEAR(volume(m) / (enclosed * 1e-9), 1.0, 0.01);
   for (const auto& tet : m.tets) EXPECT_GT(tet_volume(m.nodes[tet[0]], m.nodes[tet[1]], m.nodes[tet[2]], m.nodes[tet[3]]), 0.0);
+}
+
+// tactus-mesh cylinder. Oracle: every surface node lies on the cylinder (radius r or an end
+// plane), so the mesh's volume lies between that of the inscribed 16-gon prism (the curvature
+// sizing puts at least 16 elements around) and pi r^2 L; with a sleeve the core's volume does the
+// same with radius r - t, the two meshes conform (every free face of the union is on the outer
+// boundary, none on the interface), and nodes lie inside the sleeve (at least two tets across it).
+TEST(Objects, CylinderAndSleevedCylinder) {
+  const double r = 0.02, len = 0.06, t = 0.004;
+  const double polygon = 8 * std::sin(M_PI / 8) / M_PI;                // 16-gon area / circle area
+  auto radial = [](const Vec3& p) { return std::hypot(p[1], p[2]); };  // axis x, centred at 0
+  auto on_outside = [&](const Vec3& p) { return std::abs(radial(p) - r) < 1e-9 || std::abs(std::abs(p[0]) - 0.5 * len) < 1e-9; };
+  for (const double sleeve : {0.0, t}) {
+    mesher::CylinderSpec spec;
+    spec.radius = r, spec.length = len, spec.sleeve = sleeve, spec.element_size = 0.008, spec.axis = 0;
+    const TetMesh m = mesher::mesh_cylinder(spec);
+    const double exact = M_PI * r * r * len;
+    std::printf("cylinder, sleeve %g m: %zu tets, volume %.6e m^3 (pi r^2 L %.6e, 16-gon prism %.6e)\n", sleeve, m.tets.size(), volume(m), exact,
+                polygon * exact);
+    EXPECT_LE(volume(m), exact * (1 + 1e-12));
+    EXPECT_GE(volume(m), polygon * exact);
+    ASSERT_NE(m.find_group(2, "surface"), nullptr);
+    const int surface = m.find_group(2, "surface")->tag;
+    std::size_t surface_triangles = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+      if (m.triangle_group[f] != surface) continue;
+      ++surface_triangles;
+      for (int v : m.triangles[f]) EXPECT_TRUE(on_outside(m.nodes[static_cast<std::size_t>(v)]));
+    }
+    // The free faces of the tets (on one tet only) are exactly the surface group's.
+    std::map<std::array<int, 3>, int> faces;
+    for (const auto& tet : m.tets)
+      for (int k = 0; k < 4; ++k) {
+        std::array<int, 3> f{tet[(k + 1) % 4], tet[(k + 2) % 4], tet[(k + 3) % 4]};
+        std::sort(f.begin(), f.end());
+        ++faces[f];
+      }
+    std::size_t free_faces = 0;
+    for (const auto& [f, n] : faces) {
+      if (n != 1) continue;
+      ++free_faces;
+      for (int v : f) EXPECT_TRUE(on_outside(m.nodes[static_cast<std::size_t>(v)])) << "a free face inside the cylinder";
+    }
+    EXPECT_EQ(free_faces, surface_triangles);
+    if (sleeve == 0) {
+      ASSERT_NE(m.find_group(3, "object"), nullptr);
+      continue;
+    }
+    ASSERT_NE(m.find_group(3, "core"), nullptr);
+    ASSERT_NE(m.find_group(3, "sleeve"), nullptr);
+    const int core = m.find_group(3, "core")->tag;
+    double core_volume = 0;
+    std::size_t inside_sleeve = 0;
+    for (std::size_t e = 0; e < m.tets.size(); ++e) {
+      const auto& tet = m.tets[e];
+      const double v = tet_volume(m.nodes[tet[0]], m.nodes[tet[1]], m.nodes[tet[2]], m.nodes[tet[3]]);
+      for (int k : tet) {
+        const double rho = radial(m.nodes[static_cast<std::size_t>(k)]);
+        if (m.tet_group[e] == core)
+          EXPECT_LE(rho, r - sleeve + 1e-9);
+        else
+          EXPECT_GE(rho, r - sleeve - 1e-9);
+        if (rho > r - sleeve + 0.2 * sleeve && rho < r - 0.2 * sleeve) ++inside_sleeve;
+      }
+      if (m.tet_group[e] == core) core_volume += v;
+    }
+    const double core_exact = M_PI * (r - sleeve) * (r - sleeve) * len;
+    std::printf("  core volume %.6e m^3 (pi (r-t)^2 L %.6e); node visits inside the sleeve: %zu\n", core_volume, core_exact, inside_sleeve);
+    EXPECT_LE(core_volume, core_exact * (1 + 1e-12));
+    EXPECT_GE(core_volume, polygon * core_exact);
+    EXPECT_GT(inside_sleeve, 0u);
+  }
+  mesher::CylinderSpec bad;
+  bad.radius = 0.01, bad.sleeve = 0.01;
+  EXPECT_THROW(mesher::mesh_cylinder(bad), InputError);
 }

@@ -295,6 +295,29 @@ TEST(Grasp, BadJointInputIsRefusedNamingIt) {
     expect(sc, {"finger_skeleton.json", "one rigid piece", "'metacarpal_finger' (group 2) 'proximal_phalanx_finger' (group 3)", "touch"},
            "two bones in one piece");
   }
+  {  // a handle through the finger at the start. Oracle: the finger nodes inside the handle's
+     // 24-sided prism deeper than 1 % of its 20 mm (its distance to the nearest face plane).
+    Scenario sc = base;
+    const double r = 0.010, cx = 0.040, cz = 0.004;
+    const TempDir through_dir;  // (the other cases keep the handle's own mesh)
+    sc.bodies[1] = body_from_mesh(through_dir, "handle", cylinder_mesh(r, 0.030, cx, cz, 24, 4), "bone");
+    sc.bodies[1].rigid_velocity = Vec3{0, 0, 0}, sc.bodies[1].rigid_angular_velocity = Vec3{0, 0, 0};
+    std::size_t inside = 0;
+    double deepest = 0;
+    for (const Vec3& p : finger_mesh().nodes) {
+      double depth = 0.015 - std::abs(p[1]);
+      for (int k = 0; k < 24; ++k) {
+        const double t = 2 * M_PI * (k + 0.5) / 24;
+        depth = std::min(depth, r * std::cos(M_PI / 24) - ((p[0] - cx) * std::cos(t) + (p[2] - cz) * std::sin(t)));
+      }
+      if (depth > 0.01 * 2 * r) ++inside, deepest = std::max(deepest, depth);
+    }
+    char counted[120];
+    std::snprintf(counted, sizeof counted, "%zu nodes of 'finger' more than 0.2 mm inside the handle 'handle', the deepest %g mm", inside,
+                  deepest * 1e3);
+    std::printf("handle through the finger: expected \"%s\"\n", counted);
+    expect(sc, {"bodies[1] (the handle's placement)", "a handle clear of the hand at the start", counted}, "handle through the finger");
+  }
   {  // a bone whose label no rigid piece carries
     Scenario sc = base;
     Skeleton sk = finger_skeleton();

@@ -204,6 +204,39 @@ TEST_F(ScenarioFile, MissingMeshFile) { expect_error(replace(kValid, "pad.msh", 
 TEST_F(ScenarioFile, TomlSyntaxErrorGivesLine) { expect_error(replace(kValid, "end_time = 1e-3", "end_time = = 1e-3"), {"line 3", "valid TOML"}); }
 TEST_F(ScenarioFile, OutputTimeAfterEnd) { expect_error(replace(kValid, "[5e-4, 1e-3]", "[5e-4, 2e-3]"), {"run.output_times", "run.end_time"}); }
 
+// --set KEY=VALUE (tactus-solve, tactus-pipeline --study). Oracle: each override gives exactly
+// the value a file holding it gives; a path the file does not have, an index past a list's end
+// and a value of the wrong type are refused naming the override or the key.
+TEST_F(ScenarioFile, OverridesReplaceValuesByPath) {
+  const auto file = write(kValid);
+  const Scenario sc =
+      read_scenario(file, {}, {"run.end_time=2e-3", "bodies.0.initial_velocity=[1.5, 0, -0.5]", "run.time_step_safety=0.5", "materials.bone.E=5e9"});
+  const Scenario edited = read_scenario(write(replace(replace(replace(kValid, "end_time = 1e-3", "end_time = 2e-3\ntime_step_safety = 0.5"),
+                                                              "initial_velocity = [2.0, 0, 0]", "initial_velocity = [1.5, 0, -0.5]"),
+                                                      "E = 10e9", "E = 5e9")));
+  std::printf("--set: end_time %g (file %g), velocity %g %g %g, safety %g, bone E %g (file %g)\n", sc.run.end_time, edited.run.end_time,
+              sc.bodies[0].initial_velocity[0], sc.bodies[0].initial_velocity[1], sc.bodies[0].initial_velocity[2], sc.run.time_step_safety,
+              sc.materials.at("bone").values.numbers.at("E"), edited.materials.at("bone").values.numbers.at("E"));
+  EXPECT_EQ(sc.run.end_time, edited.run.end_time);
+  EXPECT_EQ(sc.bodies[0].initial_velocity, edited.bodies[0].initial_velocity);
+  EXPECT_EQ(sc.run.time_step_safety, 0.5);  // a key the file leaves out is added
+  EXPECT_EQ(sc.materials.at("bone").values.numbers.at("E"), 5e9);
+  EXPECT_EQ(sc.overrides.size(), 4u);
+  auto refused = [&](const std::string& item, std::initializer_list<std::string> fragments) {
+    try {
+      read_scenario(write(kValid), {}, {item});
+      ADD_FAILURE() << item << ": expected an InputError";
+    } catch (const InputError& e) {
+      for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    }
+  };
+  refused("bodies.3.mesh=x.msh", {"--set bodies.3.mesh", "an index from 0 to 0 into bodies"});
+  refused("nosuch.key=1", {"--set nosuch.key", "no nosuch in the file"});
+  refused("run.end_time", {"--set run.end_time", "KEY=VALUE"});
+  refused("run.end_time=soon", {"run.end_time", "number"});  // a bare word is a string: the reader names the key
+  refused("run.end_time.x=1", {"run.end_time is a value"});
+}
+
 // The committed reference must be what the declarations generate (regenerate with
 // `tactus-solve keys > docs/scenario-reference.md`).
 TEST(ScenarioReference, DocsMatchDeclarations) {

@@ -157,6 +157,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   nlohmann::json j;
   j["tactus_version"] = kVersion;
   j["scenario"] = sc.file.string();
+  j["scenario_overrides"] = sc.overrides;  // tactus-solve --set, in order
   j[k::status] = summary.status;
   j[k::message] = failure;
   j["units"] = "SI (m, kg, s, Pa, J)";

@@ -29,6 +29,18 @@ StlSurface read_stl(const std::filesystem::path& file);
 
 // Meshes the volume bounded by a closed, 2-manifold STL surface (units as in the file, scaled
 // by `scale` to metres). An open STL (boundary edges) is refused with their count.
+// A cylinder (a tool handle), gmsh OpenCASCADE: `radius` and `length` in m along axis 0/1/2
+// (x/y/z) about `centre`. With `sleeve` > 0 it is two volumes in one conforming mesh: a core of
+// radius - sleeve (volume group 1 "core") inside a sleeve of that thickness (group 2 "sleeve"),
+// the sleeve meshed at most sleeve / 2 so at least two tets span it; without, one volume
+// (group 1 "object", as an STL object). Surface group 20 "surface" is the outer boundary.
+struct CylinderSpec {
+  double radius = 0.02, length = 0.13, sleeve = 0, element_size = 0.006;
+  int axis = 0;
+  Vec3 centre{0, 0, 0};
+};
+TetMesh mesh_cylinder(const CylinderSpec& cylinder, double max_elements = 1e7);
+
 TetMesh mesh_stl_object(const std::filesystem::path& stl, double element_size, double scale, const std::string& name = "object",
                         double max_elements = 1e7);
 

@@ -38,6 +38,7 @@ struct RunIdentity {
   double end_time = 0;        // the run's end time (after --end-time)
   std::string inputs_digest;  // of the scenario, meshes and fibre files
   std::string version;
+  std::vector<std::string> overrides;  // tactus-solve --set, in order
   void io(StateArchive& archive);
 };
 RunIdentity run_identity(const Scenario& scenario, const std::filesystem::path& mesh_dir);
@@ -99,6 +100,7 @@ struct SolveRequest {
   std::filesystem::path scenario, meshes, output, restart;
   std::optional<double> end_time;  // --end-time: later output times are dropped
   bool resume = false;
+  std::vector<std::string> overrides;  // --set KEY=VALUE
 };
 // The run a request comes to: the scenario read (end time applied), where it goes, its identity
 // and the checkpoint it continues from, if any. Refuses (InputError) a restart with more than the

@@ -84,13 +84,15 @@ struct LoadSpec {
 };
 
 // [[pipeline.meshes]]: how tactus-pipeline makes a mesh (or fibre file) the scenario uses.
-enum class MeshKind { labels, box, stl, fibres, skeleton };
+enum class MeshKind { labels, box, stl, fibres, skeleton, cylinder };
 const char* mesh_kind_name(MeshKind k);
 struct MeshPlanEntry {
   std::string output;  // relative to the pipeline's work folder
   MeshKind kind = MeshKind::labels;
   std::string args;  // tactus-mesh options
   std::string file;  // kind = stl: the STL (relative to the scenario); fibres, skeleton: the mesh (relative to the work folder)
+  // kind = cylinder (tactus-mesh cylinder): keys of their own so that a design study can vary them.
+  std::optional<double> radius, length, sleeve;  // m
 };
 
 // [skeleton]: the bones of one body and the joints between them (tactus-mesh skeleton, or the
@@ -102,6 +104,7 @@ struct SkeletonSpec {
 
 struct Scenario {
   std::filesystem::path file;
+  std::vector<std::string> overrides;  // tactus-solve --set KEY=VALUE, applied over the file, in order
   RunSpec run;
   DampingSpec damping;
   std::vector<BodySpec> bodies;
@@ -122,7 +125,10 @@ struct Scenario {
 
 // Relative mesh and fibre paths are resolved against `mesh_dir` when given (tactus-solve --meshes,
 // used by the pipeline), else against the scenario file's folder.
-Scenario read_scenario(const std::filesystem::path& file, const std::filesystem::path& mesh_dir = {});
+// `overrides` ("KEY=VALUE", tactus-solve --set) replace values of the file before it is read:
+// KEY is a dotted path (`grasp.target_force`, `materials.sleeve.mu`, `pipeline.meshes.2.radius`,
+// an entry of a [[...]] list by its 0-based index), VALUE a TOML value (a bare word is a string).
+Scenario read_scenario(const std::filesystem::path& file, const std::filesystem::path& mesh_dir = {}, const std::vector<std::string>& overrides = {});
 
 // The mesh plan as tactus-pipeline reads it: {"meshes": [{output, kind, args, file}], "inputs":
 // [every mesh and fibre file the bodies read, resolved]}.
