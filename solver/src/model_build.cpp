@@ -3,6 +3,7 @@
 // geometry, lumped mass, locality order and contact surfaces.
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -548,9 +549,9 @@ void refuse_handle_inside_hand(const Scenario& sc, const Model& m) {
   }
   if (inside == 0) return;
   std::ostringstream found;
-  found << inside << " nodes of '" << sc.bodies[hand].name << "' more than " << tolerance * 1e3 << " mm inside the handle '" << sc.grasp.handle
-        << "', the deepest " << deepest * 1e3 << " mm at (" << where[0] << ", " << where[1] << ", " << where[2]
-        << ") m; move the handle (across, along the fingers, out of the palm)";
+  found << std::setprecision(3) << inside << (inside == 1 ? " node" : " nodes") << " of '" << sc.bodies[hand].name << "' more than "
+        << tolerance * 1e3 << " mm inside the handle '" << sc.grasp.handle << "', the deepest " << deepest * 1e3 << " mm at (" << where[0] << ", "
+        << where[1] << ", " << where[2] << ") m; move the handle (across, along the fingers, out of the palm)";
   throw InputError(sc.file.string(),
                    sc.grasp.handle_centre ? "grasp.handle_centre" : "bodies[" + std::to_string(handle) + "] (the handle's placement)",
                    "a handle clear of the hand at the start", found.str());

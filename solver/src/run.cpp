@@ -166,6 +166,14 @@ class RunLoop {
         solver_.check_energy();
         if (scheduled()) write_scheduled_state();
         if (solver_.finished()) break;
+        if (solver_.relaxed()) {  // dynamic relaxation converged: this state ends the run (relaxation.hpp)
+          write_scheduled_state();
+          summary_.relaxed_at = solver_.time();
+          log::info() << "relaxed at t = " << solver_.time() << " s (step " << solver_.step_index() << "): out-of-balance force "
+                      << solver_.relaxation().relative_residual()
+                      << " of the internal force, at most damping.residual_tolerance = " << sc_.damping.residual_tolerance;
+          break;
+        }
         solver_.advance_position();
         summary_.dt_min = std::min(summary_.dt_min, solver_.last_step());
         summary_.dt_max = std::max(summary_.dt_max, solver_.last_step());
@@ -232,7 +240,7 @@ class RunLoop {
     summary_.end_time = solver_.time();
     summary_.energy_balance_error = solver_.energies().balance_error();
     if (summary_.steps == 0) summary_.dt_min = summary_.dt_max = 0;
-    if (summary_.status == "completed" && next_out_ != solver_.schedule().size()) {
+    if (summary_.status == "completed" && next_out_ != solver_.schedule().size() && summary_.relaxed_at < 0) {
       summary_.status = "failed";
       failure = "wrote " + std::to_string(next_out_) + " of the " + std::to_string(solver_.schedule().size()) + " scheduled states";
     }

@@ -113,10 +113,27 @@ const Section<RunSpec>& run_section() {
 }
 
 const Section<DampingSpec>& damping_section() {
-  static const Section<DampingSpec> s{"damping",
-                                      "Rayleigh damping A = alpha M + beta K; the beta part is a viscous stress, never an assembled K.",
-                                      {bind_key(&DampingSpec::alpha, keys::opt(keys::number("alpha", "1/s", "mass-proportional coefficient", 0))),
-                                       bind_key(&DampingSpec::beta, keys::opt(keys::number("beta", "s", "stiffness-proportional coefficient", 0)))}};
+  static const Section<DampingSpec> s{
+      "damping",
+      "Rayleigh damping A = alpha M + beta K; the beta part is a viscous stress, never an assembled K.",
+      {bind_key(&DampingSpec::alpha, keys::opt(keys::number("alpha", "1/s", "mass-proportional coefficient", 0))),
+       bind_key(&DampingSpec::beta, keys::opt(keys::number("beta", "s", "stiffness-proportional coefficient", 0))),
+       bind_key(&DampingSpec::adaptive, keys::declare("adaptive", "",
+                                                      "dynamic relaxation: each step alpha = 2 omega, omega the frequency of the motion left "
+                                                      "(the tangent stiffness's Rayleigh quotient along the step's velocity), at least alpha "
+                                                      "above and at most 1 / dt: critical damping of the mode a relaxing body ends in")),
+       bind_key(&DampingSpec::residual_tolerance,
+                keys::opt(keys::number("residual_tolerance", "",
+                                       "stop the run once the out-of-balance force on the free deformable nodes is "
+                                       "at most this fraction of their internal force (after residual_after; under "
+                                       "a [grasp] also with the grip within 1 % of its target); run.json "
+                                       "relaxation says when",
+                                       0, false, 1)),
+                "0 (off)"),
+       bind_key(&DampingSpec::residual_after, keys::opt(keys::number("residual_after", "s",
+                                                                     "the earliest time the run may stop on residual_tolerance "
+                                                                     "(after the loads have reached their final values)",
+                                                                     0)))}};
   return s;
 }
 

@@ -160,6 +160,16 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j["scenario_overrides"] = sc.overrides;  // tactus-solve --set, in order
   j[k::status] = summary.status;
   j[k::message] = failure;
+  if (sc.damping.adaptive || sc.damping.residual_tolerance > 0) {  // dynamic relaxation (relaxation.hpp)
+    const Relaxation& r = solver.relaxation();
+    j["relaxation"] = {{"adaptive", sc.damping.adaptive},
+                       {"residual_tolerance", sc.damping.residual_tolerance},
+                       {"relaxed", summary.relaxed_at >= 0},
+                       {"relaxed_at", summary.relaxed_at >= 0 ? nlohmann::json(summary.relaxed_at) : nlohmann::json(nullptr)},
+                       {"final_relative_residual", r.relative_residual()},
+                       {"final_alpha", r.alpha()},
+                       {"final_omega", r.omega()}};
+  }
   j["units"] = "SI (m, kg, s, Pa, J)";
   // Names behind the "material" and "body" cell fields of the results (their values index these).
   j[k::materials] = nlohmann::json::array();

@@ -188,6 +188,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
   a.io("integrator.velocity_advanced", velocity_advanced_);
   checkpoint_rigid_bodies(a, rigid_.bodies_for_checkpoint());
   if (drive_) drive_->checkpoint(a);
+  relaxation_.checkpoint(a);
   contact_.checkpoint(a);
   if (a.loading()) {
     if (user_dt_ != user_dt || initial_critical_ != initial_critical)

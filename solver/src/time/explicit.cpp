@@ -21,7 +21,8 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
       max_threads_(forces_.threads()),
       tuner_(max_threads_, run.threads == 0),
       contact_tuner_(max_threads_, run.threads == 0),
-      contact_(model) {
+      contact_(model),
+      relaxation_(damping, 3 * model.num_nodes) {
   const std::size_t ndof = 3 * model.num_nodes;
   u_.assign(ndof, 0.0);
   f_.assign(ndof, 0.0);
@@ -189,7 +190,7 @@ void ExplicitSolver::advance_velocity() {
   if (const int n = contact_tuner_.threads(); n != contact_.threads()) contact_.set_threads(n);
   double contact_seconds = 0;
   const std::size_t ndof = 3 * model_.num_nodes;
-  const HalfStep h(dt_prev_, dt_next_, damping_.alpha, step_ == 0);
+  const HalfStep h(dt_prev_, dt_next_, relaxation_.alpha(), step_ == 0);  // [damping] alpha, or adaptive
   const double t_next = next_lands_ ? schedule_[next_target_] : time_ + h.dt;
   apply_loading(t_next, h.dt);
   v_prev_half_.swap(v_half_);
@@ -226,6 +227,7 @@ void ExplicitSolver::advance_velocity() {
   audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_,
                     forces_.threads());
   if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
+  relaxation_.measure(h, v_old_of, v_new_of, f_.data(), relaxed_dofs(), time_, drive_.get());
   velocity_advanced_ = true;
   step_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - contact_seconds;
 }
@@ -265,7 +267,9 @@ void ExplicitSolver::advance_position() {
   ++step_;
   dt_prev_ = dt;
   velocity_advanced_ = false;
+  relaxation_.before_pass(f_);
   stress_pass(true);
+  relaxation_.after_pass(f_, v_half_.data(), dt, relaxed_dofs());
   if (pass_.critical_step < 1e-3 * initial_critical_) {
     std::ostringstream o;
     o << "the stable time step collapsed to " << pass_.critical_step << " s at step " << step_ << ", t = " << time_

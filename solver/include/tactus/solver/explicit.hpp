@@ -20,6 +20,7 @@
 #include "tactus/solver/joint_drive.hpp"
 #include "tactus/solver/mass_scaling.hpp"
 #include "tactus/solver/model.hpp"
+#include "tactus/solver/relaxation.hpp"
 #include "tactus/solver/rigid.hpp"
 #include "tactus/solver/run_settings.hpp"
 #include "tactus/solver/thread_tuner.hpp"
@@ -96,6 +97,10 @@ class ExplicitSolver {
   const std::vector<RigidBody>& rigid_bodies() const { return rigid_.bodies(); }
   // The seam for joint-driven motion (rigid.hpp): rigid piece k moves as `motion` says.
   void prescribe_rigid_motion(std::size_t piece, const RigidMotion& motion) { rigid_.prescribe(piece, motion); }
+  // Dynamic relaxation ([damping] adaptive, residual_tolerance; relaxation.hpp): the damping of
+  // the next step, the out-of-balance force, and whether the run has relaxed (it then stops).
+  const Relaxation& relaxation() const { return relaxation_; }
+  bool relaxed() const { return relaxation_.relaxed(); }
   // The joint drive ([skeleton], [[joint]], [grasp]; joint_drive.hpp), or nullptr.
   const JointDrive* joint_drive() const { return drive_.get(); }
   // The grasp's per-region sums (grip_regions.hpp), or none; sum_grip_regions refreshes them from
@@ -137,6 +142,7 @@ class ExplicitSolver {
   void apply_loading(double t_next, double dt);
   // Sums support_force_ per boundary into reactions_, with the moments about their points (loading.cpp).
   void accumulate_reactions();
+  RelaxedDofs relaxed_dofs() const { return {masses_.mass.data(), model_.constrained.data(), rigid_.piece_of_node()}; }
 
   const Model& model_;
   RunSpec run_;
@@ -172,6 +178,7 @@ class ExplicitSolver {
   EnergyAudit audit_;                  // energies at t^n and the work halves carried to the next step (energy.hpp)
   RigidBodies rigid_;                  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
   std::unique_ptr<JointDrive> drive_;  // the bones' motion by their joints (joint_drive.hpp), or none
+  Relaxation relaxation_;              // adaptive damping and the stop on the residual (relaxation.hpp)
   std::unique_ptr<GripRegions> regions_;
 };
 

@@ -31,6 +31,7 @@ struct RunSummary {
   double energy_balance_error = 0;        // final, J
   double max_relative_balance_error = 0;  // max over steps of |error| / scale
   std::size_t outputs = 0;
+  double relaxed_at = -1;              // s: dynamic relaxation ended the run here (-1: it did not; relaxation.hpp)
   std::vector<double> von_mises_peak;  // per material block, over the output states
   // Each restart of this run (tactus-solve --restart): the step and time it continued from.
   std::vector<std::pair<std::size_t, double>> restarts;

@@ -42,6 +42,11 @@ struct RunSpec {
 struct DampingSpec {
   double alpha = 0;  // 1/s, mass-proportional
   double beta = 0;   // s, stiffness-proportional (evaluated as a viscous stress)
+  // Dynamic relaxation (relaxation.hpp): alpha each step from the relaxing mode, and the run's stop
+  // once the out-of-balance force is this fraction of the internal force (0: never) after residual_after.
+  bool adaptive = false;
+  double residual_tolerance = 0;
+  double residual_after = 0;  // s
 };
 
 }  // namespace tactus::solver
