@@ -387,6 +387,50 @@ TEST(Grasp, BadJointInputIsRefusedNamingIt) {
   }
 }
 
+// Tissue crushed between two rigid bodies, and a joint bent beyond what its tissue takes: the run
+// stops (NumericalError, the last good state kept by the run loop) naming the two rigid pieces
+// nearest the failing tet and, for two bones a joint joins, that joint. Oracle: the geometry - the
+// handle pushed up at 1 m/s into the tissue under the proximal bone (the bones held), and the PIP
+// joint driven to 170 degrees of flexion with no handle.
+TEST(Grasp, CrushedTissueNamesTheRigidBodiesAndTheJoint) {
+  auto failure = [](const Scenario& sc) {
+    const Model model = build_model(sc);
+    ExplicitSolver s(model, sc.run, sc.damping);
+    try {
+      run_to_end(s);
+    } catch (const NumericalError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(ran to the end)");
+  };
+  auto expect = [](const std::string& m, const std::vector<std::string>& parts, const char* what) {
+    std::printf("%s: %s\n", what, m.c_str());
+    for (const std::string& p : parts) EXPECT_NE(m.find(p), std::string::npos) << what << ": '" << p << "' not in: " << m;
+  };
+  {
+    TempDir dir;
+    Scenario sc = grasp_scenario(dir, 50, 0.03);
+    sc.grasp = GraspSpec{};  // the bones held
+    sc.bodies[1].rigid_velocity = Vec3{0, 0, 1.0};
+    expect(failure(sc), {"bone 'proximal_phalanx_finger' of body 'finger'", "body 'handle'", "crushed between two rigid bodies"},
+           "handle into the finger");
+  }
+  {
+    TempDir dir;
+    Scenario sc = grasp_scenario(dir, 50, 0.03);
+    sc.grasp = GraspSpec{};
+    sc.bodies.pop_back();
+    sc.contacts.clear();
+    CurveSpec close;
+    close.name = "close", close.smooth_step = true, close.t0 = 0, close.t1 = 0.02;
+    sc.curves["close"] = close;
+    sc.joints = {{"pip_finger", 170, 0, "close"}};
+    expect(failure(sc),
+           {"bone 'proximal_phalanx_finger' of body 'finger'", "bone 'middle_phalanx_finger' of body 'finger'", "across the joint 'pip_finger'"},
+           "joint bent to 170 degrees");
+  }
+}
+
 // A target the finger cannot reach stops the run with a message, not a loop: 200 N with the
 // drive capped at 1 N m (about 40 N at this finger).
 TEST(Grasp, UnreachableGripTargetStopsTheRun) {

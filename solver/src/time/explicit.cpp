@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -119,7 +120,8 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
   if (!(pass_.min_jacobian > 0)) {
     std::ostringstream o;
     o << "inverted element at step " << step_ << ", t = " << time_ << " s: " << model_.describe_element(pass_.min_jacobian_element)
-      << " has J = " << pass_.min_jacobian << " (the time step may be too large, or the loading too severe for this mesh)";
+      << " has J = " << pass_.min_jacobian << " (the time step may be too large, or the loading too severe for this mesh)"
+      << describe_rigid_neighbours(pass_.min_jacobian_element);
     throw NumericalError(o.str());
   }
   if (!std::isfinite(pass_.strain_energy)) {
@@ -140,7 +142,7 @@ void ExplicitSolver::scale_mass() {
   o << "mass scaling has added " << added << " kg to body '" << model_.bodies[b].name << "' by step " << step_ << ", t = " << time_
     << " s: " << 100 * added / mass << " % of its " << mass << " kg, above run.added_mass_limit = " << 100 * run_.added_mass_limit
     << " %, to keep the step at run.minimum_time_step = " << run_.minimum_time_step << " s (" << describe_step_limit()
-    << "); lower minimum_time_step or raise added_mass_limit";
+    << "); lower minimum_time_step or raise added_mass_limit" << describe_rigid_neighbours(pass_.limiting_element);
   throw NumericalError(o.str());
 }
 
@@ -176,6 +178,51 @@ std::string ExplicitSolver::describe_step_limit() const {
   } else {
     o << "limited by " << model_.describe_element(e) << ", critical step " << pass_.critical_step << " s";
   }
+  return o.str();
+}
+
+std::string ExplicitSolver::describe_rigid_neighbours(std::size_t e) const {
+  const std::vector<RigidBody>& pieces = rigid_.bodies();
+  if (pieces.size() < 2 || e >= model_.num_elements) return "";
+  Vec3d c = Vec3d::Zero();
+  for (int k = 0; k < 4; ++k) {
+    const auto a = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
+    c += 0.25 * (Vec3d(&model_.X[3 * a]) + Vec3d(&u_[3 * a]));
+  }
+  std::vector<std::pair<double, std::size_t>> nearest;  // distance, piece
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    double d = 1e300;
+    for (std::int32_t a : pieces[p].nodes) {
+      const auto i = static_cast<std::size_t>(a);
+      d = std::min(d, (Vec3d(&model_.X[3 * i]) + Vec3d(&u_[3 * i]) - c).norm());
+    }
+    nearest.emplace_back(d, p);
+  }
+  std::partial_sort(nearest.begin(), nearest.begin() + 2, nearest.end());
+  // A piece by its volume group's name (a bone) within its body, or the body when it is one piece.
+  auto bone = [&](const RigidBody& r) {
+    const BodyRange& b = model_.bodies[r.body];
+    for (std::size_t g = b.group_begin; g < b.group_end; ++g)
+      if (model_.input_mesh.groups[g].dim == 3 && model_.input_mesh.groups[g].tag == r.groups.front()) return model_.input_mesh.groups[g].name;
+    return std::string();
+  };
+  std::ostringstream o;
+  o << std::setprecision(3) << "; it lies between ";
+  for (int k = 0; k < 2; ++k) {
+    const RigidBody& r = pieces[nearest[static_cast<std::size_t>(k)].second];
+    const bool one_piece = std::count_if(pieces.begin(), pieces.end(), [&](const RigidBody& q) { return q.body == r.body; }) == 1;
+    o << (k ? " and " : "") << (one_piece ? "" : "bone '" + bone(r) + "' of ") << "body '" << model_.bodies[r.body].name << "' ("
+      << nearest[static_cast<std::size_t>(k)].first * 1e3 << " mm)";
+  }
+  const std::string a = bone(pieces[nearest[0].second]), b = bone(pieces[nearest[1].second]);
+  const std::vector<SkeletonJoint>& joints = model_.joint_drive.skeleton.joints;
+  for (std::size_t j = 0; j < joints.size(); ++j)
+    if ((joints[j].proximal == a && joints[j].distal == b) || (joints[j].proximal == b && joints[j].distal == a)) {
+      o << ", across the joint '" << joints[j].name << "'";
+      if (drive_) o << " (flexed " << drive_->flexion_at_step()[j] * 180 / M_PI << " deg: an angle or torque beyond what the tissue there takes?)";
+      return o.str();
+    }
+  o << ": tissue crushed between two rigid bodies";
   return o.str();
 }
 
@@ -275,7 +322,8 @@ void ExplicitSolver::advance_position() {
     o << "the stable time step collapsed to " << pass_.critical_step << " s at step " << step_ << ", t = " << time_
       << " s, below 1e-3 of the initial " << initial_critical_ << " s (" << describe_step_limit()
       << "): " << model_.describe_element(pass_.limiting_element)
-      << " is being crushed or its material stiffens without bound (fibres?); the run would not finish";
+      << " is being crushed or its material stiffens without bound (fibres?); the run would not finish"
+      << describe_rigid_neighbours(pass_.limiting_element);
     throw NumericalError(o.str());
   }
   choose_step();

@@ -46,7 +46,8 @@ void Relaxation::measure(const HalfStep& h, const double* v_old, const double* v
   }
   residual_ = internal > 0 ? std::sqrt(out_of_balance / internal) : (out_of_balance > 0 ? 1.0 : 0.0);
   bool grip_held = true;
-  if (drive && drive->grasp()) grip_held = drive->grip_target() > 0 && std::abs(drive->grip_force() - drive->grip_target()) <= 0.01 * drive->grip_target();
+  if (drive && drive->grasp())
+    grip_held = drive->grip_target() > 0 && std::abs(drive->grip_force() - drive->grip_target()) <= 0.01 * drive->grip_target();
   relaxed_ = time >= spec_.residual_after && residual_ <= spec_.residual_tolerance && grip_held;
 }
 

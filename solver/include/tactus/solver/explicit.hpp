@@ -86,6 +86,11 @@ class ExplicitSolver {
   // 'body', material 'rubber'), critical step 0.000277778 s", or the nodal bound's node and the
   // element estimate beside it.
   std::string describe_step_limit() const;
+  // For a tet that inverts or collapses the step: the two rigid pieces nearest it (bones, a rigid
+  // handle) with their distances, and the joint between them when a skeleton joins them: "; it
+  // lies between bone 'middle_phalanx_index' of body 'hand' (0.3 mm) and body 'handle' (0.5 mm):
+  // tissue crushed between two rigid bodies". Empty without rigid pieces.
+  std::string describe_rigid_neighbours(std::size_t element) const;
   // Mass scaling (run.minimum_time_step > 0): mass added so far per body (model.bodies order), kg,
   // each body's own mass, and the momentum the added mass brought (dm v when it was added).
   bool mass_scaling() const { return masses_.on(); }
