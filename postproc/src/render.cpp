@@ -473,6 +473,39 @@ std::vector<std::string> pressure_pictures(const Results& r, const Summary& s, c
   return written;
 }
 
+// The unrolled grip map (grip_map_picture): the flat pressure map in mm with its axes, the peak dot
+// and the caption.
+void draw_unrolled_map(vtkPolyData* map, double peak, const Vec3& peak_point, double radius, const std::string& caption, const fs::path& file,
+                       const RenderOptions& opt) {
+  auto window = offscreen(opt.width, opt.height);
+  auto ren = white_renderer();
+  window->AddRenderer(ren);
+  add_pressure_map(ren, map, peak, peak_point, 1.5);
+  double b[6];
+  map->GetBounds(b);
+  b[0] = 0, b[1] = 1e3 * radius * 2 * M_PI, b[4] = -1, b[5] = 1;
+  vtkCamera* cam = ren->GetActiveCamera();
+  cam->ParallelProjectionOn();
+  cam->SetFocalPoint(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0);
+  cam->SetPosition(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 100);
+  cam->SetViewUp(0, 1, 0);
+  ren->ResetCamera(b);
+  cam->SetParallelScale(0.62 * std::max(b[3] - b[2], (b[1] - b[0]) * opt.height / opt.width));
+  vtkNew<vtkCubeAxesActor> ticks;
+  ticks->SetBounds(b);
+  ticks->SetCamera(cam);
+  ticks->SetXTitle("around the handle (mm of its surface)");
+  ticks->SetYTitle("along (mm)");
+  ticks->ZAxisVisibilityOff();
+  ticks->SetFlyModeToOuterEdges();
+  for (int a = 0; a < 3; ++a) ticks->GetTitleTextProperty(a)->SetColor(0, 0, 0), ticks->GetLabelTextProperty(a)->SetColor(0, 0, 0);
+  ticks->GetXAxesLinesProperty()->SetColor(0, 0, 0);
+  ticks->GetYAxesLinesProperty()->SetColor(0, 0, 0);
+  ren->AddActor(ticks);
+  add_text(ren, caption, 20, opt.height - 40, 18);
+  write_png(window, file);
+}
+
 // grip_map.png: the handle's pressure on the hand at the last output, unrolled around the handle
 // as grip studies show it: arc length at the handle's surface around its axis against length
 // along it. The handle's axis is its longest principal axis through its centroid, its radius the
@@ -569,39 +602,13 @@ bool grip_map_picture(const Results& r, const Summary& s, const fs::path& file, 
   map->SetPoints(flat);
   map->SetPolys(triangles);
   map->GetPointData()->AddArray(pressure);
-  auto window = offscreen(opt.width, opt.height);
-  auto ren = white_renderer();
-  window->AddRenderer(ren);
   Vec3 peak_point;
   flat->GetPoint(peak_at, peak_point.data());
-  add_pressure_map(ren, map, peak, peak_point, 1.5);
-  double b[6];
-  map->GetBounds(b);
-  b[0] = 0, b[1] = 1e3 * radius * 2 * M_PI, b[4] = -1, b[5] = 1;
-  vtkCamera* cam = ren->GetActiveCamera();
-  cam->ParallelProjectionOn();
-  cam->SetFocalPoint(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0);
-  cam->SetPosition(0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 100);
-  cam->SetViewUp(0, 1, 0);
-  ren->ResetCamera(b);
-  cam->SetParallelScale(0.62 * std::max(b[3] - b[2], (b[1] - b[0]) * opt.height / opt.width));
-  vtkNew<vtkCubeAxesActor> ticks;
-  ticks->SetBounds(b);
-  ticks->SetCamera(cam);
-  ticks->SetXTitle("around the handle (mm of its surface)");
-  ticks->SetYTitle("along (mm)");
-  ticks->ZAxisVisibilityOff();
-  ticks->SetFlyModeToOuterEdges();
-  for (int a = 0; a < 3; ++a) ticks->GetTitleTextProperty(a)->SetColor(0, 0, 0), ticks->GetLabelTextProperty(a)->SetColor(0, 0, 0);
-  ticks->GetXAxesLinesProperty()->SetColor(0, 0, 0);
-  ticks->GetYAxesLinesProperty()->SetColor(0, 0, 0);
-  ren->AddActor(ticks);
   std::ostringstream caption;
   caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   " << r.bodies[static_cast<std::size_t>(hand)] << " on '"
           << s.grasp.handle << "' (radius " << 1e3 * radius << " mm), unrolled; peak " << peak / 1e6 << " MPa (black dot); grip "
           << s.grasp.final_grip << " N";
-  add_text(ren, caption.str(), 20, opt.height - 40, 18);
-  write_png(window, file);
+  draw_unrolled_map(map, peak, peak_point, radius, caption.str(), file, opt);
   return true;
 }
 

@@ -148,6 +148,18 @@ nlohmann::json joints_json(const Scenario& sc, const Model& model, const Explici
   return out;
 }
 
+// Dynamic relaxation (relaxation.hpp): whether and when the run relaxed, and the last residual and damping.
+nlohmann::json relaxation_json(const Scenario& sc, const ExplicitSolver& solver, const RunSummary& summary) {
+  const Relaxation& r = solver.relaxation();
+  return {{"adaptive", sc.damping.adaptive},
+          {"residual_tolerance", sc.damping.residual_tolerance},
+          {"relaxed", summary.relaxed_at >= 0},
+          {"relaxed_at", summary.relaxed_at >= 0 ? nlohmann::json(summary.relaxed_at) : nlohmann::json(nullptr)},
+          {"final_relative_residual", r.relative_residual()},
+          {"final_alpha", r.alpha()},
+          {"final_omega", r.omega()}};
+}
+
 }  // namespace
 
 nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
@@ -160,16 +172,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j["scenario_overrides"] = sc.overrides;  // tactus-solve --set, in order
   j[k::status] = summary.status;
   j[k::message] = failure;
-  if (sc.damping.adaptive || sc.damping.residual_tolerance > 0) {  // dynamic relaxation (relaxation.hpp)
-    const Relaxation& r = solver.relaxation();
-    j["relaxation"] = {{"adaptive", sc.damping.adaptive},
-                       {"residual_tolerance", sc.damping.residual_tolerance},
-                       {"relaxed", summary.relaxed_at >= 0},
-                       {"relaxed_at", summary.relaxed_at >= 0 ? nlohmann::json(summary.relaxed_at) : nlohmann::json(nullptr)},
-                       {"final_relative_residual", r.relative_residual()},
-                       {"final_alpha", r.alpha()},
-                       {"final_omega", r.omega()}};
-  }
+  if (sc.damping.adaptive || sc.damping.residual_tolerance > 0) j["relaxation"] = relaxation_json(sc, solver, summary);
   j["units"] = "SI (m, kg, s, Pa, J)";
   // Names behind the "material" and "body" cell fields of the results (their values index these).
   j[k::materials] = nlohmann::json::array();

@@ -199,8 +199,10 @@ std::string ExplicitSolver::describe_rigid_neighbours(std::size_t e) const {
     nearest.emplace_back(d, p);
   }
   std::partial_sort(nearest.begin(), nearest.begin() + 2, nearest.end());
-  // A piece by its volume group's name (a bone) within its body, or the body when it is one piece.
+  // A piece by its skeleton bone's name, else its volume group's name, within its body.
   auto bone = [&](const RigidBody& r) {
+    for (const SkeletonBone& sb : model_.joint_drive.skeleton.bones)
+      if (r.body == model_.joint_drive.body && sb.label == r.groups.front()) return sb.name;
     const BodyRange& b = model_.bodies[r.body];
     for (std::size_t g = b.group_begin; g < b.group_end; ++g)
       if (model_.input_mesh.groups[g].dim == 3 && model_.input_mesh.groups[g].tag == r.groups.front()) return model_.input_mesh.groups[g].name;
