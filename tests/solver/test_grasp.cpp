@@ -3,6 +3,8 @@
 // targets, and the held grasp against the moment balance about each joint.
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -255,7 +257,8 @@ TEST(Grasp, HeldGraspIsInStaticEquilibriumAboutEachJoint) {
 // 1 % of 50 N. Oracle: the same statics. Adaptive damping (no alpha given) must stop by itself
 // before the end time with each joint's moments balanced within 2 %, in no more than 5 % more
 // steps than the alpha = 200 /s tuned by hand for this finger; a first guess of alpha = 20 /s
-// is still oscillating at the end time (printed, the reason for the adaptive mode).
+// is still oscillating at 0.12 s, when both others have stopped (printed, the reason for the
+// adaptive mode).
 TEST(Grasp, DynamicRelaxationStopsInEquilibrium) {
   struct Case {
     const char* name;
@@ -269,21 +272,23 @@ TEST(Grasp, DynamicRelaxationStopsInEquilibrium) {
                              {"adaptive dynamic relaxation", 0, true}}};
   for (Case& c : cases) {
     TempDir dir;
-    Scenario sc = grasp_scenario(dir, 50, 0.25);
+    Scenario sc = grasp_scenario(dir, 50, c.alpha == 20 ? 0.12 : 0.25);  // (the oscillating run's contact is costly)
     sc.damping.alpha = c.alpha;
     sc.damping.adaptive = c.adaptive;
     sc.damping.residual_tolerance = 2e-3;
     sc.damping.residual_after = sc.grasp.ramp_time;
     const Model model = build_model(sc);
     ExplicitSolver s(model, sc.run, sc.damping);
+    const auto start = std::chrono::steady_clock::now();
     while (true) {
       s.advance_velocity();
       if (s.finished() || s.relaxed()) break;
       s.advance_position();
     }
     c.steps = s.step_index(), c.relaxed = s.relaxed();
-    std::printf("%s: %s at t = %.4f s after %zu steps, residual %.2e, grip %.3f N, KE/IE %.2e\n", c.name, c.relaxed ? "relaxed" : "NOT relaxed",
-                s.time(), c.steps, s.relaxation().relative_residual(), s.joint_drive()->grip_force(), s.energies().kinetic / s.energies().internal);
+    std::printf("%s: %s at t = %.4f s after %zu steps (%.1f s), residual %.2e, grip %.3f N, KE/IE %.2e\n", c.name,
+                c.relaxed ? "relaxed" : "NOT relaxed", s.time(), c.steps, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                s.relaxation().relative_residual(), s.joint_drive()->grip_force(), s.energies().kinetic / s.energies().internal);
     const double imbalance = worst_joint_imbalance(model, s);
     if (c.alpha == 20) continue;
     EXPECT_TRUE(c.relaxed) << c.name;
