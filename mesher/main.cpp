@@ -148,6 +148,7 @@ struct ImageOptions {
   std::vector<double> refine_box_mm;
   bool keep_surfaces = false, keep_small_regions = false;
   double min_region_mm3 = 0;
+  double joint_space_mm = 0;
 };
 
 void add_image_options(CLI::App& app, ImageOptions& o) {
@@ -164,7 +165,12 @@ void add_image_options(CLI::App& app, ImageOptions& o) {
   app.add_option("--refine-box", o.refine_box_mm,
                  "X0 Y0 Z0 X1 Y1 Z1: a world box (mm) meshed finer, e.g. where the skin will touch (with --refine-size)")
       ->expected(6);
-  app.add_option("--refine-size", p.refine_size_mm, "max facet size inside --refine-box, mm (cells there: twice it)")->check(CLI::PositiveNumber);
+  app.add_option("--refine-joints", p.refine_joints_mm,
+                 "D: also refine (at --refine-size) everything within D mm of two different bones - the joints' gaps and creases, "
+                 "where flexing squeezes the tissue")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--refine-size", p.refine_size_mm, "max facet size inside --refine-box and --refine-joints, mm (cells there: twice it)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--refine-distance", p.refine_distance_mm, "surface approximation error inside --refine-box, mm (default: --facet-distance)")
       ->check(CLI::PositiveNumber);
   app.add_option("--radius-edge", p.cell_radius_edge, "max cell radius-edge ratio")->capture_default_str();
@@ -180,6 +186,10 @@ void add_image_options(CLI::App& app, ImageOptions& o) {
                  "(0: two tets of the bone cell size, bone-cell-size^3 / 5)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--keep-small-regions", o.keep_small_regions, "mesh every region however small (tiny tets set the stable step)");
+  app.add_option("--joint-space", o.joint_space_mm,
+                 "D: leave the soft tissue within D mm of two different bones unmeshed - the joints' spaces, where cartilage slides "
+                 "rather than binds the bones (at most half the joints' gaps wider than it; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--seed", p.seed, "random seed")->capture_default_str();
   app.add_option("--max-elements", p.max_elements, "refuse meshes expected to have more tets than this")->capture_default_str();
   app.add_option("--wave-speed", o.speed_args,
@@ -209,16 +219,27 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   mesher::ImageMeshParams& p = o.p;
   p.restore_volumes = !o.keep_surfaces;
   if (!o.refine_box_mm.empty() && !(p.refine_size_mm > 0)) throw InputError("command line", "--refine-box", "a --refine-size for the box", "none");
-  if (p.refine_size_mm > 0 && o.refine_box_mm.empty()) throw InputError("command line", "--refine-size", "a --refine-box to refine", "none");
+  if (p.refine_joints_mm > 0 && !(p.refine_size_mm > 0))
+    throw InputError("command line", "--refine-joints", "a --refine-size for the joints", "none");
+  if (p.refine_size_mm > 0 && o.refine_box_mm.empty() && !(p.refine_joints_mm > 0))
+    throw InputError("command line", "--refine-size", "a --refine-box or --refine-joints to refine", "none");
   for (std::size_t i = 0; i < o.refine_box_mm.size(); ++i) p.refine_box_m[i] = o.refine_box_mm[i] * 1e-3;
   p.refine_cell_size_mm = 2 * p.refine_size_mm;  // the box's cells grade inward from its finer surface
   LabelTable table;
   auto labels = read_h5<std::uint8_t>(o.labels_file, "/labels", &table);
   const nlohmann::json absorbed = o.keep_small_regions ? nlohmann::json::array() : absorb_small_regions(labels, table, o);
+  std::size_t carved = 0;  // --joint-space: the soft tissue between two bones becomes a cavity
+  if (o.joint_space_mm > 0) {
+    const std::vector<std::uint8_t> space = mesher::joint_gap_mask(labels, o.joint_space_mm);
+    for (std::size_t v = 0; v < labels.size(); ++v)
+      if (space[v] && labels.data[v] == contracts::kSoftTissueLabel) labels.data[v] = 0, ++carved;
+    log::info() << "joint spaces: " << carved << " soft-tissue voxels within " << o.joint_space_mm << " mm of two bones left unmeshed ("
+                << carved * labels.voxel_volume() * 1e9 << " mm^3)";
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
   log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
-  output.write(mesh, wave_speeds(mesh, o.speed_args), {{"absorbed_regions", absorbed}});
+  output.write(mesh, wave_speeds(mesh, o.speed_args), {{"absorbed_regions", absorbed}, {"joint_space_voxels", carved}});
 }
 
 // skeleton.json of a hand mesh's bone groups.

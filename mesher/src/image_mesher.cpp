@@ -40,11 +40,30 @@ using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
 using Criteria = CGAL::Mesh_criteria_3<Tr>;
 using SizeField = CGAL::Mesh_constant_domain_field_3<Domain::R, Domain::Index>;
 
-// Whether a world point (m) is inside the refined region (none while refine_size_mm is 0).
+// Whether a world point (m) is inside the refined box (none while refine_size_mm is 0 or the box
+// is empty).
 bool in_refine_box(const ImageMeshParams& p, const std::array<double, 3>& x) {
   const auto& b = p.refine_box_m;
-  return p.refine_size_mm > 0 && x[0] >= b[0] && x[1] >= b[1] && x[2] >= b[2] && x[0] <= b[3] && x[1] <= b[4] && x[2] <= b[5];
+  return p.refine_size_mm > 0 && b[3] > b[0] && x[0] >= b[0] && x[1] >= b[1] && x[2] >= b[2] && x[0] <= b[3] && x[1] <= b[4] && x[2] <= b[5];
 }
+
+// The refined region: the box, and the joints' voxels (joint_gap_mask) when refine_joints_mm > 0.
+struct RefinedRegion {
+  const ImageMeshParams* p = nullptr;
+  const Volume<std::uint8_t>* labels = nullptr;
+  std::vector<std::uint8_t> joints;
+  // `aligned`: a point in the labels' axis-aligned frame, m (origin + index * spacing).
+  bool contains(const std::array<double, 3>& aligned) const {
+    if (in_refine_box(*p, labels->to_world(aligned))) return true;
+    if (joints.empty()) return false;
+    std::array<int, 3> v{};
+    for (int d = 0; d < 3; ++d) {
+      v[d] = static_cast<int>(std::lround((aligned[d] - labels->origin[d]) / labels->spacing[d]));
+      if (v[d] < 0 || v[d] >= labels->dims[d]) return false;
+    }
+    return joints[labels->index(v[0], v[1], v[2])] != 0;
+  }
+};
 
 // A CGAL sizing field: `outer` (a size per subdomain or surface patch, or one number) outside the
 // refined box, at most `inner` (mm) inside it. CGAL's points are millimetres from the labels'
@@ -52,8 +71,7 @@ bool in_refine_box(const ImageMeshParams& p, const std::array<double, 3>& x) {
 template <class Outer>
 struct RefinedField {
   const Outer* outer = nullptr;
-  const Volume<std::uint8_t>* labels = nullptr;
-  const ImageMeshParams* p = nullptr;
+  const RefinedRegion* region = nullptr;
   double inner = 0;
   [[gnu::noinline]] double operator()(const Domain::Point_3& q, int dim, const Domain::Index& index) const {
     double o;
@@ -62,10 +80,20 @@ struct RefinedField {
     else
       o = (*outer)(q, dim, index);
     if (!(inner > 0) || o <= inner) return o;
-    const auto& g = labels->origin;
-    return in_refine_box(*p, labels->to_world({g[0] + q.x() * 1e-3, g[1] + q.y() * 1e-3, g[2] + q.z() * 1e-3})) ? inner : o;
+    const auto& g = region->labels->origin;
+    return region->contains({g[0] + q.x() * 1e-3, g[1] + q.y() * 1e-3, g[2] + q.z() * 1e-3}) ? inner : o;
   }
 };
+
+// 1 where any voxel of `line` (n values, `stride` apart) within r of it is 1: a running count.
+void dilate_line(std::uint8_t* line, std::size_t stride, int n, int r, std::vector<int>& prefix) {
+  prefix.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (int i = 0; i < n; ++i)
+    prefix[static_cast<std::size_t>(i) + 1] = prefix[static_cast<std::size_t>(i)] + (line[static_cast<std::size_t>(i) * stride] ? 1 : 0);
+  for (int i = 0; i < n; ++i)
+    line[static_cast<std::size_t>(i) * stride] =
+        prefix[static_cast<std::size_t>(std::min(n, i + r + 1))] > prefix[static_cast<std::size_t>(std::max(0, i - r))];
+}
 
 void check(bool ok, const std::string& field, const std::string& expected, double value) {
   if (!ok) {
@@ -77,11 +105,58 @@ void check(bool ok, const std::string& field, const std::string& expected, doubl
 
 }  // namespace
 
+// Each bone dilated by a box of half-side `mm` within its bounding box grown by as much
+// (separable: three passes of running counts); a voxel two different bones' dilations reach is
+// in the mask. The bones' voxels themselves count, so the bone surfaces facing the gap are in it.
+std::vector<std::uint8_t> joint_gap_mask(const Volume<std::uint8_t>& labels, double mm) {
+  if (!(mm > 0)) return {};
+  std::array<int, 3> r{};
+  for (int d = 0; d < 3; ++d) r[d] = std::max(1, static_cast<int>(std::ceil(mm * 1e-3 / labels.spacing[d])));
+  std::map<int, std::array<int, 6>> boxes;  // bone label -> lo, hi voxel
+  for (int k = 0; k < labels.dims[2]; ++k)
+    for (int j = 0; j < labels.dims[1]; ++j)
+      for (int i = 0; i < labels.dims[0]; ++i) {
+        const int l = labels.at(i, j, k);
+        if (l < contracts::kFirstBoneLabel) continue;
+        auto [it, fresh] = boxes.try_emplace(l, std::array<int, 6>{i, j, k, i, j, k});
+        auto& b = it->second;
+        if (!fresh) b = {std::min(b[0], i), std::min(b[1], j), std::min(b[2], k), std::max(b[3], i), std::max(b[4], j), std::max(b[5], k)};
+      }
+  std::vector<std::uint8_t> first(labels.size(), 0), mask(labels.size(), 0), box;
+  std::vector<int> prefix;
+  for (const auto& [l, b] : boxes) {
+    std::array<int, 3> lo{}, n{};
+    for (int d = 0; d < 3; ++d) lo[d] = std::max(0, b[d] - r[d]), n[d] = std::min(labels.dims[d] - 1, b[d + 3] + r[d]) - lo[d] + 1;
+    const std::array<std::size_t, 3> stride{1, static_cast<std::size_t>(n[0]), static_cast<std::size_t>(n[0]) * static_cast<std::size_t>(n[1])};
+    box.assign(stride[2] * static_cast<std::size_t>(n[2]), 0);
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) box[i + stride[1] * j + stride[2] * k] = labels.at(lo[0] + i, lo[1] + j, lo[2] + k) == l;
+    for (int d = 0; d < 3; ++d) {  // every line along axis d
+      const int a = (d + 1) % 3, c = (d + 2) % 3;
+      for (int v = 0; v < n[c]; ++v)
+        for (int u = 0; u < n[a]; ++u) dilate_line(&box[stride[a] * u + stride[c] * v], stride[d], n[d], r[d], prefix);
+    }
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) {
+          if (!box[i + stride[1] * j + stride[2] * k]) continue;
+          const std::size_t at = labels.index(lo[0] + i, lo[1] + j, lo[2] + k);
+          if (first[at] == 0)
+            first[at] = static_cast<std::uint8_t>(l);
+          else if (first[at] != l)
+            mask[at] = 1;
+        }
+  }
+  return mask;
+}
+
 double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
   const double voxel_mm3 = labels.voxel_volume() * 1e9;
   auto tets = [&](double size_mm) { return voxel_mm3 / (0.1 * size_mm * size_mm * size_mm); };
   const double soft = tets(p.cell_size_mm), bone = tets(p.bone_cell_size_mm);
   const double refined = p.refine_cell_size_mm > 0 ? tets(p.refine_cell_size_mm) : 0;
+  const RefinedRegion region{&p, &labels, joint_gap_mask(labels, p.refine_size_mm > 0 ? p.refine_joints_mm : 0)};
   double n = 0;
   for (int k = 0; k < labels.dims[2]; ++k)
     for (int j = 0; j < labels.dims[1]; ++j)
@@ -91,7 +166,7 @@ double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& 
         const double own = v == contracts::kSoftTissueLabel ? soft : v >= contracts::kFirstBoneLabel ? bone : 0.0;
         const std::array<double, 3> aligned{labels.origin[0] + i * labels.spacing[0], labels.origin[1] + j * labels.spacing[1],
                                             labels.origin[2] + k * labels.spacing[2]};
-        n += refined > own && in_refine_box(p, labels.to_world(aligned)) ? refined : own;
+        n += refined > own && region.contains(aligned) ? refined : own;
       }
   return n;
 }
@@ -111,7 +186,9 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
         p.boundary_smoothing_voxels);
   check(p.refine_size_mm >= 0, "refine_size", "a size >= 0 mm (0: no refined region)", p.refine_size_mm);
   check(p.refine_distance_mm >= 0, "refine_distance", "a distance >= 0 mm (0: the facet distance)", p.refine_distance_mm);
-  if (p.refine_size_mm > 0)
+  const bool has_box = std::any_of(p.refine_box_m.begin(), p.refine_box_m.end(), [](double x) { return x != 0; });
+  check(p.refine_joints_mm >= 0 && p.refine_joints_mm <= 50, "refine_joints", "a distance from 0 to 50 mm", p.refine_joints_mm);
+  if (p.refine_size_mm > 0 && has_box)  // (refine_joints_mm alone refines no box)
     for (int a = 0; a < 3; ++a)
       check(p.refine_box_m[static_cast<std::size_t>(a)] < p.refine_box_m[static_cast<std::size_t>(a + 3)], std::string("refine_box ") + "xyz"[a],
             "a box whose lower corner is below its upper one",
@@ -241,9 +318,10 @@ class CgalImageMesher {
         facet_size_.set_size(p.bone_facet_size_mm, 2, domain_.index_from_surface_patch_index(Domain::Surface_patch_index(1, id)));
       }
     if (p.refine_size_mm > 0) {  // the refined region's fields (RefinedField); CGAL keeps references to them
-      refined_facet_size_ = {&facet_size_, &labels_, &p_, p.refine_size_mm};
-      refined_cell_size_ = {&size_, &labels_, &p_, p.refine_cell_size_mm};
-      refined_distance_ = {&p_.facet_distance_mm, &labels_, &p_, p.refine_distance_mm};
+      region_ = {&p_, &labels_, joint_gap_mask(labels_, p.refine_joints_mm)};
+      refined_facet_size_ = {&facet_size_, &region_, p.refine_size_mm};
+      refined_cell_size_ = {&size_, &region_, p.refine_cell_size_mm};
+      refined_distance_ = {&p_.facet_distance_mm, &region_, p.refine_distance_mm};
       criteria_ =
           std::make_unique<Criteria>(CGAL::parameters::facet_angle = p.facet_angle_deg, CGAL::parameters::facet_size = refined_facet_size_,
                                      CGAL::parameters::facet_distance = refined_distance_,
@@ -409,7 +487,8 @@ class CgalImageMesher {
   unsigned seed_;
   Domain domain_;
   SizeField size_, facet_size_;
-  RefinedField<SizeField> refined_facet_size_, refined_cell_size_;  // with refine_size_mm > 0: the fields above, finer in the box
+  RefinedRegion region_;                                            // the refined box and joints
+  RefinedField<SizeField> refined_facet_size_, refined_cell_size_;  // with refine_size_mm > 0: the fields above, finer in the region
   RefinedField<double> refined_distance_;
   std::unique_ptr<Criteria> criteria_;
   std::set<int> wanted_;

@@ -498,3 +498,28 @@ TEST(ImageMesher, SkeletonDrivesTheHandToAnotherPosture) {
   }
   std::printf("12 -> 40 degrees through the extracted skeleton: largest centroid miss %.2f mm (%s)\n", worst, worst_bone.c_str());
 }
+
+// The joints' region (--refine-joints, --joint-space): the voxels two different bones' box
+// dilations of half-side D both reach. Oracle: two bone slabs (labels 2 and 3, x = 0..7 and
+// 12..19 voxels of 1 mm) with 4 voxels of soft tissue between them, full in y and z: bone 2's
+// dilation reaches x <= 7 + ceil(D), bone 3's x >= 12 - ceil(D), so the region is the 100-voxel
+// planes where both do - none for D = 2 mm, x = 9..10 for 3 mm, x = 6..13 (into both bones) for 6.
+TEST(ImageMesher, JointRegionIsWhereTwoBonesAreNear) {
+  Volume<std::uint8_t> labels({20, 10, 10}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}, 1);
+  for (int k = 0; k < 10; ++k)
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 20; ++i) labels.at(i, j, k) = i <= 7 ? 2 : i >= 12 ? 3 : 1;
+  for (const auto& [mm, lo, hi] : {std::tuple{2.0, 1, 0}, std::tuple{3.0, 9, 10}, std::tuple{6.0, 6, 13}}) {
+    const std::vector<std::uint8_t> mask = mesher::joint_gap_mask(labels, mm);
+    std::size_t count = 0, wrong = 0;
+    for (int k = 0; k < 10; ++k)
+      for (int j = 0; j < 10; ++j)
+        for (int i = 0; i < 20; ++i) {
+          const bool in = mask[labels.index(i, j, k)] != 0;
+          count += in, wrong += in != (i >= lo && i <= hi);
+        }
+    std::printf("joint region, D = %.0f mm: %zu voxels (expected %d), %zu misplaced\n", mm, count, hi >= lo ? 100 * (hi - lo + 1) : 0, wrong);
+    EXPECT_EQ(wrong, 0u);
+  }
+  EXPECT_TRUE(mesher::joint_gap_mask(labels, 0).empty());
+}

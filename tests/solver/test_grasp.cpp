@@ -287,8 +287,9 @@ TEST(Grasp, DynamicRelaxationStopsInEquilibrium) {
     }
     c.steps = s.step_index(), c.relaxed = s.relaxed();
     std::printf("%s: %s at t = %.4f s after %zu steps (%.1f s), residual %.2e, grip %.3f N, KE/IE %.2e\n", c.name,
-                c.relaxed ? "relaxed" : "NOT relaxed", s.time(), c.steps, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
-                s.relaxation().relative_residual(), s.joint_drive()->grip_force(), s.energies().kinetic / s.energies().internal);
+                c.relaxed ? "relaxed" : "NOT relaxed", s.time(), c.steps,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), s.relaxation().relative_residual(),
+                s.joint_drive()->grip_force(), s.energies().kinetic / s.energies().internal);
     const double imbalance = worst_joint_imbalance(model, s);
     if (c.alpha == 20) continue;
     EXPECT_TRUE(c.relaxed) << c.name;

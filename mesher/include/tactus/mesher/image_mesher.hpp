@@ -29,6 +29,10 @@ struct ImageMeshParams {
   double refine_size_mm = 0;
   double refine_cell_size_mm = 0;
   double refine_distance_mm = 0;
+  // Also refined (with refine_size_mm): every voxel within refine_joints_mm of two different bones
+  // along each axis - a joint's gap, the tissue of its crease and the skin over it, where a
+  // flexing joint squeezes one layer of tets (0: off; docs/studies/grasp.md).
+  double refine_joints_mm = 0;
   double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
   double cell_size_mm = 7.0;        // soft tissue cell circumradius bound
   double bone_cell_size_mm = 3.5;   // the same in bones (finer)
@@ -46,6 +50,9 @@ struct ImageMeshParams {
 
 // The number of tets CGAL's cell-size criterion is expected to give for these labels, from each
 // subdomain's volume and cell size (tets average about a tenth of their circumradius cubed).
+// The voxels within `mm` (along each axis) of two different bone labels, one byte per voxel of
+// `labels` (empty when mm is 0): the joints' region refine_joints_mm refines.
+std::vector<std::uint8_t> joint_gap_mask(const Volume<std::uint8_t>& labels, double mm);
 double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& params);
 
 // Physical groups written: volumes by label (1 "soft_tissue", 2.. the label table's names, e.g.
