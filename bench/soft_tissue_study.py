@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Soft-tissue sensitivity study of the hand-block case (docs/soft-tissue-study.md).
+"""Soft-tissue sensitivity study of the hand-block case (docs/studies/soft-tissue.md).
 
 Runs pipeline/scenarios/hand_block.toml on the stored reference meshes with the tissue's bulk
 modulus k, its formulation (standard / anp) and its fibre field (anatomical: the hand's
