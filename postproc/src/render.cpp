@@ -245,8 +245,32 @@ void add_pressure_map(vtkRenderer* ren, vtkPolyData* surface, double scale_max, 
   ma->SetMapper(mm);
   ma->GetProperty()->SetColor(0, 0, 0);
   ren->AddActor(ma);
-  // The bar reads from 0: the same colours, without the grey floor's offset in its labels.
-  add_scalar_bar(ren, rainbow(0, scale_max, false), "contact pressure (Pa)");
+  // The bar reads from 0 in MPa: the same colours, without the grey floor's offset in its labels.
+  add_scalar_bar(ren, rainbow(0, 1e-6 * scale_max, false), "contact pressure (MPa)");
+}
+
+// The pressed nodes' (pressure, area) of `surfaces` pooled (a node's area: a third of each surface
+// triangle around it), for pressure_scale_cap.
+double surfaces_pressure_cap(const std::vector<vtkPolyData*>& surfaces) {
+  std::vector<std::pair<double, double>> pressed;
+  for (vtkPolyData* s : surfaces) {
+    vtkDataArray* p = s->GetPointData()->GetArray(cp::contact_pressure.name);
+    if (!p) continue;
+    std::vector<double> area(static_cast<std::size_t>(s->GetNumberOfPoints()), 0.0);
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    vtkCellArray* polys = s->GetPolys();
+    for (polys->InitTraversal(); polys->GetNextCell(n, ids);) {
+      if (n != 3) continue;
+      Vec3 a, b, c;
+      s->GetPoint(ids[0], a.data()), s->GetPoint(ids[1], b.data()), s->GetPoint(ids[2], c.data());
+      const double third = norm(cross(b - a, c - a)) / 6;
+      for (int k = 0; k < 3; ++k) area[static_cast<std::size_t>(ids[k])] += third;
+    }
+    for (vtkIdType i = 0; i < s->GetNumberOfPoints(); ++i)
+      if (const double q = p->GetComponent(i, 0); q > 0) pressed.emplace_back(q, area[static_cast<std::size_t>(i)]);
+  }
+  return pressure_scale_cap(pressed);
 }
 
 std::string ms(double t) {
@@ -437,6 +461,10 @@ bool pressure_picture(const Results& r, std::size_t k, int pb, vtkPolyData* body
   caption << std::setprecision(3) << "t = " << ms(r.frames[k].time) << " ms   contact pressure on " << name << "; peak "
           << p->GetComponent(peak, 0) / 1e6 << " MPa (black dot) at (" << ms(at[0]) << ", " << ms(at[1]) << ", " << ms(at[2]) << ") mm";
   add_text(ren, caption.str(), 20, opt.height - 40, 18);
+  std::ostringstream scale;
+  scale << std::setprecision(3) << "colour scale 0 - " << scale_max / 1e6
+        << " MPa: 99.5 % of the pressed area of all outputs lies below it (red: at or above)";
+  add_text(ren, scale.str(), 20, 24, 16);  // at the foot, clear of the model
   const auto axes = principal_axes(body->GetPoints());
   look(ren, hb, 2 * v.span * view, axes[2], 1.2);
   write_png(window, file);
@@ -445,19 +473,23 @@ bool pressure_picture(const Results& r, std::size_t k, int pb, vtkPolyData* body
 
 // pressure.png: the state with the peak pressure at the outputs, seen from its own pressed side.
 // pressure_t<ms>ms.png: every chosen state with contact on that body, on one colour scale (0 to the
-// outputs' peak) and one view (the pressed side of the state with the most nodes in contact), so
-// the pictures side by side show how the pressure map changes in time.
+// area-weighted 99.5th percentile over the outputs, pressure_scale_cap) and one view (the pressed side of the state with the most nodes in contact),
+// so the pictures side by side show how the pressure map changes in time.
 std::vector<std::string> pressure_pictures(const Results& r, const Summary& s, const std::vector<std::size_t>& chosen, const Views& v,
                                            const fs::path& report, const RenderOptions& opt) {
   std::vector<std::string> written;
   const int pb = std::max(0, pressure_body(r, s, opt));
-  const double scale = s.peak_pressure_outputs.value;
   std::map<std::size_t, vtkSmartPointer<vtkPolyData>> bodies;  // each state read once
   const auto body_at = [&](std::size_t k) -> vtkPolyData* {
     auto& b = bodies[k];
     if (!b) b = surface(body_cells(load(r.frames[k].file), pb));
     return b;
   };
+  std::vector<vtkPolyData*> every_output;
+  for (std::size_t k = 0; k < r.frames.size(); ++k)
+    if (s.frames[k].contact_nodes > 0) every_output.push_back(body_at(k));
+  const double cap = surfaces_pressure_cap(every_output), peak = s.peak_pressure_outputs.value;
+  const double scale = cap > 0 && cap < peak ? cap : peak;
   const std::size_t peak_k = nearest_frame(r, s.peak_pressure_outputs.time);
   if (pressure_picture(r, peak_k, pb, body_at(peak_k), pressed_side(body_at(peak_k)), scale, v, report / "pressure.png", opt))
     written.push_back("pressure.png");
@@ -681,6 +713,17 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
   for (const char* f : {"plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png", "plot_reactions.png"})
     if (fs::exists(report / f)) written.push_back(f);
   return written;
+}
+
+double pressure_scale_cap(std::vector<std::pair<double, double>> pressed) {
+  double total = 0;
+  for (const auto& [q, a] : pressed) total += a;
+  if (pressed.empty()) return 0;
+  std::sort(pressed.begin(), pressed.end());
+  double below = 0;
+  for (const auto& [q, a] : pressed)
+    if ((below += a) >= 0.995 * total) return q;
+  return pressed.back().first;
 }
 
 }  // namespace tactus::postproc

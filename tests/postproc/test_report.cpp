@@ -17,6 +17,7 @@
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
+#include "tactus/postproc/render.hpp"
 #include "tactus/postproc/results.hpp"
 #include "tactus/postproc/summary.hpp"
 #include "temp_dir.hpp"
@@ -438,4 +439,26 @@ TEST(Pictures, UnknownPressureBodyIsRefused) {
   EXPECT_NE(log.find("--pressure-body"), std::string::npos) << log;
   EXPECT_NE(log.find("plate, punch"), std::string::npos) << log;
   EXPECT_FALSE(fs::exists(tmp.path() / "report"));
+}
+
+// The pressure pictures' colour cap (render.hpp). Oracle: the definition on hand-made sets - 1,000
+// nodes of 1 mm² at 0.1..100 kPa in steps of 0.1 kPa (the cap is the 995th value, 99.5 kPa), the
+// same plus one node of 1.69 MPa on 2 mm² (0.2 % of the area: the cap stays 99.7 kPa, the 997th
+// of the pooled list), and that node on 10 mm² (1 % of the area: the cap is its pressure).
+TEST(Pictures, PressureScaleIsCappedAtTheAreaPercentile) {
+  std::vector<std::pair<double, double>> pressed;
+  for (int i = 1; i <= 1000; ++i) pressed.emplace_back(100.0 * i, 1e-6);
+  const double plain = postproc::pressure_scale_cap(pressed);
+  auto with_hot = pressed;
+  with_hot.emplace_back(1.69e6, 2e-6);
+  const double capped = postproc::pressure_scale_cap(with_hot);
+  auto wide_hot = pressed;
+  wide_hot.emplace_back(1.69e6, 10e-6);
+  const double wide = postproc::pressure_scale_cap(wide_hot);
+  std::printf("pressure cap: %.1f kPa (expected 99.5), with a 1.69 MPa node on 0.2 %% of the area %.1f kPa (99.7), on 1 %% %.3f MPa (1.69)\n",
+              plain / 1e3, capped / 1e3, wide / 1e6);
+  EXPECT_DOUBLE_EQ(plain, 99500.0);
+  EXPECT_DOUBLE_EQ(capped, 99700.0);
+  EXPECT_DOUBLE_EQ(wide, 1.69e6);
+  EXPECT_EQ(postproc::pressure_scale_cap({}), 0.0);
 }

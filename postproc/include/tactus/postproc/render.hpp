@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tactus/core/vec3.hpp"
@@ -29,6 +30,12 @@ struct RenderOptions {
 // scale), section.png (materials and von Mises on a section through the peak pressure),
 // pressure.png (the contact pressure on its body at the state with the highest pressure, peak
 // marked), plot_*.png (time histories). Returns the file names written.
+// The colour scale's top for contact pressure: the area-weighted 99.5th percentile of the pressed
+// nodes' (pressure, area) pairs - the smallest pressure with 99.5 % of the pressed area at or
+// below it - so that one hot node does not turn the rest of a map blue (the true peak keeps its
+// black dot and its value in the caption). 0 when nothing is pressed.
+double pressure_scale_cap(std::vector<std::pair<double, double>> pressure_area);
+
 std::vector<std::string> render_report(const Results& results, const Summary& summary, const std::filesystem::path& report,
                                        const RenderOptions& options);
 
