@@ -234,7 +234,7 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
     for (std::size_t v = 0; v < labels.size(); ++v)
       if (space[v] && labels.data[v] == contracts::kSoftTissueLabel) labels.data[v] = 0, ++carved;
     log::info() << "joint spaces: " << carved << " soft-tissue voxels within " << o.joint_space_mm << " mm of two bones left unmeshed ("
-                << carved * labels.voxel_volume() * 1e9 << " mm^3)";
+                << static_cast<double>(carved) * labels.voxel_volume() * 1e9 << " mm^3)";
   }
   const auto t0 = std::chrono::steady_clock::now();
   const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
