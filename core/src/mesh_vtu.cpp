@@ -2,11 +2,13 @@
 #include <vtkCellData.h>
 #include <vtkCellType.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkObject.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
@@ -34,6 +36,8 @@ vtkSmartPointer<vtkDoubleArray> to_vtk(const MeshField& f, std::size_t expected_
   a->SetNumberOfComponents(f.components);
   a->SetNumberOfTuples(static_cast<vtkIdType>(expected_tuples));
   std::copy(f.values.begin(), f.values.end(), a->GetPointer(0));
+  if (f.component_names.size() == static_cast<std::size_t>(f.components))
+    for (int c = 0; c < f.components; ++c) a->SetComponentName(c, f.component_names[static_cast<std::size_t>(c)].c_str());
   return a;
 }
 
@@ -50,7 +54,7 @@ MeshField from_vtk(vtkDataArray* a) {
 }  // namespace
 
 void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
-               const std::vector<Vec3>* current_nodes) {
+               const std::vector<Vec3>* current_nodes, std::optional<double> time) {
   const std::string fname = file.string();
   const auto& xyz = current_nodes ? *current_nodes : mesh.nodes;
   if (xyz.size() != mesh.nodes.size()) throw InputError(fname, "current nodes", std::to_string(mesh.nodes.size()) + " positions");
@@ -72,6 +76,16 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   grid->GetCellData()->AddArray(group);
   for (const auto& f : point_fields) grid->GetPointData()->AddArray(to_vtk(f, mesh.nodes.size(), fname));
   for (const auto& f : cell_fields) grid->GetCellData()->AddArray(to_vtk(f, mesh.tets.size(), fname));
+  vtkNew<vtkStringArray> units;  // every tactus file says its units
+  units->SetName("units");
+  units->InsertNextValue("SI (m, kg, s, Pa, J)");
+  grid->GetFieldData()->AddArray(units);
+  if (time) {  // ParaView's name for a dataset's time
+    vtkNew<vtkDoubleArray> t;
+    t->SetName("TimeValue");
+    t->InsertNextValue(*time);
+    grid->GetFieldData()->AddArray(t);
+  }
 
   StagedOutput out(file);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
@@ -147,6 +161,9 @@ VtuContents read_vtu_direct(const fs::path& file) {
   };
   fields(grid->GetPointData(), out.mesh.nodes.size(), out.point_fields, nullptr);
   fields(grid->GetCellData(), out.mesh.tets.size(), out.cell_fields, group);
+  if (vtkDataArray* t = grid->GetFieldData() ? grid->GetFieldData()->GetArray("TimeValue") : nullptr;
+      t && t->GetNumberOfTuples() == 1 && t->GetNumberOfComponents() == 1 && std::isfinite(t->GetComponent(0, 0)))
+    out.time = t->GetComponent(0, 0);
   return out;
 }
 
@@ -171,6 +188,8 @@ VtuContents read_vtu(const fs::path& file) {
         w.put_vector(v.mesh.tet_group);
         put_fields(w, v.point_fields);
         put_fields(w, v.cell_fields);
+        w.put<std::uint8_t>(v.time ? 1 : 0);
+        w.put<double>(v.time.value_or(0.0));
       },
       limits_for_file(fname));
   ByteReader r(bytes);
@@ -190,6 +209,9 @@ VtuContents read_vtu(const fs::path& file) {
       fields->push_back(std::move(f));
     }
   }
+  const bool has_time = r.get<std::uint8_t>() != 0;
+  const double time = r.get<double>();
+  if (has_time) out.time = time;
   return out;
 }
 

@@ -421,7 +421,7 @@ class RunLoop {
   }
 
   void write(const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t) {
-    const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, &solver_.contact());
+    const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, &solver_.contact(), t);
     for (std::size_t b = 0; b < vm.size(); ++b) summary_.von_mises_peak[b] = std::max(summary_.von_mises_peak[b], vm[b]);
     if (!solver_.contact().empty()) {
       const ContactStepReport& cr = solver_.contact_report();

@@ -2,8 +2,10 @@
 // (meshio) see the same counts and groups; bad files give InputError naming the problem.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 
 #include "expect_error.hpp"
 #include "tactus/core/error.hpp"
@@ -89,6 +91,30 @@ TEST(MeshMsh, FileIsMsh41) {
 }
 
 // Independent reader: meshio (python3-meshio) must see the same counts and physical names.
+// A state's time, units and tensor component names where ParaView looks for them. Oracle: VTK's
+// own Python reader (tests/core/vtu_field_data.py) finds TimeValue, "units" and the stress's
+// xx .. xz names, and tactus's reader gets the time back exactly; a file written without a time
+// has none.
+TEST(MeshVtu, TimeUnitsAndComponentNamesAsParaViewReadsThem) {
+  TempDir dir;
+  const TetMesh m = two_material_box();
+  MeshField stress{"cauchy_stress", 6, std::vector<double>(6 * m.tets.size(), 1.0), {"xx", "yy", "zz", "xy", "yz", "xz"}};
+  write_vtu(dir / "s.vtu", m, {}, {stress}, nullptr, 2.5e-3);
+  write_vtu(dir / "plain.vtu", m);
+  EXPECT_EQ(read_vtu(dir / "s.vtu").time, 2.5e-3);
+  EXPECT_FALSE(read_vtu(dir / "plain.vtu").time.has_value());
+  const std::string script = std::string(TACTUS_SOURCE_DIR) + "/tests/core/vtu_field_data.py";
+  const std::string out = (dir / "facts.txt").string();
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + script + " " + (dir / "s.vtu").string() + " > " + out).c_str()), 0);
+  std::ifstream in(out);
+  std::string facts((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::printf("VTK's reader finds:\n%s", facts.c_str());
+  EXPECT_NE(facts.find("TimeValue 0.0025\n"), std::string::npos);
+  EXPECT_NE(facts.find("units SI (m, kg, s, Pa, J)\n"), std::string::npos);
+  EXPECT_NE(facts.find("component cauchy_stress 0 xx\n"), std::string::npos);
+  EXPECT_NE(facts.find("component cauchy_stress 5 xz\n"), std::string::npos);
+}
+
 TEST(MeshMsh, ReadByMeshioWithSameCountsAndGroups) {
   TempDir dir;
   const TetMesh m = two_material_box();

@@ -23,7 +23,7 @@ namespace tactus::solver {
 
 // The state at one time as a .vtu (input numbering). Returns each block's largest von Mises.
 std::vector<double> write_state(const Model& m, const std::filesystem::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                                const ContactSolver* contact);
+                                const ContactSolver* contact, double time);  // time (s): field data TimeValue
 void write_pvd(const std::filesystem::path& file, const std::vector<std::pair<double, std::string>>& entries);
 
 // One history row's inputs.

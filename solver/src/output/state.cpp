@@ -19,7 +19,7 @@ namespace cc = contracts::cell;
 // Cell and point fields of one state, in the input numbering.
 // Returns the largest von Mises stress of each material block in this state.
 std::vector<double> write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                                const ContactSolver* contact) {
+                                const ContactSolver* contact, double time) {
   std::vector<double> block_peak(m.blocks.size(), 0.0);
   const std::size_t N = m.num_nodes, E = m.num_elements;
   MeshField disp{cp::displacement.name, 3, std::vector<double>(3 * N)}, vel{cp::velocity.name, 3, std::vector<double>(3 * N)};
@@ -49,9 +49,9 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
     point_fields.push_back(std::move(st));
     point_fields.push_back(std::move(g));
   }
-  MeshField stress{cc::cauchy_stress.name, 6, std::vector<double>(6 * E)}, vm{cc::von_mises.name, 1, std::vector<double>(E)},
-      material{cc::material.name, 1, std::vector<double>(E)}, jac{cc::jacobian.name, 1, std::vector<double>(E)},
-      body{cc::body.name, 1, std::vector<double>(E)};
+  MeshField stress{cc::cauchy_stress.name, 6, std::vector<double>(6 * E), {"xx", "yy", "zz", "xy", "yz", "xz"}},
+      vm{cc::von_mises.name, 1, std::vector<double>(E)}, material{cc::material.name, 1, std::vector<double>(E)},
+      jac{cc::jacobian.name, 1, std::vector<double>(E)}, body{cc::body.name, 1, std::vector<double>(E)};
   for (std::size_t e = 0; e < E; ++e) body.values[e] = static_cast<double>(m.tet_body[e]);
   // The result fields the laws of this model add (hgo: fibre_stretch), 0 on the other laws' tets.
   std::vector<MeshField> law_fields;
@@ -91,7 +91,7 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   }
   std::vector<MeshField> cell_fields{stress, vm, material, body, jac};
   for (auto& f : law_fields) cell_fields.push_back(std::move(f));
-  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current);
+  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current, time);
   return block_peak;
 }
 

@@ -49,17 +49,22 @@ struct MeshField {
   std::string name;
   int components = 1;
   std::vector<double> values;
+  std::vector<std::string> component_names{};  // (optional) VTK's component names, e.g. xx .. xz
 };
 
 // VTK XML unstructured grid (.vtu) of the tets, with cell data "group" (the physical tag) plus
-// the given point and cell fields. Optional `current_nodes` writes the deformed positions
-// (the reference geometry is then recoverable from the "displacement" field, if given).
+// the given point and cell fields, and field data "units" ("SI (m, kg, s, Pa, J)"). Optional
+// `current_nodes` writes the deformed positions (the reference geometry is then recoverable from
+// the "displacement" field, if given); `time` (s) goes into field data "TimeValue", where ParaView
+// and VTK's readers take a state's time from without the .pvd.
 void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields = {},
-               const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr);
+               const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr,
+               std::optional<double> time = std::nullopt);
 
 struct VtuContents {
   TetMesh mesh;  // nodes, tets, tet_group (no triangles: a .vtu holds the volume cells)
   std::vector<MeshField> point_fields, cell_fields;
+  std::optional<double> time;  // field data TimeValue, when the file has it
   const MeshField* point_field(std::string_view name) const;
   const MeshField* cell_field(std::string_view name) const;
 };
