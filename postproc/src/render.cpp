@@ -512,7 +512,12 @@ void draw_unrolled_map(vtkPolyData* map, double peak, const Vec3& peak_point, do
   auto window = offscreen(opt.width, opt.height);
   auto ren = white_renderer();
   window->AddRenderer(ren);
-  add_pressure_map(ren, map, peak, peak_point, 1.5);
+  const double cap = surfaces_pressure_cap({map});  // as the pressure pictures' (pressure_scale_cap)
+  const double scale = cap > 0 && cap < peak ? cap : peak;
+  add_pressure_map(ren, map, scale, peak_point, 1.5);
+  std::ostringstream foot;
+  foot << std::setprecision(3) << "colour scale 0 - " << scale / 1e6 << " MPa: 99.5 % of the pressed area lies below it (red: at or above)";
+  add_text(ren, foot.str(), 20, opt.height - 66, 16);  // under the caption (the foot holds the axis title)
   double b[6];
   map->GetBounds(b);
   b[0] = 0, b[1] = 1e3 * radius * 2 * M_PI, b[4] = -1, b[5] = 1;
