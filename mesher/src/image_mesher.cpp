@@ -151,12 +151,15 @@ std::vector<std::uint8_t> joint_gap_mask(const Volume<std::uint8_t>& labels, dou
   return mask;
 }
 
-double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
+namespace {
+// expected_tets with the joints' mask already made (mesh_label_volume makes it once for this
+// runaway guard and the sizing fields).
+double expected_tets_in(const Volume<std::uint8_t>& labels, const ImageMeshParams& p, std::vector<std::uint8_t> joints) {
   const double voxel_mm3 = labels.voxel_volume() * 1e9;
   auto tets = [&](double size_mm) { return voxel_mm3 / (0.1 * size_mm * size_mm * size_mm); };
   const double soft = tets(p.cell_size_mm), bone = tets(p.bone_cell_size_mm);
   const double refined = p.refine_cell_size_mm > 0 ? tets(p.refine_cell_size_mm) : 0;
-  const RefinedRegion region{&p, &labels, joint_gap_mask(labels, p.refine_size_mm > 0 ? p.refine_joints_mm : 0)};
+  const RefinedRegion region{&p, &labels, std::move(joints)};
   double n = 0;
   for (int k = 0; k < labels.dims[2]; ++k)
     for (int j = 0; j < labels.dims[1]; ++j)
@@ -171,10 +174,19 @@ double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& 
   return n;
 }
 
+// The refined region's joints: none without a refined size.
+std::vector<std::uint8_t> refined_joints(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
+  return joint_gap_mask(labels, p.refine_size_mm > 0 ? p.refine_joints_mm : 0);
+}
+
+}  // namespace
+
+double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) { return expected_tets_in(labels, p, refined_joints(labels, p)); }
+
 namespace {
 
 // The criteria and the labels: refused when they cannot give a mesh (or a sane one).
-void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
+void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p, const std::vector<std::uint8_t>& joints) {
   check(p.facet_angle_deg > 0 && p.facet_angle_deg <= 30, "facet_angle", "an angle in (0, 30] degrees", p.facet_angle_deg);
   check(p.facet_size_mm > 0, "facet_size", "a size > 0 mm", p.facet_size_mm);
   check(p.facet_distance_mm > 0, "facet_distance", "a distance > 0 mm", p.facet_distance_mm);
@@ -213,7 +225,7 @@ void validate(const Volume<std::uint8_t>& labels, const ImageMeshParams& p) {
                          std::to_string(hi[a] - lo[a] + 1) + " voxel(s) along " + std::string(1, "xyz"[a]));
   }
   check(p.max_elements > 0, "max_elements", "a count > 0", p.max_elements);
-  if (const double n = expected_tets(labels, p); n > p.max_elements) {
+  if (const double n = expected_tets_in(labels, p, joints); n > p.max_elements) {
     std::ostringstream f;
     f << "about " << n << " tets at cell size " << p.cell_size_mm << " mm (bone " << p.bone_cell_size_mm << " mm)";
     throw InputError("labels", "cell size",
@@ -299,7 +311,7 @@ CGAL::Image_3 boundary_weights(const Volume<std::uint8_t>& labels, double sigma)
 // lengths), the steps of mesh_label_volume.
 class CgalImageMesher {
  public:
-  CgalImageMesher(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p)
+  CgalImageMesher(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p, std::vector<std::uint8_t> joints)
       : labels_(labels),
         table_(table),
         p_(p),
@@ -318,7 +330,7 @@ class CgalImageMesher {
         facet_size_.set_size(p.bone_facet_size_mm, 2, domain_.index_from_surface_patch_index(Domain::Surface_patch_index(1, id)));
       }
     if (p.refine_size_mm > 0) {  // the refined region's fields (RefinedField); CGAL keeps references to them
-      region_ = {&p_, &labels_, joint_gap_mask(labels_, p.refine_joints_mm)};
+      region_ = {&p_, &labels_, std::move(joints)};
       refined_facet_size_ = {&facet_size_, &region_, p.refine_size_mm};
       refined_cell_size_ = {&size_, &region_, p.refine_cell_size_mm};
       refined_distance_ = {&p_.facet_distance_mm, &region_, p.refine_distance_mm};
@@ -562,8 +574,9 @@ void check_every_label_meshed(const Volume<std::uint8_t>& labels, const LabelTab
 }  // namespace
 
 TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p) {
-  validate(labels, p);
-  CgalImageMesher cgal(labels, table, p);
+  std::vector<std::uint8_t> joints = refined_joints(labels, p);
+  validate(labels, p, joints);
+  CgalImageMesher cgal(labels, table, p, std::move(joints));
   cgal.refine();
   cgal.optimise();
   std::vector<int> triangle_inner;
