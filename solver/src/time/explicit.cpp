@@ -199,12 +199,15 @@ std::string ExplicitSolver::describe_rigid_neighbours(std::size_t e) const {
     nearest.emplace_back(d, p);
   }
   std::partial_sort(nearest.begin(), nearest.begin() + 2, nearest.end());
-  // A piece by its skeleton bone's name, else its volume group's name, within its body.
-  auto bone = [&](const RigidBody& r) {
-    for (const SkeletonBone& sb : model_.joint_drive.skeleton.bones)
-      if (r.body == model_.joint_drive.body && sb.label == r.groups.front()) return sb.name;
-    const BodyRange& b = model_.bodies[r.body];
-    for (std::size_t g = b.group_begin; g < b.group_end; ++g)
+  // A piece by the skeleton bone the joint drive matched it to, else its volume group's name.
+  auto bone = [&](std::size_t piece) {
+    if (drive_)
+      for (std::size_t b = 0; b < drive_->skeleton().bones.size(); ++b)
+        for (std::size_t q : drive_->pieces(b))
+          if (q == piece) return drive_->skeleton().bones[b].name;
+    const RigidBody& r = pieces[piece];
+    const BodyRange& body = model_.bodies[r.body];
+    for (std::size_t g = body.group_begin; g < body.group_end; ++g)
       if (model_.input_mesh.groups[g].dim == 3 && model_.input_mesh.groups[g].tag == r.groups.front()) return model_.input_mesh.groups[g].name;
     return std::string();
   };
@@ -213,17 +216,19 @@ std::string ExplicitSolver::describe_rigid_neighbours(std::size_t e) const {
   for (int k = 0; k < 2; ++k) {
     const RigidBody& r = pieces[nearest[static_cast<std::size_t>(k)].second];
     const bool one_piece = std::count_if(pieces.begin(), pieces.end(), [&](const RigidBody& q) { return q.body == r.body; }) == 1;
-    o << (k ? " and " : "") << (one_piece ? "" : "bone '" + bone(r) + "' of ") << "body '" << model_.bodies[r.body].name << "' ("
-      << nearest[static_cast<std::size_t>(k)].first * 1e3 << " mm)";
+    o << (k ? " and " : "") << (one_piece ? "" : "bone '" + bone(nearest[static_cast<std::size_t>(k)].second) + "' of ") << "body '"
+      << model_.bodies[r.body].name << "' (" << nearest[static_cast<std::size_t>(k)].first * 1e3 << " mm)";
   }
-  const std::string a = bone(pieces[nearest[0].second]), b = bone(pieces[nearest[1].second]);
-  const std::vector<SkeletonJoint>& joints = model_.joint_drive.skeleton.joints;
-  for (std::size_t j = 0; j < joints.size(); ++j)
-    if ((joints[j].proximal == a && joints[j].distal == b) || (joints[j].proximal == b && joints[j].distal == a)) {
-      o << ", across the joint '" << joints[j].name << "'";
-      if (drive_) o << " (flexed " << drive_->flexion_at_step()[j] * 180 / M_PI << " deg: an angle or torque beyond what the tissue there takes?)";
-      return o.str();
-    }
+  const std::string a = bone(nearest[0].second), b = bone(nearest[1].second);
+  if (drive_) {
+    const std::vector<SkeletonJoint>& joints = drive_->skeleton().joints;
+    for (std::size_t j = 0; j < joints.size(); ++j)
+      if ((joints[j].proximal == a && joints[j].distal == b) || (joints[j].proximal == b && joints[j].distal == a)) {
+        o << ", across the joint '" << joints[j].name << "' (flexed " << drive_->flexion_at_step()[j] * 180 / M_PI
+          << " deg: an angle or torque beyond what the tissue there takes?)";
+        return o.str();
+      }
+  }
   o << ": tissue crushed between two rigid bodies";
   return o.str();
 }
