@@ -51,11 +51,13 @@ void Relaxation::measure(const HalfStep& h, const double* v_old, const double* v
   relaxed_ = time >= spec_.residual_after && residual_ <= spec_.residual_tolerance && grip_held;
 }
 
+// The forces before a pass are scratch: a checkpoint falls between steps, after after_pass has
+// used them and before the next before_pass overwrites them, so only the damping and the
+// reported figures are state.
 void Relaxation::checkpoint(StateArchive& a) {
   a.io("relaxation.alpha", alpha_);
   a.io("relaxation.omega", omega_);
   a.io("relaxation.residual", residual_);
-  if (spec_.adaptive) a.io("relaxation.force_before", force_before_, force_before_.size());
 }
 
 }  // namespace tactus::solver

@@ -60,7 +60,7 @@ class Relaxation {
   double alpha_, omega_ = 0, residual_ = -1;
   std::size_t ndof_;
   bool relaxed_ = false;
-  std::vector<double> force_before_;  // nodal forces at t^n (adaptive only)
+  std::vector<double> force_before_;  // scratch: the nodal forces at t^n during the pass to t^{n+1} (adaptive only)
 };
 
 }  // namespace tactus::solver
