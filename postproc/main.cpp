@@ -10,8 +10,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <vector>
 
 #include "tactus/core/cli.hpp"
@@ -23,6 +25,7 @@
 #include "tactus/postproc/render.hpp"
 #include "tactus/postproc/results.hpp"
 #include "tactus/postproc/summary.hpp"
+#include "tactus/postproc/web_report.hpp"
 
 namespace {
 // VTK renders through X. Without a display, start a private Xvfb for the rendering, on a display
@@ -82,6 +85,19 @@ class VirtualDisplay {
   }
   pid_t pid_ = -1;
 };
+// --probe x,y,z (metres), each.
+std::vector<tactus::Vec3> probe_points(const std::vector<std::string>& probes) {
+  std::vector<tactus::Vec3> points;
+  for (const std::string& p : probes) {
+    tactus::Vec3 x{};
+    char comma1 = 0, comma2 = 0, rest = 0;
+    if (std::sscanf(p.c_str(), "%lf %c %lf %c %lf %c", &x[0], &comma1, &x[1], &comma2, &x[2], &rest) != 5 || comma1 != ',' || comma2 != ',' ||
+        !std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+      throw tactus::InputError("command line", "--probe", "a point x,y,z in metres, e.g. --probe 0.01,0.02,0.005", "\"" + p + "\"");
+    points.push_back(x);
+  }
+  return points;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -94,10 +110,15 @@ int main(int argc, char** argv) {
   cli::add_common_options(app, common, "report folder (default: report next to the results folder)");
   std::string results_dir;
   std::vector<double> times;
-  bool no_pictures = false;
+  bool no_pictures = false, no_html = false;
   app.add_option("results", results_dir, "results folder (results.pvd, history.csv, run.json)")->required();
   app.add_option("--times", times, "times (s) of the von Mises pictures, nearest output state (default: all)");
-  app.add_flag("--no-pictures", no_pictures, "numbers only (no rendering, no display needed)");
+  app.add_flag("--no-pictures", no_pictures, "no PNG pictures or plots (no rendering, no display needed)");
+  app.add_flag("--no-html", no_html, "no interactive report (index.html and data/)");
+  std::vector<std::string> probes;
+  app.add_option("--probe", probes,
+                 "x,y,z in m (reference configuration): the contact pressure against time at the surface node nearest it, "
+                 "in probes.csv (repeat for more points)");
   postproc::RenderOptions ro;
   std::vector<double> view, section_normal;
   app.add_option("--pressure-body", ro.pressure_body, "body the pressure map shows (default: the one carrying the highest pressure)");
@@ -110,6 +131,9 @@ int main(int argc, char** argv) {
                  "body carrying the pressure)")
       ->expected(3);
   return cli::run(app, argc, argv, common, [&] {
+    postproc::WebReportOptions wo;
+    wo.page = !no_html;
+    wo.probes = probe_points(probes);
     const std::filesystem::path out =
         common.output.empty() ? std::filesystem::path(results_dir).parent_path() / "report" : std::filesystem::path(common.output);
     OutputFolder staged(out, common.output_rules({results_dir}));
@@ -128,6 +152,13 @@ int main(int argc, char** argv) {
       ro.view = direction(view, "--view");
       ro.section_normal = direction(section_normal, "--section-normal");
       summary.pictures = postproc::render_report(results, summary, staged.path(), ro);
+    }
+    const postproc::WebReport web = postproc::write_web_report(results, summary, staged.path(), wo);
+    if (!no_html) {
+      summary.interactive = "index.html";
+      log::info() << "interactive report: " << web.files.size() << " files, " << std::fixed << std::setprecision(1)
+                  << static_cast<double>(web.bytes) / (1 << 20) << " MB, " << web.faces_shown << " of " << web.surface_faces << " surface triangles";
+      for (const std::string& m : web.missing) log::warn("interactive report: not shown: " + m);
     }
     write_file(staged.path() / "summary.json", postproc::summary_json(summary));
     write_file(staged.path() / "summary.md", postproc::summary_markdown(summary));

@@ -309,6 +309,7 @@ std::string summary_json(const Summary& s) {
   }
   j["outputs"] = frames;
   j["pictures"] = s.pictures;
+  if (!s.interactive.empty()) j["interactive_report"] = s.interactive;
   return j.dump(2) + "\n";
 }
 
@@ -407,6 +408,10 @@ std::string summary_markdown(const Summary& s) {
     for (double v : f.von_mises_max) o << " " << v / 1e6 << " |";
     o << " " << f.contact_pressure_max / 1e6 << " | " << f.contact_nodes << " | " << f.contact_force << " |\n";
   }
+  if (!s.interactive.empty())
+    o << "\n## Interactive report\n\nOpen [" << s.interactive << "](" << s.interactive
+      << ") in a browser (from the file system; no server needed): turn and zoom the bodies, scrub through the output states, switch between "
+         "contact pressure, von Mises and displacement, and click a node to read its values.\n";
   if (!s.pictures.empty()) {
     o << "\n## Pictures\n\n";
     for (const auto& p : s.pictures) o << "![" << p << "](" << p << ")\n";

@@ -790,7 +790,7 @@ TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
   ASSERT_TRUE(m.contact_pairs[1].edge_pass);
   const ContactPair& mortar = m.contact_pairs[0];
   ExplicitSolver solver(m, sc.run, sc.damping);
-  std::vector<double> pressure, traction, status, gaps;
+  ContactSolver::NodeFields fields;
   double worst = 0, largest_force = 0;
   std::size_t pressed = 0;
   while (true) {
@@ -798,10 +798,10 @@ TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
     const ContactStepReport& rep = solver.contact_report();
     ASSERT_EQ(solver.contact().pair_reports()[0].normal_force, 0.0);  // the mortar rows never press
     if (rep.windowed_normal_force > 0) {
-      solver.contact().node_fields(pressure, traction, status, gaps);
+      solver.contact().node_fields(fields);
       double field = 0;
       for (std::size_t i = 0; i < mortar.slave_nodes.size(); ++i)
-        field += pressure[static_cast<std::size_t>(mortar.slave_nodes[i])] * mortar.slave_area[i];
+        field += fields.pressure[static_cast<std::size_t>(mortar.slave_nodes[i])] * mortar.slave_area[i];
       worst = std::max(worst, std::abs(field - rep.windowed_normal_force) / rep.windowed_normal_force);
       largest_force = std::max(largest_force, rep.windowed_normal_force);
       pressed += rep.normal_force > 0;

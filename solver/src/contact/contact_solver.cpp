@@ -106,6 +106,8 @@ ContactStepReport ContactSolver::correct_velocities(const double* u, double* v, 
   return rep;
 }
 
+constexpr double kNegligiblePressure = 1e-3;  // Pa
+
 void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
   for (std::int32_t s : step_nodes_) step_pressure_[static_cast<std::size_t>(s)] = 0;
   step_nodes_.clear();
@@ -146,6 +148,10 @@ void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
     double& q = windowed_pressure_[static_cast<std::size_t>(s)];
     q += w * (step_pressure_[static_cast<std::size_t>(s)] - q);
     if (q > rep.peak_pressure) rep.peak_pressure = q, rep.peak_node = s;
+    // An unloaded node's window decays geometrically and would take thousands of steps to
+    // underflow to 0, showing as pressed (status far, pressure 1e-300) long after it let go.
+    // Below kNegligiblePressure it is 0: eight orders below the softest contact this models.
+    if (q < kNegligiblePressure && step_pressure_[static_cast<std::size_t>(s)] == 0) q = 0;
     if (q != 0)
       pressed_[kept++] = s;
     else
@@ -161,23 +167,32 @@ void ContactSolver::find_pressed() {
     if (windowed_pressure_[static_cast<std::size_t>(s)] != 0) pressed_.push_back(s), is_pressed_[static_cast<std::size_t>(s)] = 1;
 }
 
-void ContactSolver::node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status,
-                                std::vector<double>& gap) const {
+void ContactSolver::node_fields(NodeFields& f) const {
   const std::size_t N = model_.num_nodes;
-  pressure.assign(N, 0.0);
-  traction.assign(3 * N, 0.0);
-  status.assign(N, -1.0);
-  gap.assign(N, std::numeric_limits<double>::quiet_NaN());
+  f.pressure.assign(N, 0.0);
+  f.traction.assign(3 * N, 0.0);
+  f.status.assign(N, -1.0);
+  f.gap.assign(N, std::numeric_limits<double>::quiet_NaN());
+  f.area.assign(N, 0.0);
   for (std::int32_t s : slave_union_)  // the windowed pressure (set_pressure_window), which outlives a node's rows
-    pressure[static_cast<std::size_t>(s)] = windowed_pressure_[static_cast<std::size_t>(s)];
+    f.pressure[static_cast<std::size_t>(s)] = windowed_pressure_[static_cast<std::size_t>(s)];
   for (std::size_t k = 0; k < rows_.size(); ++k) {
     const std::size_t s = static_cast<std::size_t>(rows_.slave(k));
     const double* r = &rows_.reaction[3 * k];
     const double* n = &rows_.normal[3 * k];
     const double rn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
-    for (int d = 0; d < 3; ++d) traction[3 * s + d] += (r[d] - rn * n[d]) / rows_.area[k];
-    status[s] = std::max(status[s], static_cast<double>(rows_.status[k]));
-    if (std::isnan(gap[s]) || rows_.gap[k] < gap[s]) gap[s] = rows_.gap[k];
+    for (int d = 0; d < 3; ++d) f.traction[3 * s + d] += (r[d] - rn * n[d]) / rows_.area[k];
+    f.status[s] = std::max(f.status[s], static_cast<double>(rows_.status[k]));
+    if (std::isnan(f.gap[s]) || rows_.gap[k] < f.gap[s]) f.gap[s] = rows_.gap[k];
+    if (!pairs_[static_cast<std::size_t>(rows_.pair[k])].edge_pass) {
+      f.area[s] = std::max(f.area[s], rows_.area[k]);
+      continue;
+    }
+    // An edge row's pressure sits on the master side's nodes, over their share of the slave surface.
+    for (auto a = rows_.start[k] + 1; a < rows_.start[k + 1]; ++a) {
+      const auto node = static_cast<std::size_t>(rows_.nodes[static_cast<std::size_t>(a)]);
+      f.area[node] = std::max(f.area[node], edge_share_area_[node]);
+    }
   }
 }
 

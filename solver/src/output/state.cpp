@@ -35,19 +35,17 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   std::vector<MeshField> point_fields{disp, vel};
   if (contact && !contact->empty()) {
     // Contact at this time: pressure r_n / A, tangential traction r_t / A, status, gap (docs/design.md).
-    std::vector<double> pressure, traction, status, gap;
-    contact->node_fields(pressure, traction, status, gap);
+    ContactSolver::NodeFields c;
+    contact->node_fields(c);
     MeshField p{cp::contact_pressure.name, 1, std::vector<double>(N)}, t{cp::contact_traction.name, 3, std::vector<double>(3 * N)},
-        st{cp::contact_status.name, 1, std::vector<double>(N)}, g{cp::contact_gap.name, 1, std::vector<double>(N)};
+        st{cp::contact_status.name, 1, std::vector<double>(N)}, g{cp::contact_gap.name, 1, std::vector<double>(N)},
+        a{cp::contact_area.name, 1, std::vector<double>(N)};
     for (std::size_t i = 0; i < N; ++i) {
       const std::size_t k = static_cast<std::size_t>(m.node_of_input[i]);
-      p.values[i] = pressure[k], st.values[i] = status[k], g.values[i] = gap[k];
-      for (int c = 0; c < 3; ++c) t.values[3 * i + c] = traction[3 * k + c];
+      p.values[i] = c.pressure[k], st.values[i] = c.status[k], g.values[i] = c.gap[k], a.values[i] = c.area[k];
+      for (int d = 0; d < 3; ++d) t.values[3 * i + d] = c.traction[3 * k + d];
     }
-    point_fields.push_back(std::move(p));
-    point_fields.push_back(std::move(t));
-    point_fields.push_back(std::move(st));
-    point_fields.push_back(std::move(g));
+    for (MeshField* f : {&p, &t, &st, &g, &a}) point_fields.push_back(std::move(*f));
   }
   MeshField stress{cc::cauchy_stress.name, 6, std::vector<double>(6 * E), {"xx", "yy", "zz", "xy", "yz", "xz"}},
       vm{cc::von_mises.name, 1, std::vector<double>(E)}, material{cc::material.name, 1, std::vector<double>(E)},

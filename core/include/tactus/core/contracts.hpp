@@ -37,7 +37,11 @@ inline constexpr FieldSpec contact_pressure{"contact_pressure", 1, "Pa", "normal
 inline constexpr FieldSpec contact_traction{"contact_traction", 3, "Pa", "tangential (friction) reaction over the tributary area"};
 inline constexpr FieldSpec contact_status{"contact_status", 1, "", "-1 far from any master, 0 open, 1 stick, 2 slip"};
 inline constexpr FieldSpec contact_gap{"contact_gap", 1, "m", "gap h to the master (NaN when far)"};
-inline constexpr std::array<const FieldSpec*, 6> all{&displacement, &velocity, &contact_pressure, &contact_traction, &contact_status, &contact_gap};
+inline constexpr FieldSpec contact_area{"contact_area", 1, "m^2",
+                                        "tributary area A of the node's contact row (mortar: its share of the overlap), so that pressure x area "
+                                        "is its normal reaction; 0 without a row"};
+inline constexpr std::array<const FieldSpec*, 7> all{&displacement,   &velocity,    &contact_pressure, &contact_traction,
+                                                     &contact_status, &contact_gap, &contact_area};
 }  // namespace point
 
 namespace cell {

@@ -82,6 +82,7 @@ struct Summary {
   } grasp;
   std::vector<FrameSummary> frames;
   std::vector<std::string> pictures;  // file names in the report folder
+  std::string interactive;            // the interactive report's page (index.html), when written
 };
 
 Summary summarize(const Results& results);

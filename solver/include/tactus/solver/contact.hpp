@@ -275,8 +275,12 @@ class ContactSolver {
   SearchCounts search_counts() const;
 
   // Point fields in the internal numbering: pressure (r_n / area), traction (r_t / area, 3),
-  // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near).
-  void node_fields(std::vector<double>& pressure, std::vector<double>& traction, std::vector<double>& status, std::vector<double>& gap) const;
+  // status (0 open, 1 stick, 2 slip; -1 not near a master surface), gap (NaN when not near),
+  // area (the tributary area the pressure is over: the largest of the node's rows; 0 without one).
+  struct NodeFields {
+    std::vector<double> pressure, traction, status, gap, area;
+  };
+  void node_fields(NodeFields& f) const;
 
   // The reported pressure field, interpolated linearly on the slave triangles at displacement u,
   // averaged over the part of the slave surfaces within the radius of a disc of `sensor_area`
