@@ -3,6 +3,7 @@
 #include <vtkCellType.h>
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
+#include <vtkIdTypeArray.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkObject.h>
@@ -15,6 +16,7 @@
 
 #include <cmath>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/file_io.hpp"
 #include "tactus/core/isolated.hpp"
@@ -54,7 +56,7 @@ MeshField from_vtk(vtkDataArray* a) {
 }  // namespace
 
 void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
-               const std::vector<Vec3>* current_nodes, std::optional<double> time) {
+               const std::vector<Vec3>* current_nodes, std::optional<double> time, const std::vector<MeshStrings>& strings) {
   const std::string fname = file.string();
   const auto& xyz = current_nodes ? *current_nodes : mesh.nodes;
   if (xyz.size() != mesh.nodes.size()) throw InputError(fname, "current nodes", std::to_string(mesh.nodes.size()) + " positions");
@@ -74,12 +76,33 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   group->SetNumberOfTuples(static_cast<vtkIdType>(mesh.tets.size()));
   for (std::size_t e = 0; e < mesh.tets.size(); ++e) group->SetValue(static_cast<vtkIdType>(e), mesh.tet_group[e]);
   grid->GetCellData()->AddArray(group);
+  // 1-based ids, as every message, summary and quality.json counts (ParaView's own ids start at 0).
+  vtkNew<vtkIdTypeArray> node_id, tet_id;
+  node_id->SetName(contracts::point::node_id.name);
+  node_id->SetNumberOfTuples(static_cast<vtkIdType>(mesh.nodes.size()));
+  for (vtkIdType i = 0; i < node_id->GetNumberOfTuples(); ++i) node_id->SetValue(i, i + 1);
+  tet_id->SetName(contracts::cell::tet_id.name);
+  tet_id->SetNumberOfTuples(static_cast<vtkIdType>(mesh.tets.size()));
+  for (vtkIdType e = 0; e < tet_id->GetNumberOfTuples(); ++e) tet_id->SetValue(e, e + 1);
+  grid->GetPointData()->AddArray(node_id);
+  grid->GetCellData()->AddArray(tet_id);
   for (const auto& f : point_fields) grid->GetPointData()->AddArray(to_vtk(f, mesh.nodes.size(), fname));
   for (const auto& f : cell_fields) grid->GetCellData()->AddArray(to_vtk(f, mesh.tets.size(), fname));
   vtkNew<vtkStringArray> units;  // every tactus file says its units
   units->SetName("units");
   units->InsertNextValue("SI (m, kg, s, Pa, J)");
   grid->GetFieldData()->AddArray(units);
+  vtkNew<vtkStringArray> points_note;
+  points_note->SetName(contracts::kPointsNote);
+  points_note->InsertNextValue(current_nodes ? "current (deformed) configuration; reference = points - displacement (do not warp by it again)"
+                                             : "reference configuration");
+  grid->GetFieldData()->AddArray(points_note);
+  for (const MeshStrings& named : strings) {
+    vtkNew<vtkStringArray> a;
+    a->SetName(named.name.c_str());
+    for (const std::string& v : named.values) a->InsertNextValue(v);
+    grid->GetFieldData()->AddArray(a);
+  }
   if (time) {  // ParaView's name for a dataset's time
     vtkNew<vtkDoubleArray> t;
     t->SetName("TimeValue");

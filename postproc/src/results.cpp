@@ -10,6 +10,7 @@
 
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/log.hpp"
 
 namespace fs = std::filesystem;
 
@@ -130,7 +131,14 @@ Results read_results(const fs::path& folder) {
       throw InputError(pvd.string(), "DataSet timestep", "a number", (*it)[1].str());
     }
     f.file = r.folder / (*it)[2].str();
-    if (!fs::exists(f.file)) throw InputError(pvd.string(), "DataSet file", "an existing state file", f.file.string() + " is missing");
+    // A state file gone (deleted, a disk that filled): the report says so and shows the others.
+    if (!fs::exists(f.file)) {
+      std::ostringstream what;
+      what << (*it)[2].str() << " (t = " << f.time << " s) is missing";
+      r.missing.push_back(what.str());
+      log::warn(pvd.string() + ": " + what.str() + "; the report leaves it out");
+      continue;
+    }
     r.frames.push_back(f);
   }
   if (s.find("<Collection") == std::string::npos) throw InputError(pvd.string(), "", "a VTK Collection file", "other content");
@@ -154,7 +162,8 @@ Results read_results(const fs::path& folder) {
       throw InputError(rj_file, rk::status, "a run with at least one output state to report on",
                        "a run that " + status + " at step " + std::to_string(j[rk::steps].get<long long>()) + " before writing any" +
                            (message.empty() ? std::string() : ": " + message));
-    throw InputError(pvd.string(), "DataSet", "at least one output state to report on", "none (the run wrote no state: see run.json)");
+    throw InputError(pvd.string(), "DataSet", "at least one output state to report on",
+                     r.missing.empty() ? "none (the run wrote no state: see run.json)" : "every state file is missing");
   }
   for (const char* key : {rk::materials, rk::bodies}) {
     auto& names = std::string(key) == rk::materials ? r.materials : r.bodies;

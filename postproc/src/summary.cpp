@@ -236,6 +236,7 @@ Summary summarize(const Results& r) {
   s.von_mises.resize(M);
   for (std::size_t m = 0; m < M; ++m) s.von_mises[m].material = m < r.materials.size() ? r.materials[m] : "material " + std::to_string(m);
   for (const Frame& f : r.frames) s.frames.push_back(summarize_frame(r, f, M, s));
+  s.missing = r.missing;
   return s;
 }
 
@@ -309,6 +310,7 @@ std::string summary_json(const Summary& s) {
   }
   j["outputs"] = frames;
   j["pictures"] = s.pictures;
+  j["missing_states"] = s.missing;
   if (!s.interactive.empty()) j["interactive_report"] = s.interactive;
   return j.dump(2) + "\n";
 }
@@ -397,6 +399,11 @@ std::string summary_markdown(const Summary& s) {
       o << "| " << rs.name << " | " << rs.peak << " | " << rs.peak_time * 1e3 << " | " << v3(rs.peak_force) << " | " << v3(rs.final_force) << " | "
         << v3(rs.final_moment) << " |\n";
     o << "\nThe force each support applies to the body (history.csv has it at every row, with its moment).\n";
+  }
+  if (!s.missing.empty()) {
+    o << "\n**Missing output states** (listed in results.pvd, left out of this report):";
+    for (const auto& m : s.missing) o << " " << m << ";";
+    o << "\n";
   }
   o << "\n## Output states\n\n| t (ms) | file |";
   for (const auto& m : s.von_mises) o << " max von Mises " << m.material << " (MPa) |";

@@ -256,6 +256,7 @@ StateFields state_fields(vtkUnstructuredGrid* g, std::size_t k, const Surface& s
 // scan.missing and left out of the page.
 Scan scan_states(const Results& r) {
   Scan scan;
+  scan.missing = r.missing;
   for (std::size_t k = 0; k < r.frames.size(); ++k) {
     const std::string file = r.frames[k].file.string();
     vtkSmartPointer<vtkUnstructuredGrid> g;
@@ -426,8 +427,8 @@ std::string pressure_csv(const Surface& s, const StateFields& f, const std::vect
     if (!(f.pressure_pa[v] > 0)) continue;
     const Vec3 &x = f.position[v], &t = f.traction[v];
     const std::uint32_t b = vertex_body[v];
-    o << s.node[v] + 1 << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << f.pressure_pa[v] << ',' << t[0] << ',' << t[1] << ',' << t[2]
-      << ',' << f.area[v] << ',' << (b < bodies.size() ? bodies[b] : std::to_string(b)) << '\n';
+    o << s.node[v] + 1 << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << f.pressure_pa[v] << ',' << t[0] << ',' << t[1] << ',' << t[2] << ','
+      << f.area[v] << ',' << (b < bodies.size() ? bodies[b] : std::to_string(b)) << '\n';
   }
   return o.str();
 }

@@ -88,21 +88,37 @@
     light.position.set(0.3, 0.5, 1);
     view.camera.add(light);
 
+    // The faces sorted by body, one draw group (and material) per body, so a body can be hidden.
     const faces = decode(model.faces, Uint32Array);
+    const faceTet = decode(model.face_tet, Uint32Array);
+    const faceBody = decode(model.face_body, Uint32Array);
     const F = faces.length / 3;
-    view.faces = faces;
+    const order = Array.from({ length: F }, (_, i) => i).sort((a, b) => faceBody[a] - faceBody[b] || a - b);
+    view.faces = new Uint32Array(3 * F);
+    view.faceTet = new Uint32Array(F);
+    view.faceBody = new Uint32Array(F);
+    order.forEach((f, i) => {
+      view.faces.set(faces.subarray(3 * f, 3 * f + 3), 3 * i);
+      view.faceTet[i] = faceTet[f];
+      view.faceBody[i] = faceBody[f];
+    });
     view.reference = decode(model.reference, Float32Array);
     view.nodeId = decode(model.node_id, Uint32Array);
-    view.faceTet = decode(model.face_tet, Uint32Array);
-    view.faceBody = decode(model.face_body, Uint32Array);
     view.geometry = new T.BufferGeometry();
     view.positions = new Float32Array(9 * F);
     view.colors = new Float32Array(9 * F);
     view.geometry.setAttribute("position", new T.BufferAttribute(view.positions, 3));
     view.geometry.setAttribute("color", new T.BufferAttribute(view.colors, 3));
-    const material = new T.MeshLambertMaterial({ vertexColors: true, side: T.DoubleSide });
-    view.mesh = new T.Mesh(view.geometry, material);
+    view.materials = model.bodies.map(() => new T.MeshLambertMaterial({ vertexColors: true, side: T.DoubleSide }));
+    for (let i = 0; i < F; ) {
+      let j = i;
+      while (j < F && view.faceBody[j] === view.faceBody[i]) ++j;
+      view.geometry.addGroup(3 * i, 3 * (j - i), Math.min(view.faceBody[i], view.materials.length - 1));
+      i = j;
+    }
+    view.mesh = new T.Mesh(view.geometry, view.materials);
     view.scene.add(view.mesh);
+    bodyToggles();
 
     // Frame the reference configuration.
     const box = new T.Box3();
@@ -114,7 +130,7 @@
     view.scene.add(view.marker);
     view.camera.near = view.radius / 100;
     view.camera.far = view.radius * 100;
-    view.camera.position.copy(sphere.center).add(new T.Vector3(1, -1.6, 1.1).normalize().multiplyScalar(3.9 * view.radius));
+    view.camera.position.copy(sphere.center).add(viewDirection().multiplyScalar(3.9 * view.radius));
     view.camera.up.set(0, 0, 1);
     view.controls = new T.OrbitControls(view.camera, view.renderer.domElement);
     view.controls.target.copy(sphere.center);
@@ -123,6 +139,61 @@
     window.addEventListener("resize", resize);
     resize();
     setupPicking();
+  }
+
+  // A checkbox per body. With contact, the bodies that carry no pressure (the masters: a block, a
+  // handle) start hidden, so the pressed skin is in view; tick them back to see them.
+  function bodyToggles() {
+    const host = $("bodies");
+    const pressed = pressedBodies();
+    model.bodies.forEach((name, b) => {
+      const label = document.createElement("label");
+      const box = document.createElement("input");
+      box.type = "checkbox";
+      box.checked = pressed.size === 0 || pressed.has(b);
+      view.materials[b].visible = box.checked;
+      box.addEventListener("change", () => {
+        view.materials[b].visible = box.checked;
+        render();
+      });
+      label.append(box, " " + name + " ");
+      host.appendChild(label);
+    });
+  }
+
+  function pressedBodies() {
+    const bodies = new Set();
+    const p = model.fields.pressure.peak;
+    if (!(p.value > 0) || !states[p.state] || !stateArrays(p.state).pressure) return bodies;
+    const pressure = stateArrays(p.state).pressure;
+    for (let f = 0; f < view.faceBody.length; ++f)
+      for (let c = 0; c < 3; ++c) if (pressure[view.faces[3 * f + c]] > 0) bodies.add(view.faceBody[f]);
+    return bodies;
+  }
+
+  // The camera's side: with contact, along the pressure-weighted outward normal of the pressed
+  // faces at the peak's output (the side the contact partner sees, as pressure.png); otherwise an
+  // oblique view.
+  function viewDirection() {
+    const T = window.THREE;
+    const d = new T.Vector3(1, -1.6, 1.1);
+    const p = model.fields.pressure.peak;
+    if (p.value > 0 && states[p.state] && stateArrays(p.state).pressure) {
+      const a = stateArrays(p.state);
+      const n = new T.Vector3();
+      const x = [0, 1, 2].map(() => new T.Vector3());
+      for (let f = 0; f < view.faceBody.length; ++f) {
+        let q = 0;
+        for (let c = 0; c < 3; ++c) {
+          const v = view.faces[3 * f + c];
+          q += a.pressure[v] / 3;
+          x[c].set(...[0, 1, 2].map((i) => view.reference[3 * v + i] + a.displacement[3 * v + i]));
+        }
+        if (q > 0) n.add(x[1].clone().sub(x[0]).cross(x[2].clone().sub(x[0])).multiplyScalar(q));
+      }
+      if (n.lengthSq() > 0) d.copy(n).normalize().add(new T.Vector3(0.15, -0.15, 0.15));
+    }
+    return d.normalize();
   }
 
   function resize() {
@@ -316,7 +387,7 @@
       if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
       const r = el.getBoundingClientRect();
       ray.setFromCamera(new T.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1), view.camera);
-      const hit = ray.intersectObject(view.mesh)[0];
+      const hit = ray.intersectObject(view.mesh).find((h) => view.materials[view.faceBody[h.faceIndex]].visible);
       if (hit) pick(hit.faceIndex, hit.point);
     });
   }
@@ -502,6 +573,7 @@
       }, 400);
     });
     show(start);
+    status.load_ms = Math.round(performance.now()); // from navigation start: every file read, the first picture drawn
     status.ready = true;
     writeStatus();
   }

@@ -34,6 +34,13 @@ std::string results_reference_markdown() {
        "current. SI units throughout.\n\n"
     << "A results folder holds `results/state_NNNN.vtu` (one per output time, listed with their times in "
        "`results.pvd`), `history.csv` and `run.json`.\n\n"
+    << "**Points**: a state's points are the current (deformed) configuration; the reference is points - `displacement`. "
+       "ParaView shows the deformed bodies as opened; do not Warp By Vector with `displacement` (that applies it twice). "
+       "Each state's field data says so in `"
+    << contracts::kPointsNote
+    << "`, gives its time in `TimeValue` (s) and its units in "
+       "`units`, and names the bodies and materials behind the `body` and `material` indices in `"
+    << contracts::kBodyNames << "` and `" << contracts::kMaterialNames << "`.\n\n"
     << "## State fields (`results/*.vtu`)\n\n| field | on | components | unit | meaning |\n|---|---|---|---|---|\n";
   for (const auto& f : result_fields())
     o << "| `" << f.name << "` | " << f.where << " | " << f.components << " | " << (f.unit.empty() ? "-" : f.unit) << " | " << f.doc << " |\n";

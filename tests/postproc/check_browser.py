@@ -164,8 +164,9 @@ def main():
         start = time.time()
         status = page_status(page)
         print(
-            f"check_browser: {size / 2**20:.1f} MB, loaded and drawn in {time.time() - start:.1f} s "
-            f"(headless Chromium, software WebGL; {status['outputs']} outputs)"
+            f"check_browser: {size / 2**20:.1f} MB, {status['outputs']} outputs; the page loaded and drew in "
+            f"{status['load_ms'] / 1e3:.2f} s by its own clock, {time.time() - start:.1f} s with Chromium's start "
+            "(headless, software WebGL)"
         )
         return
     states = states_of(results)

@@ -8,10 +8,12 @@
 #include <vtkPNGReader.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "expect_error.hpp"
 #include "tactus/core/contracts.hpp"
@@ -20,6 +22,7 @@
 #include "tactus/postproc/render.hpp"
 #include "tactus/postproc/results.hpp"
 #include "tactus/postproc/summary.hpp"
+#include "tactus/postproc/web_report.hpp"
 #include "temp_dir.hpp"
 
 using namespace tactus;
@@ -372,10 +375,10 @@ TEST(Pictures, ShowWhatTheDataSays) {
   ASSERT_EQ(run_post(d, tmp.path() / "report", ""), 0) << slurp(tmp.path() / "report.log");
   ASSERT_EQ(run_post(d, tmp.path() / "edge_on", "--view 1 0 0"), 0) << slurp(tmp.path() / "edge_on.log");
   const auto summary = nlohmann::json::parse(slurp(tmp.path() / "report" / "summary.json"));
-  std::vector<std::string> expected{"von_mises_t0.00ms.png",  "von_mises_t1.00ms.png", "section.png",
-                                    "pressure.png",           "pressure_t0.00ms.png",  "pressure_t1.00ms.png",
-                                    "plot_contact_force.png", "plot_contact_area.png", "plot_peak_pressure.png",
-                                    "plot_energies.png",      "plot_reactions.png"};
+  // (the nodal von Mises at output 1, the punch's 5 MPa: the highest stress)
+  std::vector<std::string> expected{"von_mises_t0.00ms.png", "von_mises_t1.00ms.png",  "von_mises_nodal_t1.00ms.png", "section.png",
+                                    "pressure.png",          "pressure_t0.00ms.png",   "pressure_t1.00ms.png",        "plot_contact_force.png",
+                                    "plot_contact_area.png", "plot_peak_pressure.png", "plot_energies.png",           "plot_reactions.png"};
   EXPECT_EQ(summary["pictures"].get<std::vector<std::string>>(), expected);
 
   // The stress picture looks along the plate's thinnest axis (z), so the plate shows its 40 x 20
@@ -461,4 +464,80 @@ TEST(Pictures, PressureScaleIsCappedAtTheAreaPercentile) {
   EXPECT_DOUBLE_EQ(capped, 99700.0);
   EXPECT_DOUBLE_EQ(wide, 1.69e6);
   EXPECT_EQ(postproc::pressure_scale_cap({}), 0.0);
+}
+
+// The interactive report's colour cap: the histogram's percentile against the exact one
+// (pressure_scale_cap sorts every pair), on values spread over five decades.
+TEST(WebReport, PercentileCapIsTheWeightedPercentile) {
+  std::vector<std::pair<double, double>> pairs;
+  postproc::PercentileCap cap;
+  unsigned state = 12345;
+  auto uniform = [&] { return ((state = state * 1103515245u + 12345u) >> 8) / 16777216.0; };
+  for (int i = 0; i < 20000; ++i) {
+    const double value = std::pow(10.0, 1 + 5 * uniform()), weight = 0.5 + uniform();
+    pairs.emplace_back(value, weight);
+    cap.add(value, weight);
+  }
+  const double exact = postproc::pressure_scale_cap(pairs);
+  std::printf("99.5 %% weighted percentile: histogram %.6g, exact %.6g (ratio %.5f; one bin is 1.00577)\n", cap.cap(), exact, cap.cap() / exact);
+  EXPECT_GE(cap.cap(), exact);
+  EXPECT_LE(cap.cap(), exact * std::pow(10.0, 1.0 / 400) * (1 + 1e-12));
+}
+
+// The page's data: the boundary surface of the plate and the punch (2 triangles per cell face on
+// the box surfaces: 2 x (4x2 + 4x1 + 2x1) x 2 + 6 x 2 = 68), every output, the pressure peak the
+// written one; a tiny byte budget coarsens the surface but keeps the pressed nodes' faces.
+TEST(WebReport, SurfaceStatesAndCoarsening) {
+  TempDir dir;
+  const Folder f = write_results(dir.path());
+  const postproc::Results r = postproc::read_results(dir.path());
+  const postproc::Summary s = postproc::summarize(r);
+  const postproc::WebReport full = postproc::write_web_report(r, s, dir.path() / "report");
+  EXPECT_EQ(full.surface_faces, 68u);
+  EXPECT_EQ(full.faces_shown, 68u);
+  EXPECT_TRUE(full.missing.empty());
+  for (const char* file : {"index.html", "tactus-report.js", "three-report.min.js", "data/model.js", "data/state_0000.js", "data/state_0001.js"})
+    EXPECT_TRUE(fs::is_regular_file(dir.path() / "report" / file)) << file;
+  std::string model = slurp(dir.path() / "report/data/model.js");
+  model = model.substr(model.find('(') + 1, model.rfind(')') - model.find('(') - 1);
+  const nlohmann::json j = nlohmann::json::parse(model);
+  EXPECT_EQ(j["states"].size(), 2u);
+  EXPECT_DOUBLE_EQ(j["fields"]["pressure"]["peak"]["value"].get<double>(), kPeakPressure);
+  EXPECT_EQ(j["fields"]["pressure"]["peak"]["id"].get<long>(), static_cast<long>(f.peak_node) + 1);
+  EXPECT_DOUBLE_EQ(j["fields"]["von_mises"]["peak"]["value"].get<double>(), kPunchStress);
+  // The pressure table of the last output: the peak node and its four neighbours.
+  EXPECT_TRUE(fs::is_regular_file(dir.path() / "report/pressure_1.00ms.csv"));
+  std::stringstream table(slurp(dir.path() / "report/pressure_1.00ms.csv"));
+  std::string line;
+  int rows = -1;
+  while (std::getline(table, line)) ++rows;
+  EXPECT_EQ(rows, 5);
+
+  postproc::WebReportOptions tiny;
+  tiny.byte_budget = 1;
+  const postproc::WebReport coarse = postproc::write_web_report(r, s, dir.path() / "coarse", tiny);
+  std::printf("surface %zu triangles, %zu bytes; with a 1-byte budget %zu triangles, %zu bytes\n", full.surface_faces, full.bytes, coarse.faces_shown,
+              coarse.bytes);
+  EXPECT_LT(coarse.faces_shown, full.faces_shown);
+  EXPECT_LT(coarse.bytes, full.bytes);
+  std::string cm = slurp(dir.path() / "coarse/data/model.js");
+  EXPECT_NE(cm.find("\"cluster_size\""), std::string::npos);
+}
+
+// A state file gone from a results folder: the report leaves it out, says so, and reports the rest.
+TEST(Summary, MissingStateIsSaidAndTheRestReported) {
+  TempDir tmp;
+  const fs::path d = tmp.path() / "solve";
+  write_results(d);
+  fs::remove(d / "results/state_0000.vtu");
+  const postproc::Results r = postproc::read_results(d);
+  ASSERT_EQ(r.frames.size(), 1u);
+  EXPECT_DOUBLE_EQ(r.frames[0].time, 1e-3);
+  ASSERT_EQ(r.missing.size(), 1u);
+  EXPECT_NE(r.missing[0].find("state_0000.vtu"), std::string::npos) << r.missing[0];
+  const postproc::Summary s = postproc::summarize(r);
+  EXPECT_NE(postproc::summary_markdown(s).find("Missing output states"), std::string::npos);
+  EXPECT_DOUBLE_EQ(s.peak_pressure_outputs.value, kPeakPressure);
+  fs::remove(d / "results/state_0001.vtu");
+  expect_input_error([&] { postproc::read_results(d); }, {"results.pvd", "every state file is missing"});
 }

@@ -791,7 +791,8 @@ TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
   const ContactPair& mortar = m.contact_pairs[0];
   ExplicitSolver solver(m, sc.run, sc.damping);
   ContactSolver::NodeFields fields;
-  double worst = 0, largest_force = 0;
+  double worst = 0, worst_decaying = 0, largest_force = 0, slave_area = 0;
+  for (double a : mortar.slave_area) slave_area += a;
   std::size_t pressed = 0;
   while (true) {
     solver.advance_velocity();
@@ -802,7 +803,13 @@ TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
       double field = 0;
       for (std::size_t i = 0; i < mortar.slave_nodes.size(); ++i)
         field += fields.pressure[static_cast<std::size_t>(mortar.slave_nodes[i])] * mortar.slave_area[i];
-      worst = std::max(worst, std::abs(field - rep.windowed_normal_force) / rep.windowed_normal_force);
+      // While pressed, exactly; once the plate lets go, the windows decay and each node's is cut
+      // to 0 below 1 mPa (ContactSolver::update_windows), so the two may differ by at most that
+      // pressure over the slave surface.
+      if (rep.normal_force > 0)
+        worst = std::max(worst, std::abs(field - rep.windowed_normal_force) / rep.windowed_normal_force);
+      else
+        worst_decaying = std::max(worst_decaying, std::abs(field - rep.windowed_normal_force));
       largest_force = std::max(largest_force, rep.windowed_normal_force);
       pressed += rep.normal_force > 0;
     }
@@ -811,10 +818,11 @@ TEST(Contact, EdgePassLoadIsTheSlaveSurfacesPressure) {
   }
   std::printf(
       "plate on a block's edge: %zu steps pressed by the edge rows alone, windowed force up to %.3e N; the slave surface's "
-      "pressure x tributary area against it: largest relative difference %.2e\n",
-      pressed, largest_force, worst);
+      "pressure x tributary area against it: largest relative difference %.2e while pressed, %.2e N after (bound %.2e N)\n",
+      pressed, largest_force, worst, worst_decaying, 1e-3 * slave_area);
   EXPECT_GE(pressed, 20u);  // the check ran while the edge carried the load (28 steps; the plate then rebounds)
   EXPECT_LE(worst, 1e-10);
+  EXPECT_LE(worst_decaying, 1e-3 * slave_area);
 }
 
 TEST(Contact, SphereSlidesOverTheEdgeAndCornerOfABlockMortar) {

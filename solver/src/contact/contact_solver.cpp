@@ -158,6 +158,9 @@ void ContactSolver::update_windows(ContactStepReport& rep, double dtbar) {
       is_pressed_[static_cast<std::size_t>(s)] = 0;
   }
   pressed_.resize(kept);
+  // No load and no window left: the windowed force and area end with them (else they too would
+  // decay for thousands of steps after the bodies part).
+  if (pressed_.empty() && rep.normal_force == 0) windowed_normal_force_ = windowed_area_ = 0, rep.windowed_normal_force = rep.windowed_area = 0;
 }
 
 void ContactSolver::find_pressed() {

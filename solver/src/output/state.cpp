@@ -89,7 +89,11 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   }
   std::vector<MeshField> cell_fields{stress, vm, material, body, jac};
   for (auto& f : law_fields) cell_fields.push_back(std::move(f));
-  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current, time);
+  // The names behind the "body" and "material" indices, so a plain VTK reader needs no run.json.
+  MeshStrings body_names{contracts::kBodyNames, {}}, material_names{contracts::kMaterialNames, {}};
+  for (const auto& b : m.bodies) body_names.values.push_back(b.name);
+  for (const auto& b : m.blocks) material_names.values.push_back(b.name);
+  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current, time, {body_names, material_names});
   return block_peak;
 }
 

@@ -40,8 +40,11 @@ inline constexpr FieldSpec contact_gap{"contact_gap", 1, "m", "gap h to the mast
 inline constexpr FieldSpec contact_area{"contact_area", 1, "m^2",
                                         "tributary area A of the node's contact row (mortar: its share of the overlap), so that pressure x area "
                                         "is its normal reaction; 0 without a row"};
-inline constexpr std::array<const FieldSpec*, 7> all{&displacement,   &velocity,    &contact_pressure, &contact_traction,
-                                                     &contact_status, &contact_gap, &contact_area};
+inline constexpr FieldSpec node_id{"node_id", 1, "",
+                                   "the node's number in every message, summary and quality.json (1-based; for a one-body mesh its .msh "
+                                   "tag; bodies follow each other in scenario order)"};
+inline constexpr std::array<const FieldSpec*, 8> all{&node_id,          &displacement,   &velocity,    &contact_pressure,
+                                                     &contact_traction, &contact_status, &contact_gap, &contact_area};
 }  // namespace point
 
 namespace cell {
@@ -51,8 +54,15 @@ inline constexpr FieldSpec von_mises{"von_mises", 1, "Pa", "von Mises stress of 
 inline constexpr FieldSpec material{"material", 1, "", "index into run.json materials"};
 inline constexpr FieldSpec body{"body", 1, "", "index into run.json bodies"};
 inline constexpr FieldSpec jacobian{"J", 1, "", "volume ratio det F"};
-inline constexpr std::array<const FieldSpec*, 6> all{&group, &cauchy_stress, &von_mises, &material, &body, &jacobian};
+inline constexpr FieldSpec tet_id{"tet_id", 1, "", "the tet's number in every message, summary and quality.json (1-based, as node_id)"};
+inline constexpr std::array<const FieldSpec*, 7> all{&tet_id, &group, &cauchy_stress, &von_mises, &material, &body, &jacobian};
 }  // namespace cell
+
+// Field data of every state: "TimeValue" (s, as ParaView reads it), "units", "points" (which
+// configuration the points are), and the names behind the indices: "body_names", "material_names".
+inline constexpr const char* kPointsNote = "points";
+inline constexpr const char* kBodyNames = "body_names";
+inline constexpr const char* kMaterialNames = "material_names";
 
 // --- results: history.csv ----------------------------------------------------------------------
 struct ColumnSpec {
@@ -73,7 +83,9 @@ inline constexpr ColumnSpec contact_work_normal{"contact_work_normal", "J", "ene
 inline constexpr ColumnSpec contact_work_friction{"contact_work_friction", "J", "energy dissipated by friction"};
 inline constexpr ColumnSpec energy_balance_error{"energy_balance_error", "J",
                                                  "kinetic + internal + damping + contact work - external work - initial energy"};
-inline constexpr ColumnSpec critical_step{"critical_step", "s", "the stable limit min L_e / c_e at t^n"};
+inline constexpr ColumnSpec critical_step{"critical_step", "s",
+                                          "the stable limit at t^n: the larger of the element estimate min L_e / c_e and the nodal bound "
+                                          "(docs/design.md section 5)"};
 inline constexpr ColumnSpec contact_force{"contact_force", "N", "|sum of the contact reactions on the slave nodes|"};
 inline constexpr ColumnSpec contact_force_x{"contact_force_x", "N", "its x component"};
 inline constexpr ColumnSpec contact_force_y{"contact_force_y", "N", "its y component"};

@@ -52,14 +52,22 @@ struct MeshField {
   std::vector<std::string> component_names{};  // (optional) VTK's component names, e.g. xx .. xz
 };
 
-// VTK XML unstructured grid (.vtu) of the tets, with cell data "group" (the physical tag) plus
-// the given point and cell fields, and field data "units" ("SI (m, kg, s, Pa, J)"). Optional
-// `current_nodes` writes the deformed positions (the reference geometry is then recoverable from
-// the "displacement" field, if given); `time` (s) goes into field data "TimeValue", where ParaView
-// and VTK's readers take a state's time from without the .pvd.
+// Named strings for a .vtu's field data (VTK string array), e.g. the body names.
+struct MeshStrings {
+  std::string name;
+  std::vector<std::string> values;
+};
+
+// VTK XML unstructured grid (.vtu) of the tets, with point data "node_id" and cell data "tet_id"
+// (1-based, the numbers messages use) and "group" (the physical tag), the given point and cell
+// fields, and field data "units" ("SI (m, kg, s, Pa, J)") and "points" (which configuration the
+// points are). Optional `current_nodes` writes the deformed positions (the reference geometry is
+// then points - "displacement", and the "points" note says so: a Warp By Vector would apply the
+// displacement twice); `time` (s) goes into field data "TimeValue", where ParaView and VTK's
+// readers take a state's time from without the .pvd; `strings` are added to the field data.
 void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields = {},
                const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr,
-               std::optional<double> time = std::nullopt);
+               std::optional<double> time = std::nullopt, const std::vector<MeshStrings>& strings = {});
 
 struct VtuContents {
   TetMesh mesh;  // nodes, tets, tet_group (no triangles: a .vtu holds the volume cells)

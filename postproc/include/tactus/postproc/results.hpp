@@ -30,9 +30,10 @@ struct Results {
   History history;
   std::string run_json;                        // text of run.json (parsed where needed)
   std::vector<std::string> materials, bodies;  // names behind the "material" / "body" cell fields
+  std::vector<std::string> missing;            // states results.pvd lists whose files are gone (left out, said)
 };
 
-// Reads the listing and history, checks that every state file exists (the states themselves are
+// Reads the listing and history, checks which state files exist (the states themselves are
 // read when needed). Throws InputError on a missing results.pvd, history.csv, run.json or state.
 Results read_results(const std::filesystem::path& folder);
 

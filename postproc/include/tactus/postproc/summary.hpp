@@ -81,6 +81,7 @@ struct Summary {
     std::vector<GripShare> regions, digits;
   } grasp;
   std::vector<FrameSummary> frames;
+  std::vector<std::string> missing;   // output states listed but gone (Results::missing)
   std::vector<std::string> pictures;  // file names in the report folder
   std::string interactive;            // the interactive report's page (index.html), when written
 };

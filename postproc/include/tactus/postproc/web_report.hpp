@@ -19,8 +19,8 @@ struct WebReportOptions {
   // The page and its data stay below this many bytes: when the full boundary surface would not,
   // the part that never touches anything is coarsened by vertex clustering until it does.
   std::size_t byte_budget = 45u << 20;
-  bool page = true;           // index.html and data/; off: only the pressure tables
-  std::vector<Vec3> probes;   // points (m, reference configuration) whose nearest surface node's pressure goes to probes.csv
+  bool page = true;          // index.html and data/; off: only the pressure tables
+  std::vector<Vec3> probes;  // points (m, reference configuration) whose nearest surface node's pressure goes to probes.csv
 };
 
 struct WebReport {
@@ -33,7 +33,7 @@ struct WebReport {
 // The colour scale's top for a field sampled as (value, weight) pairs: the smallest value with
 // 99.5 % of the total weight at or below it (pressure_scale_cap's rule), here on a logarithmic
 // histogram so that the tets of every output state need not be held at once: `add` them, then
-// `cap()` is within one bin (0.25 %) above the exact weighted percentile.
+// `cap()` is at most one bin (a factor 10^(1/400), 0.58 %) above the exact weighted percentile.
 class PercentileCap {
  public:
   void add(double value, double weight);
@@ -49,7 +49,6 @@ class PercentileCap {
 // Also writes, whatever the options: pressure_<ms>ms.csv for each output with contact (the
 // pressed nodes: node_id, current x y z, pressure, friction traction, tributary area, body), and
 // probes.csv (the pressure against time at the surface node nearest each probe point).
-WebReport write_web_report(const Results& results, const Summary& summary, const std::filesystem::path& report,
-                           const WebReportOptions& options = {});
+WebReport write_web_report(const Results& results, const Summary& summary, const std::filesystem::path& report, const WebReportOptions& options = {});
 
 }  // namespace tactus::postproc
