@@ -7,8 +7,7 @@
 #   3. a run that ends before the bodies meet: the report says no contact occurred;
 #   4. a stage failing mid-way (bad scenario): the pipeline names it, every output stays as it
 #      was (the previous report too: pipeline.json lists it as stale);
-#   5. a results folder with a missing state file: tactus-post warns naming it, reports the others
-#      and says in summary.md and on its page what is missing;
+#   5. a results folder whose only state file is missing: tactus-post names it and refuses;
 #   6. interrupts: SIGTERM during the solve stops it cleanly (the report kept and listed stale,
 #      pipeline.json "interrupted"; the scenario writes checkpoints, so the solve keeps its newest
 #      in its staging folder and nothing else is left) and the next pipeline run continues the
@@ -70,13 +69,18 @@ grep -q "no_such_group" "$T/fourth.err" || fail "the solver's message is not sho
 "$PY" -c "import json,sys; j=json.load(open('$T/work/pipeline.json')); sys.exit(0 if j['status']=='failed' and j['failed_stage']=='solve' and '$T/work/report' in j['stale_outputs'] else 1)" \
   || fail "pipeline.json does not record the failed solve and the stale report"
 
-echo "--- 5. a results folder missing a state file"
+echo "--- 5. a results folder missing its only state file"
+# (One missing among several is left out and said: test Summary.MissingStateIsSaidAndTheRestReported.)
 rm "$T/broken/results/state_0000.vtu"
-"$BUILD/postproc/tactus-post" "$T/broken" -o "$T/broken_report" --no-pictures 2> "$T/fifth.err" || fail "tactus-post failed on one missing state"
+set +e
+"$BUILD/postproc/tactus-post" "$T/broken" -o "$T/broken_report" --no-pictures 2> "$T/fifth.err"
+rc=$?
+set -e
 cat "$T/fifth.err"
+[ "$rc" -eq 1 ] || fail "tactus-post exit code $rc (expected 1)"
 grep -q "state_0000.vtu (t = .*) is missing" "$T/fifth.err" || fail "the missing file is not named"
-grep -q "Missing output states.*state_0000.vtu" "$T/broken_report/summary.md" || fail "summary.md does not say what is missing"
-grep -q "state_0000.vtu" "$T/broken_report/data/model.js" || fail "the page does not say what is missing"
+grep -q "every state file is missing" "$T/fifth.err" || fail "the refusal does not say why"
+[ ! -e "$T/broken_report" ] || fail "a report was left behind"
 echo "--- 6. interrupts, the lock, a foreign work folder"
 run "$SRC/pipeline/scenarios/hand_block.toml" 1e-3 > /dev/null   # a complete run again, report included
 "$PY" "$SRC/pipeline/tactus-pipeline" "$T/phantom" "$SRC/pipeline/scenarios/hand_block.toml" -o "$T/work" --end-time 2e-3 \
