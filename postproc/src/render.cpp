@@ -37,7 +37,6 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkWindowToImageFilter.h>
-#include <vtkXMLUnstructuredGridReader.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -46,6 +45,7 @@
 #include <map>
 #include <sstream>
 
+#include "state_files.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/file_io.hpp"
@@ -60,15 +60,6 @@ namespace cp = contracts::point;
 namespace hc = contracts::history;
 
 namespace {
-
-vtkSmartPointer<vtkUnstructuredGrid> load(const fs::path& file) {
-  vtkNew<vtkXMLUnstructuredGridReader> reader;
-  reader->SetFileName(file.string().c_str());
-  reader->Update();
-  vtkSmartPointer<vtkUnstructuredGrid> g = reader->GetOutput();
-  if (!g || g->GetNumberOfCells() == 0) throw InputError(file.string(), "", "a tactus-solve state (.vtu)", "no cells");
-  return g;
-}
 
 // Cells of one body (cell field "body" == index), or everything when the field is absent.
 vtkSmartPointer<vtkUnstructuredGrid> body_cells(vtkUnstructuredGrid* g, int body) {
@@ -273,12 +264,6 @@ double surfaces_pressure_cap(const std::vector<vtkPolyData*>& surfaces) {
   return pressure_scale_cap(pressed);
 }
 
-std::string ms(double t) {
-  std::ostringstream o;
-  o << std::fixed << std::setprecision(2) << t * 1e3;
-  return o.str();
-}
-
 std::size_t nearest_frame(const Results& r, double t) {
   std::size_t best = 0;
   for (std::size_t k = 1; k < r.frames.size(); ++k)
@@ -399,7 +384,7 @@ vtkSmartPointer<vtkLookupTable> mpa_bar(vtkLookupTable* vm_lut) {
 
 std::string von_mises_picture(const Results& r, std::size_t k, const Views& v, vtkLookupTable* vm_lut, const fs::path& report,
                               const RenderOptions& opt, bool nodal = false) {
-  const auto g = load(r.frames[k].file);
+  const auto g = load_state(r.frames[k].file);
   if (nodal) add_nodal_von_mises(g);
   auto window = offscreen(opt.width, opt.height);
   auto ren = white_renderer();
@@ -420,7 +405,7 @@ std::string von_mises_picture(const Results& r, std::size_t k, const Views& v, v
 // with the pressure (or of the model): materials and von Mises side by side.
 bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLookupTable* vm_lut, const fs::path& report, const RenderOptions& opt) {
   const std::size_t k = s.contact_occurred ? nearest_frame(r, s.peak_pressure_outputs.time) : r.frames.size() - 1;
-  const auto g = load(r.frames[k].file);
+  const auto g = load_state(r.frames[k].file);
   const int pb = pressure_body(r, s, opt);
   const auto axes = principal_axes(pb >= 0 ? body_cells(g, pb)->GetPoints() : g->GetPoints());
   const Vec3 normal = opt.section_normal ? (1.0 / norm(*opt.section_normal)) * *opt.section_normal : axes[2];
@@ -515,7 +500,7 @@ std::vector<std::string> pressure_pictures(const Results& r, const Summary& s, c
   std::map<std::size_t, vtkSmartPointer<vtkPolyData>> bodies;  // each state read once
   const auto body_at = [&](std::size_t k) -> vtkPolyData* {
     auto& b = bodies[k];
-    if (!b) b = surface(body_cells(load(r.frames[k].file), pb));
+    if (!b) b = surface(body_cells(load_state(r.frames[k].file), pb));
     return b;
   };
   std::vector<vtkPolyData*> every_output;
@@ -595,7 +580,7 @@ bool grip_map_picture(const Results& r, const Summary& s, const fs::path& file, 
   if (handle < 0) return false;
   hand = opt.pressure_body.empty() ? (handle == 0 ? 1 : 0) : body_index(r, opt.pressure_body);
   const std::size_t k = r.frames.size() - 1;
-  auto grid = load(r.frames[k].file);
+  auto grid = load_state(r.frames[k].file);
   auto handle_surface = surface(body_cells(grid, handle));
   auto skin = surface(body_cells(grid, hand));
   vtkDataArray* p = skin->GetPointData()->GetArray(cp::contact_pressure.name);
@@ -703,7 +688,7 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
     if (!(vm_max > 0)) vm_max = 1;
     auto vm_lut = rainbow(vm_max * 1e-4, vm_max, true);
     // The views of the first state frame them all (bodies move little over a run).
-    const Views views = choose_views(load(r.frames[chosen.front()].file), opt);
+    const Views views = choose_views(load_state(r.frames[chosen.front()].file), opt);
     for (std::size_t k : chosen) written.push_back(von_mises_picture(r, k, views, vm_lut, report, opt));
     // The nodal average beside the per-tet picture, at the chosen output with the highest stress.
     double peak_time = r.frames[chosen.back()].time;

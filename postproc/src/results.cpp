@@ -2,12 +2,17 @@
 #include "tactus/postproc/results.hpp"
 #include "tactus/core/file_io.hpp"
 
+#include <vtkNew.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
 #include <algorithm>
 #include <fstream>
+#include <iomanip>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 
+#include "state_files.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
@@ -20,6 +25,22 @@ namespace rk = contracts::run_json;
 namespace hc = contracts::history;
 namespace cc = contracts::cell;
 namespace cp = contracts::point;
+
+vtkSmartPointer<vtkUnstructuredGrid> load_state(const fs::path& file) {
+  require_regular_file(file, "a tactus-solve state (.vtu)");
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(file.string().c_str());
+  reader->Update();
+  vtkSmartPointer<vtkUnstructuredGrid> g = reader->GetOutput();
+  if (!g || g->GetNumberOfCells() == 0) throw InputError(file.string(), "", "a tactus-solve state (.vtu)", "no cells");
+  return g;
+}
+
+std::string ms(double t) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(2) << t * 1e3;
+  return o.str();
+}
 
 const std::vector<double>& History::column(const std::string& name) const {
   auto it = columns.find(name);

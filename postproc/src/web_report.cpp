@@ -8,7 +8,6 @@
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkXMLUnstructuredGridReader.h>
 
 #include <algorithm>
 #include <array>
@@ -21,6 +20,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "state_files.hpp"
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/embedded.hpp"
 #include "tactus/core/error.hpp"
@@ -78,16 +78,6 @@ std::string base64(const void* data, std::size_t bytes) {
 template <class T>
 std::string base64(const std::vector<T>& v) {
   return base64(v.data(), v.size() * sizeof(T));
-}
-
-vtkSmartPointer<vtkUnstructuredGrid> load_state(const fs::path& file) {
-  require_regular_file(file, "a tactus-solve state (.vtu)");
-  vtkNew<vtkXMLUnstructuredGridReader> reader;
-  reader->SetFileName(file.string().c_str());
-  reader->Update();
-  vtkSmartPointer<vtkUnstructuredGrid> g = reader->GetOutput();
-  if (!g || g->GetNumberOfCells() == 0) throw InputError(file.string(), "", "a tactus-solve state (.vtu)", "no cells");
-  return g;
 }
 
 // The bodies' boundary: the tet faces that belong to one tet only, oriented outward in the
@@ -171,8 +161,9 @@ struct Peak {
 struct Scan {
   std::vector<Vec3> X;  // reference positions of the .vtu points
   Surface surface;
-  std::vector<std::size_t> states;  // frames shown
-  std::vector<char> ever_pressed;   // per surface vertex
+  std::vector<std::uint32_t> tet_body;  // each cell's body index (the "body" field; 0 without it)
+  std::vector<std::size_t> states;      // frames shown
+  std::vector<char> ever_pressed;       // per surface vertex
   std::vector<std::pair<double, double>> pressed;
   PercentileCap stress;
   double displacement_max = 0;
@@ -276,6 +267,10 @@ Scan scan_states(const Results& r) {
           for (int c = 0; c < 3; ++c) scan.X[i][static_cast<std::size_t>(c)] -= u->GetComponent(static_cast<vtkIdType>(i), c);
       }
       scan.surface = boundary_surface(g, scan.X, file);
+      scan.tet_body.assign(scan.surface.tets.size(), 0);
+      if (vtkDataArray* b = g->GetCellData()->GetArray(cc::body.name))
+        for (std::size_t e = 0; e < scan.tet_body.size(); ++e)
+          scan.tet_body[e] = static_cast<std::uint32_t>(b->GetComponent(static_cast<vtkIdType>(e), 0));
       scan.ever_pressed.assign(scan.surface.node.size(), 0);
     } else if (static_cast<std::size_t>(g->GetNumberOfPoints()) != scan.X.size() ||
                static_cast<std::size_t>(g->GetNumberOfCells()) != scan.surface.tets.size()) {
@@ -370,14 +365,10 @@ nlohmann::json model_json(const Results& r, const Scan& scan, const std::vector<
     for (double c : scan.X[s.node[v]]) X.push_back(static_cast<float>(c));
   }
   const nlohmann::json run = nlohmann::json::parse(r.run_json, nullptr, false);
-  std::vector<double> body_of_tet;
-  if (vtkSmartPointer<vtkUnstructuredGrid> g = scan.states.empty() ? nullptr : load_state(r.frames[scan.states.front()].file))
-    if (vtkDataArray* b = g->GetCellData()->GetArray(cc::body.name))
-      for (vtkIdType e = 0; e < b->GetNumberOfTuples(); ++e) body_of_tet.push_back(b->GetComponent(e, 0));
   for (std::size_t i : shown) {
     for (std::uint32_t v : s.faces[i]) faces.push_back(v);
     face_tet.push_back(s.face_tet[i] + 1);
-    face_body.push_back(body_of_tet.empty() ? 0u : static_cast<std::uint32_t>(body_of_tet[s.face_tet[i]]));
+    face_body.push_back(scan.tet_body[s.face_tet[i]]);
   }
   nlohmann::json states = nlohmann::json::array();
   for (std::size_t k : scan.states) states.push_back({{"time", r.frames[k].time}, {"file", r.frames[k].file.filename().string()}});
@@ -411,12 +402,6 @@ nlohmann::json model_json(const Results& r, const Scan& scan, const std::vector<
           {"at_outputs", at_outputs}};
 }
 
-std::string state_ms(double t) {
-  std::ostringstream o;
-  o << std::fixed << std::setprecision(2) << t * 1e3;
-  return o.str();
-}
-
 // The pressed nodes of one output: id, current position, pressure, friction traction, tributary
 // area (a third of the current surface triangles around the node) and body.
 std::string pressure_csv(const Surface& s, const StateFields& f, const std::vector<std::string>& bodies,
@@ -446,12 +431,10 @@ std::vector<std::size_t> probe_vertices(const Surface& s, const std::vector<Vec3
   return nearest;
 }
 
-std::vector<std::uint32_t> vertex_bodies(const Surface& s, vtkUnstructuredGrid* g) {
+std::vector<std::uint32_t> vertex_bodies(const Surface& s, const std::vector<std::uint32_t>& tet_body) {
   std::vector<std::uint32_t> body(s.node.size(), 0);
-  vtkDataArray* b = g->GetCellData()->GetArray(cc::body.name);
-  if (!b) return body;
   for (std::size_t i = 0; i < s.faces.size(); ++i)
-    for (std::uint32_t v : s.faces[i]) body[v] = static_cast<std::uint32_t>(b->GetComponent(static_cast<vtkIdType>(s.face_tet[i]), 0));
+    for (std::uint32_t v : s.faces[i]) body[v] = tet_body[s.face_tet[i]];
   return body;
 }
 
@@ -489,15 +472,13 @@ WebReport write_web_report(const Results& r, const Summary& /*summary*/, const f
   const std::vector<std::size_t> probes = probe_vertices(s, scan.X, o.probes);
   std::ostringstream probe_rows;
   probe_rows << std::setprecision(9) << "probe,x_m,y_m,z_m,node_id,distance_m,time_s,pressure_Pa\n";
-  std::vector<std::uint32_t> vertex_body;
+  const std::vector<std::uint32_t> vertex_body = vertex_bodies(s, scan.tet_body);
   // The states again, one file each (the page loads them one by one; nothing holds them all).
   for (std::size_t j = 0; j < scan.states.size(); ++j) {
     const std::size_t k = scan.states[j];
-    const vtkSmartPointer<vtkUnstructuredGrid> g = load_state(r.frames[k].file);
-    const StateFields f = state_fields(g, k, s, nullptr, r.frames[k].file.string());
-    if (vertex_body.empty()) vertex_body = vertex_bodies(s, g);
+    const StateFields f = state_fields(load_state(r.frames[k].file), k, s, nullptr, r.frames[k].file.string());
     if (f.has_pressure && std::any_of(f.pressure_pa.begin(), f.pressure_pa.end(), [](double q) { return q > 0; }))
-      put("pressure_" + state_ms(r.frames[k].time) + "ms.csv", pressure_csv(s, f, r.bodies, vertex_body));
+      put("pressure_" + ms(r.frames[k].time) + "ms.csv", pressure_csv(s, f, r.bodies, vertex_body));
     for (std::size_t q = 0; q < probes.size(); ++q) {
       const Vec3& at = o.probes[q];
       probe_rows << q + 1 << ',' << at[0] << ',' << at[1] << ',' << at[2] << ',' << s.node[probes[q]] + 1 << ','
