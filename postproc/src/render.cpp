@@ -3,8 +3,11 @@
 #include "tactus/postproc/render.hpp"
 
 #include <vtkActor.h>
+#include <vtkActor2D.h>
+#include <vtkAxesActor.h>
 #include <vtkAxis.h>
 #include <vtkCamera.h>
+#include <vtkCaptionActor2D.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkChartXY.h>
@@ -16,6 +19,7 @@
 #include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
 #include <vtkLookupTable.h>
+#include <vtkMath.h>
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
 #include <vtkPen.h>
@@ -24,8 +28,10 @@
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
+#include <vtkPolyDataMapper2D.h>
 #include <vtkPolyDataNormals.h>
 #include <vtkProperty.h>
+#include <vtkProperty2D.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
@@ -36,6 +42,7 @@
 #include <vtkThreshold.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
+#include <vtkVariant.h>
 #include <vtkWindowToImageFilter.h>
 
 #include <Eigen/Dense>
@@ -161,7 +168,88 @@ vtkSmartPointer<vtkRenderer> white_renderer() {
   return r;
 }
 
-// Camera on `direction` from the centre of `bounds`, `up` up (made perpendicular to the view).
+// The side a picture is seen from, in the model's axes: each axis whose component of the direction
+// towards the camera is at least a third of it, signed ("+x", "-y +z").
+std::string seen_from(const Vec3& to_camera) {
+  const Vec3 d = (1.0 / norm(to_camera)) * to_camera;
+  std::string side;
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(d[k]) >= 1.0 / 3) side += std::string(side.empty() ? "" : " ") + (d[k] > 0 ? "+" : "-") + "xyz"[k];
+  return "seen from " + side;
+}
+
+// A round length (1, 2 or 5 times a power of ten) at most `limit`.
+double round_length(double limit) {
+  const double decade = std::pow(10.0, std::floor(std::log10(limit)));
+  for (double m : {5.0, 2.0, 1.0})
+    if (m * decade <= limit) return m * decade;
+  return decade;
+}
+
+// What every 3-D picture carries beside its colours, in the corner of renderer `ren` (already
+// looking at the model through a parallel projection): an axes triad turned as the model is, the
+// side it is seen from, and a scale bar of a round length in mm. The projection is parallel, so the
+// bar holds everywhere in the picture, not only at one depth.
+void add_view_keys(vtkRenderWindow* window, vtkRenderer* ren) {
+  const int* size = window->GetSize();
+  const double* vp = ren->GetViewport();
+  const double w = (vp[2] - vp[0]) * size[0], h = (vp[3] - vp[1]) * size[1];
+  vtkCamera* cam = ren->GetActiveCamera();
+  // The triad: a small renderer on the layer above, its camera along the main one's.
+  const double side = 0.16 * h;
+  auto triad = vtkSmartPointer<vtkRenderer>::New();
+  triad->SetViewport(vp[0], vp[1] + 0.08 * (vp[3] - vp[1]), vp[0] + side / size[0], vp[1] + 0.08 * (vp[3] - vp[1]) + side / size[1]);
+  triad->SetLayer(1);
+  triad->InteractiveOff();
+  window->SetNumberOfLayers(2);
+  window->AddRenderer(triad);
+  vtkNew<vtkAxesActor> axes;
+  axes->SetShaftTypeToCylinder();
+  axes->SetCylinderRadius(0.04);
+  axes->SetConeRadius(0.5);
+  for (vtkCaptionActor2D* label : {axes->GetXAxisCaptionActor2D(), axes->GetYAxisCaptionActor2D(), axes->GetZAxisCaptionActor2D()}) {
+    label->GetCaptionTextProperty()->SetColor(0, 0, 0);
+    label->GetCaptionTextProperty()->ShadowOff();
+    label->GetCaptionTextProperty()->ItalicOff();
+  }
+  triad->AddActor(axes);
+  double dop[3];
+  cam->GetDirectionOfProjection(dop);
+  vtkCamera* tc = triad->GetActiveCamera();
+  tc->SetFocalPoint(0, 0, 0);
+  tc->SetPosition(-4 * dop[0], -4 * dop[1], -4 * dop[2]);
+  tc->SetViewUp(cam->GetViewUp());
+  triad->ResetCamera();
+  add_text(ren, seen_from({-dop[0], -dop[1], -dop[2]}), 20, 0.08 * h + side + 4, 16);
+  // The scale bar: parallel scale = half the viewport's height in metres.
+  const double metres_per_pixel = 2 * cam->GetParallelScale() / h;
+  const double length = round_length(0.2 * w * metres_per_pixel), pixels = length / metres_per_pixel;
+  const double x0 = side + 40, y0 = 0.08 * h + 12;
+  vtkNew<vtkPoints> pts;
+  for (const auto& [x, y] : {std::pair{x0, y0}, {x0 + pixels, y0}, {x0, y0 - 6}, {x0, y0 + 6}, {x0 + pixels, y0 - 6}, {x0 + pixels, y0 + 6}})
+    pts->InsertNextPoint(x, y, 0);
+  vtkNew<vtkCellArray> lines;
+  for (vtkIdType k = 0; k < 6; k += 2) {
+    const vtkIdType ends[2] = {k, k + 1};
+    lines->InsertNextCell(2, ends);
+  }
+  vtkNew<vtkPolyData> bar;
+  bar->SetPoints(pts);
+  bar->SetLines(lines);
+  vtkNew<vtkPolyDataMapper2D> mapper;
+  mapper->SetInputData(bar);
+  vtkNew<vtkActor2D> actor;
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetColor(0, 0, 0);
+  actor->GetProperty()->SetLineWidth(2);
+  ren->AddActor2D(actor);
+  std::ostringstream label;
+  label << 1e3 * length << " mm";
+  add_text(ren, label.str(), x0, y0 + 10, 16);
+}
+
+// Camera on `direction` from the centre of `bounds`, `up` up (made perpendicular to the view),
+// with a parallel projection (a scale bar holds at every depth).
 void look(vtkRenderer* r, const double* bounds, const Vec3& direction, Vec3 up, double zoom) {
   const double c[3] = {0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]), 0.5 * (bounds[4] + bounds[5])};
   const Vec3 d = (1.0 / norm(direction)) * direction;
@@ -171,6 +259,7 @@ void look(vtkRenderer* r, const double* bounds, const Vec3& direction, Vec3 up, 
   cam->SetFocalPoint(c);
   cam->SetPosition(c[0] + d[0], c[1] + d[1], c[2] + d[2]);
   cam->SetViewUp(up.data());
+  cam->ParallelProjectionOn();
   r->ResetCamera(const_cast<double*>(bounds));
   cam->Zoom(zoom);
 }
@@ -396,6 +485,7 @@ std::string von_mises_picture(const Results& r, std::size_t k, const Views& v, v
                (nodal ? "nodal average (volume-weighted over each node's tets)" : "per tet") + ", log scale",
            20, opt.height - 40);
   look(ren, v.bounds, 2 * v.span * v.view, v.up, 1.3);
+  add_view_keys(window, ren);
   const std::string name = (nodal ? "von_mises_nodal_t" : "von_mises_t") + ms(r.frames[k].time) + "ms.png";
   write_png(window, report / name);
   return name;
@@ -423,11 +513,18 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
   vtkPolyData* section = cut->GetOutput();
   if (section->GetNumberOfCells() == 0) return false;
   auto window = offscreen(opt.width * 2, opt.height);
-  const double nm = std::max<double>(1, static_cast<double>(r.materials.size()) - 1);
-  auto mat_lut = rainbow(0, nm, false);
-  mat_lut->SetHueRange(0.1, 0.75);
-  mat_lut->SetNumberOfTableValues(static_cast<vtkIdType>(nm + 1));
-  mat_lut->Build();
+  // Materials are categories: one colour and one named swatch each (an indexed lookup table's
+  // annotations), not a continuous bar whose in-between values mean nothing.
+  auto mat_lut = vtkSmartPointer<vtkLookupTable>::New();
+  mat_lut->IndexedLookupOn();
+  mat_lut->SetNumberOfTableValues(static_cast<vtkIdType>(std::max<std::size_t>(1, r.materials.size())));
+  for (std::size_t m = 0; m < r.materials.size(); ++m) {
+    const double hue = 0.1 + 0.65 * static_cast<double>(m) / std::max<double>(1, static_cast<double>(r.materials.size()) - 1);
+    double rgb[3];
+    vtkMath::HSVToRGB(hue, 0.75, 0.9, rgb, rgb + 1, rgb + 2);
+    mat_lut->SetTableValue(static_cast<vtkIdType>(m), rgb[0], rgb[1], rgb[2], 1.0);
+    mat_lut->SetAnnotation(vtkVariant(static_cast<int>(m)), r.materials[m]);
+  }
   double sb[6];
   section->GetBounds(sb);
   std::ostringstream caption;
@@ -439,9 +536,6 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
     window->AddRenderer(ren);
     if (side == 0) {
       ren->AddActor(colored(section, cc::material.name, true, mat_lut));
-      std::string legend = "materials:";
-      for (std::size_t m = 0; m < r.materials.size(); ++m) legend += "  " + std::to_string(m) + " " + r.materials[m];
-      add_text(ren, legend, 20, 20, 18);
       add_scalar_bar(ren, mat_lut, "material");
     } else {
       ren->AddActor(colored(section, cc::von_mises.name, true, vm_lut));
@@ -449,6 +543,7 @@ bool section_picture(const Results& r, const Summary& s, const Views& v, vtkLook
     }
     add_text(ren, caption.str(), 20, opt.height - 40, 18);
     look(ren, sb, 2 * v.span * normal, axes[1], 1.2);
+    add_view_keys(window, ren);
   }
   write_png(window, report / "section.png");
   return true;
@@ -485,6 +580,7 @@ bool pressure_picture(const Results& r, std::size_t k, int pb, vtkPolyData* body
   add_text(ren, scale.str(), 20, 24, 16);  // at the foot, clear of the model
   const auto axes = principal_axes(body->GetPoints());
   look(ren, hb, 2 * v.span * view, axes[2], 1.2);
+  add_view_keys(window, ren);
   write_png(window, file);
   return true;
 }

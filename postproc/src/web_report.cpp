@@ -356,7 +356,31 @@ nlohmann::json field_json(const char* label, const char* unit, double scale, dou
   return {{"label", label}, {"unit", unit}, {"scale", scale}, {"cap", cap}, {"cap_rule", cap_rule}, {"peak", peak.json(frames)}};
 }
 
-nlohmann::json model_json(const Results& r, const Scan& scan, const std::vector<std::size_t>& shown, double cluster) {
+// The grasp's table for the page: the handle's load per region (Summary::Grasp, from run.json) and
+// the unrolled map's picture when tactus-post drew it; null without a grasp.
+nlohmann::json grasp_json(const Summary& summary) {
+  const Summary::Grasp& g = summary.grasp;
+  if (!g.on) return nullptr;
+  nlohmann::json regions = nlohmann::json::array();
+  for (const Summary::GripShare& s : g.regions)
+    regions.push_back({{"name", s.name},
+                       {"digit", s.digit},
+                       {"force_N", s.force},
+                       {"share", s.share},
+                       {"area_m2", s.area},
+                       {"peak_pressure_Pa", s.peak_pressure},
+                       {"averaged_peak_pressure_Pa", s.averaged_peak_pressure}});
+  const bool map = std::find(summary.pictures.begin(), summary.pictures.end(), "grip_map.png") != summary.pictures.end();
+  return {{"handle", g.handle},
+          {"target_N", g.target},
+          {"final_grip_N", g.final_grip},
+          {"quasi_static", g.quasi_static},
+          {"sensor_area_m2", g.sensor_area},
+          {"regions", regions},
+          {"grip_map", map ? nlohmann::json("grip_map.png") : nlohmann::json(nullptr)}};
+}
+
+nlohmann::json model_json(const Results& r, const Summary& summary, const Scan& scan, const std::vector<std::size_t>& shown, double cluster) {
   const Surface& s = scan.surface;
   std::vector<std::uint32_t> node_id(s.node.size()), faces, face_tet, face_body;
   std::vector<float> X;
@@ -399,7 +423,8 @@ nlohmann::json model_json(const Results& r, const Scan& scan, const std::vector<
             {"displacement", field_json("displacement |u|", "mm", 1e3, scan.displacement_peak.value, scan.displacement_peak, r.frames,
                                         "the largest over all outputs")}}},
           {"history", history_json(r.history)},
-          {"at_outputs", at_outputs}};
+          {"at_outputs", at_outputs},
+          {"grasp", grasp_json(summary)}};
 }
 
 // The pressed nodes of one output: id, current position, pressure, friction traction, tributary
@@ -440,7 +465,7 @@ std::vector<std::uint32_t> vertex_bodies(const Surface& s, const std::vector<std
 
 }  // namespace
 
-WebReport write_web_report(const Results& r, const Summary& /*summary*/, const fs::path& report, const WebReportOptions& o) {
+WebReport write_web_report(const Results& r, const Summary& summary, const fs::path& report, const WebReportOptions& o) {
   WebReport out;
   Scan scan = scan_states(r);
   const Surface& s = scan.surface;
@@ -468,7 +493,7 @@ WebReport write_web_report(const Results& r, const Summary& /*summary*/, const f
     out.files.push_back(name);
     out.bytes += text.size();
   };
-  if (o.page) put("data/model.js", "tactusModel(" + model_json(r, scan, shown, cluster).dump() + ");\n");
+  if (o.page) put("data/model.js", "tactusModel(" + model_json(r, summary, scan, shown, cluster).dump() + ");\n");
   const std::vector<std::size_t> probes = probe_vertices(s, scan.X, o.probes);
   std::ostringstream probe_rows;
   probe_rows << std::setprecision(9) << "probe,x_m,y_m,z_m,node_id,distance_m,time_s,pressure_Pa\n";

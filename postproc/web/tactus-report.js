@@ -498,6 +498,38 @@
     g.stroke();
   }
 
+  // --- the grasp: the handle's load per region and digit (run.json's joints.grasp) -------------
+  function showGrasp(g) {
+    if (!g) return;
+    $("grasp").hidden = false;
+    $("grip").textContent =
+      "grip " + g.final_grip_N.toFixed(1) + " N (target " + g.target_N.toFixed(1) + " N) on " + g.handle +
+      "; peak pressure averaged over " + (g.sensor_area_m2 * 1e6).toFixed(0) + " mm²" + (g.quasi_static ? "." : "; the hold was dynamic (KE/IE above 5 %).");
+    const table = $("regions");
+    const head = table.insertRow();
+    for (const h of ["region", "force N", "share", "area mm²", "peak MPa"]) head.appendChild(document.createElement("th")).textContent = h;
+    const widest = Math.max(1e-12, ...g.regions.map((r) => r.share));
+    for (const r of g.regions) {
+      const row = table.insertRow();
+      row.insertCell().textContent = r.name;
+      row.insertCell().textContent = r.force_N.toFixed(1);
+      const share = row.insertCell();
+      const bar = document.createElement("span");
+      bar.className = "share";
+      bar.style.width = Math.round((48 * r.share) / widest) + "px";
+      share.append(bar, " " + (100 * r.share).toFixed(0) + " %");
+      row.insertCell().textContent = (r.area_m2 * 1e6).toFixed(0);
+      row.insertCell().textContent = (r.averaged_peak_pressure_Pa * 1e-6).toFixed(3);
+    }
+    if (g.grip_map) {
+      const img = $("grip_map");
+      img.src = g.grip_map;
+      img.hidden = false;
+      img.title = "pressure against the angle round the handle and the length along it, capped as the pictures are";
+    }
+    status.grasp_regions = g.regions.length;
+  }
+
   // --- start ----------------------------------------------------------------------------------
   async function main() {
     try {
@@ -537,6 +569,7 @@
     }
     buildScene();
     setupPlots();
+    showGrasp(model.grasp);
     const params = new URLSearchParams(window.location.search);
     const hasContact = model.fields.pressure.peak.value > 0;
     field = params.get("field") || (hasContact ? "pressure" : "von_mises_nodal");

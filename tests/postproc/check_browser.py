@@ -19,6 +19,8 @@ Checks, each against the results folder read independently here (VTK's .vtu read
      .vtu's, and pressure times tributary area, summed, equals the base's reaction (history.csv,
      reaction_base_z: the pad is held at rest under the punch) within 2 %.
 With --timing it prints how long the page takes to load and the report's size (no checks).
+With --grasp the results folder's run.json carries a grasp (joints.grasp): the page must draw its
+grip table, one row per region of run.json, with no script error.
 """
 import glob
 import html
@@ -169,9 +171,17 @@ def main():
             "(headless, software WebGL)"
         )
         return
+    if "--grasp" in sys.argv:
+        regions = json.load(open(os.path.join(results, "run.json")))["joints"]["grasp"]["regions"]["regions"]
+        status = page_status(page)
+        if status.get("grasp_regions") != len(regions):
+            fail(f"the page's grip table has {status.get('grasp_regions')} rows, run.json {len(regions)} regions")
+        print(f"check_browser: grip table with {len(regions)} regions, as run.json has")
+        return
     states = states_of(results)
     run = json.load(open(os.path.join(results, "run.json")))
-    at_outputs = run.get("contact", {}).get("at_outputs", [])
+    # run.json's contact rows are the scheduled outputs' (the initial state, t = 0, has none): by time.
+    at_outputs = {round(o["time"], 12): o for o in run.get("contact", {}).get("at_outputs", [])}
     last = len(states) - 1
     status = page_status(page + f"?state={last}&field=pressure")
     if status["outputs"] != len(states):
@@ -210,8 +220,11 @@ def main():
                 fail(f"output {k}: nodes with pressure outside stick or slip status in the .vtu")
             if s["pressed_vertices"] != pressed:
                 fail(f"output {k}: the page colours {s['pressed_vertices']} nodes by pressure, the .vtu presses {pressed}")
-            if k < len(at_outputs) and (at_outputs[k]["area"] > 0) != (pressed > 0):
-                fail(f"output {k}: run.json contact area {at_outputs[k]['area']} but {pressed} pressed nodes")
+            row = at_outputs.get(round(t, 12))
+            if row is None and t > 0:
+                fail(f"output {k} (t = {t} s): no contact row in run.json")
+            if row is not None and (row["area"] > 0) != (pressed > 0):
+                fail(f"output {k}: run.json contact area {row['area']} but {pressed} pressed nodes")
             if k in (0, last):
                 rgb = screenshot(page + f"?state={k}&field=pressure", os.path.join(tmp, f"{k}.png"), s["canvas"])
                 drawn = not_blank(rgb, f"output {k}")

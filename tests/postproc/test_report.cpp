@@ -271,6 +271,17 @@ TEST(Summary, GraspSharesAreTheWrittenOnes) {
   EXPECT_NE(md.find("| index | 30 | 60 % |"), std::string::npos) << md;
   EXPECT_NE(md.find("| distal_phalanx_index | index | 30 | 60 % | 150 | 0.4 | 0.3 |"), std::string::npos) << md;
   EXPECT_DOUBLE_EQ(nlohmann::json::parse(postproc::summary_json(s))["grasp"]["digits"][1]["share"].get<double>(), 0.4);
+  // The interactive page's grip table carries the same numbers (no pictures drawn: no map).
+  postproc::write_web_report(postproc::read_results(tmp.path() / "solve"), s, tmp.path() / "report");
+  std::string model = slurp(tmp.path() / "report/data/model.js");
+  const auto page = nlohmann::json::parse(model.substr(model.find('(') + 1, model.rfind(')') - model.find('(') - 1))["grasp"];
+  ASSERT_EQ(page["regions"].size(), 2u);
+  EXPECT_EQ(page["regions"][1]["name"], "palm_central");
+  EXPECT_DOUBLE_EQ(page["regions"][0]["force_N"].get<double>(), 30.0);
+  EXPECT_DOUBLE_EQ(page["regions"][0]["share"].get<double>(), 0.6);
+  EXPECT_DOUBLE_EQ(page["regions"][1]["averaged_peak_pressure_Pa"].get<double>(), 8e4);
+  EXPECT_DOUBLE_EQ(page["final_grip_N"].get<double>(), 49.0);
+  EXPECT_TRUE(page["grip_map"].is_null());
 }
 
 TEST(Summary, NoContactIsSaid) {
@@ -337,15 +348,27 @@ Picture read_png(const fs::path& file) {
   return p;
 }
 
+// The lower-left corner of a 3-D picture holds its view keys (triad, "seen from", scale bar).
+bool in_keys(const Picture& p, int x, int y) { return x < 0.4 * p.width && y < 0.28 * p.height; }
+
 // The model's part of a picture: left of the colour bar (88 % of the width), between the caption
-// rows at the top and the legend at the bottom.
+// rows at the top and the legend at the bottom, outside the keys' corner.
 template <typename Pred>
 std::vector<std::array<int, 2>> pixels(const Picture& p, Pred pred) {
   std::vector<std::array<int, 2>> out;
   for (int y = 60; y < p.height - 60; ++y)
     for (int x = 0; x < static_cast<int>(0.86 * p.width); ++x)
-      if (pred(p.at(x, y))) out.push_back({x, y});
+      if (!in_keys(p, x, y) && pred(p.at(x, y))) out.push_back({x, y});
   return out;
+}
+
+// The keys' corner only.
+template <typename Pred>
+std::size_t key_pixels(const Picture& p, Pred pred) {
+  std::size_t n = 0;
+  for (int y = 0; y < p.height; ++y)
+    for (int x = 0; x < p.width; ++x) n += in_keys(p, x, y) && y >= 60 && pred(p.at(x, y));
+  return n;
 }
 
 bool coloured(const std::array<int, 3>& c) { return std::max({c[0], c[1], c[2]}) - std::min({c[0], c[1], c[2]}) > 60; }
@@ -407,6 +430,12 @@ TEST(Pictures, ShowWhatTheDataSays) {
   EXPECT_GT(greys.size(), reds.size());
   EXPECT_LT(std::hypot(r[0] - b[0], r[1] - b[1]), 0.03 * pressure.width);
   EXPECT_GT(std::hypot(r[0] - 0.5 * pressure.width, r[1] - 0.5 * pressure.height), 0.1 * pressure.width);
+  // Its keys: the triad's green y axis and the black scale bar with its label, in the corner.
+  const auto green = [](const std::array<int, 3>& c) { return c[1] > 150 && c[0] < 90 && c[2] < 90; };
+  const std::size_t triad = key_pixels(pressure, green), ink = key_pixels(pressure, black);
+  std::cout << "view keys: " << triad << " green triad pixels, " << ink << " black (scale bar, labels)\n";
+  EXPECT_GT(triad, 20u);
+  EXPECT_GT(ink, 200u);
 
   // One pressure picture per output with contact, on one colour scale (0 to the outputs' peak) and
   // one view: the 1 ms state is the peak state, so its picture is pressure.png pixel for pixel; at
