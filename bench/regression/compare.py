@@ -3,6 +3,9 @@
 history.csv, and run.json's figures (not its timings). Prints one line per case.
     compare.py A B [--allow NAME ...]
 An array present on one side only passes when all its values are 0 (a field that became optional).
+States are paired by their time in results.pvd (so a build that writes the initial t = 0 state
+compares with one that did not, the states' numbers shifted by one); a state at a time only one
+side has is reported, and passes with --allow initial_state when that time is 0.
 --allow names a deliberate change of a file contract that is reported but not failed: an array
 ("cell:group"), a run.json key ("contact.pairs") or a prefix of history columns added on one side
 ("history:reaction_").
@@ -12,6 +15,7 @@ refactor; with contraction off the arithmetic is exactly what the source says.""
 import json
 import os
 import sys
+import xml.etree.ElementTree as ET
 
 import numpy as np
 from vtk.util.numpy_support import vtk_to_numpy
@@ -69,12 +73,37 @@ def compare_history(pa, pb):
     return out
 
 
+def states_by_time(folder):
+    """{time: path} of the states results.pvd lists (empty without one)."""
+    pvd = os.path.join(folder, "results.pvd")
+    if not os.path.exists(pvd):
+        return {}
+    sets = ET.parse(pvd).getroot().iter("DataSet")
+    return {float(d.get("timestep")): os.path.join(folder, d.get("file")) for d in sets}
+
+
+def pair(a, b, pa):
+    """The file of folder b that corresponds to pa of folder a: a state by its time (None when b has
+    no state at that time), any other file by name."""
+    ta, tb = states_by_time(a), states_by_time(b)
+    for t, f in ta.items():
+        if os.path.exists(f) and os.path.samefile(f, pa):
+            return tb.get(t)  # None: a state only this side has
+    return os.path.join(b, os.path.relpath(pa, a))
+
+
 def compare(a, b):
     diffs = []
+    ta, tb = states_by_time(a), states_by_time(b)
+    for t in sorted(set(ta) ^ set(tb)):
+        if not (t == 0 and "initial_state" in ALLOW):
+            diffs.append(f"a state at t = {t} s only in {'the first' if t in ta else 'the second'}")
     for root, _, files in os.walk(a):
         for f in sorted(files):
             pa = os.path.join(root, f)
-            pb = os.path.join(b, os.path.relpath(pa, a))
+            pb = pair(a, b, pa)
+            if f.endswith(".vtu") and (pb is None or not os.path.exists(pb)):
+                continue  # a state only one side has: said above
             if f.endswith(".vtu"):
                 A, B = arrays(pa), arrays(pb)
                 for k in sorted(set(A) | set(B)):

@@ -70,7 +70,7 @@ double check_runaway(const Scenario& sc, const Model& model, const ExplicitSolve
   }
   const double nodes = static_cast<double>(model.num_nodes), tets = static_cast<double>(model.num_elements);
   const double state_bytes = 8.0 * (15.0 * nodes + 16.0 * tets);
-  const auto states = static_cast<double>(solver.schedule().size());
+  const auto states = static_cast<double>(solver.schedule().size()) + 1;  // and the initial one
   const double columns = 40.0 + 6.0 * static_cast<double>(model.boundaries.size()) + 19.0 * static_cast<double>(model.bodies.size());
   const double history_bytes = 24.0 * columns * (est_steps / static_cast<double>(history_interval(sc, est_steps)) + states + 1);
   const double checkpoint_bytes = sc.run.checkpoints() ? 2 * 8.0 * (60.0 * nodes + 2.0 * tets) : 0.0;
@@ -150,7 +150,10 @@ class RunLoop {
         last_checkpoint_wall_(std::chrono::steady_clock::now()) {
     summary_.dt_min = std::numeric_limits<double>::infinity();
     summary_.von_mises_peak.assign(model.blocks.size(), 0.0);
-    if (from) restore(*from);
+    if (from)
+      restore(*from);
+    else
+      write("state_0000.vtu", solver_.displacement(), solver_.velocity_at_step(), solver_.time(), false);  // the initial state, t = 0
   }
 
   // Steps to the end time; a numerical failure writes the last good state and is returned. An
@@ -348,7 +351,7 @@ class RunLoop {
     for (const auto& [time, file] : pvd_) {
       unsigned index = 0;
       char rest = 0;
-      if (!std::isfinite(time) || time > t || std::sscanf(file.c_str(), "results/state_%u.vtu%c", &index, &rest) != 1 || index >= next_out_)
+      if (!std::isfinite(time) || time > t || std::sscanf(file.c_str(), "results/state_%u.vtu%c", &index, &rest) != 1 || index > next_out_)
         a.invalid("loop.pvd_files", "the states written before t = " + std::to_string(t) + " s (results/state_NNNN.vtu)", "'" + file + "'");
     }
   }
@@ -365,7 +368,7 @@ class RunLoop {
     for (auto it = fs::directory_iterator(folder_ / "results", ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
       const std::string name = it->path().filename().string();
       unsigned index = 0;
-      const bool later_state = std::sscanf(name.c_str(), "state_%u.vtu", &index) == 1 && index >= next_out_;
+      const bool later_state = std::sscanf(name.c_str(), "state_%u.vtu", &index) == 1 && index > next_out_;
       if (later_state || name.find(".partial-") != std::string::npos) fs::remove(it->path());
     }
     for (const auto& e : fs::directory_iterator(folder_ / kResumableDir))
@@ -415,15 +418,17 @@ class RunLoop {
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly
     std::ostringstream name;
-    name << "state_" << std::setw(4) << std::setfill('0') << next_out_ << ".vtu";
+    name << "state_" << std::setw(4) << std::setfill('0') << next_out_ + 1 << ".vtu";  // state_0000 is the initial state
     write(name.str(), solver_.displacement(), solver_.velocity_at_step(), solver_.time());
     ++next_out_;
   }
 
-  void write(const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t) {
+  // A state file; `output` adds its contact row to run.json's contact.at_outputs (the scheduled
+  // outputs and the last good state; the initial state has had no contact step yet).
+  void write(const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t, bool output = true) {
     const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, &solver_.contact(), t);
     for (std::size_t b = 0; b < vm.size(); ++b) summary_.von_mises_peak[b] = std::max(summary_.von_mises_peak[b], vm[b]);
-    if (!solver_.contact().empty()) {
+    if (output && !solver_.contact().empty()) {
       const ContactStepReport& cr = solver_.contact_report();
       const ContactSolver::AveragedPressure avg = solver_.contact().averaged_peak_pressure(u.data(), sc_.contact_solver.pressure_average_area);
       peaks_.at_outputs.push_back({t, cr.normal_force, cr.area, cr.peak_pressure, avg.value, avg.at, cr.windowed_normal_force, cr.windowed_area});

@@ -5,7 +5,7 @@
 
 Read back with VTK's PNG reader: every picture listed in summary.json exists; each von Mises
 picture has the model in it (coloured pixels over at least 5 % of the model area, left of the
-colour bar and between the captions); the pressure map has its red (shaded) peak where its black
+colour bar and between the captions, outside the view keys' corner); the pressure map has its red (shaded) peak where its black
 dot marks the peak node; with --pressure-body, the summary maps the pressure on that body.
 """
 import json
@@ -29,6 +29,9 @@ def model_area(file):
     img = r.GetOutput()
     w, h, _ = img.GetDimensions()
     rgb = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)[:, :, :3].astype(int)
+    # VTK's rows start at the bottom: the view keys (triad, "seen from", scale bar) hold the
+    # lower-left corner, painted white here so their red x axis and black bar are not the model's.
+    rgb[: int(0.28 * h), : int(0.4 * w)] = 255
     return rgb[60 : h - 60, : int(0.86 * w)]  # without the captions and the colour bar
 
 

@@ -53,12 +53,15 @@ std::vector<double> pvd_times(const std::filesystem::path& file) {
 }
 
 void expect_exact_states(const RunSummary& s, const std::filesystem::path& out, const std::vector<double>& expected) {
+  // The initial state (t = 0) comes first, then the scheduled ones.
   const std::vector<double> listed = pvd_times(out / "results.pvd");
-  ASSERT_EQ(listed.size(), expected.size());
-  for (std::size_t k = 0; k < expected.size(); ++k) EXPECT_EQ(listed[k], expected[k]) << "state " << k;  // exact (12 digits written)
+  ASSERT_EQ(listed.size(), expected.size() + 1);
+  EXPECT_EQ(listed[0], 0.0);
+  EXPECT_TRUE(std::filesystem::is_regular_file(out / "results" / "state_0000.vtu"));
+  for (std::size_t k = 0; k < expected.size(); ++k) EXPECT_EQ(listed[k + 1], expected[k]) << "state " << k + 1;  // exact (12 digits written)
   const auto& j = s.run_json;
   EXPECT_EQ(j["end_time"].get<double>(), expected.back());
-  EXPECT_EQ(j["outputs"].get<std::size_t>(), expected.size());
+  EXPECT_EQ(j["outputs"].get<std::size_t>(), expected.size() + 1);
   EXPECT_GE(j["time_step"]["min_ratio_to_nominal"].get<double>(), 0.5);
   for (std::size_t k = 0; k < expected.size(); ++k)
     EXPECT_EQ(j["output_times"][k].get<double>(), expected[k]);  // the solver's own times: exact to the bit
