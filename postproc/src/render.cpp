@@ -25,6 +25,7 @@
 #include <vtkPen.h>
 #include <vtkPlane.h>
 #include <vtkPlot.h>
+#include <vtkPlotPoints.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
@@ -50,6 +51,7 @@
 #include <cmath>
 #include <iomanip>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "state_files.hpp"
@@ -375,8 +377,16 @@ int pressure_body(const Results& r, const Summary& s, const RenderOptions& opt) 
   return s.peak_pressure_outputs.body.empty() ? -1 : body_index(r, s.peak_pressure_outputs.body);
 }
 
+// A series with its own times (the windowed figures at the outputs, from run.json), drawn with
+// its points marked beside a plot's history columns.
+struct OutputSeries {
+  std::string label;
+  std::vector<double> time, value;  // s, plotted unit
+};
+
 void plot(const History& h, const fs::path& file, const std::string& title, const std::string& ylabel,
-          const std::vector<std::pair<std::string, double>>& series, int w, int hgt) {
+          const std::vector<std::pair<std::string, double>>& series, int w, int hgt, const std::vector<OutputSeries>& at_outputs = {},
+          const std::map<std::string, std::string>& labels = {}) {
   if (!h.has(hc::time.name)) return;
   vtkNew<vtkTable> table;
   vtkNew<vtkDoubleArray> t;
@@ -386,7 +396,7 @@ void plot(const History& h, const fs::path& file, const std::string& title, cons
   for (const auto& [name, scale] : series)
     if (h.has(name)) {
       vtkNew<vtkDoubleArray> a;
-      a->SetName(name.c_str());
+      a->SetName(labels.count(name) ? labels.at(name).c_str() : name.c_str());  // the legend's text
       table->AddColumn(a);
       present.push_back(name);
     }
@@ -411,13 +421,34 @@ void plot(const History& h, const fs::path& file, const std::string& title, cons
   chart->SetTitle(title);
   chart->GetAxis(vtkAxis::BOTTOM)->SetTitle("time (ms)");
   chart->GetAxis(vtkAxis::LEFT)->SetTitle(ylabel);
-  chart->SetShowLegend(present.size() > 1);
+  chart->SetShowLegend(present.size() + at_outputs.size() > 1);
   const unsigned char colors[5][3] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189}, {255, 127, 14}};
   for (std::size_t k = 0; k < present.size(); ++k) {
     vtkPlot* line = chart->AddPlot(vtkChart::LINE);
     line->SetInputData(table, 0, static_cast<vtkIdType>(k + 1));
     line->SetColor(colors[k % 5][0], colors[k % 5][1], colors[k % 5][2], 255);
     line->SetWidth(2.0);
+  }
+  std::vector<vtkSmartPointer<vtkTable>> output_tables;  // alive until the picture is drawn
+  for (std::size_t k = 0; k < at_outputs.size(); ++k) {
+    const OutputSeries& o = at_outputs[k];
+    if (o.time.empty()) continue;
+    auto series_table = vtkSmartPointer<vtkTable>::New();
+    vtkNew<vtkDoubleArray> x, y;
+    x->SetName("time (ms)");
+    y->SetName(o.label.c_str());
+    series_table->AddColumn(x);
+    series_table->AddColumn(y);
+    series_table->SetNumberOfRows(static_cast<vtkIdType>(o.time.size()));
+    for (std::size_t i = 0; i < o.time.size(); ++i)
+      series_table->SetValue(static_cast<vtkIdType>(i), 0, o.time[i] * 1e3), series_table->SetValue(static_cast<vtkIdType>(i), 1, o.value[i]);
+    output_tables.push_back(series_table);
+    vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+    line->SetInputData(series_table, 0, 1);
+    const auto& c = colors[(present.size() + k) % 5];
+    line->SetColor(c[0], c[1], c[2], 255);
+    line->SetWidth(2.5);
+    if (auto* points = vtkPlotPoints::SafeDownCast(line)) points->SetMarkerStyle(vtkPlotPoints::CIRCLE), points->SetMarkerSize(8);
   }
   write_png(window, file);
 }
@@ -801,9 +832,24 @@ std::vector<std::string> render_report(const Results& r, const Summary& s, const
   }
   const History& h = r.history;
   const int pw = 900, ph = 600;
-  plot(h, report / "plot_contact_force.png", "total contact force", "N", {{hc::contact_force.name, 1.0}}, pw, ph);
-  plot(h, report / "plot_contact_area.png", "contact area", "mm^2", {{hc::contact_area.name, 1e6}}, pw, ph);
-  plot(h, report / "plot_peak_pressure.png", "peak contact pressure", "MPa", {{hc::peak_pressure.name, 1e-6}}, pw, ph);
+  // Force and area: the windowed figures at the outputs (run.json contact.at_outputs, what
+  // summary.md and the interactive page report) over the single steps' history, which carries the
+  // first-touch impulses; the peak pressure windowed over the one-step impulse / dt.
+  OutputSeries force{"windowed, at the outputs", {}, {}}, area{"windowed, at the outputs", {}, {}};
+  if (const auto run = nlohmann::json::parse(r.run_json, nullptr, false); run.is_object() && run.contains("contact"))
+    for (const auto& o : run["contact"].value("at_outputs", nlohmann::json::array()))
+      if (o.contains("windowed_normal_force") && o.contains("windowed_area")) {
+        force.time.push_back(o["time"].get<double>()), force.value.push_back(o["windowed_normal_force"].get<double>());
+        area.time.push_back(o["time"].get<double>()), area.value.push_back(1e6 * o["windowed_area"].get<double>());
+      }
+  const std::map<std::string, std::string> legend{{hc::contact_force.name, "one step (carries the impulses)"},
+                                                  {hc::contact_area.name, "one step"},
+                                                  {hc::peak_pressure.name, "windowed (contact_solver.pressure_window)"},
+                                                  {hc::peak_step_pressure.name, "one step (impulse / dt)"}};
+  plot(h, report / "plot_contact_force.png", "total contact force", "N", {{hc::contact_force.name, 1.0}}, pw, ph, {force}, legend);
+  plot(h, report / "plot_contact_area.png", "contact area", "mm^2", {{hc::contact_area.name, 1e6}}, pw, ph, {area}, legend);
+  plot(h, report / "plot_peak_pressure.png", "peak contact pressure", "MPa", {{hc::peak_step_pressure.name, 1e-6}, {hc::peak_pressure.name, 1e-6}},
+       pw, ph, {}, legend);
   plot(h, report / "plot_energies.png", "energies", "J",
        {{hc::kinetic_energy.name, 1.0},
         {hc::internal_energy.name, 1.0},
