@@ -7,8 +7,10 @@
 #   bench/hand_grasp.sh [FLEXION_DEG] [HANDLE_CENTRE]
 # FLEXION_DEG (default 35): the phantom's pre-flexion; HANDLE_CENTRE (default the scenario's,
 # e.g. "0.0, -0.01, 0.056"): [grasp] handle_centre in the palm frame, for a posture study.
-# Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder). Never time
-# it while something else runs.
+# Environment: TACTUS_BUILD_DIR (default build/), WORK (default a temporary folder); SLEEVE=T
+# (m) gives the handle a rubber sleeve of thickness T over its rigid core (neo-Hookean, E = 1 MPa,
+# nu = 0.48; SLEEVE_MU / SLEEVE_BULK in Pa override it), the handle's outer radius unchanged.
+# Never time it while something else runs.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
@@ -18,6 +20,24 @@ W=${WORK:-$(mktemp -d)}
 [ -z "${WORK:-}" ] && trap 'rm -rf "$W"' EXIT
 mkdir -p "$W"
 cp "$ROOT/pipeline/scenarios/hand_grasp.toml" "$W/"
+if [ -n "${SLEEVE:-}" ]; then
+  /usr/bin/python3 - "$W/hand_grasp.toml" "$SLEEVE" "${SLEEVE_MU:-3.38e5}" "${SLEEVE_BULK:-8.33e6}" <<'PY'
+import sys
+
+path, thickness, mu, bulk = sys.argv[1:]
+s = open(path).read()
+edits = [
+    ('materials = { "*" = "handle" }', 'materials = { core = "handle", sleeve = "sleeve" }'),
+    ("[skeleton]", f'[materials.sleeve]\ntype = "neo_hookean"\nmu = {mu}\nbulk = {bulk}\ndensity = 1100.0\n\n[skeleton]'),
+    ('args = "--axis x', f'sleeve = {thickness}\nargs = "--axis x'),
+]
+for old, new in edits:
+    if old not in s:
+        sys.exit(f"hand_grasp.sh: the scenario has no {old!r} to give the handle a sleeve")
+    s = s.replace(old, new, 1)
+open(path, "w").write(s)
+PY
+fi
 if [ -n "$CENTRE" ]; then
   sed -i "s/^handle_centre = .*/handle_centre = [$CENTRE]/" "$W/hand_grasp.toml"
 fi
