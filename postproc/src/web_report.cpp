@@ -5,8 +5,10 @@
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkFieldData.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
+#include <vtkStringArray.h>
 #include <vtkUnstructuredGrid.h>
 
 #include <algorithm>
@@ -146,7 +148,22 @@ struct StateFields {
   // For the pressure tables (double): current position, friction traction, tributary area.
   std::vector<Vec3> position, traction;
   std::vector<double> area, pressure_pa;
+  std::vector<std::string> region;  // a grasp's hand region per vertex (grip_region), else empty
 };
+
+// A grasp state's region name per surface vertex (point field grip_region, names in field data
+// grip_region_names); empty names elsewhere, and all empty for a state without them.
+std::vector<std::string> vertex_regions(vtkUnstructuredGrid* g, const Surface& s) {
+  std::vector<std::string> out(s.node.size());
+  vtkDataArray* region = g->GetPointData()->GetArray(cp::grip_region.name);
+  auto* names = vtkStringArray::SafeDownCast(g->GetFieldData()->GetAbstractArray(contracts::kGripRegionNames));
+  if (!region || !names) return out;
+  for (std::size_t v = 0; v < s.node.size(); ++v) {
+    const double r = region->GetComponent(static_cast<vtkIdType>(s.node[v]), 0);
+    if (r >= 0 && r < static_cast<double>(names->GetNumberOfValues())) out[v] = names->GetValue(static_cast<vtkIdType>(r));
+  }
+  return out;
+}
 
 struct Peak {
   double value = 0;
@@ -215,6 +232,7 @@ StateFields state_fields(vtkUnstructuredGrid* g, std::size_t k, const Surface& s
   if (vtkDataArray* a = g->GetPointData()->GetArray(cp::contact_area.name))
     for (std::size_t v = 0; v < V; ++v) area[v] = a->GetComponent(static_cast<vtkIdType>(s.node[v]), 0);
   f.area = area;
+  f.region = vertex_regions(g, s);
   for (std::size_t v = 0; v < V && scan; ++v)
     if (f.pressure[v] > 0) {
       scan->pressed.emplace_back(f.pressure[v], area[v]);
@@ -428,17 +446,17 @@ nlohmann::json model_json(const Results& r, const Summary& summary, const Scan& 
 }
 
 // The pressed nodes of one output: id, current position, pressure, friction traction, tributary
-// area (a third of the current surface triangles around the node) and body.
+// area (the solver's contact_area), body and, for a grasp, the hand region.
 std::string pressure_csv(const Surface& s, const StateFields& f, const std::vector<std::string>& bodies,
                          const std::vector<std::uint32_t>& vertex_body) {
   std::ostringstream o;
-  o << std::setprecision(9) << "node_id,x_m,y_m,z_m,pressure_Pa,traction_x_Pa,traction_y_Pa,traction_z_Pa,area_m2,body\n";
+  o << std::setprecision(9) << "node_id,x_m,y_m,z_m,pressure_Pa,traction_x_Pa,traction_y_Pa,traction_z_Pa,area_m2,body,region\n";
   for (std::size_t v = 0; v < s.node.size(); ++v) {
     if (!(f.pressure_pa[v] > 0)) continue;
     const Vec3 &x = f.position[v], &t = f.traction[v];
     const std::uint32_t b = vertex_body[v];
     o << s.node[v] + 1 << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << f.pressure_pa[v] << ',' << t[0] << ',' << t[1] << ',' << t[2] << ','
-      << f.area[v] << ',' << (b < bodies.size() ? bodies[b] : std::to_string(b)) << '\n';
+      << f.area[v] << ',' << (b < bodies.size() ? bodies[b] : std::to_string(b)) << ',' << f.region[v] << '\n';
   }
   return o.str();
 }

@@ -40,7 +40,8 @@ std::string results_reference_markdown() {
     << contracts::kPointsNote
     << "`, gives its time in `TimeValue` (s) and its units in "
        "`units`, and names the bodies and materials behind the `body` and `material` indices in `"
-    << contracts::kBodyNames << "` and `" << contracts::kMaterialNames << "`.\n\n"
+    << contracts::kBodyNames << "` and `" << contracts::kMaterialNames << "` (a grasp's state also the regions behind `grip_region` in `"
+    << contracts::kGripRegionNames << "`).\n\n"
     << "## State fields (`results/*.vtu`)\n\n| field | on | components | unit | meaning |\n|---|---|---|---|---|\n";
   for (const auto& f : result_fields())
     o << "| `" << f.name << "` | " << f.where << " | " << f.components << " | " << (f.unit.empty() ? "-" : f.unit) << " | " << f.doc << " |\n";

@@ -426,7 +426,7 @@ class RunLoop {
   // A state file; `output` adds its contact row to run.json's contact.at_outputs (the scheduled
   // outputs and the last good state; the initial state has had no contact step yet).
   void write(const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t, bool output = true) {
-    const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, &solver_.contact(), t);
+    const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, &solver_.contact(), t, solver_.grip_regions());
     for (std::size_t b = 0; b < vm.size(); ++b) summary_.von_mises_peak[b] = std::max(summary_.von_mises_peak[b], vm[b]);
     if (output && !solver_.contact().empty()) {
       const ContactStepReport& cr = solver_.contact_report();

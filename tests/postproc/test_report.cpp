@@ -84,8 +84,12 @@ Folder write_results(const fs::path& dir, bool contact = true) {
       else if (std::abs(d - 0.01) < 1e-9 && k == 1)
         p.values[i] = kSidePressure;
     }
+    // A grasp's region per node: the plate's nodes are one finger segment, the punch's none.
+    MeshField region{c::point::grip_region.name, 1, std::vector<double>(f.mesh.nodes.size(), -1.0)};
+    for (std::size_t i = 0; i < f.plate_nodes; ++i) region.values[i] = 0;
     const std::string name = "results/state_000" + std::to_string(k) + ".vtu";
-    write_vtu(dir / name, f.mesh, {p}, {vm, mat, body, stretch, fstress});
+    write_vtu(dir / name, f.mesh, {p, region}, {vm, mat, body, stretch, fstress}, nullptr, std::nullopt,
+              {{c::kGripRegionNames, {"distal_phalanx_index"}}});
     pvd << "<DataSet timestep=\"" << k * 1e-3 << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
   }
   pvd << "</Collection>\n</VTKFile>\n";
@@ -534,12 +538,16 @@ TEST(WebReport, SurfaceStatesAndCoarsening) {
   EXPECT_DOUBLE_EQ(j["fields"]["pressure"]["peak"]["value"].get<double>(), kPeakPressure);
   EXPECT_EQ(j["fields"]["pressure"]["peak"]["id"].get<long>(), static_cast<long>(f.peak_node) + 1);
   EXPECT_DOUBLE_EQ(j["fields"]["von_mises"]["peak"]["value"].get<double>(), kPunchStress);
-  // The pressure table of the last output: the peak node and its four neighbours.
+  // The pressure table of the last output: the peak node and its four neighbours, each in the
+  // plate's grip region (the states' grip_region and grip_region_names).
   EXPECT_TRUE(fs::is_regular_file(dir.path() / "report/pressure_1.00ms.csv"));
   std::stringstream table(slurp(dir.path() / "report/pressure_1.00ms.csv"));
   std::string line;
   int rows = -1;
-  while (std::getline(table, line)) ++rows;
+  while (std::getline(table, line)) {
+    EXPECT_EQ(line.substr(line.rfind(',') + 1), rows < 0 ? "region" : "distal_phalanx_index") << line;
+    ++rows;
+  }
   EXPECT_EQ(rows, 5);
 
   postproc::WebReportOptions tiny;

@@ -12,9 +12,12 @@
 #include <vector>
 
 #include "finger_kit.hpp"
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
+#include "tactus/core/mesh.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model_build.hpp"
+#include "tactus/solver/run.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
@@ -151,27 +154,34 @@ TEST(Grasp, ControllerSettlesOnEachGripTarget) {
 // region of the bone nearest it, found here as the distance to each bone's box (the mesh puts
 // the bones' nodes on those boxes), the palm zone for the root; the regions' forces sum to the
 // grip the controller measured from the contact pairs' own reports.
+const std::vector<std::string> kRegionNames{"proximal_phalanx_finger", "middle_phalanx_finger", "palm_thenar", "palm_central", "palm_hypothenar"};
+
+// The region a skin node at x belongs to by the nearest bone box ("" on the plane between two).
+std::string nearest_bone_region(const double* x) {
+  auto box_distance = [](const FingerBone& b, const double* p) {
+    const double dx = std::max({b.x0 - p[0], 0.0, p[0] - b.x1}), dy = std::max(std::abs(p[1]) - 0.003, 0.0),
+                 dz = std::max({kFingerAxisZ - 0.003 - p[2], 0.0, p[2] - kFingerAxisZ - 0.003});
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+  };
+  std::array<double, 3> d{};
+  for (std::size_t b = 0; b < 3; ++b) d[b] = box_distance(kFingerBones[b], x);
+  std::array<double, 3> sorted = d;
+  std::sort(sorted.begin(), sorted.end());
+  if (sorted[1] - sorted[0] < 1e-9) return "";  // on the plane between two bones: either
+  const auto nearest = static_cast<std::size_t>(std::min_element(d.begin(), d.end()) - d.begin());
+  return nearest == 0 ? "palm_central" : kFingerBones[nearest].name;
+}
+
 void expect_grip_regions(const Model& model, ExplicitSolver& s) {
   s.sum_grip_regions();
   const GripRegions& g = *s.grip_regions();
-  const std::vector<std::string> names{"proximal_phalanx_finger", "middle_phalanx_finger", "palm_thenar", "palm_central", "palm_hypothenar"};
-  EXPECT_EQ(g.names(), names);
-  auto box_distance = [](const FingerBone& b, const double* x) {
-    const double dx = std::max({b.x0 - x[0], 0.0, x[0] - b.x1}), dy = std::max(std::abs(x[1]) - 0.003, 0.0),
-                 dz = std::max({kFingerAxisZ - 0.003 - x[2], 0.0, x[2] - kFingerAxisZ - 0.003});
-    return std::sqrt(dx * dx + dy * dy + dz * dz);
-  };
+  EXPECT_EQ(g.names(), kRegionNames);
   std::size_t checked = 0, wrong = 0;
   for (std::size_t a = 0; a < model.num_nodes; ++a) {
     const std::int32_t r = g.region_of_node()[a];
     if (r < 0) continue;
-    std::array<double, 3> d{};
-    for (std::size_t b = 0; b < 3; ++b) d[b] = box_distance(kFingerBones[b], &model.X[3 * a]);
-    std::array<double, 3> sorted = d;
-    std::sort(sorted.begin(), sorted.end());
-    if (sorted[1] - sorted[0] < 1e-9) continue;  // on the plane between two bones: either
-    const auto nearest = static_cast<std::size_t>(std::min_element(d.begin(), d.end()) - d.begin());
-    const std::string expected = nearest == 0 ? "palm_central" : kFingerBones[nearest].name;
+    const std::string expected = nearest_bone_region(&model.X[3 * a]);
+    if (expected.empty()) continue;
     ++checked, wrong += g.names()[static_cast<std::size_t>(r)] == expected ? 0 : 1;
   }
   double total = 0;
@@ -250,6 +260,31 @@ TEST(Grasp, HeldGraspIsInStaticEquilibriumAboutEachJoint) {
   EXPECT_LT(worst_joint_imbalance(model, s), 0.02);
   EXPECT_NEAR(s.joint_drive()->grip_force(), 50, 1.0);
   expect_grip_regions(model, s);
+}
+
+// A grasp's state files carry each skin node's hand region (point field grip_region, an index
+// into the regions' names), so a reader can tell the pressure per finger segment without the
+// solver. Oracle: the nearest bone box, as above, on the initial state (reference positions).
+TEST(Grasp, StatesCarryEachSkinNodesRegion) {
+  TempDir dir;
+  const Scenario sc = grasp_scenario(dir, 50, 1e-4);
+  run_simulation(sc, dir / "out");
+  const VtuContents state = read_vtu(dir / "out" / "results" / "state_0000.vtu");
+  const MeshField* region = state.point_field(contracts::point::grip_region.name);
+  ASSERT_NE(region, nullptr);
+  std::size_t in_a_region = 0, checked = 0, wrong = 0;
+  for (std::size_t i = 0; i < region->values.size(); ++i) {
+    const double r = region->values[i];
+    if (r < 0) continue;
+    ++in_a_region;
+    ASSERT_LT(r, static_cast<double>(kRegionNames.size()));
+    const std::string expected = nearest_bone_region(state.mesh.nodes[i].data());
+    if (expected.empty()) continue;
+    ++checked, wrong += kRegionNames[static_cast<std::size_t>(r)] == expected ? 0 : 1;
+  }
+  std::printf("state_0000.vtu: %zu nodes in a grip region, %zu checked against the nearest bone box, %zu wrong\n", in_a_region, checked, wrong);
+  EXPECT_GT(checked, 100u);
+  EXPECT_EQ(wrong, 0u);
 }
 
 // Dynamic relaxation (relaxation.hpp) against damped dynamics, all stopping on the same

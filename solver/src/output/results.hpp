@@ -15,6 +15,7 @@
 #include "tactus/core/file_io.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/explicit.hpp"
+#include "tactus/solver/grip_regions.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/rigid.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -23,7 +24,8 @@ namespace tactus::solver {
 
 // The state at one time as a .vtu (input numbering). Returns each block's largest von Mises.
 std::vector<double> write_state(const Model& m, const std::filesystem::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                                const ContactSolver* contact, double time);  // time (s): field data TimeValue
+                                const ContactSolver* contact, double time,  // time (s): field data TimeValue
+                                const GripRegions* regions = nullptr);      // a grasp: each node's region (grip_region)
 void write_pvd(const std::filesystem::path& file, const std::vector<std::pair<double, std::string>>& entries);
 
 // One history row's inputs.

@@ -19,7 +19,7 @@ namespace cc = contracts::cell;
 // Cell and point fields of one state, in the input numbering.
 // Returns the largest von Mises stress of each material block in this state.
 std::vector<double> write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                                const ContactSolver* contact, double time) {
+                                const ContactSolver* contact, double time, const GripRegions* regions) {
   std::vector<double> block_peak(m.blocks.size(), 0.0);
   const std::size_t N = m.num_nodes, E = m.num_elements;
   MeshField disp{cp::displacement.name, 3, std::vector<double>(3 * N)}, vel{cp::velocity.name, 3, std::vector<double>(3 * N)};
@@ -46,6 +46,11 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
       for (int d = 0; d < 3; ++d) t.values[3 * i + d] = c.traction[3 * k + d];
     }
     for (MeshField* f : {&p, &t, &st, &g, &a}) point_fields.push_back(std::move(*f));
+  }
+  if (regions) {  // constant over the run; in every state so each file stands alone
+    MeshField region{cp::grip_region.name, 1, std::vector<double>(N)};
+    for (std::size_t i = 0; i < N; ++i) region.values[i] = regions->region_of_node()[static_cast<std::size_t>(m.node_of_input[i])];
+    point_fields.push_back(std::move(region));
   }
   MeshField stress{cc::cauchy_stress.name, 6, std::vector<double>(6 * E), {"xx", "yy", "zz", "xy", "yz", "xz"}},
       vm{cc::von_mises.name, 1, std::vector<double>(E)}, material{cc::material.name, 1, std::vector<double>(E)},
@@ -93,7 +98,9 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   MeshStrings body_names{contracts::kBodyNames, {}}, material_names{contracts::kMaterialNames, {}};
   for (const auto& b : m.bodies) body_names.values.push_back(b.name);
   for (const auto& b : m.blocks) material_names.values.push_back(b.name);
-  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current, time, {body_names, material_names});
+  std::vector<MeshStrings> names{body_names, material_names};
+  if (regions) names.push_back({contracts::kGripRegionNames, regions->names()});
+  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current, time, names);
   return block_peak;
 }
 

@@ -43,8 +43,11 @@ inline constexpr FieldSpec contact_area{"contact_area", 1, "m^2",
 inline constexpr FieldSpec node_id{"node_id", 1, "",
                                    "the node's number in every message, summary and quality.json (1-based; for a one-body mesh its .msh "
                                    "tag; bodies follow each other in scenario order)"};
-inline constexpr std::array<const FieldSpec*, 8> all{&node_id,          &displacement,   &velocity,    &contact_pressure,
-                                                     &contact_traction, &contact_status, &contact_gap, &contact_area};
+inline constexpr FieldSpec grip_region{"grip_region", 1, "",
+                                       "a grasp's hand region of the node, an index into field data grip_region_names (-1: none); "
+                                       "written only for a run with [grasp]"};
+inline constexpr std::array<const FieldSpec*, 9> all{&node_id,        &displacement, &velocity,     &contact_pressure, &contact_traction,
+                                                     &contact_status, &contact_gap,  &contact_area, &grip_region};
 }  // namespace point
 
 namespace cell {
@@ -63,6 +66,7 @@ inline constexpr std::array<const FieldSpec*, 7> all{&tet_id, &group, &cauchy_st
 inline constexpr const char* kPointsNote = "points";
 inline constexpr const char* kBodyNames = "body_names";
 inline constexpr const char* kMaterialNames = "material_names";
+inline constexpr const char* kGripRegionNames = "grip_region_names";  // a grasp's state: the names behind grip_region
 
 // --- results: history.csv ----------------------------------------------------------------------
 struct ColumnSpec {
