@@ -473,26 +473,15 @@ Views choose_views(vtkUnstructuredGrid* g, const RenderOptions& opt) {
   return v;
 }
 
-// The tets' von Mises averaged at each node, weighted by the tets' volumes (as the interactive
-// report's nodal field): a smooth picture beside the per-tet one, whose jumps show the mesh.
+// The nodal von Mises (nodal_von_mises, as the interactive report's) as point field
+// "von_mises_nodal": a smooth picture beside the per-tet one, whose jumps show the mesh.
 void add_nodal_von_mises(vtkUnstructuredGrid* g) {
-  vtkDataArray* vm = g->GetCellData()->GetArray(cc::von_mises.name);
-  if (!vm) return;
-  std::vector<double> sum(static_cast<std::size_t>(g->GetNumberOfPoints()), 0.0), weight(sum.size(), 0.0);
-  for (vtkIdType c = 0; c < g->GetNumberOfCells(); ++c) {
-    vtkIdType n = 0;
-    const vtkIdType* p = nullptr;
-    g->GetCellPoints(c, n, p);
-    if (n != 4) continue;
-    Vec3 x[4];
-    for (int a = 0; a < 4; ++a) g->GetPoint(p[a], x[a].data());
-    const double volume = std::abs(dot(cross(x[1] - x[0], x[2] - x[0]), x[3] - x[0])) / 6, value = vm->GetComponent(c, 0);
-    for (int a = 0; a < 4; ++a) sum[static_cast<std::size_t>(p[a])] += volume * value, weight[static_cast<std::size_t>(p[a])] += volume;
-  }
+  const std::vector<double> values = nodal_von_mises(g);
+  if (values.empty()) return;
   vtkNew<vtkDoubleArray> nodal;
   nodal->SetName("von_mises_nodal");
-  nodal->SetNumberOfTuples(static_cast<vtkIdType>(sum.size()));
-  for (std::size_t i = 0; i < sum.size(); ++i) nodal->SetValue(static_cast<vtkIdType>(i), weight[i] > 0 ? sum[i] / weight[i] : 0.0);
+  nodal->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i) nodal->SetValue(static_cast<vtkIdType>(i), values[i]);
   g->GetPointData()->AddArray(nodal);
 }
 

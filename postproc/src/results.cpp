@@ -2,6 +2,8 @@
 #include "tactus/postproc/results.hpp"
 #include "tactus/core/file_io.hpp"
 
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
 #include <vtkNew.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
@@ -16,6 +18,7 @@
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
+#include "tactus/core/vec3.hpp"
 
 namespace fs = std::filesystem;
 
@@ -40,6 +43,24 @@ std::string ms(double t) {
   std::ostringstream o;
   o << std::fixed << std::setprecision(2) << t * 1e3;
   return o.str();
+}
+
+std::vector<double> nodal_von_mises(vtkUnstructuredGrid* g) {
+  vtkDataArray* vm = g->GetCellData()->GetArray(cc::von_mises.name);
+  if (!vm) return {};
+  std::vector<double> sum(static_cast<std::size_t>(g->GetNumberOfPoints()), 0.0), weight(sum.size(), 0.0);
+  for (vtkIdType c = 0; c < g->GetNumberOfCells(); ++c) {
+    vtkIdType n = 0;
+    const vtkIdType* p = nullptr;
+    g->GetCellPoints(c, n, p);
+    if (n != 4) continue;
+    Vec3 x[4];
+    for (int a = 0; a < 4; ++a) g->GetPoint(p[a], x[a].data());
+    const double volume = std::abs(dot(cross(x[1] - x[0], x[2] - x[0]), x[3] - x[0])) / 6, value = vm->GetComponent(c, 0);
+    for (int a = 0; a < 4; ++a) sum[static_cast<std::size_t>(p[a])] += volume * value, weight[static_cast<std::size_t>(p[a])] += volume;
+  }
+  for (std::size_t i = 0; i < sum.size(); ++i) sum[i] = weight[i] > 0 ? sum[i] / weight[i] : 0.0;
+  return sum;
 }
 
 const std::vector<double>& History::column(const std::string& name) const {

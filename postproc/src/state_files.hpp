@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace tactus::postproc {
 
@@ -15,5 +16,10 @@ vtkSmartPointer<vtkUnstructuredGrid> load_state(const std::filesystem::path& fil
 
 // An output time as file names carry it: milliseconds with two decimals ("1.00").
 std::string ms(double t);
+
+// The tets' von Mises averaged at each point, weighted by the tets' current volumes: the nodal
+// von Mises of the pictures and of the interactive report (0 at a point no tet holds; empty
+// without a von_mises cell field).
+std::vector<double> nodal_von_mises(vtkUnstructuredGrid* g);
 
 }  // namespace tactus::postproc

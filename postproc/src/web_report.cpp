@@ -86,7 +86,6 @@ std::string base64(const std::vector<T>& v) {
 // reference configuration. Surface vertices are numbered compactly (node: their .vtu point).
 struct Surface {
   std::vector<std::uint32_t> node;                  // surface vertex -> .vtu point
-  std::vector<std::int64_t> vertex_of;              // .vtu point -> surface vertex, -1 inside
   std::vector<std::array<std::uint32_t, 3>> faces;  // surface vertices
   std::vector<std::uint32_t> face_tet;              // .vtu cell of each face
   std::vector<std::array<vtkIdType, 4>> tets;       // every cell's points
@@ -122,14 +121,14 @@ Surface boundary_surface(vtkUnstructuredGrid* g, const std::vector<Vec3>& X, con
     }
   }
   std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) { return a.key < b.key; });
-  s.vertex_of.assign(X.size(), -1);
+  std::vector<std::int64_t> vertex_of(X.size(), -1);  // .vtu point -> surface vertex, -1 inside
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i + 1;
     while (j < faces.size() && faces[j].key == faces[i].key) ++j;
     if (j == i + 1) {
       std::array<std::uint32_t, 3> tri{};
       for (int k = 0; k < 3; ++k) {
-        auto& v = s.vertex_of[static_cast<std::size_t>(faces[i].points[k])];
+        auto& v = vertex_of[static_cast<std::size_t>(faces[i].points[k])];
         if (v < 0) v = static_cast<std::int64_t>(s.node.size()), s.node.push_back(static_cast<std::uint32_t>(faces[i].points[k]));
         tri[k] = static_cast<std::uint32_t>(v);
       }
@@ -148,7 +147,6 @@ struct StateFields {
   // For the pressure tables (double): current position, friction traction, tributary area.
   std::vector<Vec3> position, traction;
   std::vector<double> area, pressure_pa;
-  std::vector<std::string> region;  // a grasp's hand region per vertex (grip_region), else empty
 };
 
 // A grasp state's region name per surface vertex (point field grip_region, names in field data
@@ -178,9 +176,10 @@ struct Peak {
 struct Scan {
   std::vector<Vec3> X;  // reference positions of the .vtu points
   Surface surface;
-  std::vector<std::uint32_t> tet_body;  // each cell's body index (the "body" field; 0 without it)
-  std::vector<std::size_t> states;      // frames shown
-  std::vector<char> ever_pressed;       // per surface vertex
+  std::vector<std::uint32_t> tet_body;     // each cell's body index (the "body" field; 0 without it)
+  std::vector<std::string> vertex_region;  // a grasp's hand region per surface vertex (constant over the run), else ""
+  std::vector<std::size_t> states;         // frames shown
+  std::vector<char> ever_pressed;          // per surface vertex
   std::vector<std::pair<double, double>> pressed;
   PercentileCap stress;
   double displacement_max = 0;
@@ -232,29 +231,25 @@ StateFields state_fields(vtkUnstructuredGrid* g, std::size_t k, const Surface& s
   if (vtkDataArray* a = g->GetPointData()->GetArray(cp::contact_area.name))
     for (std::size_t v = 0; v < V; ++v) area[v] = a->GetComponent(static_cast<vtkIdType>(s.node[v]), 0);
   f.area = area;
-  f.region = vertex_regions(g, s);
   for (std::size_t v = 0; v < V && scan; ++v)
     if (f.pressure[v] > 0) {
       scan->pressed.emplace_back(f.pressure[v], area[v]);
       scan->ever_pressed[v] = 1;
       if (f.pressure[v] > scan->pressure_peak.value) scan->pressure_peak = {f.pressure[v], k, static_cast<long>(s.node[v]) + 1, x[s.node[v]]};
     }
-  // von Mises: per tet, and averaged at the surface vertices weighted by the tets' volumes.
-  std::vector<double> sum(V, 0.0), weight(V, 0.0);
-  for (std::size_t e = 0; e < s.tets.size(); ++e) {
+  // von Mises: per tet (its peak and the volume-weighted cap), and nodal at the surface vertices.
+  for (std::size_t e = 0; e < s.tets.size() && scan; ++e) {
     const double value = vm->GetComponent(static_cast<vtkIdType>(e), 0), volume = tet_volume(s.tets[e], x);
-    if (scan) scan->stress.add(value, volume);
-    if (scan && value > scan->stress_peak.value) {
+    scan->stress.add(value, volume);
+    if (value > scan->stress_peak.value) {
       Vec3 centre{0, 0, 0};
       for (vtkIdType q : s.tets[e]) centre = centre + 0.25 * x[static_cast<std::size_t>(q)];
       scan->stress_peak = {value, k, static_cast<long>(e) + 1, centre};
     }
-    for (vtkIdType q : s.tets[e])
-      if (const std::int64_t v = s.vertex_of[static_cast<std::size_t>(q)]; v >= 0)
-        sum[static_cast<std::size_t>(v)] += volume * value, weight[static_cast<std::size_t>(v)] += volume;
   }
+  const std::vector<double> nodal = nodal_von_mises(g);
   f.von_mises_nodal.resize(V);
-  for (std::size_t v = 0; v < V; ++v) f.von_mises_nodal[v] = static_cast<float>(weight[v] > 0 ? sum[v] / weight[v] : 0.0);
+  for (std::size_t v = 0; v < V; ++v) f.von_mises_nodal[v] = static_cast<float>(nodal[s.node[v]]);
   f.von_mises_face.resize(s.faces.size());
   for (std::size_t i = 0; i < s.faces.size(); ++i)
     f.von_mises_face[i] = static_cast<float>(vm->GetComponent(static_cast<vtkIdType>(s.face_tet[i]), 0));
@@ -289,6 +284,7 @@ Scan scan_states(const Results& r) {
       if (vtkDataArray* b = g->GetCellData()->GetArray(cc::body.name))
         for (std::size_t e = 0; e < scan.tet_body.size(); ++e)
           scan.tet_body[e] = static_cast<std::uint32_t>(b->GetComponent(static_cast<vtkIdType>(e), 0));
+      scan.vertex_region = vertex_regions(g, scan.surface);
       scan.ever_pressed.assign(scan.surface.node.size(), 0);
     } else if (static_cast<std::size_t>(g->GetNumberOfPoints()) != scan.X.size() ||
                static_cast<std::size_t>(g->GetNumberOfCells()) != scan.surface.tets.size()) {
@@ -448,7 +444,7 @@ nlohmann::json model_json(const Results& r, const Summary& summary, const Scan& 
 // The pressed nodes of one output: id, current position, pressure, friction traction, tributary
 // area (the solver's contact_area), body and, for a grasp, the hand region.
 std::string pressure_csv(const Surface& s, const StateFields& f, const std::vector<std::string>& bodies,
-                         const std::vector<std::uint32_t>& vertex_body) {
+                         const std::vector<std::uint32_t>& vertex_body, const std::vector<std::string>& vertex_region) {
   std::ostringstream o;
   o << std::setprecision(9) << "node_id,x_m,y_m,z_m,pressure_Pa,traction_x_Pa,traction_y_Pa,traction_z_Pa,area_m2,body,region\n";
   for (std::size_t v = 0; v < s.node.size(); ++v) {
@@ -456,7 +452,7 @@ std::string pressure_csv(const Surface& s, const StateFields& f, const std::vect
     const Vec3 &x = f.position[v], &t = f.traction[v];
     const std::uint32_t b = vertex_body[v];
     o << s.node[v] + 1 << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << f.pressure_pa[v] << ',' << t[0] << ',' << t[1] << ',' << t[2] << ','
-      << f.area[v] << ',' << (b < bodies.size() ? bodies[b] : std::to_string(b)) << ',' << f.region[v] << '\n';
+      << f.area[v] << ',' << (b < bodies.size() ? bodies[b] : std::to_string(b)) << ',' << vertex_region[v] << '\n';
   }
   return o.str();
 }
@@ -521,7 +517,7 @@ WebReport write_web_report(const Results& r, const Summary& summary, const fs::p
     const std::size_t k = scan.states[j];
     const StateFields f = state_fields(load_state(r.frames[k].file), k, s, nullptr, r.frames[k].file.string());
     if (f.has_pressure && std::any_of(f.pressure_pa.begin(), f.pressure_pa.end(), [](double q) { return q > 0; }))
-      put("pressure_" + ms(r.frames[k].time) + "ms.csv", pressure_csv(s, f, r.bodies, vertex_body));
+      put("pressure_" + ms(r.frames[k].time) + "ms.csv", pressure_csv(s, f, r.bodies, vertex_body, scan.vertex_region));
     for (std::size_t q = 0; q < probes.size(); ++q) {
       const Vec3& at = o.probes[q];
       probe_rows << q + 1 << ',' << at[0] << ',' << at[1] << ',' << at[2] << ',' << s.node[probes[q]] + 1 << ','
