@@ -131,6 +131,14 @@ std::vector<std::string> rigid_body_names(const ExplicitSolver& solver) {
   return names;
 }
 
+// A state file's name: number 0 is the initial state (t = 0), number k the k-th scheduled output;
+// after n outputs the folder holds state_0000 .. state_n.
+std::string state_name(std::size_t number) {
+  std::ostringstream name;
+  name << "state_" << std::setw(4) << std::setfill('0') << number << ".vtu";
+  return name.str();
+}
+
 // The steps of one run and what they write as they go.
 class RunLoop {
  public:
@@ -153,7 +161,7 @@ class RunLoop {
     if (from)
       restore(*from);
     else
-      write("state_0000.vtu", solver_.displacement(), solver_.velocity_at_step(), solver_.time(), false);  // the initial state, t = 0
+      write(state_name(0), solver_.displacement(), solver_.velocity_at_step(), solver_.time(), false);  // the initial state
   }
 
   // Steps to the end time; a numerical failure writes the last good state and is returned. An
@@ -417,9 +425,7 @@ class RunLoop {
   }
 
   void write_scheduled_state() {  // the solver lands on every scheduled time exactly
-    std::ostringstream name;
-    name << "state_" << std::setw(4) << std::setfill('0') << next_out_ + 1 << ".vtu";  // state_0000 is the initial state
-    write(name.str(), solver_.displacement(), solver_.velocity_at_step(), solver_.time());
+    write(state_name(next_out_ + 1), solver_.displacement(), solver_.velocity_at_step(), solver_.time());
     ++next_out_;
   }
 
