@@ -207,51 +207,81 @@ void rotate_element_data(const MaterialType& type, const BodySpec& body, double*
   }
 }
 
-// One block per material (in the scenario's order), its elements in input order; a law's element
-// data from the bodies' files where given, else the material's constants.
+// The skeleton body's joint gaps (MaterialBlock::joint_gap), on input numbering: its deformable
+// tets whose four nodes all lie on its rigid tets.
+std::vector<char> joint_gap_tets(const Scenario& sc, const Model& m, const TetAssignment& tets) {
+  std::vector<char> gap(m.num_elements, 0);
+  if (!sc.skeleton) return gap;
+  auto rigid = [&](std::size_t e) {
+    const auto it = sc.materials.find(tets.material[e]);
+    return it != sc.materials.end() && it->second.type == "rigid";
+  };
+  for (const BodyRange& body : m.bodies) {
+    if (body.name != sc.skeleton->body) continue;
+    std::vector<char> on_bone(m.num_nodes, 0);
+    for (std::size_t e = body.tet_begin; e < body.tet_end; ++e)
+      if (rigid(e))
+        for (int v : m.input_mesh.tets[e]) on_bone[static_cast<std::size_t>(v)] = 1;
+    for (std::size_t e = body.tet_begin; e < body.tet_end; ++e) {
+      const auto& t = m.input_mesh.tets[e];
+      gap[e] = !rigid(e) && std::all_of(t.begin(), t.end(), [&](int v) { return on_bone[static_cast<std::size_t>(v)] != 0; });
+    }
+  }
+  return gap;
+}
+
+// One block per material (in the scenario's order), its elements in input order, then the
+// material's joint gaps as a block of their own; a law's element data from the bodies' files where
+// given, else the material's constants.
 std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssignment& tets) {
   std::vector<std::size_t> order;
-  for (const auto& [name, inst] : sc.materials) {
-    MaterialBlock b;
-    b.name = name;
-    const auto law = sc.laws.find(name);
-    b.material = law != sc.laws.end() ? law->second : Material::make(inst.type, inst.values, "materials." + name);
-    b.begin = order.size();
-    for (std::size_t e = 0; e < m.num_elements; ++e)
-      if (tets.material[e] == name) order.push_back(e);
-    b.end = order.size();
-    if (b.end == b.begin) continue;
-    const MaterialType& type = b.material.type();
-    const std::size_t n = type.element_data_size;
-    bool from_files = false;
-    for (std::size_t k = b.begin; k < b.end && n > 0; ++k) {
-      if (tets.data[order[k]] || sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].rotated)
-        from_files = true;
-      else if (b.material.needs_element_data()) {
-        std::string keys;
-        for (const ValueSpec& s : type.parameters.keys)
-          if (s.type == ValueType::vec3_list) keys += (keys.empty() ? "" : ", ") + s.key;
-        throw InputError(sc.file.string(), "materials." + name + "." + keys,
-                         "element data for " + type.name + ": " + keys + " here, or a per-element `fibres` file on body '" +
-                             sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].name + "'",
-                         "none");
+  const std::vector<char> gap = joint_gap_tets(sc, m, tets);
+  for (const auto& [name, inst] : sc.materials)
+    for (const bool in_gap : {false, true}) {
+      MaterialBlock b;
+      b.name = in_gap ? name + "_joint_gap" : name;
+      b.joint_gap = in_gap;
+      const auto law = sc.laws.find(name);
+      b.material = law != sc.laws.end() ? law->second : Material::make(inst.type, inst.values, "materials." + name);
+      b.begin = order.size();
+      for (std::size_t e = 0; e < m.num_elements; ++e)
+        if (tets.material[e] == name && (gap[e] != 0) == in_gap) order.push_back(e);
+      b.end = order.size();
+      if (b.end == b.begin) continue;
+      if (in_gap)
+        log::info() << "joint gaps: " << b.end - b.begin << " tets of '" << name << "' lie wholly on the bones of body '" << sc.skeleton->body
+                    << "' (placed by the joints; no stress, no step of their own): material '" << b.name << "'";
+      const MaterialType& type = b.material.type();
+      const std::size_t n = type.element_data_size;
+      bool from_files = false;
+      for (std::size_t k = b.begin; k < b.end && n > 0; ++k) {
+        if (tets.data[order[k]] || sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].rotated)
+          from_files = true;
+        else if (b.material.needs_element_data()) {
+          std::string keys;
+          for (const ValueSpec& s : type.parameters.keys)
+            if (s.type == ValueType::vec3_list) keys += (keys.empty() ? "" : ", ") + s.key;
+          throw InputError(sc.file.string(), "materials." + name + "." + keys,
+                           "element data for " + type.name + ": " + keys + " here, or a per-element `fibres` file on body '" +
+                               sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].name + "'",
+                           "none");
+        }
       }
-    }
-    if (from_files) {
-      b.element_data.resize(n * (b.end - b.begin));
-      for (std::size_t k = b.begin; k < b.end; ++k) {
-        double* out = &b.element_data[n * (k - b.begin)];
-        const std::size_t body = static_cast<std::size_t>(m.tet_body[order[k]]);
-        if (const auto& d = tets.data[order[k]])
-          type.element_data_from_fields(d->data(), out,
-                                        sc.bodies[body].fibres.string() + ": tet " + std::to_string(order[k] - m.bodies[body].tet_begin + 1));
-        else
-          std::copy(b.material.constant_element_data().begin(), b.material.constant_element_data().end(), out);
-        if (sc.bodies[body].rotated) rotate_element_data(type, sc.bodies[body], out, "bodies[" + std::to_string(body) + "]");
+      if (from_files) {
+        b.element_data.resize(n * (b.end - b.begin));
+        for (std::size_t k = b.begin; k < b.end; ++k) {
+          double* out = &b.element_data[n * (k - b.begin)];
+          const std::size_t body = static_cast<std::size_t>(m.tet_body[order[k]]);
+          if (const auto& d = tets.data[order[k]])
+            type.element_data_from_fields(d->data(), out,
+                                          sc.bodies[body].fibres.string() + ": tet " + std::to_string(order[k] - m.bodies[body].tet_begin + 1));
+          else
+            std::copy(b.material.constant_element_data().begin(), b.material.constant_element_data().end(), out);
+          if (sc.bodies[body].rotated) rotate_element_data(type, sc.bodies[body], out, "bodies[" + std::to_string(body) + "]");
+        }
       }
+      m.blocks.push_back(std::move(b));
     }
-    m.blocks.push_back(std::move(b));
-  }
   return order;
 }
 

@@ -517,7 +517,7 @@ void read_materials(const Reader& r, const toml::table& root, Scenario& sc, cons
     if (!type) r.fail(path + ".type", "one of " + material_type_list(), "\"" + m.type + "\"");
     r.check_keys(t, type->parameters, path, {"type"});
     for (const ValueSpec& ps : type->parameters.keys) {
-      if (ps.type == ValueType::number)
+      if (ps.type == ValueType::number && (ps.required || t.contains(ps.key)))  // an optional one absent: the law's default
         m.values.numbers[ps.key] = r.number(t, ps, path, 0);
       else if (ps.type == ValueType::vec3_list && t.contains(ps.key))
         m.values.vectors[ps.key] = r.vec3_list(t, ps, path);

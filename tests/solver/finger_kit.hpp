@@ -27,7 +27,9 @@ inline constexpr std::array<FingerBone, 3> kFingerBones{
     {{"metacarpal_finger", 2, 0.003, 0.018}, {"proximal_phalanx_finger", 3, 0.024, 0.042}, {"middle_phalanx_finger", 4, 0.048, 0.066}}};
 inline constexpr double kFingerAxisZ = 0.009;
 
-inline TetMesh finger_mesh() {
+// one_cell_joint_gap: the proximal phalanx reaches 3 mm further, so one cell (3 mm) separates it
+// from the middle phalanx: tissue tets there have all four nodes on the two bones (joint gaps).
+inline TetMesh finger_mesh(bool one_cell_joint_gap = false) {
   TetMesh m = samples::make_box_mesh(24, 6, 6, 0.072, 0.018, 0.018, {0, -0.009, 0});
   for (PhysicalGroup& g : m.groups)
     if (g.dim == 3) g.name = "tissue";
@@ -37,7 +39,7 @@ inline TetMesh finger_mesh() {
     for (int v : m.tets[e]) c = c + 0.25 * m.nodes[static_cast<std::size_t>(v)];
     if (std::abs(c[1]) > 0.003 || c[2] < 0.006 || c[2] > 0.012) continue;
     for (const FingerBone& b : kFingerBones)
-      if (c[0] > b.x0 && c[0] < b.x1) m.tet_group[e] = b.label;
+      if (c[0] > b.x0 && c[0] < b.x1 + (one_cell_joint_gap && b.label == kFingerBones[1].label ? 0.003 : 0.0)) m.tet_group[e] = b.label;
   }
   add_whole_boundary_group(m);
   return m;
@@ -108,9 +110,9 @@ inline void add_finger_materials(solver::Scenario& sc) {
 }
 
 // The finger as a scenario body with its skeleton (written to dir/finger_skeleton.json).
-inline void add_finger(solver::Scenario& sc, const TempDir& dir) {
+inline void add_finger(solver::Scenario& sc, const TempDir& dir, bool one_cell_joint_gap = false) {
   add_finger_materials(sc);
-  solver::BodySpec finger = body_from_mesh(dir, "finger", finger_mesh(), "tissue");
+  solver::BodySpec finger = body_from_mesh(dir, "finger", finger_mesh(one_cell_joint_gap), "tissue");
   for (const FingerBone& b : kFingerBones) finger.materials[b.name] = "bone";
   sc.bodies.push_back(finger);
   write_skeleton(dir.path() / "finger_skeleton.json", finger_skeleton());

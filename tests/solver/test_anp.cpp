@@ -477,3 +477,96 @@ TEST(Anp, PressureSmoothingIsCheckedOutsideTheReaderToo) {
   EXPECT_THROW(elastic(1e6, 0.4999, "anp1.5"), InputError);
   EXPECT_THROW(elastic(1e6, 0.4999, "anp9"), InputError);
 }
+
+// Oracle: calculus. The volume floor's barrier b(J) = -kappa (J - J0)^2 ln(J / J0) below J0: its
+// pressure and stiffness are b' and b'' (central differences of the energy and of the pressure
+// within 1e-6), all three are zero at and above J0 (so a run whose tets stay above the floor keeps
+// its bits), it grows without bound as J -> 0, and its stiffness is positive below the floor.
+TEST(Anp, VolumeFloorBarrierIsAPotentialThatIsZeroAboveTheFloor) {
+  const double J0 = 0.5, kappa = 1e8, h = 1e-6;
+  double worst_pressure = 0, worst_stiffness = 0;
+  for (double J = 0.02; J < J0 - 2 * h; J += 0.01) {
+    const VolumeFloorBarrier b = volume_floor_barrier(J, J0, kappa);
+    const VolumeFloorBarrier up = volume_floor_barrier(J + h, J0, kappa), down = volume_floor_barrier(J - h, J0, kappa);
+    worst_pressure = std::max(worst_pressure, std::abs((up.energy - down.energy) / (2 * h) - b.pressure) / std::abs(b.pressure));
+    worst_stiffness = std::max(worst_stiffness, std::abs((up.pressure - down.pressure) / (2 * h) - b.stiffness) / std::abs(b.stiffness));
+    EXPECT_GT(b.energy, 0);
+    EXPECT_LT(b.pressure, 0);
+    EXPECT_GT(b.stiffness, 0);
+  }
+  const VolumeFloorBarrier at_floor = volume_floor_barrier(J0, J0, kappa), above = volume_floor_barrier(0.9, J0, kappa);
+  const VolumeFloorBarrier near_zero = volume_floor_barrier(1e-6, J0, kappa);
+  std::printf("volume floor J0 = 0.5: b' and b'' against central differences within %.1e and %.1e; at J = 1e-6 the pressure is %.2e Pa\n",
+              worst_pressure, worst_stiffness, near_zero.pressure);
+  EXPECT_LE(worst_pressure, 1e-6);
+  EXPECT_LE(worst_stiffness, 1e-6);
+  for (const VolumeFloorBarrier& zero : {at_floor, above}) {
+    EXPECT_EQ(zero.energy, 0.0);
+    EXPECT_EQ(zero.pressure, 0.0);
+    EXPECT_EQ(zero.stiffness, 0.0);
+  }
+  EXPECT_LT(near_zero.pressure, -100 * kappa);
+}
+
+// Oracle: the barrier's own sum and its derivative. One interior node of a nearly incompressible
+// ANP box is pushed 0.9 of a cell along a diagonal, so some of its tets fall below J0 = 0.5 while
+// the others grow (the kernel mode of the nodal constraint). The stress pass's energy with the
+// floor less the one without equals sum_e V_e b(J_e) over the tets, J_e computed here from the
+// nodes (within 1e-12 of the barrier's sum); the floor's forces are minus the gradient of that
+// energy (the pushed node's, central differences, within 1e-5 of its largest component).
+TEST(Anp, VolumeFloorAddsItsEnergyAndForcesOnlyBelowTheFloor) {
+  TetMesh mesh = samples::make_box_mesh(4, 4, 4, 0.04, 0.04, 0.04);
+  auto material = [](double floor) {
+    MaterialValues v;
+    v.numbers = {{"mu", 2e4}, {"bulk", 1e8}, {"density", 1000}, {"volume_floor", floor}};
+    v.strings["formulation"] = "anp";
+    return Material::make("neo_hookean", v);
+  };
+  const Model with = build_model(mesh, material(0.5)), without = build_model(mesh, material(0.0));
+  ASSERT_EQ(with.blocks[0].material.volume_floor(), 0.5);
+  std::size_t centre = 0;  // the node nearest the box's centre
+  for (std::size_t a = 0; a < with.num_nodes; ++a) {
+    auto d = [&](std::size_t b) { return std::hypot(with.X[3 * b] - 0.02, with.X[3 * b + 1] - 0.02, with.X[3 * b + 2] - 0.02); };
+    if (d(a) < d(centre)) centre = a;
+  }
+  std::vector<double> u(3 * with.num_nodes, 0.0), v(u.size(), 0.0), f_with(u.size()), f_without(u.size());
+  for (int i = 0; i < 3; ++i) u[3 * centre + static_cast<std::size_t>(i)] = 0.9 * 0.01 / std::sqrt(3.0);
+  InternalForces forces_with(with, 0.0, 1), forces_without(without, 0.0, 1);
+  const double E_with = forces_with.compute(u.data(), v.data(), f_with.data()).strain_energy;
+  const double E_without = forces_without.compute(u.data(), v.data(), f_without.data()).strain_energy;
+  double barrier = 0, smallest = 1;
+  std::size_t below = 0;
+  for (std::size_t e = 0; e < with.num_elements; ++e) {
+    const std::int32_t* c = &with.conn[4 * e];
+    const Mat3 F = Mat3::Identity() + nodal_gradient(u.data(), c, &with.grad[9 * e]);
+    const double J = F.determinant();
+    smallest = std::min(smallest, J);
+    below += J < 0.5;
+    barrier += with.volume[e] * volume_floor_barrier(J, 0.5, 1e8).energy;
+  }
+  // The floor's force on the pushed node against minus the gradient of the floor's energy.
+  double worst = 0, largest = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t dof = 3 * centre + static_cast<std::size_t>(i);
+    const double h = 1e-9, at = u[dof];
+    std::vector<double> scratch(u.size());
+    u[dof] = at + h;
+    const double up = forces_with.compute(u.data(), v.data(), scratch.data()).strain_energy -
+                      forces_without.compute(u.data(), v.data(), scratch.data()).strain_energy;
+    u[dof] = at - h;
+    const double down = forces_with.compute(u.data(), v.data(), scratch.data()).strain_energy -
+                        forces_without.compute(u.data(), v.data(), scratch.data()).strain_energy;
+    u[dof] = at;
+    const double force = f_with[dof] - f_without[dof];
+    worst = std::max(worst, std::abs(force + (up - down) / (2 * h)));
+    largest = std::max(largest, std::abs(force));
+  }
+  std::printf(
+      "volume floor: %zu tets below J0 = 0.5 (smallest J %.3f); energy added %.6e J against the barrier's sum %.6e J; force on the pushed "
+      "node against -dE/du within %.1e of its largest component %.3e N\n",
+      below, smallest, E_with - E_without, barrier, worst / largest, largest);
+  ASSERT_GT(below, 0u);
+  EXPECT_NEAR(E_with - E_without, barrier, 1e-12 * barrier);
+  EXPECT_GT(largest, 0);
+  EXPECT_LE(worst, 1e-5 * largest);
+}

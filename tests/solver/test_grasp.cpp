@@ -16,6 +16,7 @@
 #include "tactus/core/error.hpp"
 #include "tactus/core/mesh.hpp"
 #include "tactus/solver/explicit.hpp"
+#include "tactus/solver/internal_force.hpp"
 #include "tactus/solver/model_build.hpp"
 #include "tactus/solver/run.hpp"
 
@@ -113,6 +114,69 @@ TEST(Grasp, JointAnglesPlaceEveryBoneByForwardKinematics) {
   EXPECT_LT(centre_error, 1e-9);
   EXPECT_LT(rotation_error, 1e-9);
   EXPECT_GT(J, 0.2);
+}
+
+// Oracle: the joint gaps' definition, counted here from the input mesh: the finger's tissue tets
+// whose four nodes all lie on its bones' tets (one cell of them between its proximal and middle
+// phalanges) form the block "tissue_joint_gap" (and no other tet does). Its PIP then flexes by
+// 45 deg: the gap tets are squeezed by the bones (no force can stop them), carry no stress
+// (element_cauchy_stress 0) and do not stop the run, while every other tissue tet keeps J > 0.2.
+TEST(Grasp, JointGapsArePlacedByTheBonesAndCarryNoStress) {
+  TempDir dir;
+  Scenario sc;
+  sc.file = dir.path() / "finger.toml";
+  add_finger(sc, dir, true);  // one cell between the proximal and middle phalanges
+  CurveSpec close;
+  close.name = "close", close.smooth_step = true, close.t0 = 0, close.t1 = 0.02;
+  sc.curves["close"] = close;
+  sc.joints = {{"pip_finger", 45, 0, "close"}};
+  sc.run.end_time = 0.03;
+  sc.damping.alpha = 100;
+  const Model model = build_model(sc);
+  // The count from the input mesh (the finger is the only body).
+  const TetMesh& mesh = model.input_mesh;
+  std::vector<char> on_bone(mesh.nodes.size(), 0);
+  std::vector<char> bone_tet(mesh.tets.size(), 0);
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    const std::string& group = mesh.find_group(3, mesh.tet_group[e])->name;
+    const auto& materials = sc.bodies[0].materials;
+    bone_tet[e] = (materials.count(group) ? materials.at(group) : materials.at("*")) == "bone";
+    if (bone_tet[e])
+      for (int v : mesh.tets[e]) on_bone[static_cast<std::size_t>(v)] = 1;
+  }
+  std::size_t expected = 0;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    expected +=
+        !bone_tet[e] && std::all_of(mesh.tets[e].begin(), mesh.tets[e].end(), [&](int v) { return on_bone[static_cast<std::size_t>(v)] != 0; });
+  const MaterialBlock* gap = nullptr;
+  for (const MaterialBlock& b : model.blocks)
+    if (b.joint_gap) {
+      EXPECT_EQ(gap, nullptr);
+      gap = &b;
+    }
+  ASSERT_NE(gap, nullptr);
+  EXPECT_EQ(gap->name, "tissue_joint_gap");
+  EXPECT_FALSE(gap->has_stress_pass());
+  ASSERT_GT(expected, 0u);
+  EXPECT_EQ(gap->end - gap->begin, expected);
+  ExplicitSolver s(model, sc.run, sc.damping);
+  run_to_end(s);
+  const std::vector<Mat3> sigma = element_cauchy_stress(model, s.displacement().data());
+  double gap_stress = 0, gap_J = 1e300, tissue_J = 1e300;
+  for (const MaterialBlock& b : model.blocks) {
+    if (b.material.rigid()) continue;
+    for (std::size_t e = b.begin; e < b.end; ++e) {
+      Mat3 F = Mat3::Identity() + nodal_gradient(s.displacement().data(), &model.conn[4 * e], &model.grad[9 * e]);
+      (b.joint_gap ? gap_J : tissue_J) = std::min(b.joint_gap ? gap_J : tissue_J, F.determinant());
+      if (b.joint_gap) gap_stress = std::max(gap_stress, sigma[e].norm());
+    }
+  }
+  std::printf(
+      "joint gaps of the finger: %zu tets (counted from the mesh: %zu); PIP flexed 45 deg in %zu steps: gap tets' smallest J %.3f, their largest "
+      "stress %.1f Pa; the other tissue's smallest J %.3f\n",
+      gap->end - gap->begin, expected, s.step_index(), gap_J, gap_stress, tissue_J);
+  EXPECT_EQ(gap_stress, 0.0);
+  EXPECT_GT(tissue_J, 0.2);
 }
 
 // Oracle: the grip targets themselves. The finger closes on the handle under the torque law's

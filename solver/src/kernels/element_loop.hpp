@@ -56,6 +56,9 @@ struct StressKernelArgs {
   std::size_t f_node_offset = 0;
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
+  // ANP: the volume floor J0 (0: off) and its barrier's stiffness (material.hpp, volume_floor_barrier).
+  double anp_volume_floor = 0, anp_floor_stiffness = 0;
+  const char* rigid_node = nullptr;  // ANP: per node, 1 on a rigid piece (a tet with four such has no floor)
   // The nodal step bound (false: off): each tet adds its rows' sums to its nodes, after their forces
   // (f[kForceStride (n - f_node_offset) + 3]); ANP tets take their volumetric rows from their constant
   // factors anp_bound_factor (per tet from block_begin; anp_step_bound_factors) and their
@@ -225,10 +228,25 @@ TACTUS_KERNEL_INLINE LawStress<T> lane_law_stress(const StressKernelArgs& a, con
     LawStress<T> sp = mat.evaluate_isochoric(d.F, d.cof, d.J, data);
     const std::int32_t* c = a.conn + 4 * e;
     const double* np = a.nodal_pressure;  // the mean of the tet's nodal pressures: its energy is the nodes' (J pass)
-    const T p = lanes::make_lanes<T>([&](int l) {
+    T p = lanes::make_lanes<T>([&](int l) {
       const std::int32_t* cl = c + 4 * l;
       return 0.25 * (np[cl[0]] + np[cl[1]] + np[cl[2]] + np[cl[3]]);
     });
+    // The volume floor's barrier, lane by lane and only where a tet is below the floor (rare): its
+    // terms are exactly zero elsewhere, so the stress, energy and modulus keep their bits.
+    bool below = false;
+    for (int l = 0; l < lanes::lanes_of<T>; ++l) below |= lanes::lane(d.J, l) < a.anp_volume_floor;
+    if (below) {
+      VolumeFloorBarrier b[lanes::lanes_of<T>];
+      for (int l = 0; l < lanes::lanes_of<T>; ++l) {
+        const std::int32_t* cl = c + 4 * l;
+        const bool placed = a.rigid_node && a.rigid_node[cl[0]] && a.rigid_node[cl[1]] && a.rigid_node[cl[2]] && a.rigid_node[cl[3]];
+        if (!placed) b[l] = volume_floor_barrier(lanes::lane(d.J, l), a.anp_volume_floor, a.anp_floor_stiffness);
+      }
+      p += lanes::make_lanes<T>([&](int l) { return b[l].pressure; });
+      sp.W += lanes::make_lanes<T>([&](int l) { return b[l].energy; });
+      sp.modulus += lanes::make_lanes<T>([&](int l) { return b[l].stiffness; });
+    }
     sp.P += p * d.cof;
     return sp;
   } else {

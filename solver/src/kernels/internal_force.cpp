@@ -4,6 +4,7 @@
 #include "tactus/solver/internal_force.hpp"
 
 #include "element_loop.hpp"
+#include "tactus/solver/rigid.hpp"
 
 #include <omp.h>
 
@@ -159,13 +160,16 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
 }
 
 std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
-  std::vector<Mat3> sigma(m.num_elements);
+  std::vector<Mat3> sigma(m.num_elements, Mat3::Zero());  // joint gaps stay 0
+  const std::vector<char> rigid = rigid_nodes(m);
   for (const MaterialBlock& b : m.blocks) {
+    if (b.joint_gap) continue;  // placed by the bones, no stress (model.hpp): sigma stays 0
     const std::vector<double> p = b.material.anp() ? anp_nodal_pressure(m, b, u) : std::vector<double>();
     for (std::size_t e = b.begin; e < b.end; ++e) {
       const std::int32_t* c = &m.conn[4 * e];
       const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, &m.grad[9 * e]);
-      const Mat3 P = b.material.anp() ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), b.data_of(e)).P
+      const bool placed = rigid[c[0]] && rigid[c[1]] && rigid[c[2]] && rigid[c[3]];
+      const Mat3 P = b.material.anp() ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), b.data_of(e), !placed).P
                                       : b.material.evaluate(F, b.data_of(e)).P;
       sigma[e] = cauchy_stress(F, P);
     }
@@ -177,7 +181,7 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
     : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads(model.num_elements)) {
   block_pressure_.assign(model.blocks.size(), nullptr);
   for (std::size_t k = 0; k < model.blocks.size(); ++k)
-    if (model.blocks[k].material.anp()) {
+    if (model.blocks[k].material.anp() && model.blocks[k].has_stress_pass()) {
       AnpBlock a{k, anp_reference_node_volumes(model, model.blocks[k]), std::vector<double>(model.num_nodes, 0.0), {}, {}, {}};
       a.bound_factor = anp_step_bound_factors(model, model.blocks[k], a.reference_volume);
       if (model.blocks[k].material.pressure_smoothing() > 0) {
@@ -195,12 +199,13 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
       anp_.push_back(std::move(a));
     }
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
+  if (!anp_.empty()) rigid_node_ = rigid_nodes(model);
   // Fixed partitions (independent of the thread count) and the node range each touches; the
   // Morton order of nodes and tets (model.cpp) keeps the ranges short.
   std::size_t forces = 0, volumes = 0, tiles = 0;
   for (std::size_t k = 0; k < model.blocks.size(); ++k) {
     const MaterialBlock& b = model.blocks[k];
-    if (b.material.rigid()) continue;  // moved as rigid bodies (time/rigid.cpp): no stress, no step limit
+    if (!b.has_stress_pass()) continue;  // moved as rigid bodies (time/rigid.cpp) or placed by them: no stress, no step limit
     const std::size_t n = b.end - b.begin,
                       parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
     for (std::size_t p = 0; p < parts; ++p) {
@@ -261,7 +266,7 @@ std::size_t InternalForces::memory_bytes() const {
                   sizeof(double);
   b += (anp_tiles_.capacity() + anp_reference_rows_.capacity() + anp_rest_rows_.capacity() + chunk_eta_bound_.capacity()) * sizeof(double);
   b += anp_node_tile_first_.capacity() * sizeof(std::size_t) + anp_node_tiles_.capacity() * sizeof(std::uint32_t);
-  b += node_moves_.capacity() + (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
+  b += node_moves_.capacity() + rigid_node_.capacity() + (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
   for (const auto& a : anp_)
@@ -376,6 +381,10 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
                             q.node_lo,
                             viscous ? beta_ : 0.0};
       args.nodal_pressure = block_pressure_[q.block];
+      if (args.nodal_pressure) {
+        args.anp_volume_floor = b.material.volume_floor(), args.anp_floor_stiffness = b.material.small_strain_bulk();
+        args.rigid_node = rigid_node_.data();
+      }
       if (nodal_mass_) {
         args.nodal_bound = true;
         for (const AnpBlock& an : anp_)

@@ -144,6 +144,15 @@ MaterialType make_material_type() {
         "anp only: passes of node -> tet -> node averaging applied to the nodal volume ratio and to the nodal pressure; 0 is plain "
         "ANP, whose nodal pressure oscillates when nearly incompressible, each pass about halves that oscillation";
     t.parameters.keys.push_back(smoothing);
+    ValueSpec floor;
+    floor.key = "volume_floor";
+    floor.type = ValueType::number;
+    floor.min = 0, floor.max = 0.99;
+    floor.default_text = "0.5";
+    floor.doc =
+        "anp only: the tet volume ratio J below which a barrier adds the tet's own volumetric resistance (stiffness: the bulk "
+        "modulus; exactly zero above it), so that no single tet collapses while its nodes' averaged volumes hold; 0 is off";
+    t.parameters.keys.push_back(floor);
     t.evaluate_isochoric = [](const void* law, const Mat3& F, const Mat3& cof, double J, const double* data) {
       return to_stress_point(static_cast<const Law*>(law)->evaluate_isochoric(to_m3(F), to_m3(cof), J, data));
     };

@@ -52,7 +52,7 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
     if (s.type != ValueType::number && s.type != ValueType::integer) continue;
     auto it = checked.numbers.find(s.key);
     if (it == checked.numbers.end()) {
-      if (s.type == ValueType::integer) continue;  // optional: the law's default
+      if (s.type == ValueType::integer || !s.required) continue;  // optional: the law's default
       throw InputError(values.source, where + "." + s.key, s.doc, "missing");
     }
     if (s.type == ValueType::integer && it->second != std::floor(it->second))
@@ -75,6 +75,7 @@ Material Material::make(const std::string& type, const MaterialValues& values, c
   }
   if (auto it = values.numbers.find("pressure_smoothing"); it != values.numbers.end() && m.type_->volumetric_split())
     m.pressure_smoothing_ = static_cast<int>(it->second);  // checked above against the law's declaration
+  if (auto it = values.numbers.find("volume_floor"); it != values.numbers.end() && m.type_->volumetric_split()) m.volume_floor_ = it->second;
   return m;
 }
 
@@ -83,10 +84,14 @@ StressPoint Material::evaluate(const Mat3& F, const double* data) const {
   return type_->evaluate(law_.get(), F, cof, F.row(0).dot(cof.row(0)), data ? data : constants_.data());
 }
 
-StressPoint Material::evaluate_with_pressure(const Mat3& F, double pressure, const double* data) const {
+StressPoint Material::evaluate_with_pressure(const Mat3& F, double pressure, const double* data, bool floor) const {
   const Mat3 cof = cofactor(F);
   StressPoint s = type_->evaluate_isochoric(law_.get(), F, cof, F.row(0).dot(cof.row(0)), data ? data : constants_.data());
-  s.P += pressure * cof;
+  const double J = F.row(0).dot(cof.row(0));
+  const VolumeFloorBarrier barrier = anp() && floor ? volume_floor_barrier(J, volume_floor_, small_strain_bulk()) : VolumeFloorBarrier{};
+  s.P += (pressure + barrier.pressure) * cof;
+  s.W += barrier.energy;
+  s.modulus += barrier.stiffness;
   return s;
 }
 

@@ -182,6 +182,9 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j[k::pressure_smoothing] = nlohmann::json::object();
   for (const auto& b : model.blocks)
     if (b.material.anp()) j[k::pressure_smoothing][b.name] = b.material.pressure_smoothing();
+  j[k::volume_floor] = nlohmann::json::object();
+  for (const auto& b : model.blocks)
+    if (b.material.anp()) j[k::volume_floor][b.name] = b.material.volume_floor();
   j[k::bodies] = nlohmann::json::array();
   for (const auto& b : model.bodies) j[k::bodies].push_back(b.name);
   j[k::nodes] = model.num_nodes;

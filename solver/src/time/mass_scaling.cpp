@@ -34,7 +34,7 @@ void MassScaling::scale(InternalForces& forces, StressPassResult& pass, const Ri
   std::vector<double>& factor = forces.mass_factor();
   const std::vector<double>& dt2 = forces.element_dt2();
   for (const MaterialBlock& b : model_.blocks) {
-    if (b.material.rigid()) continue;  // no step of their own
+    if (!b.has_stress_pass()) continue;  // no step of their own
     const double rho = b.material.density();
     for (std::size_t e = b.begin; e < b.end; ++e) {
       if (!(dt2[e] * factor[e] < floor2)) continue;
@@ -61,7 +61,7 @@ void MassScaling::scale(InternalForces& forces, StressPassResult& pass, const Ri
   // The step with the new masses (every scaled tet now sits at the floor), as the kernel computes it.
   double best = std::numeric_limits<double>::infinity();
   for (const MaterialBlock& b : model_.blocks)
-    for (std::size_t e = b.begin; e < b.end && !b.material.rigid(); ++e) {
+    for (std::size_t e = b.begin; e < b.end && b.has_stress_pass(); ++e) {
       double dt = std::sqrt(dt2[e] * factor[e]);
       if (beta > 0) {
         const double omega = 2.0 / dt, xi = 0.5 * beta * omega;

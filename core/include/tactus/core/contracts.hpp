@@ -183,6 +183,7 @@ inline constexpr const char* materials = "materials";                    // name
 inline constexpr const char* bodies = "bodies";                          // names behind the cell field "body"
 inline constexpr const char* formulations = "formulations";              // {material name: "standard" | "anp"}
 inline constexpr const char* pressure_smoothing = "pressure_smoothing";  // {ANP material name: smoothing passes}
+inline constexpr const char* volume_floor = "volume_floor";              // {ANP material name: J below which its barrier acts}
 inline constexpr const char* steps = "steps";
 inline constexpr const char* nodes = "nodes";
 inline constexpr const char* tets = "tets";
@@ -205,9 +206,9 @@ inline constexpr const char* reactions = "reactions";  // [{name, moment_about, 
 // Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},
 // added_kinetic_energy, added_momentum}
 inline constexpr const char* mass_scaling = "mass_scaling";
-inline constexpr std::array<const char*, 19> all{status,         message,  materials,    formulations, pressure_smoothing, bodies,    steps,  nodes,
-                                                 tets,           end_time, output_times, outputs,      wall_time,          time_step, timing, energy,
-                                                 peak_von_mises, contact,  reactions};
+inline constexpr std::array<const char*, 20> all{
+    status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,
+    end_time, output_times, outputs,   wall_time,    time_step,          timing,       energy, peak_von_mises, contact, reactions};
 }  // namespace run_json
 
 }  // namespace tactus::contracts

@@ -194,6 +194,9 @@ class InternalForces {
   };
   std::vector<AnpBlock> anp_;
   std::vector<const double*> block_pressure_;  // per block: its AnpBlock's pressure, or nullptr
+  // Per node: 1 when a tet of a rigid block holds it. An ANP tet whose four nodes all are is placed
+  // by the rigid pieces (tissue in a joint's gap between two bones), so its volume floor is off.
+  std::vector<char> rigid_node_;
   std::vector<double> chunk_anp_energy_;
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);

@@ -127,6 +127,30 @@ inline constexpr double kAnpDefaultBulkToShear = 100.0;
 // nodal volume ratio and, by symmetry, to the nodal pressure (kernels/internal_force.cpp).
 inline constexpr int kAnpDefaultPressureSmoothing = 2;
 inline constexpr int kAnpMaxPressureSmoothing = 8;
+// The `volume_floor` key of ANP tets: the element volume ratio J_e below which a barrier adds the
+// element's own volumetric resistance (0: off). ANP constrains only nodal volumes, so a tet can
+// lose its volume while its nodes' averages hold (the kernel of the nodal constraint, resisted
+// only at the shear scale); the barrier closes that mode below the floor and is exactly zero
+// above it, so runs whose tets stay above the floor are unchanged to the bit.
+inline constexpr double kAnpDefaultVolumeFloor = 0.5;
+
+// The barrier of the volume floor J0 with stiffness kappa (the material's bulk modulus): per
+// reference volume b(J) = -kappa (J - J0)^2 ln(J / J0) for J < J0, else 0 (the form of the
+// incremental-potential contact barrier, C2 at J0, infinite as J -> 0). Its first derivative is
+// a pressure added to the tet's nodal one (P += b'(J) cof F); its second, a bulk stiffness, is
+// added to the tet's P-wave modulus for the stable step.
+struct VolumeFloorBarrier {
+  double energy = 0, pressure = 0, stiffness = 0;
+};
+inline VolumeFloorBarrier volume_floor_barrier(double J, double floor, double kappa) {
+  VolumeFloorBarrier b;
+  if (!(J < floor) || !(J > 0)) return b;
+  const double d = J - floor, L = std::log(J / floor);
+  b.energy = -kappa * d * d * L;
+  b.pressure = -kappa * (2.0 * d * L + d * d / J);
+  b.stiffness = -kappa * (2.0 * L + 4.0 * d / J - d * d / (J * J));
+  return b;
+}
 
 // Every registered law, in registration order.
 const std::vector<const MaterialType*>& material_types();
@@ -155,12 +179,15 @@ class Material {
   bool anp() const { return formulation_ == Formulation::anp; }
   // ANP tets: how many averaging passes smooth the nodal volume ratio and pressure (0: plain ANP).
   int pressure_smoothing() const { return pressure_smoothing_; }
+  // ANP tets: the element volume ratio below which the volume-floor barrier acts (0: off).
+  double volume_floor() const { return volume_floor_; }
   bool rigid() const { return type_->rigid; }
 
   // P, W and modulus at F; `data`: this element's data (default: the constants).
   StressPoint evaluate(const Mat3& F, const double* data = nullptr) const;
-  // The same for an ANP tet whose nodes' average pressure is `pressure` (W: the isochoric part).
-  StressPoint evaluate_with_pressure(const Mat3& F, double pressure, const double* data = nullptr) const;
+  // The same for an ANP tet whose nodes' average pressure is `pressure` (W: the isochoric part and
+  // the volume floor's barrier, unless `floor` is false: a tet placed by rigid pieces).
+  StressPoint evaluate_with_pressure(const Mat3& F, double pressure, const double* data = nullptr, bool floor = true) const;
 
  private:
   const MaterialType* type_ = nullptr;
@@ -168,6 +195,7 @@ class Material {
   std::vector<double> constants_;
   Formulation formulation_ = Formulation::standard;
   int pressure_smoothing_ = kAnpDefaultPressureSmoothing;
+  double volume_floor_ = kAnpDefaultVolumeFloor;
 };
 
 // Cauchy stress sigma = F S F^T / J = P F^T / J (paper eq. 18), and its von Mises value.

@@ -25,7 +25,13 @@ struct MaterialBlock {
   Material material;
   std::size_t begin = 0, end = 0;    // element range
   std::vector<double> element_data;  // material.type().element_data_size per element, or empty
+  // The joint gaps of a skeleton's body: its deformable tets whose four nodes all lie on its bones
+  // (rigid pieces). The joints place those nodes, so such a tet has no degree of freedom of its own;
+  // flexing a joint about its centre crushes it whatever its material (the cartilage it stands for
+  // slides), so it carries no stress and sets no step. Named "<material>_joint_gap".
+  bool joint_gap = false;
 
+  bool has_stress_pass() const { return !joint_gap && !material.rigid(); }
   bool per_element_data() const { return !element_data.empty(); }
   const double* data() const { return per_element_data() ? element_data.data() : material.constant_element_data().data(); }
   std::size_t data_stride() const { return per_element_data() ? material.type().element_data_size : 0; }
