@@ -25,6 +25,10 @@ int main(int argc, char** argv) {
   app.add_option("--min-bone-mm3", o.segment.min_bone_volume_mm3, "smallest bone kept, mm^3")->capture_default_str();
   app.add_option("--edge-voxels", o.surfaces.target_edge_voxels, "surface remeshing edge length, voxels")->capture_default_str();
   app.add_flag("--no-surfaces", no_surfaces, "skip surface extraction");
+  bool no_repair = false;
+  app.add_flag("--no-surface-repair", no_repair,
+               "do not repair a surface that fails its checks (coarser remeshing, CGAL's local self-intersection removal, a smoothed "
+               "label): it is written as <name>_failed_checks.stl at once; for the tests of that path");
   return cli::run(app, argc, argv, common, [&] {
     // Bounds a sigma, a volume and an edge can sensibly mean (finite numbers are checked by cli::run;
     // the sigma against the volume's extent once it is read, in segment_hand).
@@ -38,6 +42,7 @@ int main(int argc, char** argv) {
     if (*body_opt) o.segment.body_threshold_hu = body;
     if (*bone_opt) o.segment.bone_threshold_hu = bone;
     o.write_surfaces = !no_surfaces;
+    o.surfaces.repair = !no_repair;
     OutputFolder out(common.output, common.output_rules({stack}));
     segment::run_segment_stage(stack, out, o);
   });

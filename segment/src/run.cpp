@@ -72,12 +72,24 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
     j["bones"].push_back(
         {{"label", b.label}, {"name", s.table.at(b.label)}, {"voxels", b.voxels}, {"volume_m3", b.volume_m3}, {"centroid_m", b.centroid_m}});
   double t_surfaces = 0;
+  std::vector<std::string> warnings;
   if (o.write_surfaces) {
     const auto t2 = Clock::now();
     const auto surfaces = extract_surfaces(s.labels, s.table, out / "surfaces", o.surfaces);
     t_surfaces = seconds(t2);
     j["surfaces"] = nlohmann::json::array();
-    for (const auto& r : surfaces)
+    for (const auto& r : surfaces) {
+      if (!r.passed) warnings.push_back(r.failure);
+      nlohmann::json checks = {{"passed", r.passed},
+                               {"closed", r.closed},
+                               {"manifold", r.manifold},
+                               {"self_intersecting", r.self_intersecting},
+                               {"repairs_tried", r.repairs}};
+      if (!r.passed) {
+        checks["failed"] = r.failure;
+        checks["self_intersecting_triangle_pairs"] = r.intersecting_pairs;
+        if (r.intersecting_pairs > 0) checks["worst_self_intersection_m"] = r.worst_self_intersection;
+      }
       j["surfaces"].push_back({{"name", r.name},
                                {"stl", r.stl.filename().string()},
                                {"ply", r.ply.filename().string()},
@@ -90,8 +102,14 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
                                {"closed", r.closed},
                                {"manifold", r.manifold},
                                {"self_intersecting", r.self_intersecting},
-                               {"edge_factor", r.edge_factor}});
+                               {"edge_factor", r.edge_factor},
+                               {"checks", checks}});
+    }
   }
+  // "partial": the labels are whole, a surface is not (its file is <name>_failed_checks.stl); the
+  // exit code stays 0, so the pipeline goes on to the mesher, which reads labels.h5.
+  j["status"] = warnings.empty() ? "complete" : "partial";
+  j["warnings"] = warnings;
   j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
   write_file(out / "segment.json", j.dump(2) + '\n');
   staged.commit();

@@ -10,6 +10,7 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/repair_self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 #include <vtkCellArray.h>
@@ -121,14 +122,32 @@ double min_angle_deg(const Mesh& m) {
   return best;
 }
 
-SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char>& select, const std::string& name, const fs::path& folder,
-                           const SurfaceParams& p) {
-  SurfaceReport r;
-  r.name = name;
-  std::size_t count = 0;
-  auto image = cropped_mask(L, select, count);
-  r.label_volume_m3 = static_cast<double>(count) * L.voxel_volume();
-  if (count == 0) throw InputError("labels", name, "at least one voxel", "none");
+// The mask smoothed by [1 2 1] / 4 along each axis: the iso-surface at 0.5 of it no longer
+// follows one-voxel steps, pinches and bridges (a label's hardest places to extract).
+void smooth_mask(vtkImageData* image) {
+  int dims[3];
+  image->GetDimensions(dims);
+  auto* values = vtkFloatArray::SafeDownCast(image->GetPointData()->GetScalars());
+  std::vector<float> a(static_cast<std::size_t>(values->GetNumberOfTuples())), b(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) a[i] = values->GetValue(static_cast<vtkIdType>(i));
+  const std::size_t stride[3] = {1, static_cast<std::size_t>(dims[0]), static_cast<std::size_t>(dims[0]) * static_cast<std::size_t>(dims[1])};
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int z = 0; z < dims[2]; ++z)
+      for (int y = 0; y < dims[1]; ++y)
+        for (int x = 0; x < dims[0]; ++x) {
+          const int p[3] = {x, y, z};
+          const std::size_t i = static_cast<std::size_t>(x) + stride[1] * static_cast<std::size_t>(y) + stride[2] * static_cast<std::size_t>(z);
+          const float lo = p[axis] > 0 ? a[i - stride[axis]] : 0.0f, hi = p[axis] + 1 < dims[axis] ? a[i + stride[axis]] : 0.0f;
+          b[i] = 0.25f * lo + 0.5f * a[i] + 0.25f * hi;
+        }
+    std::swap(a, b);
+  }
+  for (std::size_t i = 0; i < a.size(); ++i) values->SetValue(static_cast<vtkIdType>(i), a[i]);
+  values->Modified();
+}
+
+// Marching cubes (flying edges) at 0.5 and windowed-sinc smoothing of a mask image.
+Mesh extract_iso_surface(vtkImageData* image, const SurfaceParams& p) {
   vtkNew<vtkFlyingEdges3D> mc;
   mc->SetInputData(image);
   mc->SetValue(0, 0.5);
@@ -144,15 +163,78 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
   smooth->FeatureEdgeSmoothingOff();
   smooth->NonManifoldSmoothingOn();
   smooth->Update();
-  const Mesh extracted = to_cgal(smooth->GetOutput());
-  // Remeshed at the target edge; a surface that fails its checks (a self-intersection where two
-  // thin parts nearly touch, seen with 0.5 x 0.5 x 2.5 mm voxels) is remeshed again at 1.5x and
-  // 2.25x the edge before tactus gives up: a coarser edge cannot fold into the gap.
-  // Bounded before remeshing: an edge far below the voxel asks for gigabytes of triangles. An
-  // equilateral triangle of edge h covers sqrt(3)/4 h^2.
-  {
-    const double h = p.target_edge_voxels * std::cbrt(L.voxel_volume());
-    const double estimate = PMP::area(extracted) / (0.433 * h * h);
+  return to_cgal(smooth->GetOutput());
+}
+
+// The checks (closed, 2-manifold, no self-intersection) and the measures of a candidate surface.
+bool check_surface(Mesh& mesh, SurfaceReport& r) {
+  r.closed = CGAL::is_closed(mesh);
+  r.manifold = CGAL::is_valid_polygon_mesh(mesh) && CGAL::is_triangle_mesh(mesh);
+  r.self_intersecting = r.manifold && PMP::does_self_intersect(mesh);
+  if (r.closed && r.manifold) PMP::orient_to_bound_a_volume(mesh);
+  r.surface_volume_m3 = r.closed && r.manifold ? PMP::volume(mesh) : 0.0;
+  r.area_m2 = PMP::area(mesh);
+  r.vertices = mesh.number_of_vertices();
+  r.triangles = mesh.number_of_faces();
+  r.min_angle_deg = min_angle_deg(mesh);
+  return r.closed && r.manifold && !r.self_intersecting;
+}
+
+// Remeshed to edge h, its volume restored to the label's. Marching cubes on a binary mask chamfers
+// every convex edge, so the enclosed volume comes out 1-3 % below the voxel count for bone-sized
+// objects; one uniform offset along the vertex normals, delta = (V_label - V_surface) / area (a
+// few hundredths of a voxel), restores it.
+Mesh remeshed(const Mesh& extracted, double h, const SurfaceParams& p, double label_volume) {
+  Mesh mesh = extracted;
+  PMP::isotropic_remeshing(faces(mesh), h, mesh, CGAL::parameters::number_of_iterations(static_cast<unsigned>(p.remeshing_iterations)));
+  mesh.collect_garbage();
+  if (CGAL::is_closed(mesh)) {
+    PMP::orient_to_bound_a_volume(mesh);
+    const double delta = (label_volume - PMP::volume(mesh)) / PMP::area(mesh);
+    std::vector<std::pair<Mesh::Vertex_index, Kernel::Vector_3>> moves;
+    for (auto v : mesh.vertices()) moves.emplace_back(v, delta * PMP::compute_vertex_normal(v, mesh));
+    for (const auto& [v, d] : moves) mesh.point(v) = mesh.point(v) + d;
+  }
+  return mesh;
+}
+
+// Where a surface that failed its checks fails: its self-intersecting triangle pairs, and the
+// place the most of them crowd around (the midpoint of the pair with the most other pairs'
+// midpoints within 3 edge lengths; the first 2,000 pairs), in the volume's frame.
+void locate_self_intersections(const Mesh& mesh, double h, SurfaceReport& r) {
+  if (!r.manifold) return;
+  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  PMP::self_intersections(mesh, std::back_inserter(pairs));
+  r.intersecting_pairs = pairs.size();
+  if (pairs.size() > 2000) pairs.resize(2000);
+  std::vector<Point> mid;
+  for (const auto& [f, g] : pairs) {
+    std::vector<Point> q;
+    for (auto face : {f, g})
+      for (auto v : CGAL::vertices_around_face(mesh.halfedge(face), mesh)) q.push_back(mesh.point(v));
+    mid.push_back(CGAL::centroid(q.begin(), q.end()));
+  }
+  std::size_t best = 0, most = 0;
+  for (std::size_t i = 0; i < mid.size(); ++i) {
+    std::size_t near = 0;
+    for (const Point& m : mid) near += CGAL::squared_distance(mid[i], m) < 9 * h * h;
+    if (near > most) most = near, best = i;
+  }
+  if (!mid.empty()) r.worst_self_intersection = {mid[best].x(), mid[best].y(), mid[best].z()};
+}
+
+SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char>& select, const std::string& name, const fs::path& folder,
+                           const SurfaceParams& p) {
+  SurfaceReport r;
+  r.name = name;
+  std::size_t count = 0;
+  auto image = cropped_mask(L, select, count);
+  r.label_volume_m3 = static_cast<double>(count) * L.voxel_volume();
+  if (count == 0) throw InputError("labels", name, "at least one voxel", "none");
+  const Mesh extracted = extract_iso_surface(image, p);
+  const double h = p.target_edge_voxels * std::cbrt(L.voxel_volume());
+  {  // bounded before remeshing: an edge far below the voxel asks for gigabytes of triangles
+    const double estimate = PMP::area(extracted) / (0.433 * h * h);  // an equilateral triangle of edge h covers sqrt(3)/4 h^2
     constexpr double kMaxTriangles = 2e7;
     if (estimate > kMaxTriangles)
       throw InputError("command line", "--edge-voxels",
@@ -160,41 +242,38 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
                            std::to_string(static_cast<long long>(estimate)) + ")",
                        std::to_string(p.target_edge_voxels));
   }
-  Mesh mesh;
-  for (const double factor : {1.0, 1.5, 2.25}) {
-    mesh = extracted;
-    const double h = factor * p.target_edge_voxels * std::cbrt(L.voxel_volume());
-    PMP::isotropic_remeshing(faces(mesh), h, mesh, CGAL::parameters::number_of_iterations(static_cast<unsigned>(p.remeshing_iterations)));
-    mesh.collect_garbage();
-    // Marching cubes on a binary mask chamfers every convex edge, so the enclosed volume comes out
-    // 1-3 % below the voxel count for bone-sized objects. Restore it with one uniform offset along
-    // the vertex normals, delta = (V_label - V_surface) / area (a few hundredths of a voxel).
-    if (CGAL::is_closed(mesh)) {
-      PMP::orient_to_bound_a_volume(mesh);
-      const double delta = (r.label_volume_m3 - PMP::volume(mesh)) / PMP::area(mesh);
-      std::vector<std::pair<Mesh::Vertex_index, Kernel::Vector_3>> moves;
-      for (auto v : mesh.vertices()) moves.emplace_back(v, delta * PMP::compute_vertex_normal(v, mesh));
-      for (const auto& [v, d] : moves) mesh.point(v) = mesh.point(v) + d;
-    }
-    r.closed = CGAL::is_closed(mesh);
-    r.manifold = CGAL::is_valid_polygon_mesh(mesh) && CGAL::is_triangle_mesh(mesh);
-    r.self_intersecting = PMP::does_self_intersect(mesh);
-    if (r.closed) PMP::orient_to_bound_a_volume(mesh);
-    r.surface_volume_m3 = r.closed ? PMP::volume(mesh) : 0.0;
-    r.area_m2 = PMP::area(mesh);
-    r.vertices = mesh.number_of_vertices();
-    r.triangles = mesh.number_of_faces();
-    r.min_angle_deg = min_angle_deg(mesh);
+  // Repairs, in order, until the checks pass (p.repair false: the first remeshing alone):
+  //  - remeshed again at 1.5x and 2.25x the edge: a coarser edge cannot fold into a thin gap (a
+  //    self-intersection where two thin parts nearly touch, seen with 0.5 x 0.5 x 2.5 mm voxels);
+  //  - CGAL's local removal of self-intersections (remove and refill the faces around them);
+  //  - extracted again from the mask smoothed by [1 2 1] / 4 per axis, which opens one-voxel
+  //    pinches and bridges (a self-touching fold), at the target edge.
+  Mesh mesh = remeshed(extracted, h, p, r.label_volume_m3);
+  bool passed = check_surface(mesh, r);
+  for (const double factor : {1.5, 2.25}) {
+    if (passed || !p.repair) break;
+    r.repairs.push_back("remeshed at " + std::to_string(factor).substr(0, 4) + "x the target edge");
+    mesh = remeshed(extracted, factor * h, p, r.label_volume_m3);
+    passed = check_surface(mesh, r);
     r.edge_factor = factor;
-    if (r.closed && r.manifold && !r.self_intersecting) break;
   }
-  if (r.edge_factor > 1) log::info() << "surface '" << name << "': remeshed at " << r.edge_factor << "x the target edge to pass its checks";
-  if (!r.closed || !r.manifold || r.self_intersecting) {
-    std::ostringstream o;
-    o << "surface '" << name << "' failed its checks (closed " << r.closed << ", 2-manifold " << r.manifold << ", self-intersecting "
-      << r.self_intersecting << "); not written";
-    throw NumericalError(o.str());
+  if (!passed && p.repair && r.manifold) {
+    r.repairs.push_back("self-intersections removed locally (CGAL remove_self_intersections)");
+    mesh = remeshed(extracted, h, p, r.label_volume_m3);
+    r.edge_factor = 1;
+    PMP::experimental::remove_self_intersections(mesh);
+    mesh.collect_garbage();
+    passed = check_surface(mesh, r);
   }
+  if (!passed && p.repair) {
+    r.repairs.push_back("extracted from the label smoothed by [1 2 1] / 4 per axis");
+    smooth_mask(image);
+    mesh = remeshed(extract_iso_surface(image, p), h, p, r.label_volume_m3);
+    passed = check_surface(mesh, r);
+  }
+  if (passed && !r.repairs.empty()) log::info() << "surface '" << name << "': passed its checks after: " << r.repairs.back();
+  r.passed = passed;
+  if (!passed) locate_self_intersections(mesh, r.edge_factor * h, r);
   // Extracted in the volume's axis-aligned frame; written in the world frame (a reflection in
   // the scanner's axes flips the triangles' turn, so they are turned back to face outwards).
   if (!is_identity(L.direction)) {
@@ -204,9 +283,24 @@ SurfaceReport make_surface(const Volume<std::uint8_t>& L, const std::vector<char
       mesh.point(v) = Point(w[0], w[1], w[2]);
     }
     if (determinant(L.direction) < 0) PMP::reverse_face_orientations(mesh);
+    if (r.intersecting_pairs > 0) r.worst_self_intersection = L.to_world(r.worst_self_intersection);
   }
-  r.stl = folder / (name + ".stl");
-  r.ply = folder / (name + ".ply");
+  // A surface that failed its checks is kept for a look, under a name no reader takes for a
+  // checked one; segment.json says what failed and where.
+  const std::string file = passed ? name : name + "_failed_checks";
+  if (!passed) {
+    std::ostringstream o;
+    o << "surface '" << name << "' failed its checks " << (p.repair ? "after every repair" : "(repairs off)") << " (closed " << r.closed
+      << ", 2-manifold " << r.manifold << ", self-intersecting " << r.self_intersecting;
+    if (r.intersecting_pairs > 0)
+      o << ": " << r.intersecting_pairs << " triangle pairs, the most around (" << 1e3 * r.worst_self_intersection[0] << ", "
+        << 1e3 * r.worst_self_intersection[1] << ", " << 1e3 * r.worst_self_intersection[2] << ") mm";
+    o << "); written as " << file << ".stl for a look, the labels are unaffected";
+    r.failure = o.str();
+    log::warn(r.failure);
+  }
+  r.stl = folder / (file + ".stl");
+  r.ply = folder / (file + ".ply");
   {  // through memory: the file itself is written with every write checked (a full disk is an error)
     std::ostringstream os(std::ios::binary);
     CGAL::IO::set_mode(os, CGAL::IO::BINARY);  // (the named parameter alone still writes ASCII in 5.5)
