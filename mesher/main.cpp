@@ -22,6 +22,7 @@
 #include "tactus/mesher/quality.hpp"
 #include "tactus/mesher/skeleton.hpp"
 #include "tactus/mesher/small_regions.hpp"
+#include "tactus/mesher/well_composed.hpp"
 
 namespace {
 
@@ -63,8 +64,12 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
   for (const auto& u : report["guarantees"]["unmet"]) {
     std::ostringstream o;
     o << "mesh: guarantee " << u["guarantee"].get<std::string>() << " not met in " << u["group"].get<std::string>() << ": "
-      << u["value"].get<double>() << " at tet " << u["element"].get<long>() << " (" << u["tets_below"].get<long>() << " tets below); "
-      << u["why"].get<std::string>() << " (quality.json \"guarantees\")";
+      << u["value"].get<double>();
+    if (u.contains("element"))
+      o << " at tet " << u["element"].get<long>() << " (" << u["tets_below"].get<long>() << " tets below)";
+    else
+      o << " near (" << u["at_m"][0].get<double>() << ", " << u["at_m"][1].get<double>() << ", " << u["at_m"][2].get<double>() << ") m";
+    o << "; " << u["why"].get<std::string>() << " (quality.json \"guarantees\")";
     tactus::log::warn(o.str());
   }
 }
@@ -213,6 +218,21 @@ nlohmann::json absorb_small_regions(Volume<std::uint8_t>& labels, const LabelTab
   return absorbed;
 }
 
+// The label configurations that touch only along a voxel edge or at a corner, resolved
+// (well_composed.hpp); what the report lists of them.
+nlohmann::json make_labels_well_composed(Volume<std::uint8_t>& labels) {
+  const mesher::WellComposedReport r = mesher::make_well_composed(labels);
+  if (r.voxels_changed > 0)
+    log::info() << "mesher: " << r.edge_pinches << " edge and " << r.vertex_pinches << " vertex pinch(es) of the labels resolved by changing "
+                << r.voxels_changed << " voxel(s) (" << static_cast<double>(r.voxels_changed) * labels.voxel_volume() * 1e9 << " mm^3)"
+                << (r.remaining ? "; " + std::to_string(r.remaining) + " left" : std::string());
+  nlohmann::json changes = nlohmann::json::array();
+  for (const auto& c : r.changes) changes.push_back({{"voxel", c.voxel}, {"from", c.from}, {"to", c.to}});
+  return {{"edge_pinches", r.edge_pinches},     {"vertex_pinches", r.vertex_pinches},
+          {"voxels_changed", r.voxels_changed}, {"volume_moved_m3", static_cast<double>(r.voxels_changed) * labels.voxel_volume()},
+          {"remaining", r.remaining},           {"changes", changes}};
+}
+
 void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   if (o.labels_file.empty()) throw CLI::RequiredError("labels");
   MeshOutput output(common.output, common.output_rules({o.labels_file}));
@@ -228,6 +248,7 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   LabelTable table;
   auto labels = read_h5<std::uint8_t>(o.labels_file, "/labels", &table);
   const nlohmann::json absorbed = o.keep_small_regions ? nlohmann::json::array() : absorb_small_regions(labels, table, o);
+  const nlohmann::json well_composed = make_labels_well_composed(labels);
   std::size_t carved = 0;  // --joint-space: the soft tissue between two bones becomes a cavity
   if (o.joint_space_mm > 0) {
     const std::vector<std::uint8_t> space = mesher::joint_gap_mask(labels, o.joint_space_mm);
@@ -239,7 +260,8 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   const auto t0 = std::chrono::steady_clock::now();
   const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
   log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
-  output.write(mesh, wave_speeds(mesh, o.speed_args), {{"absorbed_regions", absorbed}, {"joint_space_voxels", carved}});
+  output.write(mesh, wave_speeds(mesh, o.speed_args),
+               {{"absorbed_regions", absorbed}, {"joint_space_voxels", carved}, {"well_composed", well_composed}});
 }
 
 // skeleton.json of a hand mesh's bone groups.
