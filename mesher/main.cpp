@@ -61,7 +61,9 @@ void write_outputs(const tactus::TetMesh& mesh, Output& out, std::size_t first, 
   tactus::log::info() << "mesh: " << mesh.nodes.size() << " nodes, " << mesh.tets.size() << " tets; min dihedral "
                       << all["min_dihedral_deg"].get<double>() << " deg, " << 100 * all["fraction_min_dihedral_below_10deg"].get<double>()
                       << " % of tets below 10 deg" << step.str();
-  for (const auto& u : report["guarantees"]["unmet"]) {
+  nlohmann::json unmet = report["guarantees"]["unmet"];
+  for (const auto& u : report["guarantees"]["boundary_manifold"]["unmet"]) unmet.push_back(u);
+  for (const auto& u : unmet) {
     std::ostringstream o;
     o << "mesh: guarantee " << u["guarantee"].get<std::string>() << " not met in " << u["group"].get<std::string>() << ": "
       << u["value"].get<double>();

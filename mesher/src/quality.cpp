@@ -201,27 +201,31 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
     add_unmet(mesh, name, a, on_surface, goal, advice, unmet);
   }
   // The boundaries' topology: the skin and each group's own boundary, a closed 2-manifold each.
+  // Reported and warned about as a guarantee, but not yet part of "met": the mesher does not hold
+  // it on every input (a bone shell thinner than its cells, a bone reaching the skin; design.md).
   j["boundaries"] = nlohmann::json::object();
+  nlohmann::json boundary_unmet = nlohmann::json::array();
   for (const auto& [name, t] : boundary_topology(mesh)) {
     j["boundaries"][name] = {{"faces", t.faces}, {"non_manifold_edges", t.non_manifold_edges}, {"non_manifold_vertices", t.non_manifold_vertices}};
     if (t.non_manifold_edges + t.non_manifold_vertices > 0)
-      unmet.push_back({{"group", name},
-                       {"guarantee", "boundary_manifold"},
-                       {"value", t.non_manifold_edges + t.non_manifold_vertices},
-                       {"at_m", t.first_defect},
-                       {"why", "the boundary of '" + name + "' has " + std::to_string(t.non_manifold_edges) + " non-manifold edge(s) and " +
-                                   std::to_string(t.non_manifold_vertices) +
-                                   " non-manifold vertex(es): parts of it touch along an edge or at a point (a label that touches itself "
-                                   "diagonally in the voxels, or a pinch thinner than the elements)"}});
+      boundary_unmet.push_back({{"group", name},
+                                {"guarantee", "boundary_manifold"},
+                                {"value", t.non_manifold_edges + t.non_manifold_vertices},
+                                {"at_m", t.first_defect},
+                                {"why", "the boundary of '" + name + "' has " + std::to_string(t.non_manifold_edges) + " non-manifold edge(s) and " +
+                                            std::to_string(t.non_manifold_vertices) +
+                                            " non-manifold vertex(es): parts of it touch along an edge or at a point (a label that touches itself "
+                                            "diagonally in the voxels, or a pinch thinner than the elements)"}});
   }
   j["guarantees"] = {{"min_dihedral_deg", goal.min_dihedral_deg},
                      {"min_over_median_length", goal.min_length_ratio},
-                     {"boundary_manifold", true},
-                     {"scope",
-                      "every subdomain (volume group); L_e over the subdomain's median L_e; the skin and every group's own boundary a "
-                      "2-manifold (each edge in two of its faces, each vertex's faces one fan)"},
+                     {"scope", "every subdomain (volume group); L_e over the subdomain's median L_e"},
                      {"met", unmet.empty()},
-                     {"unmet", unmet}};
+                     {"unmet", unmet},
+                     {"boundary_manifold",
+                      {{"scope", "the skin and every group's own boundary a 2-manifold (each edge in two of its faces, each vertex's faces one fan)"},
+                       {"met", boundary_unmet.empty()},
+                       {"unmet", boundary_unmet}}}};
   if (nlohmann::json step = critical_step_report(mesh, wave_speed); !step.is_null()) j["critical_time_step"] = step;
   return j;
 }

@@ -44,8 +44,7 @@ std::pair<std::size_t, std::size_t> block_pinches(const Block& b) {
   if (std::all_of(b.v.begin(), b.v.end(), [&](std::uint8_t v) { return v == b.v[0]; })) return {0, 0};
   std::size_t edges = 0, vertices = 0;
   for_each_mask(b, [&](auto in) {
-    for (const auto& f : kFaces)
-      edges += in(f[0]) == in(f[3]) && in(f[1]) == in(f[2]) && in(f[0]) != in(f[1]);
+    for (const auto& f : kFaces) edges += in(f[0]) == in(f[3]) && in(f[1]) == in(f[2]) && in(f[0]) != in(f[1]);
     for (int p = 0; p < 4; ++p) {  // opposite corners p and 7 - p
       const bool m = in(p);
       bool rest = true;

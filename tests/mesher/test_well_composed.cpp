@@ -28,7 +28,9 @@ Volume<std::uint8_t> volume_of(int n, const std::function<int(int, int, int)>& l
   return v;
 }
 
-bool in_box(int x, int y, int z, int x0, int y0, int z0, int x1, int y1, int z1) { return x >= x0 && x < x1 && y >= y0 && y < y1 && z >= z0 && z < z1; }
+bool in_box(int x, int y, int z, int x0, int y0, int z0, int x1, int y1, int z1) {
+  return x >= x0 && x < x1 && y >= y0 && y < y1 && z >= z0 && z < z1;
+}
 
 struct Case {
   const char* name;
@@ -43,29 +45,37 @@ struct Case {
 std::vector<Case> cases() {
   const LabelTable tissue{{1, "soft_tissue"}}, tissue_bones{{1, "soft_tissue"}, {2, "bone_02"}, {3, "bone_03"}};
   std::vector<Case> c;
-  c.push_back({"two cubes touching along one edge", volume_of(24, [](int x, int y, int z) {
-                 return in_box(x, y, z, 3, 3, 5, 12, 12, 19) || in_box(x, y, z, 12, 12, 5, 21, 21, 19) ? 1 : 0;
-               }),
-               tissue, 14});  // 14 voxel edges along z
-  c.push_back({"two cubes touching at one corner", volume_of(24, [](int x, int y, int z) {
-                 return in_box(x, y, z, 3, 3, 3, 12, 12, 12) || in_box(x, y, z, 12, 12, 12, 21, 21, 21) ? 1 : 0;
-               }),
-               tissue, 1});
-  c.push_back({"a label pinched to one voxel", volume_of(24, [](int x, int y, int z) {
-                 return in_box(x, y, z, 2, 6, 6, 11, 18, 18) || in_box(x, y, z, 12, 6, 6, 21, 18, 18) || (x == 11 && y == 12 && z == 12) ? 1 : 0;
-               }),
+  c.push_back(
+      {"two cubes touching along one edge",
+       volume_of(24, [](int x, int y, int z) { return in_box(x, y, z, 3, 3, 5, 12, 12, 19) || in_box(x, y, z, 12, 12, 5, 21, 21, 19) ? 1 : 0; }),
+       tissue, 14});  // 14 voxel edges along z
+  c.push_back(
+      {"two cubes touching at one corner",
+       volume_of(24, [](int x, int y, int z) { return in_box(x, y, z, 3, 3, 3, 12, 12, 12) || in_box(x, y, z, 12, 12, 12, 21, 21, 21) ? 1 : 0; }),
+       tissue, 1});
+  c.push_back({"a label pinched to one voxel",
+               volume_of(24,
+                         [](int x, int y, int z) {
+                           return in_box(x, y, z, 2, 6, 6, 11, 18, 18) || in_box(x, y, z, 12, 6, 6, 21, 18, 18) || (x == 11 && y == 12 && z == 12)
+                                      ? 1
+                                      : 0;
+                         }),
                tissue, 0});
-  c.push_back({"a one-voxel sheet of tissue between two bones", volume_of(24, [](int x, int y, int z) {
-                 if (!in_box(x, y, z, 2, 2, 2, 22, 22, 22)) return 0;
-                 if (in_box(x, y, z, 5, 5, 5, 11, 19, 19)) return 2;
-                 if (in_box(x, y, z, 12, 5, 5, 18, 19, 19)) return 3;
-                 return 1;
-               }),
+  c.push_back({"a one-voxel sheet of tissue between two bones",
+               volume_of(24,
+                         [](int x, int y, int z) {
+                           if (!in_box(x, y, z, 2, 2, 2, 22, 22, 22)) return 0;
+                           if (in_box(x, y, z, 5, 5, 5, 11, 19, 19)) return 2;
+                           if (in_box(x, y, z, 12, 5, 5, 18, 19, 19)) return 3;
+                           return 1;
+                         }),
                tissue_bones, 0});
-  c.push_back({"a shell 1.2 voxels thick over a bone", volume_of(26, [](int x, int y, int z) {
-                 const double r = std::sqrt((x - 12.5) * (x - 12.5) + (y - 12.5) * (y - 12.5) + (z - 12.5) * (z - 12.5));
-                 return r < 8 ? 2 : r < 9.2 ? 1 : 0;
-               }),
+  c.push_back({"a shell 1.2 voxels thick over a bone",
+               volume_of(26,
+                         [](int x, int y, int z) {
+                           const double r = std::sqrt((x - 12.5) * (x - 12.5) + (y - 12.5) * (y - 12.5) + (z - 12.5) * (z - 12.5));
+                           return r < 8 ? 2 : r < 9.2 ? 1 : 0;
+                         }),
                tissue_bones, 0, false});
   return c;
 }
