@@ -162,6 +162,23 @@ nlohmann::json relaxation_json(const Scenario& sc, const ExplicitSolver& solver,
 
 }  // namespace
 
+namespace {
+// Names behind the "material" cell field of the results (its values index them), with each
+// block's formulation and, for ANP blocks, its pressure smoothing and volume floor.
+void add_materials(const Model& model, nlohmann::json& j) {
+  namespace k = contracts::run_json;
+  j[k::materials] = nlohmann::json::array();
+  j[k::formulations] = j[k::pressure_smoothing] = j[k::volume_floor] = nlohmann::json::object();
+  for (const auto& b : model.blocks) {
+    j[k::materials].push_back(b.name);
+    j[k::formulations][b.name] = b.material.anp() ? "anp" : "standard";
+    if (!b.material.anp()) continue;
+    j[k::pressure_smoothing][b.name] = b.material.pressure_smoothing();
+    j[k::volume_floor][b.name] = b.material.volume_floor();
+  }
+}
+}  // namespace
+
 nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
                         const nlohmann::json& failure) {
   namespace k = contracts::run_json;
@@ -174,17 +191,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
   j[k::message] = failure;
   if (sc.damping.adaptive || sc.damping.residual_tolerance > 0) j["relaxation"] = relaxation_json(sc, solver, summary);
   j["units"] = "SI (m, kg, s, Pa, J)";
-  // Names behind the "material" and "body" cell fields of the results (their values index these).
-  j[k::materials] = nlohmann::json::array();
-  for (const auto& b : model.blocks) j[k::materials].push_back(b.name);
-  j[k::formulations] = nlohmann::json::object();
-  for (const auto& b : model.blocks) j[k::formulations][b.name] = b.material.anp() ? "anp" : "standard";
-  j[k::pressure_smoothing] = nlohmann::json::object();
-  for (const auto& b : model.blocks)
-    if (b.material.anp()) j[k::pressure_smoothing][b.name] = b.material.pressure_smoothing();
-  j[k::volume_floor] = nlohmann::json::object();
-  for (const auto& b : model.blocks)
-    if (b.material.anp()) j[k::volume_floor][b.name] = b.material.volume_floor();
+  add_materials(model, j);
   j[k::bodies] = nlohmann::json::array();
   for (const auto& b : model.bodies) j[k::bodies].push_back(b.name);
   j[k::nodes] = model.num_nodes;
