@@ -359,13 +359,12 @@ class CgalImageMesher {
   // hand needs a tenth of it). If it reaches the bound, the mesh is made again without the
   // criterion and quality.json's boundary_manifold guarantee says what is left.
   void refine() {
+    // (CGAL's defaults are non_manifold() and no vertex bound, so one call serves both.)
     const auto make = [&](bool manifold, std::size_t bound, CGAL::Mesh_error_code* code) {
-      c3t3_ = manifold ? CGAL::make_mesh_3<C3t3>(domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
-                                                 CGAL::parameters::no_perturb(), CGAL::parameters::no_exude(), CGAL::parameters::manifold(),
-                                                 CGAL::parameters::mesh_3_options(CGAL::parameters::maximal_number_of_vertices = bound,
-                                                                                  CGAL::parameters::pointer_to_error_code = code))
-                       : CGAL::make_mesh_3<C3t3>(domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(),
-                                                 CGAL::parameters::no_perturb(), CGAL::parameters::no_exude());
+      c3t3_ = CGAL::make_mesh_3<C3t3>(
+          domain_, *criteria_, CGAL::parameters::no_odt(), CGAL::parameters::no_lloyd(), CGAL::parameters::no_perturb(), CGAL::parameters::no_exude(),
+          manifold ? CGAL::parameters::manifold() : CGAL::parameters::non_manifold(),
+          CGAL::parameters::mesh_3_options(CGAL::parameters::maximal_number_of_vertices = bound, CGAL::parameters::pointer_to_error_code = code));
       std::set<int> missing = missing_labels();
       for (int attempt = 0; attempt < 4 && !missing_labels().empty(); ++attempt) {
         for (int l : missing_labels()) missing.insert(l);

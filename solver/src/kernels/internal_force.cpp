@@ -161,14 +161,16 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
 
 std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
   std::vector<Mat3> sigma(m.num_elements, Mat3::Zero());  // joint gaps stay 0
-  const std::vector<char> rigid = rigid_nodes(m);
+  // An ANP tet placed by rigid pieces has no volume floor (as in the stress pass).
+  const bool any_anp = std::any_of(m.blocks.begin(), m.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
+  const std::vector<char> rigid = any_anp ? rigid_nodes(m) : std::vector<char>();
   for (const MaterialBlock& b : m.blocks) {
     if (b.joint_gap) continue;  // placed by the bones, no stress (model.hpp): sigma stays 0
     const std::vector<double> p = b.material.anp() ? anp_nodal_pressure(m, b, u) : std::vector<double>();
     for (std::size_t e = b.begin; e < b.end; ++e) {
       const std::int32_t* c = &m.conn[4 * e];
       const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, &m.grad[9 * e]);
-      const bool placed = rigid[c[0]] && rigid[c[1]] && rigid[c[2]] && rigid[c[3]];
+      const bool placed = b.material.anp() && rigid[c[0]] && rigid[c[1]] && rigid[c[2]] && rigid[c[3]];
       const Mat3 P = b.material.anp() ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), b.data_of(e), !placed).P
                                       : b.material.evaluate(F, b.data_of(e)).P;
       sigma[e] = cauchy_stress(F, P);

@@ -86,8 +86,8 @@ StressPoint Material::evaluate(const Mat3& F, const double* data) const {
 
 StressPoint Material::evaluate_with_pressure(const Mat3& F, double pressure, const double* data, bool floor) const {
   const Mat3 cof = cofactor(F);
-  StressPoint s = type_->evaluate_isochoric(law_.get(), F, cof, F.row(0).dot(cof.row(0)), data ? data : constants_.data());
   const double J = F.row(0).dot(cof.row(0));
+  StressPoint s = type_->evaluate_isochoric(law_.get(), F, cof, J, data ? data : constants_.data());
   const VolumeFloorBarrier barrier = anp() && floor ? volume_floor_barrier(J, volume_floor_, small_strain_bulk()) : VolumeFloorBarrier{};
   s.P += (pressure + barrier.pressure) * cof;
   s.W += barrier.energy;

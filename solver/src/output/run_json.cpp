@@ -160,9 +160,6 @@ nlohmann::json relaxation_json(const Scenario& sc, const ExplicitSolver& solver,
           {"final_omega", r.omega()}};
 }
 
-}  // namespace
-
-namespace {
 // Names behind the "material" cell field of the results (its values index them), with each
 // block's formulation and, for ANP blocks, its pressure smoothing and volume floor.
 void add_materials(const Model& model, nlohmann::json& j) {
@@ -177,6 +174,7 @@ void add_materials(const Model& model, nlohmann::json& j) {
     j[k::volume_floor][b.name] = b.material.volume_floor();
   }
 }
+
 }  // namespace
 
 nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSolver& solver, const RunSummary& summary, const RunPeaks& peaks,
