@@ -22,6 +22,7 @@
 #include "tactus/mesher/quality.hpp"
 #include "tactus/mesher/skeleton.hpp"
 #include "tactus/mesher/small_regions.hpp"
+#include "tactus/mesher/thickness.hpp"
 #include "tactus/mesher/well_composed.hpp"
 
 namespace {
@@ -156,6 +157,7 @@ struct ImageOptions {
   bool keep_surfaces = false, keep_small_regions = false;
   double min_region_mm3 = 0;
   double joint_space_mm = 0;
+  double min_thickness_mm = 0;
 };
 
 void add_image_options(CLI::App& app, ImageOptions& o) {
@@ -191,6 +193,10 @@ void add_image_options(CLI::App& app, ImageOptions& o) {
   app.add_option("--min-region-mm3", o.min_region_mm3,
                  "connected regions of one label (or enclosed background pockets) smaller than this go to the label they border most "
                  "(0: two tets of the bone cell size, bone-cell-size^3 / 5)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--min-thickness-mm", o.min_thickness_mm,
+                 "T: the parts of a label where no ball of diameter T fits go to the neighbouring label they share the most faces with "
+                 "(a gap or fin thinner than T; 0: none - a label thinner than its cells is then meshed finer instead)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--keep-small-regions", o.keep_small_regions, "mesh every region however small (tiny tets set the stable step)");
   app.add_option("--joint-space", o.joint_space_mm,
@@ -250,6 +256,7 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   LabelTable table;
   auto labels = read_h5<std::uint8_t>(o.labels_file, "/labels", &table);
   const nlohmann::json absorbed = o.keep_small_regions ? nlohmann::json::array() : absorb_small_regions(labels, table, o);
+  const nlohmann::json thin = mesher::fit_thin_labels(labels, table, o.p, o.min_thickness_mm, o.labels_file);
   const nlohmann::json well_composed = make_labels_well_composed(labels);
   std::size_t carved = 0;  // --joint-space: the soft tissue between two bones becomes a cavity
   if (o.joint_space_mm > 0) {
@@ -263,7 +270,7 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
   const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
   log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
   output.write(mesh, wave_speeds(mesh, o.speed_args),
-               {{"absorbed_regions", absorbed}, {"joint_space_voxels", carved}, {"well_composed", well_composed}});
+               {{"absorbed_regions", absorbed}, {"joint_space_voxels", carved}, {"well_composed", well_composed}, {"thin_regions", thin}});
 }
 
 // skeleton.json of a hand mesh's bone groups.

@@ -13,6 +13,7 @@ PACKAGES=(
   xvfb xauth chromium
   python3 python3-numpy python3-h5py python3-meshio python3-vtk9
   python3-pydicom python3-nibabel dicom3tools black python3-flake8
+  libcgal-demo
 )
 
 missing=()

@@ -166,7 +166,11 @@ double expected_tets_in(const Volume<std::uint8_t>& labels, const ImageMeshParam
       for (int i = 0; i < labels.dims[0]; ++i) {
         const auto v = labels.at(i, j, k);
         if (v == 0) continue;
-        const double own = v == contracts::kSoftTissueLabel ? soft : v >= contracts::kFirstBoneLabel ? bone : 0.0;
+        const auto fitted = p.label_cell_size_mm.find(v);
+        const double own = fitted != p.label_cell_size_mm.end() ? tets(fitted->second)
+                           : v == contracts::kSoftTissueLabel   ? soft
+                           : v >= contracts::kFirstBoneLabel    ? bone
+                                                                : 0.0;
         const std::array<double, 3> aligned{labels.origin[0] + i * labels.spacing[0], labels.origin[1] + j * labels.spacing[1],
                                             labels.origin[2] + k * labels.spacing[2]};
         n += refined > own && region.contains(aligned) ? refined : own;
@@ -329,6 +333,15 @@ class CgalImageMesher {
         size_.set_size(p.bone_cell_size_mm, 3, domain_.index_from_subdomain_index(id));
         facet_size_.set_size(p.bone_facet_size_mm, 2, domain_.index_from_surface_patch_index(Domain::Surface_patch_index(1, id)));
       }
+    // A thin label's own size, in its cells and on every surface patch it bounds (patches are
+    // (smaller label, larger label) pairs).
+    for (const auto& [id, size] : p.label_cell_size_mm) {
+      size_.set_size(size, 3, domain_.index_from_subdomain_index(id));
+      for (int other = 0; other < 256; ++other)
+        if (other != id && (other == 0 || table.count(other)))
+          facet_size_.set_size(size, 2,
+                               domain_.index_from_surface_patch_index(Domain::Surface_patch_index(std::min(id, other), std::max(id, other))));
+    }
     if (p.refine_size_mm > 0) {  // the refined region's fields (RefinedField); CGAL keeps references to them
       region_ = {&p_, &labels_, std::move(joints)};
       refined_facet_size_ = {&facet_size_, &region_, p.refine_size_mm};

@@ -73,7 +73,8 @@ struct Acc {
   std::size_t worst_angle_tet = 0, shortest_tet = 0;
   double volume = 0, min_dihedral = 180, max_dihedral = 0, min_radius_ratio = 1, max_edge_ratio = 0, min_length = 1e300;
   std::vector<double> lengths;
-  std::array<std::size_t, 18> dihedral_hist{};  // 10-degree bins of the minimum dihedral angle
+  std::vector<std::pair<double, double>> short_tets;  // (L_e, volume) of each tet, for the added mass (sorted with the lengths)
+  std::array<std::size_t, 18> dihedral_hist{};        // 10-degree bins of the minimum dihedral angle
   void add(const TetQuality& q, std::size_t e, double sliver_deg, const QualityGuarantees& goal) {
     ++tets;
     volume += q.volume;
@@ -88,14 +89,30 @@ struct Acc {
     min_radius_ratio = std::min(min_radius_ratio, q.radius_ratio);
     max_edge_ratio = std::max(max_edge_ratio, q.edge_ratio);
     lengths.push_back(q.length);
+    short_tets.emplace_back(q.length, q.volume);
     ++dihedral_hist[static_cast<std::size_t>(std::clamp(q.min_dihedral_deg / 10.0, 0.0, 17.0))];
   }
   // The figures as quality.json holds them (sorts the lengths for their median).
-  nlohmann::json to_json();
+  nlohmann::json to_json(double step_ratio);
+  // The mass, as a fraction of the subdomain's, that mass scaling adds to bring every tet's step
+  // L_e / c up to `ratio` of the median tet's: a tet's mass scales by (ratio L_median / L_e)^2,
+  // since its step grows as the square root of its mass. One density and one wave speed per
+  // subdomain, so volumes stand for masses and lengths for steps. Valid after to_json.
+  double added_mass_fraction(double ratio) const {
+    if (lengths.empty() || volume <= 0) return 0;
+    const double target = ratio * lengths[lengths.size() / 2];
+    double added = 0;
+    for (const auto& [length, v] : short_tets) {
+      if (length >= target) break;
+      added += v * ((target / length) * (target / length) - 1);
+    }
+    return added / volume;
+  }
 };
 
-nlohmann::json Acc::to_json() {
+nlohmann::json Acc::to_json(double step_ratio) {
   std::sort(lengths.begin(), lengths.end());
+  std::sort(short_tets.begin(), short_tets.end());
   const double median = lengths.empty() ? 0 : lengths[lengths.size() / 2];
   const double smallest = lengths.empty() ? 0 : lengths.front();
   return nlohmann::json{{"tets", tets},
@@ -110,6 +127,7 @@ nlohmann::json Acc::to_json() {
                         {"min_length_m", smallest},
                         {"median_length_m", median},
                         {"min_over_median_length", median > 0 ? smallest / median : 0},
+                        {"added_mass_fraction_for_step_ratio", added_mass_fraction(step_ratio)},
                         {"min_dihedral_histogram_10deg_bins", dihedral_hist}};
 }
 
@@ -135,13 +153,17 @@ void add_unmet(const TetMesh& mesh, const std::string& name, const Acc& a, const
                      {"why", surface == 4 ? advice.surface_angle : advice.interior_angle}});
   }
   const double median = a.lengths[a.lengths.size() / 2];
-  if (a.min_length < goal.min_length_ratio * median) {
+  const double added_mass = a.added_mass_fraction(goal.min_length_ratio);
+  if (a.min_length < goal.min_length_ratio * median && added_mass > goal.max_added_mass_fraction) {
     const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median) - a.lengths.begin();
     std::ostringstream why;
-    why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3 << " mm: " << advice.short_length;
+    why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3 << " mm, and mass scaling to "
+        << goal.min_length_ratio << " of the median tet's step would add " << 100 * added_mass << " % of its mass (at most "
+        << 100 * goal.max_added_mass_fraction << " %): " << advice.short_length;
     unmet.push_back({{"group", name},
                      {"guarantee", "min_over_median_length"},
                      {"value", a.min_length / median},
+                     {"added_mass_fraction", added_mass},
                      {"tets_below", below},
                      {"element", a.shortest_tet + 1},
                      {"at_m", centroid(a.shortest_tet)},
@@ -186,7 +208,7 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   j["units"] = "SI (m, m^3, s); angles in degrees; length = L_e = (sum_a |grad N_a|^2)^(-1/2)";
   j["nodes"] = mesh.nodes.size();
   j["sliver_bound_deg"] = sliver_deg;
-  j["all"] = all.to_json();
+  j["all"] = all.to_json(goal.min_length_ratio);
   j["groups"] = nlohmann::json::object();
   // Per subdomain, its figures and the guarantees: each unmet one with its worst tet, where it
   // is, and why.
@@ -197,7 +219,7 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   for (auto& [tag, a] : acc) {
     const auto* g = mesh.find_group(3, tag);
     const std::string name = g ? g->name : std::to_string(tag);
-    j["groups"][name] = a.to_json();  // sorts a.lengths
+    j["groups"][name] = a.to_json(goal.min_length_ratio);  // sorts a.lengths
     add_unmet(mesh, name, a, on_surface, goal, advice, unmet);
   }
   // The boundaries' topology: the skin and each group's own boundary, a closed 2-manifold each.
@@ -219,7 +241,10 @@ nlohmann::json quality_report(const TetMesh& mesh, const std::map<int, double>& 
   }
   j["guarantees"] = {{"min_dihedral_deg", goal.min_dihedral_deg},
                      {"min_over_median_length", goal.min_length_ratio},
-                     {"scope", "every subdomain (volume group); L_e over the subdomain's median L_e"},
+                     {"max_added_mass_fraction", goal.max_added_mass_fraction},
+                     {"scope",
+                      "every subdomain (volume group); L_e over the subdomain's median L_e (its critical step over its median tet's), "
+                      "or else the mass that mass scaling adds to reach that step ratio (added_mass_fraction_for_step_ratio)"},
                      {"met", unmet.empty()},
                      {"unmet", unmet},
                      {"boundary_manifold",

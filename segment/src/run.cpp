@@ -3,6 +3,7 @@
 #include <chrono>
 #include <fstream>
 
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/file_io.hpp"
 #include "tactus/core/log.hpp"
@@ -14,6 +15,36 @@
 namespace fs = std::filesystem;
 
 namespace tactus::segment {
+
+namespace {
+
+// How the labels came about: the imported values' mapping, or the thresholds and the steps.
+void add_steps(nlohmann::json& j, const StageOptions& o, const Segmentation& s, const std::vector<ImportedLabel>& imported) {
+  if (o.import_labels) {
+    j["imported_labels"] = nlohmann::json::array();
+    int tissue_value = 0;
+    for (const auto& l : imported) {
+      j["imported_labels"].push_back({{"value", l.value}, {"label", l.label}, {"name", l.name}, {"voxels", l.voxels}});
+      if (l.label == contracts::kSoftTissueLabel) tissue_value = l.value;
+    }
+    j["steps"] = {"label volume imported: value 0 the background, value " + std::to_string(tissue_value) +
+                  " the soft tissue (label 1), the other values labels 2.. in increasing order (imported_labels)"};
+    return;
+  }
+  j["thresholds"] = {{"body_hu", s.body_threshold_hu},         {"body_source", s.body_threshold_source},   {"bone_hu", s.bone_threshold_hu},
+                     {"bone_source", s.bone_threshold_source}, {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
+  j["steps"] = {"3-D Gaussian denoise sigma " + std::to_string(o.segment.denoise_sigma_voxels) + " voxel",
+                "body = largest 3-D component above the body threshold, holes filled",
+                "bone = body voxels above the bone threshold, marrow holes filled (3-D and in the planes across each axis)",
+                "bones split: 6-connected components of the mask eroded by " + std::to_string(o.segment.split_erosion_voxels) +
+                    " voxel, grown back; touching pieces joined again when they touch across " + std::to_string(o.segment.split_neck_ratio) +
+                    " of the smaller one's V^(2/3) or either kept less than " + std::to_string(o.segment.split_min_core_fraction) +
+                    " of itself as its eroded core",
+                "each bone closed by a box of half-width " + std::to_string(o.segment.marrow_closing_mm) + " mm (not into or next to another bone)",
+                "bone components under " + std::to_string(o.segment.min_bone_volume_mm3) + " mm^3 removed"};
+}
+
+}  // namespace
 
 nlohmann::json run_segment_stage(const fs::path& stack_folder, const fs::path& out, const StageOptions& o) {
   OutputFolder staged(out, {"tactus-segment", {stack_folder}, false});
@@ -39,7 +70,9 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   const std::array<int, 3> dims = stack.hu.dims;
   const std::array<double, 3> spacing = stack.hu.spacing;
   const double voxel_volume = stack.hu.voxel_volume();
-  const Segmentation s = segment_hand(std::move(stack.hu), o.segment);  // the HU volume is not needed after
+  std::vector<ImportedLabel> imported;
+  const Segmentation s = o.import_labels ? import_label_volume(stack.hu, o.labels, stack_folder.string(), imported)
+                                         : segment_hand(std::move(stack.hu), o.segment);  // the HU volume is not needed after
   const double t_segment = seconds(t1);
 
   write_h5(out / "labels.h5", "/labels", s.labels, &s.table);
@@ -53,17 +86,7 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   j["spacing_m"] = spacing;
   j["bit_depth"] = stack.bit_depth;
   j["input"] = stack.source;
-  j["thresholds"] = {{"body_hu", s.body_threshold_hu},         {"body_source", s.body_threshold_source},   {"bone_hu", s.bone_threshold_hu},
-                     {"bone_source", s.bone_threshold_source}, {"soft_tissue_level_hu", s.soft_tissue_hu}, {"cortical_level_hu", s.cortical_hu}};
-  j["steps"] = {"3-D Gaussian denoise sigma " + std::to_string(o.segment.denoise_sigma_voxels) + " voxel",
-                "body = largest 3-D component above the body threshold, holes filled",
-                "bone = body voxels above the bone threshold, marrow holes filled (3-D and in the planes across each axis)",
-                "bones split: 6-connected components of the mask eroded by " + std::to_string(o.segment.split_erosion_voxels) +
-                    " voxel, grown back; touching pieces joined again when they touch across " + std::to_string(o.segment.split_neck_ratio) +
-                    " of the smaller one's V^(2/3) or either kept less than " + std::to_string(o.segment.split_min_core_fraction) +
-                    " of itself as its eroded core",
-                "each bone closed by a box of half-width " + std::to_string(o.segment.marrow_closing_mm) + " mm (not into or next to another bone)",
-                "bone components under " + std::to_string(o.segment.min_bone_volume_mm3) + " mm^3 removed"};
+  add_steps(j, o, s, imported);
   j["body_volume_m3"] = static_cast<double>(s.body_voxels) * voxel_volume;
   j["bone_volume_m3"] = static_cast<double>(s.bone_voxels) * voxel_volume;
   j["specks_removed"] = s.specks_removed;
@@ -113,9 +136,12 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   j["time_s"] = {{"read", t_read}, {"segment", t_segment}, {"surfaces", t_surfaces}};
   write_file(out / "segment.json", j.dump(2) + '\n');
   staged.commit();
-  log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU (" << s.body_threshold_source
-              << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
-              << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << out.string();
+  if (o.import_labels)
+    log::info() << "segment: imported " << imported.size() - 1 << " label(s) of " << stack_folder.string() << "; wrote " << out.string();
+  else
+    log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU (" << s.body_threshold_source
+                << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
+                << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << out.string();
   return j;
 }
 

@@ -536,12 +536,73 @@ SliceStack read_metaimage(const fs::path& path) {
   return s;
 }
 
+// ---- INRIMAGE-4 ------------------------------------------------------------------------------
+
+// Inria's format, which CGAL's image meshers read: "#INRIMAGE-4#{", "KEY=value" lines, newline
+// padding to a multiple of 256 bytes, "##}\n", then the raw voxels x fastest (.inr.gz: the whole
+// file gzipped). It has no orientation: the axes are the world's, the origin XO/YO/ZO (mm; 0 when
+// absent). Lines starting with '#' (#GEOMETRY=CARTESIAN) are comments.
+SliceStack read_inrimage(const fs::path& path) {
+  const std::string file = path.string();
+  std::string raw = read_bytes(path, kMaxBytes, "INRIMAGE file");
+  const bool gz = raw.size() >= 2 && static_cast<unsigned char>(raw[0]) == 0x1F && static_cast<unsigned char>(raw[1]) == 0x8B;
+  constexpr std::size_t kMaxHeader = 64 * 256;
+  const std::string head = gz ? inflate_prefix(raw, kMaxHeader) : raw.substr(0, std::min(raw.size(), kMaxHeader));
+  if (head.rfind("#INRIMAGE-4#{\n", 0) != 0)
+    throw InputError(file, "magic", "\"#INRIMAGE-4#{\" (an INRIMAGE-4 header)", "other bytes (not an INRIMAGE file)");
+  const auto close = head.find("##}\n");
+  if (close == std::string::npos) throw InputError(file, "header", "a header closed by \"##}\" within 16 kB", "none (truncated, or not INRIMAGE)");
+  const std::size_t header_bytes = close + 4;
+  if (header_bytes % 256 != 0) throw InputError(file, "header", "a header of a multiple of 256 bytes", std::to_string(header_bytes) + " bytes");
+  std::map<std::string, std::string> f;
+  std::istringstream lines(head.substr(14, close - 14));
+  for (std::string line; std::getline(lines, line);) {
+    if (trim(line).empty() || line[0] == '#') continue;
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) throw InputError(file, "header", "KEY=value lines", line.substr(0, 60));
+    f[trim(line.substr(0, eq))] = trim(line.substr(eq + 1));
+  }
+  auto need = [&](const char* key) -> const std::string& {
+    if (!f.count(key)) throw InputError(file, key, "a " + std::string(key) + "= line", "missing");
+    return f.at(key);
+  };
+  const std::array<int, 3> dims = sizes(need("XDIM") + " " + need("YDIM") + " " + need("ZDIM"), file, "XDIM/YDIM/ZDIM");
+  if (f.count("VDIM") && f.at("VDIM") != "1") throw InputError(file, "VDIM", "1 (one scalar per voxel)", f.at("VDIM"));
+  const std::string type = lower(need("TYPE")), bits = lower(need("PIXSIZE"));
+  static const std::map<std::string, Scalar> kTypes{{"unsigned fixed 8 bits", Scalar::u8},   {"signed fixed 8 bits", Scalar::i8},
+                                                    {"unsigned fixed 16 bits", Scalar::u16}, {"signed fixed 16 bits", Scalar::i16},
+                                                    {"unsigned fixed 32 bits", Scalar::u32}, {"signed fixed 32 bits", Scalar::i32},
+                                                    {"float 32 bits", Scalar::f32},          {"float 64 bits", Scalar::f64}};
+  const auto t = kTypes.find(type + " " + bits);
+  if (t == kTypes.end())
+    throw InputError(file, "TYPE/PIXSIZE", "unsigned or signed fixed of 8, 16 or 32 bits, or float of 32 or 64 bits", type + ", " + bits);
+  // CPU: the byte order of the voxels (decm, alpha, pc: little-endian; sun, sgi: big-endian).
+  const std::string cpu = f.count("CPU") ? lower(f.at("CPU")) : "decm";
+  if (cpu != "decm" && cpu != "alpha" && cpu != "pc" && cpu != "sun" && cpu != "sgi")
+    throw InputError(file, "CPU", "decm, alpha, pc (little-endian), sun or sgi (big-endian)", cpu);
+  const bool big = cpu == "sun" || cpu == "sgi";
+  double M[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, o[3] = {0, 0, 0};
+  const char* step_keys[3] = {"VX", "VY", "VZ"};
+  const char* origin_keys[3] = {"XO", "YO", "ZO"};
+  for (int a = 0; a < 3; ++a) {
+    M[a][a] = f.count(step_keys[a]) ? numbers(f.at(step_keys[a]), 1, file, step_keys[a])[0] : 1.0;
+    if (f.count(origin_keys[a])) o[a] = numbers(f.at(origin_keys[a]), 1, file, origin_keys[a])[0];
+  }
+  SliceStack s = make_stack(dims, M, o, false, file, "VX/VY/VZ");
+  const std::size_t bytes = voxel_count(dims) * scalar_size(t->second);
+  if (gz) raw = inflate_exactly(raw, header_bytes + bytes, file, "voxels");
+  fill_voxels(s, raw.substr(std::min(raw.size(), header_bytes)), false, t->second, big, file);
+  s.source = "INRIMAGE file " + file;
+  return s;
+}
+
 std::string kind_of(const fs::path& file) {
   const std::string name = lower(file.filename().string());
   auto ends = [&](const std::string& e) { return name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0; };
   if (ends(".nii") || ends(".nii.gz")) return "nifti";
   if (ends(".nrrd") || ends(".nhdr")) return "nrrd";
   if (ends(".mha") || ends(".mhd")) return "metaimage";
+  if (ends(".inr") || ends(".inr.gz")) return "inrimage";
   return {};
 }
 
@@ -553,8 +614,11 @@ SliceStack read_volume_file(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) throw InputError(file.string(), "", "an existing CT volume file", "no such file");
   const std::string kind = kind_of(file);
-  if (kind.empty()) throw InputError(file.string(), "", "a .nii, .nii.gz, .nrrd, .nhdr, .mha or .mhd file", file.extension().string());
-  SliceStack s = kind == "nifti" ? read_nifti(file) : kind == "nrrd" ? read_nrrd(file) : read_metaimage(file);
+  if (kind.empty()) throw InputError(file.string(), "", "a .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd, .inr or .inr.gz file", file.extension().string());
+  SliceStack s = kind == "nifti"       ? read_nifti(file)
+                 : kind == "nrrd"      ? read_nrrd(file)
+                 : kind == "metaimage" ? read_metaimage(file)
+                                       : read_inrimage(file);
   s.files = 1;
   s.bit_depth = 0;
   return s;

@@ -18,6 +18,7 @@
 #include "tactus/mesher/image_mesher.hpp"
 #include "tactus/mesher/quality.hpp"
 #include "tactus/mesher/small_regions.hpp"
+#include "tactus/mesher/thickness.hpp"
 #include "tactus/mesher/well_composed.hpp"
 
 namespace tactus::testkit {
@@ -54,11 +55,12 @@ inline std::map<int, WorstTet> recomputed_quality(const TetMesh& m) {
   return worst;
 }
 
-// Meshes `labels` the way tactus-mesh does with its defaults (small regions absorbed first);
-// returns the mesh and the number of regions absorbed.
+// Meshes `labels` the way tactus-mesh does with its defaults (small regions absorbed, thin labels
+// given a finer size, pinches resolved); returns the mesh and the number of regions absorbed.
 inline std::pair<TetMesh, std::size_t> mesh_like_tactus_mesh(Volume<std::uint8_t> labels, const LabelTable& table) {
-  const mesher::ImageMeshParams p;
+  mesher::ImageMeshParams p;
   const auto absorbed = mesher::absorb_small_regions(labels, mesher::min_region_voxels(labels, 0, p.bone_cell_size_mm));
+  mesher::fit_thin_labels(labels, table, p, 0, "labels");
   mesher::make_well_composed(labels);
   return {mesher::mesh_label_volume(labels, table, p), absorbed.size()};
 }

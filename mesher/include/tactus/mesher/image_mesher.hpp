@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <map>
 // A conforming multi-material tetrahedral mesh of a label volume with CGAL's 3-D mesher
 // (labelled-image domain, paper §3.1: one continuous mesh of bones and soft tissue "without
 // interfaces"): one subdomain per label, nodes shared across every interface.
@@ -33,9 +34,12 @@ struct ImageMeshParams {
   // along each axis - a joint's gap, the tissue of its crease and the skin over it, where a
   // flexing joint squeezes one layer of tets (0: off; docs/studies/grasp.md).
   double refine_joints_mm = 0;
-  double cell_radius_edge = 3.0;    // upper bound on circumradius / shortest edge, >= 2
-  double cell_size_mm = 7.0;        // soft tissue cell circumradius bound
-  double bone_cell_size_mm = 3.5;   // the same in bones (finer)
+  double cell_radius_edge = 3.0;   // upper bound on circumradius / shortest edge, >= 2
+  double cell_size_mm = 7.0;       // soft tissue cell circumradius bound
+  double bone_cell_size_mm = 3.5;  // the same in bones (finer)
+  // Per label, a cell and facet size of its own (mm) in place of the two above: a label thinner
+  // than its cells (thickness.hpp) gets a few elements across it.
+  std::map<int, double> label_cell_size_mm;
   bool odt = false, lloyd = false;  // global optimisers (slow); perturb + exude are on by default
   bool perturb = true, exude = true;
   double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this

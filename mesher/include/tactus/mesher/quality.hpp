@@ -21,6 +21,10 @@ TetQuality tet_quality(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
 struct QualityGuarantees {
   double min_dihedral_deg = 10;
   double min_length_ratio = 0.2;
+  // The step a subdomain pays: its critical step is at least min_length_ratio of its median tet's
+  // own step (one wave speed per subdomain: the L_e ratio), or mass scaling lifts its few short tets
+  // to that step by adding at most this fraction of the subdomain's mass.
+  double max_added_mass_fraction = 0.01;
 };
 
 // What an unmet guarantee's "why" advises, per mesher: the defaults speak of the image mesher's

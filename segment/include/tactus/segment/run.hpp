@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tactus/core/output.hpp"
+#include "tactus/segment/import_labels.hpp"
 #include "tactus/segment/segment.hpp"
 #include "tactus/segment/surfaces.hpp"
 
@@ -15,7 +16,9 @@ struct StageOptions {
   SegmentParams segment;
   SurfaceParams surfaces;
   bool write_surfaces = true;
-  std::string dicom_series;  // a DICOM folder's SeriesInstanceUID (empty: its only series)
+  std::string dicom_series;    // a DICOM folder's SeriesInstanceUID (empty: its only series)
+  bool import_labels = false;  // the input is a label volume (import_labels.hpp), not a CT
+  LabelImport labels;
 };
 
 // Writes labels.h5, labels.vti, surfaces/ and segment.json into `out` and commits it; returns the

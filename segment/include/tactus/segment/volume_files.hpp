@@ -1,6 +1,7 @@
 #pragma once
 // CT volumes in single files: NIfTI-1 (.nii, .nii.gz), NRRD (.nrrd, or .nhdr with a detached
-// raw or gzip data file) and MetaImage (.mha, or .mhd with a raw data file). tactus parses these
+// raw or gzip data file), MetaImage (.mha, or .mhd with a raw data file) and INRIMAGE-4 (.inr,
+// .inr.gz; axis-aligned, no orientation). tactus parses these
 // formats itself (they are a fixed binary header or a text header before the voxels): every
 // field is checked, the voxel bytes are counted against the header before they are read, and a
 // compressed stream is inflated with a cap at the declared size. Values become HU through the
