@@ -150,8 +150,9 @@ std::map<int, LabelThickness> label_thickness(const Volume<std::uint8_t>& labels
           ++t.voxels;
           if (f.d2[x] > deepest) {
             deepest = f.d2[x];
-            t.thickest_at = labels.to_world({labels.origin[0] + (b.lo[0] + i) * labels.spacing[0], labels.origin[1] + (b.lo[1] + j) * labels.spacing[1],
-                                             labels.origin[2] + (b.lo[2] + k) * labels.spacing[2]});
+            t.thickest_at =
+                labels.to_world({labels.origin[0] + (b.lo[0] + i) * labels.spacing[0], labels.origin[1] + (b.lo[1] + j) * labels.spacing[1],
+                                 labels.origin[2] + (b.lo[2] + k) * labels.spacing[2]});
           }
         }
     t.thickness_m = 2 * std::sqrt(std::max(0.0, deepest)) + min_spacing(labels);
@@ -253,8 +254,8 @@ nlohmann::json fit_thin_labels(Volume<std::uint8_t>& labels, const LabelTable& t
       << " mm (--min-thickness-mm) given to their neighbours " << into.dump() << ", e.g. at (" << part.at[0] << ", " << part.at[1] << ", "
       << part.at[2] << ") m";
     log::warn(m.str());
-    absorbed.push_back({{"label", part.label}, {"name", name(part.label)}, {"voxels", part.voxels}, {"volume_moved_m3", moved}, {"into", into},
-                        {"at_m", part.at}});
+    absorbed.push_back(
+        {{"label", part.label}, {"name", name(part.label)}, {"voxels", part.voxels}, {"volume_moved_m3", moved}, {"into", into}, {"at_m", part.at}});
   }
   const double voxel_mm = 1e3 * std::min({labels.spacing[0], labels.spacing[1], labels.spacing[2]});
   nlohmann::json per_label = nlohmann::json::array();
@@ -264,7 +265,8 @@ nlohmann::json fit_thin_labels(Volume<std::uint8_t>& labels, const LabelTable& t
   for (const auto& [id, t] : thickness) {
     const double cell = id == contracts::kSoftTissueLabel ? p.cell_size_mm : p.bone_cell_size_mm;
     const double t_mm = t.thickness_m * 1e3;
-    nlohmann::json entry = {{"label", id}, {"name", name(id)}, {"thickness_m", t.thickness_m}, {"cell_size_m", cell * 1e-3}, {"thickest_at_m", t.thickest_at}};
+    nlohmann::json entry = {
+        {"label", id}, {"name", name(id)}, {"thickness_m", t.thickness_m}, {"cell_size_m", cell * 1e-3}, {"thickest_at_m", t.thickest_at}};
     if (t_mm < cell) {
       fitted[id] = std::max(t_mm / 3, voxel_mm);
       entry["fitted_cell_size_m"] = fitted[id] * 1e-3;

@@ -49,7 +49,7 @@ Segmentation import_label_volume(const Volume<float>& values, const LabelImport&
   for (const auto& [v, n] : count) {
     const int label = v == tissue ? contracts::kSoftTissueLabel : next++;
     auto named = options.names.find(v);
-    const std::string name = named != options.names.end() ? named->second
+    const std::string name = named != options.names.end()           ? named->second
                              : label == contracts::kSoftTissueLabel ? std::string(contracts::kSoftTissueName)
                                                                     : "label_" + std::to_string(v);
     s.table[label] = name;

@@ -82,7 +82,10 @@ TEST(Thickness, EveryLabelThinnerThanItsCellsIsRefused) {
   for (int k = 10; k < 12; ++k)
     for (int j = 2; j < 28; ++j)
       for (int i = 2; i < 28; ++i) v.at(i, j, k) = k == 10 ? 1 : 2;  // two one-voxel sheets
-  mesher::ImageMeshParams p;  // cells 7 mm and 3.5 mm
-  testkit::expect_input_error([&] { mesher::fit_thin_labels(v, {{1, "soft_tissue"}, {2, "bone_02"}}, p, 0, "labels.h5"); },
-                     {"every label thinner than one element", "'soft_tissue' 1 mm (cells 7 mm)", "'bone_02' 1 mm (cells 3.5 mm)"});
+  mesher::ImageMeshParams p;                                         // cells 7 mm and 3.5 mm
+  testkit::expect_input_error(
+      [&] {
+        mesher::fit_thin_labels(v, {{1, "soft_tissue"}, {2, "bone_02"}}, p, 0, "labels.h5");
+      },
+      {"every label thinner than one element", "'soft_tissue' 1 mm (cells 7 mm)", "'bone_02' 1 mm (cells 3.5 mm)"});
 }

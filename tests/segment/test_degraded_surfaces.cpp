@@ -72,7 +72,11 @@ TEST(SegmentDegraded, SkinThatFailsItsChecksKeepsTheLabelsAndMeshes) {
   // The labels mesh within the guarantees, as the pipeline's next stage would.
   LabelTable table;
   const Volume<std::uint8_t> labels = read_h5<std::uint8_t>(dir / "partial" / "labels.h5", "/labels", &table);
-  const auto [mesh, absorbed] = testkit::mesh_like_tactus_mesh(labels, table);
+  // Cells of 2 mm: every slab is 2.1 mm thick, and tactus-mesh refuses a volume whose every label
+  // is thinner than its cells (the defaults, 7 and 3.5 mm).
+  mesher::ImageMeshParams p;
+  p.cell_size_mm = p.bone_cell_size_mm = 2.0;
+  const auto [mesh, absorbed] = testkit::mesh_like_tactus_mesh(labels, table, p);
   std::printf("the partial segmentation's labels: %zu bones, meshed to %zu tets\n", partial["bones"].size(), mesh.tets.size());
   EXPECT_EQ(partial["bones"].size(), 2u);
   EXPECT_GT(mesh.tets.size(), 0u);

@@ -57,8 +57,7 @@ inline std::map<int, WorstTet> recomputed_quality(const TetMesh& m) {
 
 // Meshes `labels` the way tactus-mesh does with its defaults (small regions absorbed, thin labels
 // given a finer size, pinches resolved); returns the mesh and the number of regions absorbed.
-inline std::pair<TetMesh, std::size_t> mesh_like_tactus_mesh(Volume<std::uint8_t> labels, const LabelTable& table) {
-  mesher::ImageMeshParams p;
+inline std::pair<TetMesh, std::size_t> mesh_like_tactus_mesh(Volume<std::uint8_t> labels, const LabelTable& table, mesher::ImageMeshParams p = {}) {
   const auto absorbed = mesher::absorb_small_regions(labels, mesher::min_region_voxels(labels, 0, p.bone_cell_size_mm));
   mesher::fit_thin_labels(labels, table, p, 0, "labels");
   mesher::make_well_composed(labels);

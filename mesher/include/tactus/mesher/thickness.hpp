@@ -37,8 +37,8 @@ std::map<int, LabelThickness> label_thickness(const Volume<std::uint8_t>& labels
 
 struct ThinPart {
   int label = 0;
-  std::size_t voxels = 0;            // moved out of the label
-  std::map<int, std::size_t> into;   // to which labels, how many voxels
+  std::size_t voxels = 0;             // moved out of the label
+  std::map<int, std::size_t> into;    // to which labels, how many voxels
   std::array<double, 3> at{0, 0, 0};  // world position of one of its voxels (m)
 };
 

@@ -20,8 +20,8 @@ struct ImportedLabel {
 };
 
 struct LabelImport {
-  int tissue_value = -1;                  // the input value that becomes the soft tissue; -1: the most common non-zero one
-  std::map<int, std::string> names;       // by input value; unnamed values are "label_<value>"
+  int tissue_value = -1;             // the input value that becomes the soft tissue; -1: the most common non-zero one
+  std::map<int, std::string> names;  // by input value; unnamed values are "label_<value>"
 };
 
 // `values` as read (any voxel type, as floats); `file` names it in errors. Fills `imported` with
