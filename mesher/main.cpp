@@ -216,7 +216,7 @@ nlohmann::json absorb_small_regions(Volume<std::uint8_t>& labels, const LabelTab
   nlohmann::json absorbed = nlohmann::json::array();
   const std::size_t min_voxels = mesher::min_region_voxels(labels, o.min_region_mm3, o.p.bone_cell_size_mm);
   for (const auto& r : mesher::absorb_small_regions(labels, min_voxels)) {
-    const auto name = [&](int id) { return table.count(id) ? table.at(id) : id == 0 ? std::string("background") : "label " + std::to_string(id); };
+    const auto name = [&](int id) { return label_name(table, id); };
     std::ostringstream m;
     m << "mesher: a region of " << name(r.label) << " of " << r.voxels << " voxel(s) at (" << r.at[0] << ", " << r.at[1] << ", " << r.at[2]
       << ") m is below " << min_voxels << " voxels (--min-region-mm3); it becomes " << name(r.into);

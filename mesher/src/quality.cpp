@@ -72,9 +72,8 @@ struct Acc {
   std::size_t tets = 0, slivers = 0, below10 = 0, inverted = 0, below_goal_angle = 0;
   std::size_t worst_angle_tet = 0, shortest_tet = 0;
   double volume = 0, min_dihedral = 180, max_dihedral = 0, min_radius_ratio = 1, max_edge_ratio = 0, min_length = 1e300;
-  std::vector<double> lengths;
-  std::vector<std::pair<double, double>> short_tets;  // (L_e, volume) of each tet, for the added mass (sorted with the lengths)
-  std::array<std::size_t, 18> dihedral_hist{};        // 10-degree bins of the minimum dihedral angle
+  std::vector<std::pair<double, double>> lengths;  // (L_e, volume) of each tet: the volumes weigh the added mass
+  std::array<std::size_t, 18> dihedral_hist{};     // 10-degree bins of the minimum dihedral angle
   void add(const TetQuality& q, std::size_t e, double sliver_deg, const QualityGuarantees& goal) {
     ++tets;
     volume += q.volume;
@@ -88,10 +87,10 @@ struct Acc {
     max_dihedral = std::max(max_dihedral, q.max_dihedral_deg);
     min_radius_ratio = std::min(min_radius_ratio, q.radius_ratio);
     max_edge_ratio = std::max(max_edge_ratio, q.edge_ratio);
-    lengths.push_back(q.length);
-    short_tets.emplace_back(q.length, q.volume);
+    lengths.emplace_back(q.length, q.volume);
     ++dihedral_hist[static_cast<std::size_t>(std::clamp(q.min_dihedral_deg / 10.0, 0.0, 17.0))];
   }
+  double median_length() const { return lengths.empty() ? 0 : lengths[lengths.size() / 2].first; }  // once sorted
   // The figures as quality.json holds them (sorts the lengths for their median).
   nlohmann::json to_json(double step_ratio);
   // The mass, as a fraction of the subdomain's, that mass scaling adds to bring every tet's step
@@ -100,9 +99,9 @@ struct Acc {
   // subdomain, so volumes stand for masses and lengths for steps. Valid after to_json.
   double added_mass_fraction(double ratio) const {
     if (lengths.empty() || volume <= 0) return 0;
-    const double target = ratio * lengths[lengths.size() / 2];
+    const double target = ratio * median_length();
     double added = 0;
-    for (const auto& [length, v] : short_tets) {
+    for (const auto& [length, v] : lengths) {
       if (length >= target) break;
       added += v * ((target / length) * (target / length) - 1);
     }
@@ -112,9 +111,8 @@ struct Acc {
 
 nlohmann::json Acc::to_json(double step_ratio) {
   std::sort(lengths.begin(), lengths.end());
-  std::sort(short_tets.begin(), short_tets.end());
-  const double median = lengths.empty() ? 0 : lengths[lengths.size() / 2];
-  const double smallest = lengths.empty() ? 0 : lengths.front();
+  const double median = median_length();
+  const double smallest = lengths.empty() ? 0 : lengths.front().first;
   return nlohmann::json{{"tets", tets},
                         {"volume_m3", volume},
                         {"inverted", inverted},
@@ -152,10 +150,12 @@ void add_unmet(const TetMesh& mesh, const std::string& name, const Acc& a, const
                      {"nodes_on_surfaces", surface},
                      {"why", surface == 4 ? advice.surface_angle : advice.interior_angle}});
   }
-  const double median = a.lengths[a.lengths.size() / 2];
+  const double median = a.median_length();
   const double added_mass = a.added_mass_fraction(goal.min_length_ratio);
   if (a.min_length < goal.min_length_ratio * median && added_mass > goal.max_added_mass_fraction) {
-    const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median) - a.lengths.begin();
+    const auto below = std::lower_bound(a.lengths.begin(), a.lengths.end(), goal.min_length_ratio * median,
+                                        [](const std::pair<double, double>& t, double length) { return t.first < length; }) -
+                       a.lengths.begin();
     std::ostringstream why;
     why << "L_e " << a.min_length * 1e3 << " mm against the subdomain's median " << median * 1e3 << " mm, and mass scaling to "
         << goal.min_length_ratio << " of the median tet's step would add " << 100 * added_mass << " % of its mass (at most "

@@ -55,10 +55,7 @@ std::vector<AbsorbedRegion> absorb_small_regions(Volume<std::uint8_t>& labels, s
       const auto best = std::max_element(faces.begin(), faces.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
       AbsorbedRegion r;
       r.label = value, r.voxels = members.size(), r.into = best->first;
-      const std::size_t v = members.front();
-      r.at = labels.to_world({labels.origin[0] + labels.spacing[0] * static_cast<double>(v % sy),
-                              labels.origin[1] + labels.spacing[1] * static_cast<double>((v / sy) % static_cast<std::size_t>(d[1])),
-                              labels.origin[2] + labels.spacing[2] * static_cast<double>(v / sz)});
+      r.at = labels.voxel_world(members.front());
       for (std::size_t m : members) labels.data[m] = static_cast<std::uint8_t>(best->first);
       absorbed.push_back(r);
       ++changed;

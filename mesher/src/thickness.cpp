@@ -150,9 +150,7 @@ std::map<int, LabelThickness> label_thickness(const Volume<std::uint8_t>& labels
           ++t.voxels;
           if (f.d2[x] > deepest) {
             deepest = f.d2[x];
-            t.thickest_at =
-                labels.to_world({labels.origin[0] + (b.lo[0] + i) * labels.spacing[0], labels.origin[1] + (b.lo[1] + j) * labels.spacing[1],
-                                 labels.origin[2] + (b.lo[2] + k) * labels.spacing[2]});
+            t.thickest_at = labels.voxel_world(labels.index(b.lo[0] + i, b.lo[1] + j, b.lo[2] + k));
           }
         }
     t.thickness_m = 2 * std::sqrt(std::max(0.0, deepest)) + min_spacing(labels);
@@ -195,12 +193,7 @@ std::vector<ThinPart> absorb_thin_parts(Volume<std::uint8_t>& labels, double min
     if (pending.empty()) continue;
     ThinPart part;
     part.label = l;
-    {
-      const std::size_t x = pending.front();
-      part.at = labels.to_world({labels.origin[0] + static_cast<double>(x % nx) * labels.spacing[0],
-                                 labels.origin[1] + static_cast<double>(x / nx % ny) * labels.spacing[1],
-                                 labels.origin[2] + static_cast<double>(x / (nx * ny)) * labels.spacing[2]});
-    }
+    part.at = labels.voxel_world(pending.front());
     // Sweeps from the outside in: each pending voxel takes the label (not l) most of its settled
     // face neighbours have, a non-zero one before the background; decided from the sweep's start.
     std::vector<std::uint8_t> is_pending(labels.size(), 0);
@@ -243,7 +236,7 @@ std::vector<ThinPart> absorb_thin_parts(Volume<std::uint8_t>& labels, double min
 
 nlohmann::json fit_thin_labels(Volume<std::uint8_t>& labels, const LabelTable& table, ImageMeshParams& p, double min_thickness_mm,
                                const std::string& file) {
-  const auto name = [&](int id) { return table.count(id) ? table.at(id) : id == 0 ? std::string("background") : "label " + std::to_string(id); };
+  const auto name = [&](int id) { return label_name(table, id); };
   nlohmann::json absorbed = nlohmann::json::array();
   for (const auto& part : absorb_thin_parts(labels, min_thickness_mm * 1e-3)) {
     nlohmann::json into = nlohmann::json::object();
@@ -257,7 +250,7 @@ nlohmann::json fit_thin_labels(Volume<std::uint8_t>& labels, const LabelTable& t
     absorbed.push_back(
         {{"label", part.label}, {"name", name(part.label)}, {"voxels", part.voxels}, {"volume_moved_m3", moved}, {"into", into}, {"at_m", part.at}});
   }
-  const double voxel_mm = 1e3 * std::min({labels.spacing[0], labels.spacing[1], labels.spacing[2]});
+  const double voxel_mm = 1e3 * min_spacing(labels);
   nlohmann::json per_label = nlohmann::json::array();
   std::map<int, double> fitted;
   std::ostringstream thin;

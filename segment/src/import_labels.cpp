@@ -13,17 +13,17 @@ Segmentation import_label_volume(const Volume<float>& values, const LabelImport&
                                  std::vector<ImportedLabel>& imported) {
   // Counts per value; a fraction or a value past uint16 is not a label (a CT passed by mistake).
   std::map<int, std::size_t> count;
+  const std::size_t nx = static_cast<std::size_t>(values.dims[0]), ny = static_cast<std::size_t>(values.dims[1]);
   for (std::size_t i = 0; i < values.size(); ++i) {
     const float v = values.data[i];
     if (!(v >= 0 && v <= 65535 && v == std::floor(v))) {
       std::ostringstream at;
-      at << v << " at voxel (" << i % static_cast<std::size_t>(values.dims[0]) << ", "
-         << i / static_cast<std::size_t>(values.dims[0]) % static_cast<std::size_t>(values.dims[1]) << ", "
-         << i / (static_cast<std::size_t>(values.dims[0]) * static_cast<std::size_t>(values.dims[1])) << ")";
+      at << v << " at voxel (" << i % nx << ", " << i / nx % ny << ", " << i / (nx * ny) << ")";
       throw InputError(file, "voxels", "whole label numbers from 0 to 65535 (a label volume, not a CT: drop --labels for a CT)", at.str());
     }
     ++count[static_cast<int>(v)];
   }
+  const std::size_t background = count[contracts::kBackgroundLabel];
   count.erase(contracts::kBackgroundLabel);
   if (count.empty()) throw InputError(file, "voxels", "at least one non-zero label", "only background (0)");
   if (count.size() > 254) throw InputError(file, "voxels", "at most 254 distinct non-zero labels", std::to_string(count.size()));
@@ -43,7 +43,7 @@ Segmentation import_label_volume(const Volume<float>& values, const LabelImport&
   s.body_threshold_source = s.bone_threshold_source = "imported";
   s.table[contracts::kBackgroundLabel] = "background";
   imported.clear();
-  imported.push_back({0, contracts::kBackgroundLabel, "background", values.size()});
+  imported.push_back({0, contracts::kBackgroundLabel, "background", background});
   std::map<int, int> label_of{{0, contracts::kBackgroundLabel}};
   int next = contracts::kFirstBoneLabel;
   for (const auto& [v, n] : count) {
@@ -55,7 +55,6 @@ Segmentation import_label_volume(const Volume<float>& values, const LabelImport&
     s.table[label] = name;
     label_of[v] = label;
     imported.push_back({v, label, name, n});
-    imported.front().voxels -= n;
     s.body_voxels += n;
     if (label != contracts::kSoftTissueLabel) s.bone_voxels += n;
   }

@@ -50,6 +50,12 @@ struct Volume {
     for (int r = 0; r < 3; ++r) w[r] = origin[r] + direction[3 * r] * d[0] + direction[3 * r + 1] * d[1] + direction[3 * r + 2] * d[2];
     return w;
   }
+  // The world position of the centre of the voxel at flat index `v` (x fastest).
+  std::array<double, 3> voxel_world(std::size_t v) const noexcept {
+    const std::size_t nx = static_cast<std::size_t>(dims[0]), ny = static_cast<std::size_t>(dims[1]);
+    return to_world({origin[0] + spacing[0] * static_cast<double>(v % nx), origin[1] + spacing[1] * static_cast<double>(v / nx % ny),
+                     origin[2] + spacing[2] * static_cast<double>(v / (nx * ny))});
+  }
   // The same geometry (dims, spacing, origin, direction) with every voxel `fill`.
   template <class U>
   Volume<U> like(U fill = U{}) const {
@@ -73,6 +79,11 @@ void validate_direction(const Direction& d, const std::string& file, const std::
 
 // Names of the labels in a label volume: 0 background, 1 soft tissue, 2.. bones.
 using LabelTable = std::map<int, std::string>;
+// A label's name in messages: the table's, else "background" for 0, else "label <id>".
+inline std::string label_name(const LabelTable& table, int id) {
+  const auto it = table.find(id);
+  return it != table.end() ? it->second : id == 0 ? std::string("background") : "label " + std::to_string(id);
+}
 
 // Limits of what tactus accepts as a volume: voxels per axis, and the plausible physical range of
 // a voxel (0.1 um to 1 m) and of an origin (within 1 km).
