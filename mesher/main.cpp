@@ -267,10 +267,22 @@ void mesh_labels(ImageOptions o, const cli::CommonOptions& common) {
                 << static_cast<double>(carved) * labels.voxel_volume() * 1e9 << " mm^3)";
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const TetMesh mesh = mesher::mesh_label_volume(labels, table, p);
+  mesher::ImageMeshReport report;
+  const TetMesh mesh = mesher::mesh_label_volume(labels, table, p, &report);
   log::info() << "meshed in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
+  const mesher::BoundaryPinchReport& pinches = report.pinches;
+  const nlohmann::json boundary_pinches = {{"manifold_criterion_capped", report.manifold_criterion_capped},
+                                           {"defects_before", pinches.defects_before},
+                                           {"tets_relabelled", pinches.tets_relabelled},
+                                           {"tets_removed", pinches.tets_removed},
+                                           {"volume_moved_m3", pinches.volume_moved_m3},
+                                           {"defects_after", pinches.defects_after}};
   output.write(mesh, wave_speeds(mesh, o.speed_args),
-               {{"absorbed_regions", absorbed}, {"joint_space_voxels", carved}, {"well_composed", well_composed}, {"thin_regions", thin}});
+               {{"absorbed_regions", absorbed},
+                {"joint_space_voxels", carved},
+                {"well_composed", well_composed},
+                {"thin_regions", thin},
+                {"boundary_pinches", boundary_pinches}});
 }
 
 // skeleton.json of a hand mesh's bone groups.

@@ -28,6 +28,7 @@
 #include "tactus/core/stable_step.hpp"
 #include "tactus/mesher/post_passes.hpp"
 #include "tactus/mesher/quality.hpp"
+#include "tactus/mesher/well_composed.hpp"
 
 namespace tactus::mesher {
 
@@ -411,6 +412,8 @@ class CgalImageMesher {
                  : CGAL::parameters::no_exude());
   }
 
+  bool manifold_pass_capped() const { return manifold_pass_capped_; }
+
   // The complex as a TetMesh in metres: tets by label, skin and bone-interface triangles oriented
   // out of their inner material; triangle_inner: that material (0 for the outer skin).
   TetMesh extract(std::vector<int>& triangle_inner, std::map<int, std::size_t>& per_label) const;
@@ -612,9 +615,18 @@ void check_every_label_meshed(const Volume<std::uint8_t>& labels, const LabelTab
     }
 }
 
+// The last post-pass (boundary_pinches.cpp), said in the log when it had anything to do.
+BoundaryPinchReport resolve_pinches_logged(TetMesh& mesh, const PostPassParams& post) {
+  const BoundaryPinchReport r = resolve_boundary_pinches(mesh, post);
+  if (r.defects_before > 0)
+    log::info() << "mesher: " << r.defects_before << " non-manifold boundary edge(s) and vertex(es) after meshing; " << r.tets_relabelled
+                << " tet(s) relabelled and " << r.tets_removed << " removed (" << r.volume_moved_m3 * 1e9 << " mm^3), " << r.defects_after << " left";
+  return r;
+}
+
 }  // namespace
 
-TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p) {
+TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& p, ImageMeshReport* report) {
   std::vector<std::uint8_t> joints = refined_joints(labels, p);
   validate(labels, p, joints);
   CgalImageMesher cgal(labels, table, p, std::move(joints));
@@ -630,8 +642,23 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
   const double surface_move =
       1e-3 * (p.refine_size_mm > 0 && p.refine_distance_mm > 0 ? std::min(p.facet_distance_mm, p.refine_distance_mm) : p.facet_distance_mm);
   post.relocate_passes = p.relocate_passes;
-  if (p.restore_volumes) restore_volumes(mesh, labels, triangle_inner, post);
-  if (p.relocate_passes > 0) relocate_short_tets(mesh, surface_move, post);
+  // At debug level (-vv), the boundary defects after each pass: which pass makes a boundary
+  // non-manifold (each count walks every face; not paid otherwise).
+  const auto trace_defects = [&](const char* after) {
+    if (log::level() < log::Level::debug) return;
+    std::size_t n = 0;
+    for (const auto& [name, t] : boundary_topology(mesh)) n += t.non_manifold_edges + t.non_manifold_vertices;
+    log::debug() << "mesher: " << n << " boundary defects (non-manifold edges + vertices) after " << after;
+  };
+  trace_defects("CGAL");
+  if (p.restore_volumes) {
+    restore_volumes(mesh, labels, triangle_inner, post);
+    trace_defects("volume restore");
+  }
+  if (p.relocate_passes > 0) {
+    relocate_short_tets(mesh, surface_move, post);
+    trace_defects("short-tet relocation");
+  }
   if (p.peel_skin_slivers) {
     // Sweeps until nothing changes: peeling one sliver can put its neighbour flat on the skin.
     std::size_t peeled = 0;
@@ -641,6 +668,7 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
       if (n == 0) break;
     }
     log::verbose() << "mesher: peeled " << peeled << " soft-tissue slivers lying on the skin";
+    trace_defects("sliver peeling");
     if (peeled > 0 && p.relocate_passes > 0) relocate_short_tets(mesh, surface_move, post);
   }
   if (p.relocate_passes > 0) {
@@ -664,7 +692,12 @@ TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& 
       if (given > 0) left = relocate_poor_tets(mesh, surface_move, post);
     }
     log::verbose() << "mesher: " << left << " tets below the guarantees after the post-passes";
+    trace_defects("the guarantee passes");
   }
+  ImageMeshReport done;
+  done.manifold_criterion_capped = cgal.manifold_pass_capped();
+  if (p.resolve_boundary_pinches) done.pinches = resolve_pinches_logged(mesh, post);
+  if (report) *report = done;
   check_every_label_meshed(labels, table, per_label);
   // Meshed and improved in the voxels' axis-aligned frame (the relocation pass tries moves along
   // its axes); now placed where the voxels are in the world. A reflection turns every tet and

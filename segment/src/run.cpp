@@ -137,11 +137,12 @@ nlohmann::json run_segment_stage(const fs::path& stack_folder, OutputFolder& sta
   write_file(out / "segment.json", j.dump(2) + '\n');
   staged.commit();
   if (o.import_labels)
-    log::info() << "segment: imported " << imported.size() - 1 << " label(s) of " << stack_folder.string() << "; wrote " << out.string();
+    log::info() << "segment: imported " << imported.size() - 1 << " label(s) of " << stack_folder.string() << "; wrote "
+                << staged.final_path().string();
   else
     log::info() << "segment: " << s.bones.size() << " bones; thresholds body " << s.body_threshold_hu << " HU (" << s.body_threshold_source
                 << "), bone " << s.bone_threshold_hu << " HU (" << s.bone_threshold_source << "); "
-                << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << out.string();
+                << "read " << t_read << " s, segment " << t_segment << " s, surfaces " << t_surfaces << " s; wrote " << staged.final_path().string();
   return j;
 }
 

@@ -328,7 +328,7 @@ std::vector<Target> make_targets(const fs::path& work) {
       samples::write_dicom_series(samples::make_hand_phantom(p).ct, dd, o);
       t.push_back({"dicom_" + std::string(compression), dd / "IM_0005.dcm", false, [dd] { segment::read_dicom_series(dd); }});
     }
-    // NIfTI, NRRD and MetaImage headers and voxels, written by hand from the same phantom.
+    // NIfTI, NRRD, MetaImage and INRIMAGE headers and voxels, written by hand from the same phantom.
     const Volume<std::int16_t> ct = samples::make_hand_phantom(p).ct;
     const std::string voxels(reinterpret_cast<const char*>(ct.data.data()), ct.data.size() * sizeof(std::int16_t));
     const fs::path dv = work / "volumes";
@@ -342,6 +342,14 @@ std::vector<Target> make_targets(const fs::path& work) {
                                   "ElementDataFile = LOCAL\n" +
                                   voxels);
     t.push_back({"metaimage", dv / "ct.mha", true, [dv] { segment::read_volume_file(dv / "ct.mha"); }});
+    {  // INRIMAGE-4: the header padded with newlines to 256 bytes, closed by "##}"
+      std::string inr = "#INRIMAGE-4#{\nXDIM=" + std::to_string(ct.dims[0]) + "\nYDIM=" + std::to_string(ct.dims[1]) +
+                        "\nZDIM=" + std::to_string(ct.dims[2]) +
+                        "\nVDIM=1\nTYPE=signed fixed\nPIXSIZE=16 bits\nSCALE=2**0\nCPU=decm\nVX=8\nVY=8\nVZ=8\nXO=1\nYO=2\nZO=3\n";
+      inr += std::string(256 - 4 - inr.size(), '\n') + "##}\n";
+      write_file(dv / "ct.inr", inr + voxels);
+      t.push_back({"inrimage", dv / "ct.inr", true, [dv] { segment::read_volume_file(dv / "ct.inr"); }});
+    }
     std::string nifti(352, '\0');
     auto put = [&](std::size_t off, const auto& v) { std::memcpy(nifti.data() + off, &v, sizeof v); };
     put(0, std::int32_t{348});

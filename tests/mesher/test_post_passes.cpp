@@ -1,17 +1,20 @@
 // The mesher's post-passes on hand-made meshes (no CGAL): boundary triangles rebuilt from the
-// labels, volume restore, node relocation and skin-sliver peeling. Oracles: exact volumes and
-// areas of boxes, the characteristic length of a regular Kuhn cell, and counts of tets and faces.
+// labels, volume restore, node relocation, skin-sliver peeling and boundary pinches. Oracles:
+// exact volumes and areas of boxes, the characteristic length of a regular Kuhn cell, and counts
+// of tets and faces (boundary_topology's non-manifold edges and vertices).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <set>
 
 #include "tactus/core/contracts.hpp"
 #include "tactus/core/stable_step.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/mesher/post_passes.hpp"
+#include "tactus/mesher/well_composed.hpp"
 
 using namespace tactus;
 using namespace tactus::mesher;
@@ -318,4 +321,87 @@ TEST(PostPasses, EdgeRemovalTakesOutASliver) {
   EXPECT_GT(min_volume(mesh), 0);
   EXPECT_NEAR(mesh_volume(mesh), volume, 1e-12 * volume);
   EXPECT_EQ(mesh.triangles.size(), triangles);  // the outer faces stay
+}
+
+namespace {
+
+// The cell (i, j) of a box mesh's layer that a tet's centroid lies in (1 mm cells).
+std::pair<int, int> cell_of(const TetMesh& mesh, std::size_t e) {
+  double x = 0, y = 0;
+  for (int k : mesh.tets[e]) x += mesh.nodes[static_cast<std::size_t>(k)][0] / 4, y += mesh.nodes[static_cast<std::size_t>(k)][1] / 4;
+  return {static_cast<int>(x / kCell), static_cast<int>(y / kCell)};
+}
+
+std::size_t all_defects(const TetMesh& mesh) {
+  std::size_t n = 0;
+  for (const auto& [name, t] : boundary_topology(mesh)) n += t.non_manifold_edges + t.non_manifold_vertices;
+  return n;
+}
+
+double group_volume(const TetMesh& m, int group) {
+  double v = 0;
+  for (std::size_t e = 0; e < m.tets.size(); ++e)
+    if (m.tet_group[e] == group) {
+      const auto& t = m.tets[e];
+      v += tet_volume(m.nodes[static_cast<std::size_t>(t[0])], m.nodes[static_cast<std::size_t>(t[1])], m.nodes[static_cast<std::size_t>(t[2])],
+                      m.nodes[static_cast<std::size_t>(t[3])]);
+    }
+  return v;
+}
+
+}  // namespace
+
+// Two bone cells touching along one edge in a 2 x 2 x 1 box of tissue (the cells on a diagonal
+// bone, the others tissue): the bone's own boundary has four faces on the shared edge, and its
+// ends are non-manifold vertices. The pinch pass relabels tets of the smallest run around each
+// defect. Oracles: boundary_topology's count, 0 after; the body's volume (the skin) exactly kept;
+// the bone volume moved at most one cell's (1 mm^3) - a tet is a sixth of a cell.
+TEST(PostPasses, PinchPassMakesTwoCellsTouchingAlongAnEdgeManifold) {
+  TetMesh mesh = samples::make_box_mesh(2, 2, 1, 2 * kCell, 2 * kCell, kCell);
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    const auto [i, j] = cell_of(mesh, e);
+    mesh.tet_group[e] = i == j ? contracts::kFirstBoneLabel : contracts::kSoftTissueLabel;
+  }
+  rebuild_boundary_triangles(mesh);
+  const double volume = mesh_volume(mesh), bone = group_volume(mesh, contracts::kFirstBoneLabel);
+  const std::size_t before = all_defects(mesh);
+  const BoundaryPinchReport r = resolve_boundary_pinches(mesh);
+  const double moved = std::abs(group_volume(mesh, contracts::kFirstBoneLabel) - bone);
+  std::cout << "edge-touching cells: " << before << " defects (boundary_topology) -> " << all_defects(mesh) << "; the pass counted "
+            << r.defects_before << " -> " << r.defects_after << ", relabelled " << r.tets_relabelled << " tets (" << r.volume_moved_m3 * 1e9
+            << " mm^3, bone volume changed by " << moved * 1e9 << " mm^3 of a 1 mm^3 cell)\n";
+  EXPECT_GT(before, 0u);
+  EXPECT_EQ(r.defects_before, before);
+  EXPECT_EQ(all_defects(mesh), 0u);
+  EXPECT_EQ(r.defects_after, 0u);
+  EXPECT_EQ(r.tets_removed, 0u);
+  EXPECT_NEAR(mesh_volume(mesh), volume, 1e-12 * volume);
+  EXPECT_GT(moved, 0);
+  EXPECT_LE(r.volume_moved_m3, kCell * kCell * kCell * (1 + 1e-12));
+}
+
+// The body itself pinched: two cells of a 2 x 2 x 1 box touching along an edge, the other two
+// empty. The skin is non-manifold on that edge; only removing tets can open it (nothing can be
+// added outside). Oracles: 0 defects after, every node still in a tet, at most one cell's volume
+// removed, both cells still there.
+TEST(PostPasses, PinchPassOpensABodyTouchingItselfAlongAnEdge) {
+  TetMesh box = samples::make_box_mesh(2, 2, 1, 2 * kCell, 2 * kCell, kCell);
+  TetMesh mesh = box;
+  mesh.tets.clear(), mesh.tet_group.clear();
+  for (std::size_t e = 0; e < box.tets.size(); ++e)
+    if (const auto [i, j] = cell_of(box, e); i == j) mesh.tets.push_back(box.tets[e]), mesh.tet_group.push_back(contracts::kSoftTissueLabel);
+  rebuild_boundary_triangles(mesh);
+  const double volume = mesh_volume(mesh);
+  const std::size_t before = all_defects(mesh);
+  const BoundaryPinchReport r = resolve_boundary_pinches(mesh);
+  std::set<int> used;
+  for (const auto& t : mesh.tets) used.insert(t.begin(), t.end());
+  std::cout << "edge-touching body: " << before << " defects -> " << all_defects(mesh) << "; removed " << r.tets_removed << " tets ("
+            << (volume - mesh_volume(mesh)) * 1e9 << " mm^3 of 2 mm^3)\n";
+  EXPECT_GT(before, 0u);
+  EXPECT_EQ(all_defects(mesh), 0u);
+  EXPECT_GT(r.tets_removed, 0u);
+  EXPECT_EQ(used.size(), 14u);  // the two cells' 2 x 8 corners less the two on the shared edge
+  EXPECT_NEAR(volume - mesh_volume(mesh), r.volume_moved_m3, 1e-12 * volume);
+  EXPECT_LE(volume - mesh_volume(mesh), kCell * kCell * kCell * (1 + 1e-12));
 }

@@ -44,10 +44,11 @@ struct ImageMeshParams {
   bool perturb = true, exude = true;
   double exude_sliver_bound_deg = 12;  // exudation targets dihedral angles below this
   double optimiser_time_limit_s = 30;
-  int relocate_passes = 6;        // node relocation of the tets that set the stable step (0: off)
-  PostPassParams post;            // the post-passes' thresholds (post_passes.hpp)
-  bool restore_volumes = true;    // offset surfaces to the label volumes (see image_mesher.cpp)
-  bool peel_skin_slivers = true;  // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
+  int relocate_passes = 6;               // node relocation of the tets that set the stable step (0: off)
+  PostPassParams post;                   // the post-passes' thresholds (post_passes.hpp)
+  bool restore_volumes = true;           // offset surfaces to the label volumes (see image_mesher.cpp)
+  bool peel_skin_slivers = true;         // remove soft-tissue slivers lying flat on the skin (see image_mesher.cpp)
+  bool resolve_boundary_pinches = true;  // relabel or remove tets at non-manifold boundary edges and vertices (boundary_pinches.cpp)
   unsigned seed = 0;
   double max_elements = 1e7;  // refused above this many expected tets (a runaway guard; raise it knowingly)
 };
@@ -63,6 +64,14 @@ double expected_tets(const Volume<std::uint8_t>& labels, const ImageMeshParams& 
 // "bone_02"), surfaces 1001 "skin" (soft tissue / outside) and 1002 "bone_interface".
 constexpr int kSkinTag = contracts::kSkinTag, kBoneInterfaceTag = contracts::kBoneInterfaceTag;
 
-TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& params);
+// What the meshing did that quality.json reports: whether CGAL's manifold criterion reached its
+// vertex bound (the mesh then made without it), and what the tet-level pinch pass changed.
+struct ImageMeshReport {
+  bool manifold_criterion_capped = false;
+  BoundaryPinchReport pinches;
+};
+
+TetMesh mesh_label_volume(const Volume<std::uint8_t>& labels, const LabelTable& table, const ImageMeshParams& params,
+                          ImageMeshReport* report = nullptr);
 
 }  // namespace tactus::mesher

@@ -2,7 +2,8 @@
 // The mesher's post-passes on a tet mesh, after CGAL (CGAL-free: they work on TetMesh alone and
 // are tested on hand-made meshes): restoring each subdomain's volume, relocating the nodes of the
 // tets that set the explicit time step, peeling soft-tissue slivers that lie flat on the skin, and
-// rebuilding the boundary triangles from the tets' labels. Their thresholds are in PostPassParams.
+// rebuilding the boundary triangles from the tets' labels, and resolving the boundaries'
+// non-manifold edges and vertices left after meshing. Their thresholds are in PostPassParams.
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -58,5 +59,18 @@ std::size_t give_wedges_to_bone(TetMesh& mesh, const PostPassParams& p = {});
 std::size_t peel_skin_slivers(TetMesh& mesh, const PostPassParams& p = {});
 // The faces between different labels (0 = outside): skin or bone interface, oriented outward.
 void rebuild_boundary_triangles(TetMesh& mesh);
+
+// What resolve_boundary_pinches did: the non-manifold edges and vertices of the skin and of every
+// group's own boundary (as boundary_topology counts them) before and after, and the tets it
+// relabelled or removed with their volume.
+struct BoundaryPinchReport {
+  std::size_t defects_before = 0, defects_after = 0;
+  std::size_t tets_relabelled = 0, tets_removed = 0;
+  double volume_moved_m3 = 0;
+};
+// Resolves the non-manifold edges and vertices left on the boundaries by relabelling or removing
+// the tets of the smallest run around each (boundary_pinches.cpp); no node moves. The boundary
+// triangles are rebuilt when anything changed.
+BoundaryPinchReport resolve_boundary_pinches(TetMesh& mesh, const PostPassParams& p = {});
 
 }  // namespace tactus::mesher
