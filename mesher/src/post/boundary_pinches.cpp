@@ -276,8 +276,10 @@ class PinchResolver {
   }
   void undo(const std::vector<std::size_t>& run, int to, const std::vector<int>& before) {
     for (std::size_t i = 0; i < run.size(); ++i) {
-      if (to < 0) alive_[run[i]] = 1;
-      else --group_tets_[to];
+      if (to < 0)
+        alive_[run[i]] = 1;
+      else
+        --group_tets_[to];
       mesh_.tet_group[run[i]] = before[i];
       ++group_tets_[before[i]];
     }
