@@ -47,7 +47,7 @@ class PinchResolver {
       if (changed == 0) break;
     }
     r.defects_after = left;
-    if (r.tets_relabelled + r.tets_removed > 0) compact();
+    if (r.tets_relabelled + r.tets_removed > 0) keep_alive_tets(mesh_, alive_);
     return r;
   }
 
@@ -351,16 +351,6 @@ class PinchResolver {
       undo(*m.run, m.to, before);
     }
     return 0;
-  }
-
-  void compact() {
-    std::vector<std::array<int, 4>> tets;
-    std::vector<int> groups;
-    for (std::size_t e = 0; e < mesh_.tets.size(); ++e)
-      if (alive_[e]) tets.push_back(mesh_.tets[e]), groups.push_back(mesh_.tet_group[e]);
-    mesh_.tets = std::move(tets);
-    mesh_.tet_group = std::move(groups);
-    rebuild_boundary_triangles(mesh_);
   }
 
   TetMesh& mesh_;

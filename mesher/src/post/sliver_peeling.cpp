@@ -43,7 +43,7 @@ class SkinPeeler {
     std::sort(candidates.begin(), candidates.end());
     std::size_t removed = 0;
     for (const auto& [len, e] : candidates) removed += try_peel(e, len);
-    if (removed > 0) compact();
+    if (removed > 0) keep_alive_tets(mesh_, alive_);
     return removed;
   }
 
@@ -153,16 +153,6 @@ class SkinPeeler {
         alive_[other] = 1;
       }
     return 0;
-  }
-
-  void compact() {
-    std::vector<std::array<int, 4>> tets;
-    std::vector<int> groups;
-    for (std::size_t e = 0; e < mesh_.tets.size(); ++e)
-      if (alive_[e]) tets.push_back(mesh_.tets[e]), groups.push_back(mesh_.tet_group[e]);
-    mesh_.tets = std::move(tets);
-    mesh_.tet_group = std::move(groups);
-    rebuild_boundary_triangles(mesh_);
   }
 
   TetMesh& mesh_;

@@ -76,6 +76,16 @@ FaceOwners face_owners(const TetMesh& mesh) {
   return owners;
 }
 
+void keep_alive_tets(TetMesh& mesh, const std::vector<char>& alive) {
+  std::vector<std::array<int, 4>> tets;
+  std::vector<int> groups;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    if (alive[e]) tets.push_back(mesh.tets[e]), groups.push_back(mesh.tet_group[e]);
+  mesh.tets = std::move(tets);
+  mesh.tet_group = std::move(groups);
+  rebuild_boundary_triangles(mesh);
+}
+
 std::array<int, 3> sorted_face(int a, int b, int c) {
   std::array<int, 3> f{a, b, c};
   std::sort(f.begin(), f.end());

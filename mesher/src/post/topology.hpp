@@ -16,6 +16,9 @@ std::array<int, 3> sorted_face(int a, int b, int c);
 inline constexpr int kFaces[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};  // face nodes, then the opposite
 // The key of face f (a row of kFaces) of tet t.
 inline std::array<int, 3> tet_face(const std::array<int, 4>& t, const int (&f)[4]) { return sorted_face(t[f[0]], t[f[1]], t[f[2]]); }
+// Keeps the tets whose `alive` is set (in order) and rebuilds the boundary triangles.
+void keep_alive_tets(TetMesh& mesh, const std::vector<char>& alive);
+
 // The tets on each face, by key.
 using FaceOwners = std::map<std::array<int, 3>, std::vector<std::size_t>>;
 FaceOwners face_owners(const TetMesh& mesh);
