@@ -245,7 +245,8 @@ int main(int argc, char** argv) {
   int rounds = 5;
   auto* tp = app.add_subcommand("throughput", "stress-pass throughput (vector and scalar kernels) and memory per tet");
   tp->add_option("--cells", sizes, "cells per box edge (6 n^3 tets)")->capture_default_str();
-  tp->add_option("--materials", materials, "laws, or <law>/anp, <law>/anp<smoothing passes> and <law>/standard; +nofloor: the ANP volume floor off")->capture_default_str();
+  tp->add_option("--materials", materials, "laws, or <law>/anp, <law>/anp<smoothing passes> and <law>/standard; +nofloor: the ANP volume floor off")
+      ->capture_default_str();
   tp->add_option("--rounds", rounds, "timings per rate (the median is printed)")->capture_default_str()->check(CLI::Range(1, 100));
   auto* cb = app.add_subcommand("cube", "whole-run neo_hookean cube (48,000 tets, 2,000 steps)");
   cb->add_option("--work", work, "folder for the mesh and results")->capture_default_str();

@@ -115,6 +115,17 @@ std::string labels_of(const std::vector<BoneShape>& bones, const std::vector<std
   return s.str();
 }
 
+// What the chain refusals add when the hand has fewer bone groups than a hand's 27 bones: two
+// bones closer than about two voxels fuse in the segmentation (the phantom at 1.2 mm voxels has
+// 26, two carpals one elongated group that passes for a long bone; at 1.5 mm 21), and a fused pair
+// breaks the chains. Not a refusal by itself: a scan may hold part of a hand, or sesamoids more.
+std::string fused_bones_hint(std::size_t groups) {
+  constexpr std::size_t kHandBones = 27;
+  if (groups >= kHandBones) return "";
+  return " (the mesh has " + std::to_string(groups) + " bone groups where a hand has 27: bones closer than about two voxels fuse " +
+         "in the segmentation, so segment at a finer voxel or name the groups with --names)";
+}
+
 // A long bone (phalanx, metacarpal) spreads at least twice as far along its axis as across it; a
 // carpal is compact (the phantom's: 1.6, its phalanges 3 and more).
 constexpr double kLongBone = 2.0;
@@ -156,21 +167,22 @@ std::vector<Digit> chains(const std::vector<BoneShape>& bones, const std::vector
     }
     if (!at_carpal)
       throw InputError(source, "bones " + labels_of(bones, d.bones),
-                       "a chain of long bones that ends on a carpal (a compact bone); give their names with --names", "it does not reach one");
+                       "a chain of long bones that ends on a carpal (a compact bone); give their names with --names",
+                       "it does not reach one" + fused_bones_hint(bones.size()));
     if (d.bones.size() == 4)
       fingers.push_back(d);
     else if (d.bones.size() == 3)
       thumbs.push_back(d);
     else
       throw InputError(source, "bones " + labels_of(bones, d.bones), "chains of 4 bones (a finger) or 3 (the thumb); give their names with --names",
-                       "a chain of " + std::to_string(d.bones.size()));
+                       "a chain of " + std::to_string(d.bones.size()) + fused_bones_hint(bones.size()));
   }
   if (fingers.size() != 4 || thumbs.size() != 1) {
     std::vector<std::size_t> all;
     for (const auto* set : {&fingers, &thumbs})
       for (const auto& d : *set) all.insert(all.end(), d.bones.begin(), d.bones.end());
     throw InputError(source, "bones " + labels_of(bones, all), "four finger chains and one thumb chain; give their names with --names",
-                     std::to_string(fingers.size()) + " and " + std::to_string(thumbs.size()));
+                     std::to_string(fingers.size()) + " and " + std::to_string(thumbs.size()) + fused_bones_hint(bones.size()));
   }
   // Index to little: by the metacarpals' distance from the thumb's.
   const V thumb = bones[thumbs[0].bones.back()].centroid;
