@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -617,7 +618,10 @@ void check_every_label_meshed(const Volume<std::uint8_t>& labels, const LabelTab
 
 // The last post-pass (boundary_pinches.cpp), said in the log when it had anything to do.
 BoundaryPinchReport resolve_pinches_logged(TetMesh& mesh, const PostPassParams& post) {
+  const auto start = std::chrono::steady_clock::now();
   const BoundaryPinchReport r = resolve_boundary_pinches(mesh, post);
+  log::verbose() << "mesher: the boundary pinch pass took " << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+                 << " s";
   if (r.defects_before > 0)
     log::info() << "mesher: " << r.defects_before << " non-manifold boundary edge(s) and vertex(es) after meshing; " << r.tets_relabelled
                 << " tet(s) relabelled and " << r.tets_removed << " removed (" << r.volume_moved_m3 * 1e9 << " mm^3), " << r.defects_after << " left";
