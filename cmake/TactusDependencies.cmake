@@ -33,6 +33,20 @@ if(NOT TARGET tactus_hdf5)
     INTERFACE_COMPILE_DEFINITIONS "${HDF5_C_DEFINITIONS}")
 endif()
 
+# METIS 5 partitions the solver's atoms among ranks (solver/decomposition.hpp).
+find_path(METIS_INCLUDE_DIR metis.h)
+find_library(METIS_LIBRARY metis)
+if(METIS_INCLUDE_DIR AND METIS_LIBRARY)
+  set(METIS_FOUND TRUE)
+endif()
+tactus_require(METIS libmetis-dev)
+if(NOT TARGET tactus_metis)
+  add_library(tactus_metis INTERFACE IMPORTED)
+  set_target_properties(tactus_metis PROPERTIES
+    INTERFACE_INCLUDE_DIRECTORIES "${METIS_INCLUDE_DIR}"
+    INTERFACE_LINK_LIBRARIES "${METIS_LIBRARY}")
+endif()
+
 find_path(GMSH_INCLUDE_DIR gmsh.h)
 find_library(GMSH_LIBRARY gmsh)
 if(GMSH_INCLUDE_DIR AND GMSH_LIBRARY)

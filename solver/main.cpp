@@ -12,6 +12,8 @@
 #include "tactus/core/log.hpp"
 #include "tactus/core/staged_output.hpp"
 #include "tactus/solver/checkpoint.hpp"
+#include "tactus/solver/decomposition.hpp"
+#include "tactus/solver/model_build.hpp"
 #include "tactus/solver/reference.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
@@ -60,20 +62,25 @@ void add_solve_options(CLI::App& app, SolveOptions& o) {
 
 // The subcommands that print a reference or evaluate one material; run() does the one parsed.
 struct Tools {
-  CLI::App *keys, *results_reference, *mesh_plan, *material_point;
+  CLI::App *keys, *results_reference, *mesh_plan, *material_point, *decompose;
   bool results_json = false;
   std::string plan_scenario, plan_meshes;
   std::vector<std::string> plan_overrides;
   std::string mt_scenario, mt_material, mt_mode = "uniaxial", mt_output;
   double mt_max = 1.3;
   int mt_samples = 30;
+  std::string dc_scenario, dc_meshes;
+  std::vector<std::string> dc_overrides;
+  int dc_ranks = 2;
+  std::size_t dc_atom_tets = 128;
 
   explicit Tools(CLI::App& app)
       : keys(app.add_subcommand("keys", "print the reference of every scenario key (Markdown)")),
         results_reference(app.add_subcommand("results-reference", "print the reference of the result files (Markdown, or --json)")),
         mesh_plan(app.add_subcommand("mesh-plan",
                                      "print the scenario's [[pipeline.meshes]] and the files its bodies read, as JSON (what tactus-pipeline runs)")),
-        material_point(app.add_subcommand("material-point", "Cauchy stress vs stretch of one material of a scenario, as CSV")) {
+        material_point(app.add_subcommand("material-point", "Cauchy stress vs stretch of one material of a scenario, as CSV")),
+        decompose(app.add_subcommand("decompose", "split the scenario's model into ranks (METIS on atoms of tets) and print the quality")) {
     results_reference->add_flag("--json", results_json, "as JSON (what the Python tools read)");
     mesh_plan->add_option("scenario", plan_scenario, "scenario.toml")->required();
     mesh_plan->add_option("--meshes", plan_meshes, "the folder the mesh and fibre paths are relative to (default: the scenario's)");
@@ -87,6 +94,13 @@ struct Tools {
     material_point->add_option("--max", mt_max, "largest stretch (or shear gamma)")->capture_default_str();
     material_point->add_option("--samples", mt_samples, "number of increments")->capture_default_str();
     material_point->add_option("-o,--output", mt_output, "CSV file (default: standard output)");
+    decompose->add_option("scenario", dc_scenario, "scenario.toml")->required()->check(CLI::ExistingFile);
+    decompose->add_option("--ranks", dc_ranks, "number of ranks")->capture_default_str();
+    decompose->add_option("--atom-tets", dc_atom_tets, "tets per atom (a block's last atom may be smaller)")->capture_default_str();
+    decompose->add_option("--meshes", dc_meshes, "the folder the mesh and fibre paths are relative to (default: the scenario's)");
+    decompose->add_option("--set", dc_overrides, "KEY=VALUE: replace one scenario value, as tactus-solve --set (repeatable)")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   }
 
   // False when no subcommand was given (the run itself is wanted).
@@ -97,6 +111,11 @@ struct Tools {
       std::cout << (results_json ? solver::results_reference_json().dump(2) + "\n" : solver::results_reference_markdown());
     } else if (mesh_plan->parsed()) {
       std::cout << solver::mesh_plan_json(solver::read_scenario(plan_scenario, plan_meshes, plan_overrides));
+    } else if (decompose->parsed()) {
+      if (dc_atom_tets < 1 || dc_atom_tets > 1000000)
+        throw InputError("command line", "--atom-tets", "1 to 1,000,000 tets", std::to_string(dc_atom_tets));
+      const solver::Model model = solver::build_model(solver::read_scenario(dc_scenario, dc_meshes, dc_overrides));
+      std::cout << solver::format_decomposition(solver::decompose(model, dc_ranks, dc_atom_tets, "--ranks"));
     } else if (material_point->parsed()) {
       const std::string csv = solver::material_point_csv(solver::read_scenario(mt_scenario), mt_material, mt_mode, mt_max, mt_samples);
       if (mt_output.empty()) {

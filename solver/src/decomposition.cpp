@@ -1,0 +1,160 @@
+#include "tactus/solver/decomposition.hpp"
+
+#include <metis.h>
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <sstream>
+
+#include "tactus/core/error.hpp"
+
+namespace tactus::solver {
+
+namespace {
+
+int tet_cost(const MaterialBlock& b) {
+  if (!b.has_stress_pass()) return kRigidCost;
+  return b.material.anp() ? kAnpCost : kStandardCost;
+}
+
+// Faces shared by two tets, as (tet, tet) pairs in face order.
+std::vector<std::pair<std::size_t, std::size_t>> shared_faces(const Model& m) {
+  const std::size_t tets = m.conn.size() / 4;
+  std::vector<std::pair<std::array<std::int32_t, 3>, std::size_t>> faces;
+  faces.reserve(4 * tets);
+  for (std::size_t e = 0; e < tets; ++e)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::array<std::int32_t, 3> f{};
+      for (int k = 0, i = 0; k < 4; ++k)
+        if (k != skip) f[static_cast<std::size_t>(i++)] = m.conn[4 * e + static_cast<std::size_t>(k)];
+      std::sort(f.begin(), f.end());
+      faces.push_back({f, e});
+    }
+  std::sort(faces.begin(), faces.end());
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t i = 0; i + 1 < faces.size(); ++i)
+    if (faces[i].first == faces[i + 1].first) pairs.push_back({faces[i].second, faces[i + 1].second}), ++i;
+  return pairs;
+}
+
+// The atoms' dual graph in METIS's compressed form, edges weighted by the faces two atoms share.
+struct AtomGraph {
+  std::vector<idx_t> xadj{0}, adjncy, adjwgt;
+};
+AtomGraph atom_graph(const Decomposition& d, const std::vector<std::pair<std::size_t, std::size_t>>& faces) {
+  std::vector<std::map<std::uint32_t, idx_t>> links(d.atom_cost.size());
+  for (const auto& [a, b] : faces) {
+    const std::uint32_t x = d.tet_atom[a], y = d.tet_atom[b];
+    if (x == y) continue;
+    ++links[x][y], ++links[y][x];
+  }
+  AtomGraph g;
+  for (const auto& l : links) {
+    for (const auto& [other, w] : l) g.adjncy.push_back(static_cast<idx_t>(other)), g.adjwgt.push_back(w);
+    g.xadj.push_back(static_cast<idx_t>(g.adjncy.size()));
+  }
+  return g;
+}
+
+// Whether every atom reaches every other through the graph (METIS refuses a contiguous partition
+// of a disconnected graph: several bodies).
+bool connected(const AtomGraph& g) {
+  const std::size_t n = g.xadj.size() - 1;
+  std::vector<char> seen(n, 0);
+  std::vector<std::size_t> stack{0};
+  seen[0] = 1;
+  std::size_t reached = 1;
+  while (!stack.empty()) {
+    const std::size_t a = stack.back();
+    stack.pop_back();
+    for (idx_t k = g.xadj[a]; k < g.xadj[a + 1]; ++k) {
+      const auto b = static_cast<std::size_t>(g.adjncy[static_cast<std::size_t>(k)]);
+      if (!seen[b]) seen[b] = 1, ++reached, stack.push_back(b);
+    }
+  }
+  return reached == n;
+}
+
+void measure(const Model& m, const std::vector<std::pair<std::size_t, std::size_t>>& faces, Decomposition& d) {
+  const std::size_t tets = m.conn.size() / 4;
+  const auto rank_of = [&](std::size_t e) { return d.atom_rank[d.tet_atom[e]]; };
+  d.edge_cut_faces = 0;
+  for (const auto& [a, b] : faces) d.edge_cut_faces += rank_of(a) != rank_of(b);
+  const auto ranks = static_cast<std::size_t>(d.ranks);
+  d.rank_cost.assign(ranks, 0);
+  d.rank_tets.assign(ranks, 0);
+  d.halo_nodes.assign(ranks, 0);
+  for (std::size_t atom = 0; atom < d.atom_rank.size(); ++atom) d.rank_cost[static_cast<std::size_t>(d.atom_rank[atom])] += d.atom_cost[atom];
+  std::vector<std::int32_t> first(m.num_nodes, -1);  // the first rank seen at each node, -2 when two are
+  for (std::size_t e = 0; e < tets; ++e) {
+    const std::int32_t r = rank_of(e);
+    ++d.rank_tets[static_cast<std::size_t>(r)];
+    for (int k = 0; k < 4; ++k) {
+      std::int32_t& f = first[static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(k)])];
+      f = f == -1 ? r : f == r ? r : -2;
+    }
+  }
+  std::vector<std::vector<char>> holds(ranks, std::vector<char>(m.num_nodes, 0));
+  for (std::size_t e = 0; e < tets; ++e)
+    for (int k = 0; k < 4; ++k)
+      holds[static_cast<std::size_t>(rank_of(e))][static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(k)])] = 1;
+  for (std::size_t r = 0; r < ranks; ++r)
+    for (std::size_t n = 0; n < m.num_nodes; ++n) d.halo_nodes[r] += holds[r][n] && first[n] == -2;
+  std::int64_t total = 0, heaviest = 0;
+  for (const std::int64_t c : d.rank_cost) total += c, heaviest = std::max(heaviest, c);
+  d.load_imbalance = total > 0 ? static_cast<double>(heaviest) * static_cast<double>(ranks) / static_cast<double>(total) - 1 : 0;
+}
+
+}  // namespace
+
+Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, const std::string& what) {
+  if (atom_tets < 1) throw InputError("decomposition", "atom size", "at least one tet", "0");
+  Decomposition d;
+  d.ranks = ranks;
+  d.atom_tets = atom_tets;
+  const std::size_t tets = model.conn.size() / 4;
+  d.tet_atom.assign(tets, 0);
+  for (const MaterialBlock& b : model.blocks)
+    for (std::size_t start = b.begin; start < b.end; start += atom_tets) {
+      const std::size_t end = std::min(b.end, start + atom_tets);
+      const auto atom = static_cast<std::uint32_t>(d.atom_cost.size());
+      for (std::size_t e = start; e < end; ++e) d.tet_atom[e] = atom;
+      d.atom_cost.push_back(static_cast<std::int64_t>(end - start) * tet_cost(b));
+    }
+  const std::size_t atoms = d.atom_cost.size();
+  if (ranks < 1 || static_cast<std::size_t>(ranks) > atoms)
+    throw InputError("command line", what,
+                     "1 to " + std::to_string(atoms) + " ranks (one atom of " + std::to_string(atom_tets) + " tets each at least)",
+                     std::to_string(ranks));
+  d.atom_rank.assign(atoms, 0);
+  const auto faces = shared_faces(model);
+  if (ranks > 1) {
+    AtomGraph g = atom_graph(d, faces);
+    std::vector<idx_t> weight(d.atom_cost.begin(), d.atom_cost.end()), part(atoms, 0);
+    idx_t n = static_cast<idx_t>(atoms), constraints = 1, parts = ranks, cut = 0;
+    idx_t options[METIS_NOPTIONS];
+    METIS_SetDefaultOptions(options);
+    options[METIS_OPTION_SEED] = 1;                       // the same parts on every run and every rank
+    options[METIS_OPTION_UFACTOR] = 30;                   // at most 3 % above the mean cost (METIS's tolerance, in per mille)
+    options[METIS_OPTION_CONTIG] = connected(g) ? 1 : 0;  // each rank's atoms connected where the graph is (one body)
+    options[METIS_OPTION_NUMBERING] = 0;
+    const int status = METIS_PartGraphKway(&n, &constraints, g.xadj.data(), g.adjncy.data(), weight.data(), nullptr, g.adjwgt.data(), &parts, nullptr,
+                                           nullptr, options, &cut, part.data());
+    if (status != METIS_OK) throw NumericalError("decomposition: METIS failed (status " + std::to_string(status) + ")");
+    for (std::size_t a = 0; a < atoms; ++a) d.atom_rank[a] = static_cast<std::int32_t>(part[a]);
+  }
+  measure(model, faces, d);
+  return d;
+}
+
+std::string format_decomposition(const Decomposition& d) {
+  std::ostringstream o;
+  o << d.ranks << " rank(s), " << d.atom_rank.size() << " atoms of up to " << d.atom_tets << " tets; edge cut " << d.edge_cut_faces
+    << " faces; load imbalance " << 100 * d.load_imbalance << " %\n";
+  o << "rank      tets      cost  halo nodes\n";
+  for (std::size_t r = 0; r < d.rank_cost.size(); ++r) o << r << "  " << d.rank_tets[r] << "  " << d.rank_cost[r] << "  " << d.halo_nodes[r] << "\n";
+  return o.str();
+}
+
+}  // namespace tactus::solver

@@ -1,0 +1,80 @@
+// Domain decomposition (solver/decomposition.hpp) on a box of 16 x 16 x 8 Kuhn cells (12,288
+// tets, one material). Oracles: the faces between ranks and the halo nodes recounted here
+// independently (a face map, a node's set of ranks), the costs summed from the tet counts, the
+// atoms the same at every rank count and the parts the same on a second call, and the load
+// imbalance within METIS's 3 % tolerance (the bound: 5 %).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "tactus/core/error.hpp"
+#include "tactus/data_samples/box_mesh.hpp"
+#include "tactus/solver/decomposition.hpp"
+#include "tactus/solver/model.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+
+namespace {
+
+Model box_model() {
+  MaterialValues v;
+  v.numbers = {{"E", 1e6}, {"nu", 0.3}, {"density", 1000.0}};
+  return build_model(samples::make_box_mesh(16, 16, 8, 0.16, 0.16, 0.08), Material::make("linear_elastic", v));
+}
+
+}  // namespace
+
+TEST(Decomposition, AtomsAndRanksAreFixedAndTheQualityIsRecountedIndependently) {
+  const Model m = box_model();
+  const std::size_t tets = m.conn.size() / 4;
+  const Decomposition one = decompose(m, 1);
+  EXPECT_EQ(one.atom_rank.size(), (tets + 127) / 128);
+  EXPECT_EQ(one.edge_cut_faces, 0u);
+  for (int ranks = 2; ranks <= 4; ++ranks) {
+    const Decomposition d = decompose(m, ranks), again = decompose(m, ranks);
+    EXPECT_EQ(d.tet_atom, one.tet_atom) << ranks;  // atoms do not depend on the rank count
+    EXPECT_EQ(d.atom_rank, again.atom_rank) << ranks;
+    std::map<std::array<std::int32_t, 3>, std::vector<std::size_t>> faces;
+    std::vector<std::set<std::int32_t>> node_ranks(m.num_nodes);
+    std::vector<std::size_t> atom_size(d.atom_rank.size(), 0);
+    for (std::size_t e = 0; e < tets; ++e) {
+      const std::int32_t r = d.atom_rank[d.tet_atom[e]];
+      ++atom_size[d.tet_atom[e]];
+      for (int skip = 0; skip < 4; ++skip) {
+        std::array<std::int32_t, 3> f{};
+        for (int k = 0, i = 0; k < 4; ++k)
+          if (k != skip) f[static_cast<std::size_t>(i++)] = m.conn[4 * e + static_cast<std::size_t>(k)];
+        std::sort(f.begin(), f.end());
+        faces[f].push_back(e);
+      }
+      for (int k = 0; k < 4; ++k) node_ranks[static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(k)])].insert(r);
+    }
+    std::size_t cut = 0;
+    for (const auto& [f, on] : faces) cut += on.size() == 2 && d.atom_rank[d.tet_atom[on[0]]] != d.atom_rank[d.tet_atom[on[1]]];
+    std::vector<std::size_t> halo(static_cast<std::size_t>(ranks), 0), rank_tets(static_cast<std::size_t>(ranks), 0);
+    for (const auto& s : node_ranks)
+      if (s.size() > 1)
+        for (std::int32_t r : s) ++halo[static_cast<std::size_t>(r)];
+    for (std::size_t e = 0; e < tets; ++e) ++rank_tets[static_cast<std::size_t>(d.atom_rank[d.tet_atom[e]])];
+    std::printf("%d ranks: %zu atoms, edge cut %zu faces (recounted %zu), imbalance %.2f %%, halo nodes", ranks, d.atom_rank.size(), d.edge_cut_faces,
+                cut, 100 * d.load_imbalance);
+    for (std::size_t r = 0; r < halo.size(); ++r) std::printf(" %zu (recounted %zu)", d.halo_nodes[r], halo[r]);
+    std::printf("\n");
+    EXPECT_EQ(d.edge_cut_faces, cut);
+    EXPECT_GT(cut, 0u);
+    for (std::size_t r = 0; r < halo.size(); ++r) {
+      EXPECT_EQ(d.halo_nodes[r], halo[r]);
+      EXPECT_EQ(d.rank_tets[r], rank_tets[r]);
+      EXPECT_EQ(d.rank_cost[r], static_cast<std::int64_t>(kStandardCost * rank_tets[r]));  // one standard material
+    }
+    for (std::size_t n : atom_size) EXPECT_LE(n, 128u);
+    EXPECT_LE(d.load_imbalance, 0.05);
+  }
+  EXPECT_THROW(decompose(m, 0), InputError);
+  EXPECT_THROW(decompose(m, static_cast<int>(one.atom_rank.size()) + 1), InputError);
+}
