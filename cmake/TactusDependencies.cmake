@@ -33,32 +33,27 @@ if(NOT TARGET tactus_hdf5)
     INTERFACE_COMPILE_DEFINITIONS "${HDF5_C_DEFINITIONS}")
 endif()
 
-# METIS 5 partitions the solver's atoms among ranks (solver/decomposition.hpp).
-find_path(METIS_INCLUDE_DIR metis.h)
-find_library(METIS_LIBRARY metis)
-if(METIS_INCLUDE_DIR AND METIS_LIBRARY)
-  set(METIS_FOUND TRUE)
-endif()
-tactus_require(METIS libmetis-dev)
-if(NOT TARGET tactus_metis)
-  add_library(tactus_metis INTERFACE IMPORTED)
-  set_target_properties(tactus_metis PROPERTIES
-    INTERFACE_INCLUDE_DIRECTORIES "${METIS_INCLUDE_DIR}"
-    INTERFACE_LINK_LIBRARIES "${METIS_LIBRARY}")
-endif()
+# A plain C library (one header, one library file, no CMake package) as the imported target
+# tactus_<target>; stops with the Debian package when missing.
+macro(tactus_plain_library target header library debian_package)
+  string(TOUPPER ${target} _upper)
+  find_path(${_upper}_INCLUDE_DIR ${header})
+  find_library(${_upper}_LIBRARY ${library})
+  if(${_upper}_INCLUDE_DIR AND ${_upper}_LIBRARY)
+    set(${target}_FOUND TRUE)
+  endif()
+  tactus_require(${target} ${debian_package})
+  if(NOT TARGET tactus_${target})
+    add_library(tactus_${target} INTERFACE IMPORTED)
+    set_target_properties(tactus_${target} PROPERTIES
+      INTERFACE_INCLUDE_DIRECTORIES "${${_upper}_INCLUDE_DIR}"
+      INTERFACE_LINK_LIBRARIES "${${_upper}_LIBRARY}")
+  endif()
+endmacro()
 
-find_path(GMSH_INCLUDE_DIR gmsh.h)
-find_library(GMSH_LIBRARY gmsh)
-if(GMSH_INCLUDE_DIR AND GMSH_LIBRARY)
-  set(gmsh_FOUND TRUE)
-endif()
-tactus_require(gmsh libgmsh-dev)
-if(NOT TARGET tactus_gmsh)
-  add_library(tactus_gmsh INTERFACE IMPORTED)
-  set_target_properties(tactus_gmsh PROPERTIES
-    INTERFACE_INCLUDE_DIRECTORIES "${GMSH_INCLUDE_DIR}"
-    INTERFACE_LINK_LIBRARIES "${GMSH_LIBRARY}")
-endif()
+# METIS 5 partitions the solver's atoms among ranks (solver/decomposition.hpp).
+tactus_plain_library(metis metis.h metis libmetis-dev)
+tactus_plain_library(gmsh gmsh.h gmsh libgmsh-dev)
 
 find_package(VTK 9.1 QUIET COMPONENTS CommonCore CommonDataModel IOXML FiltersCore FiltersGeneral FiltersGeometry
   FiltersSources IOGeometry IOImage RenderingCore RenderingOpenGL2 RenderingFreeType RenderingAnnotation
