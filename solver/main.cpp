@@ -69,7 +69,7 @@ struct Tools {
   std::string mt_scenario, mt_material, mt_mode = "uniaxial", mt_output;
   double mt_max = 1.3;
   int mt_samples = 30;
-  std::string dc_scenario, dc_meshes;
+  std::string dc_scenario, dc_meshes, dc_partition, dc_output;
   std::vector<std::string> dc_overrides;
   int dc_ranks = 2;
   std::size_t dc_atom_tets = 128;
@@ -97,6 +97,9 @@ struct Tools {
     decompose->add_option("scenario", dc_scenario, "scenario.toml")->required()->check(CLI::ExistingFile);
     decompose->add_option("--ranks", dc_ranks, "number of ranks")->capture_default_str();
     decompose->add_option("--atom-tets", dc_atom_tets, "tets per atom (a block's last atom may be smaller)")->capture_default_str();
+    decompose->add_option("--partition", dc_partition, "a partition to measure instead of METIS's (JSON: atom_tets, ranks, atom_rank)")
+        ->check(CLI::ExistingFile);
+    decompose->add_option("-o,--output", dc_output, "also write the decomposition as JSON (format \"tactus decomposition\")");
     decompose->add_option("--meshes", dc_meshes, "the folder the mesh and fibre paths are relative to (default: the scenario's)");
     decompose->add_option("--set", dc_overrides, "KEY=VALUE: replace one scenario value, as tactus-solve --set (repeatable)")
         ->expected(1)
@@ -115,7 +118,14 @@ struct Tools {
       if (dc_atom_tets < 1 || dc_atom_tets > 1000000)
         throw InputError("command line", "--atom-tets", "1 to 1,000,000 tets", std::to_string(dc_atom_tets));
       const solver::Model model = solver::build_model(solver::read_scenario(dc_scenario, dc_meshes, dc_overrides));
-      std::cout << solver::format_decomposition(solver::decompose(model, dc_ranks, dc_atom_tets, "--ranks"));
+      const solver::Decomposition d =
+          dc_partition.empty() ? solver::decompose(model, dc_ranks, dc_atom_tets, "--ranks") : solver::read_partition(model, dc_partition);
+      std::cout << solver::format_decomposition(d);
+      if (!dc_output.empty()) {
+        OutputFiles out({dc_output}, common.output_rules({dc_scenario}));
+        write_file(out.staged(0), solver::decomposition_json(d).dump(1) + "\n");
+        out.commit();
+      }
     } else if (material_point->parsed()) {
       const std::string csv = solver::material_point_csv(solver::read_scenario(mt_scenario), mt_material, mt_mode, mt_max, mt_samples);
       if (mt_output.empty()) {

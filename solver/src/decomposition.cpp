@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <array>
+#include <fstream>
 #include <map>
 #include <sstream>
 
 #include "tactus/core/error.hpp"
+#include "tactus/core/file_io.hpp"
 
 namespace tactus::solver {
 
@@ -106,15 +108,13 @@ void measure(const Model& m, const std::vector<std::pair<std::size_t, std::size_
   d.load_imbalance = total > 0 ? static_cast<double>(heaviest) * static_cast<double>(ranks) / static_cast<double>(total) - 1 : 0;
 }
 
-}  // namespace
-
-Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, const std::string& what) {
+// The atoms of the model (decomposition.hpp), with their costs; ranks not yet given.
+Decomposition make_atoms(const Model& model, int ranks, std::size_t atom_tets) {
   if (atom_tets < 1) throw InputError("decomposition", "atom size", "at least one tet", "0");
   Decomposition d;
   d.ranks = ranks;
   d.atom_tets = atom_tets;
-  const std::size_t tets = model.conn.size() / 4;
-  d.tet_atom.assign(tets, 0);
+  d.tet_atom.assign(model.conn.size() / 4, 0);
   for (const MaterialBlock& b : model.blocks)
     for (std::size_t start = b.begin; start < b.end; start += atom_tets) {
       const std::size_t end = std::min(b.end, start + atom_tets);
@@ -122,6 +122,13 @@ Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, co
       for (std::size_t e = start; e < end; ++e) d.tet_atom[e] = atom;
       d.atom_cost.push_back(static_cast<std::int64_t>(end - start) * tet_cost(b));
     }
+  return d;
+}
+
+}  // namespace
+
+Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, const std::string& what) {
+  Decomposition d = make_atoms(model, ranks, atom_tets);
   const std::size_t atoms = d.atom_cost.size();
   if (ranks < 1 || static_cast<std::size_t>(ranks) > atoms)
     throw InputError("command line", what,
@@ -146,6 +153,53 @@ Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, co
   }
   measure(model, faces, d);
   return d;
+}
+
+Decomposition read_partition(const Model& model, const std::filesystem::path& file) {
+  const std::string name = file.string();
+  require_regular_file(file, "a partition (JSON)");
+  std::ifstream in(file);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) throw InputError(name, "", "a JSON object {\"ranks\", \"atom_tets\", \"atom_rank\"}", "other text");
+  const auto whole = [&](const char* key, long lo, long hi) {
+    if (!j.contains(key) || !j[key].is_number_integer() || j[key].get<long>() < lo || j[key].get<long>() > hi)
+      throw InputError(name, key, "a whole number from " + std::to_string(lo) + " to " + std::to_string(hi),
+                       j.contains(key) ? j[key].dump() : "missing");
+    return j[key].get<long>();
+  };
+  const long atom_tets = whole("atom_tets", 1, 1000000);
+  Decomposition d = make_atoms(model, 1, static_cast<std::size_t>(atom_tets));
+  const std::size_t atoms = d.atom_cost.size();
+  d.ranks = static_cast<int>(whole("ranks", 1, static_cast<long>(atoms)));
+  const auto& ranks = j.contains("atom_rank") ? j["atom_rank"] : nlohmann::json();
+  if (!ranks.is_array() || ranks.size() != atoms)
+    throw InputError(name, "atom_rank", "a list of " + std::to_string(atoms) + " ranks (the model's atoms of " + std::to_string(atom_tets) + " tets)",
+                     ranks.is_array() ? std::to_string(ranks.size()) + " entries" : "no list");
+  std::vector<std::size_t> count(static_cast<std::size_t>(d.ranks), 0);
+  for (std::size_t a = 0; a < atoms; ++a) {
+    if (!ranks[a].is_number_integer() || ranks[a].get<long>() < 0 || ranks[a].get<long>() >= d.ranks)
+      throw InputError(name, "atom_rank[" + std::to_string(a) + "]", "a rank from 0 to " + std::to_string(d.ranks - 1), ranks[a].dump());
+    d.atom_rank.push_back(ranks[a].get<std::int32_t>());
+    ++count[static_cast<std::size_t>(d.atom_rank.back())];
+  }
+  for (std::size_t r = 0; r < count.size(); ++r)
+    if (count[r] == 0)
+      throw InputError(name, "atom_rank", "every rank from 0 to " + std::to_string(d.ranks - 1) + " given an atom",
+                       "none for rank " + std::to_string(r));
+  measure(model, shared_faces(model), d);
+  return d;
+}
+
+nlohmann::json decomposition_json(const Decomposition& d) {
+  return {{"format", "tactus decomposition"},
+          {"ranks", d.ranks},
+          {"atom_tets", d.atom_tets},
+          {"edge_cut_faces", d.edge_cut_faces},
+          {"load_imbalance", d.load_imbalance},
+          {"rank_tets", d.rank_tets},
+          {"rank_cost", d.rank_cost},
+          {"halo_nodes", d.halo_nodes},
+          {"atom_rank", d.atom_rank}};
 }
 
 std::string format_decomposition(const Decomposition& d) {

@@ -19,6 +19,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <memory>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -39,6 +40,7 @@
 #include "tactus/segment/stack.hpp"
 #include "tactus/segment/volume_files.hpp"
 #include "tactus/solver/checkpoint.hpp"
+#include "tactus/solver/decomposition.hpp"
 #include "tactus/solver/model.hpp"
 #include "tactus/solver/model_build.hpp"
 #include "tactus/solver/run.hpp"
@@ -376,6 +378,16 @@ std::vector<Target> make_targets(const fs::path& work) {
                    LabelTable lt;
                    read_h5<std::uint8_t>(d / "labels.h5", "/labels", &lt);
                  }});
+  }
+  {  // a partition (tactus-solve decompose --partition): METIS's own for a small box model
+    solver::MaterialValues v;
+    v.numbers = {{"E", 1e6}, {"nu", 0.3}, {"density", 1000.0}};
+    auto model = std::make_shared<solver::Model>(
+        solver::build_model(samples::make_box_mesh(8, 8, 4, 0.08, 0.08, 0.04), solver::Material::make("linear_elastic", v)));
+    const fs::path f = work / "partition" / "partition.json";
+    fs::create_directories(f.parent_path());
+    write_file(f, solver::decomposition_json(solver::decompose(*model, 3, 16)).dump(1));
+    t.push_back({"partition", f, true, [f, model] { solver::read_partition(*model, f); }});
   }
   {  // a restart checkpoint (core/state_file.hpp, as tactus-solve writes them)
     StateArrays state;

@@ -8,13 +8,16 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <set>
 
+#include "expect_error.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/decomposition.hpp"
 #include "tactus/solver/model.hpp"
+#include "temp_dir.hpp"
 
 using namespace tactus;
 using namespace tactus::solver;
@@ -77,4 +80,34 @@ TEST(Decomposition, AtomsAndRanksAreFixedAndTheQualityIsRecountedIndependently) 
   }
   EXPECT_THROW(decompose(m, 0), InputError);
   EXPECT_THROW(decompose(m, static_cast<int>(one.atom_rank.size()) + 1), InputError);
+}
+
+// A partition given by the user (a cut placed on purpose): METIS's own, written and read back,
+// measures the same; a list of another length, a rank out of range and a rank with no atom are
+// refused naming the entry.
+TEST(Decomposition, AGivenPartitionIsMeasuredAndCheckedEntryByEntry) {
+  const Model m = box_model();
+  const Decomposition d = decompose(m, 3);
+  const testkit::TempDir dir;
+  const auto write = [&](const nlohmann::json& j) {
+    const auto file = dir.path() / "partition.json";
+    std::ofstream(file) << j.dump();
+    return file;
+  };
+  const Decomposition back = read_partition(m, write(decomposition_json(d)));
+  std::printf("given partition: edge cut %zu faces (METIS's %zu), imbalance %.2f %% (%.2f %%)\n", back.edge_cut_faces, d.edge_cut_faces,
+              100 * back.load_imbalance, 100 * d.load_imbalance);
+  EXPECT_EQ(back.atom_rank, d.atom_rank);
+  EXPECT_EQ(back.edge_cut_faces, d.edge_cut_faces);
+  EXPECT_EQ(back.halo_nodes, d.halo_nodes);
+  EXPECT_EQ(back.load_imbalance, d.load_imbalance);
+  nlohmann::json j = decomposition_json(d);
+  j["atom_rank"].erase(j["atom_rank"].begin());
+  testkit::expect_input_error([&] { read_partition(m, write(j)); }, {"atom_rank", "96 ranks", "95 entries"});
+  j = decomposition_json(d);
+  j["atom_rank"][5] = 3;
+  testkit::expect_input_error([&] { read_partition(m, write(j)); }, {"atom_rank[5]", "0 to 2", "3"});
+  j = decomposition_json(d);
+  for (auto& r : j["atom_rank"]) r = r.get<int>() == 2 ? 1 : r.get<int>();
+  testkit::expect_input_error([&] { read_partition(m, write(j)); }, {"none for rank 2"});
 }

@@ -9,8 +9,11 @@
 // rounded). METIS runs with a fixed seed, so the same model and rank count give the same parts.
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "tactus/solver/model.hpp"
 
@@ -39,6 +42,17 @@ struct Decomposition {
 // Atoms of the model and their ranks. `ranks` from 1 to the number of atoms; an InputError
 // otherwise (naming `what`, e.g. "--ranks").
 Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets = 128, const std::string& what = "ranks");
+
+// A partition given by the user instead of METIS (a cut placed on purpose: `tactus-solve decompose
+// --partition FILE`): the JSON decomposition_json writes, of which "atom_tets", "ranks" and
+// "atom_rank" (one rank per atom of this model) are read; its quality is measured as decompose's.
+// An InputError names the file and the entry that is wrong (a list of another length, a rank out of
+// range, a rank given no atom).
+Decomposition read_partition(const Model& model, const std::filesystem::path& file);
+
+// The decomposition as JSON ("format" "tactus decomposition"): ranks, atom_tets, the quality
+// figures and atom_rank.
+nlohmann::json decomposition_json(const Decomposition& d);
 
 // The quality figures of a decomposition as a small table (what tactus-solve decompose prints).
 std::string format_decomposition(const Decomposition& d);
