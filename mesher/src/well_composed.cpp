@@ -1,7 +1,8 @@
 #include "tactus/mesher/well_composed.hpp"
 
 #include <algorithm>
-#include <numeric>
+
+#include "post/topology.hpp"
 
 namespace tactus::mesher {
 
@@ -175,21 +176,10 @@ std::map<std::string, BoundaryTopology> boundary_topology(const TetMesh& mesh) {
       if (n != 2) ++t.non_manifold_edges, locate(e.first);
     // A vertex's faces in one fan: joined through the edges they share at the vertex.
     for (const auto& [v, fs] : vertex_faces) {
-      std::vector<std::size_t> parent(fs.size());
-      std::iota(parent.begin(), parent.end(), 0);
-      auto root = [&](std::size_t i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];
-        return i;
-      };
-      for (std::size_t i = 0; i < fs.size(); ++i)
-        for (std::size_t j = i + 1; j < fs.size(); ++j) {
-          int shared = 0;
-          for (int a : faces[fs[i]])
-            for (int b : faces[fs[j]]) shared += a == b;
-          if (shared == 2) parent[root(i)] = root(j);  // the vertex and one more: an edge at the vertex
-        }
-      std::size_t fans = 0;
-      for (std::size_t i = 0; i < fs.size(); ++i) fans += root(i) == i;
+      std::vector<std::array<int, 3>> at;
+      for (std::size_t i : fs) at.push_back(faces[i]);
+      const std::vector<std::size_t> fan = face_fans(at);
+      const std::size_t fans = *std::max_element(fan.begin(), fan.end()) + 1;
       if (fans > 1) ++t.non_manifold_vertices, locate(v);
     }
   }

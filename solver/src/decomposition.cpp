@@ -88,21 +88,19 @@ void measure(const Model& m, const std::vector<std::pair<std::size_t, std::size_
   d.rank_tets.assign(ranks, 0);
   d.halo_nodes.assign(ranks, 0);
   for (std::size_t atom = 0; atom < d.atom_rank.size(); ++atom) d.rank_cost[static_cast<std::size_t>(d.atom_rank[atom])] += d.atom_cost[atom];
-  std::vector<std::int32_t> first(m.num_nodes, -1);  // the first rank seen at each node, -2 when two are
-  for (std::size_t e = 0; e < tets; ++e) {
-    const std::int32_t r = rank_of(e);
-    ++d.rank_tets[static_cast<std::size_t>(r)];
-    for (int k = 0; k < 4; ++k) {
-      std::int32_t& f = first[static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(k)])];
-      f = f == -1 ? r : f == r ? r : -2;
-    }
-  }
+  // Which ranks hold each node; a node two ranks hold is in both ranks' halos.
   std::vector<std::vector<char>> holds(ranks, std::vector<char>(m.num_nodes, 0));
-  for (std::size_t e = 0; e < tets; ++e)
+  for (std::size_t e = 0; e < tets; ++e) {
+    ++d.rank_tets[static_cast<std::size_t>(rank_of(e))];
     for (int k = 0; k < 4; ++k)
       holds[static_cast<std::size_t>(rank_of(e))][static_cast<std::size_t>(m.conn[4 * e + static_cast<std::size_t>(k)])] = 1;
-  for (std::size_t r = 0; r < ranks; ++r)
-    for (std::size_t n = 0; n < m.num_nodes; ++n) d.halo_nodes[r] += holds[r][n] && first[n] == -2;
+  }
+  for (std::size_t n = 0; n < m.num_nodes; ++n) {
+    std::size_t held = 0;
+    for (std::size_t r = 0; r < ranks; ++r) held += holds[r][n];
+    if (held > 1)
+      for (std::size_t r = 0; r < ranks; ++r) d.halo_nodes[r] += holds[r][n];
+  }
   std::int64_t total = 0, heaviest = 0;
   for (const std::int64_t c : d.rank_cost) total += c, heaviest = std::max(heaviest, c);
   d.load_imbalance = total > 0 ? static_cast<double>(heaviest) * static_cast<double>(ranks) / static_cast<double>(total) - 1 : 0;

@@ -38,15 +38,15 @@ class PinchResolver {
 
   BoundaryPinchReport run() {
     BoundaryPinchReport r;
-    r.defects_before = count_all();
-    std::size_t left = r.defects_before;
-    for (int round = 0; round < 8 && left > 0; ++round) {
+    std::vector<Defect> found = defects();
+    r.defects_before = found.size();
+    for (int round = 0; round < 8 && !found.empty(); ++round) {
       std::size_t changed = 0;
-      for (const auto& d : defects()) changed += resolve(d, r);
-      left = count_all();
+      for (const auto& d : found) changed += resolve(d, r);
       if (changed == 0) break;
+      found = defects();
     }
-    r.defects_after = left;
+    r.defects_after = found.size();
     if (r.tets_relabelled + r.tets_removed > 0) keep_alive_tets(mesh_, alive_);
     return r;
   }
@@ -78,27 +78,6 @@ class PinchResolver {
     return {faces.begin(), faces.end()};
   }
 
-  // The fan (0, 1, ..) of each of these faces through one node: faces sharing an edge at the
-  // node are in one fan.
-  static std::vector<std::size_t> fans(const std::vector<Face>& faces) {
-    std::vector<std::size_t> parent(faces.size());
-    std::iota(parent.begin(), parent.end(), 0);
-    const auto root = [&](std::size_t i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
-    for (std::size_t i = 0; i < faces.size(); ++i)
-      for (std::size_t j = i + 1; j < faces.size(); ++j) {
-        int shared = 0;
-        for (int x : faces[i]) shared += std::find(faces[j].begin(), faces[j].end(), x) != faces[j].end();
-        if (shared == 2) parent[root(i)] = root(j);
-      }
-    std::map<std::size_t, std::size_t> number;
-    std::vector<std::size_t> fan(faces.size());
-    for (std::size_t i = 0; i < faces.size(); ++i) fan[i] = number.emplace(root(i), number.size()).first->second;
-    return fan;
-  }
-
   // The defects of `boundary` at node v: its edges (v, w) in other than two of the boundary's
   // faces, and v itself when its faces form more than one fan (as boundary_topology counts them).
   std::size_t defects_at(int v, int boundary, std::vector<Defect>* out = nullptr) const {
@@ -113,7 +92,7 @@ class PinchResolver {
         ++n;
         if (out && v < w) out->push_back({boundary, v, w});
       }
-    const std::vector<std::size_t> fan = fans(faces);
+    const std::vector<std::size_t> fan = face_fans(faces);
     const std::size_t fans_at_v = fan.empty() ? 0 : *std::max_element(fan.begin(), fan.end()) + 1;
     if (fans_at_v > 1) {
       ++n;
@@ -143,8 +122,6 @@ class PinchResolver {
       for (int b : boundaries_at(static_cast<int>(v))) defects_at(static_cast<int>(v), b, &out);
     return out;
   }
-
-  std::size_t count_all() const { return defects().size(); }
 
   // The live tets through the defect (its edge's ring or its vertex's star), split into
   // face-connected runs of inside and of outside tets (joined through faces holding the defect).
@@ -180,7 +157,7 @@ class PinchResolver {
   // the tunnel to one side.
   std::vector<std::size_t> bridge(int v) const {
     const std::vector<Face> faces = boundary_faces_at(v, kSkin);
-    const std::vector<std::size_t> fan = fans(faces);
+    const std::vector<std::size_t> fan = face_fans(faces);
     std::map<std::size_t, std::size_t> fan_of;  // star tet -> its skin face's fan
     for (std::size_t i = 0; i < faces.size(); ++i)
       for (std::size_t e : owners_.at(faces[i]))

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <set>
 
 #include "tactus/core/contracts.hpp"
@@ -74,6 +75,25 @@ FaceOwners face_owners(const TetMesh& mesh) {
   for (std::size_t e = 0; e < mesh.tets.size(); ++e)
     for (const auto& f : kFaces) owners[tet_face(mesh.tets[e], f)].push_back(e);
   return owners;
+}
+
+std::vector<std::size_t> face_fans(const std::vector<std::array<int, 3>>& faces) {
+  std::vector<std::size_t> parent(faces.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto root = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    for (std::size_t j = i + 1; j < faces.size(); ++j) {
+      int shared = 0;
+      for (int x : faces[i]) shared += std::find(faces[j].begin(), faces[j].end(), x) != faces[j].end();
+      if (shared == 2) parent[root(i)] = root(j);  // the node and one more: an edge at the node
+    }
+  std::map<std::size_t, std::size_t> number;
+  std::vector<std::size_t> fan(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) fan[i] = number.emplace(root(i), number.size()).first->second;
+  return fan;
 }
 
 void keep_alive_tets(TetMesh& mesh, const std::vector<char>& alive) {

@@ -16,6 +16,10 @@ std::array<int, 3> sorted_face(int a, int b, int c);
 inline constexpr int kFaces[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};  // face nodes, then the opposite
 // The key of face f (a row of kFaces) of tet t.
 inline std::array<int, 3> tet_face(const std::array<int, 4>& t, const int (&f)[4]) { return sorted_face(t[f[0]], t[f[1]], t[f[2]]); }
+// The fan (0, 1, ..) of each of these faces, all through one node: faces sharing an edge at the
+// node are in one fan (a boundary is a 2-manifold at the node when there is one fan).
+std::vector<std::size_t> face_fans(const std::vector<std::array<int, 3>>& faces);
+
 // Keeps the tets whose `alive` is set (in order) and rebuilds the boundary triangles.
 void keep_alive_tets(TetMesh& mesh, const std::vector<char>& alive);
 
