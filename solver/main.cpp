@@ -72,7 +72,7 @@ struct Tools {
   std::string dc_scenario, dc_meshes, dc_partition, dc_output;
   std::vector<std::string> dc_overrides;
   int dc_ranks = 2;
-  std::size_t dc_atom_tets = 128;
+  std::size_t dc_atom_tets = solver::kAtomTets;
 
   explicit Tools(CLI::App& app)
       : keys(app.add_subcommand("keys", "print the reference of every scenario key (Markdown)")),

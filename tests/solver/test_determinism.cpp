@@ -60,7 +60,7 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
 }  // namespace
 
 TEST(Determinism, SameBitsOnOneTwoAndThreeThreads) {
-  ASSERT_GE(9216u, 2 * InternalForces::kPartitionElements + 1);  // several stress partitions
+  ASSERT_GE(9216u, 2 * kAtomTets + 1);  // several atoms
   const Final one = run_on(1);
   std::printf("1 thread: t = %.6e s, kinetic %.17g J, internal %.17g J, contact work %.17g J\n", one.time, one.energies.kinetic,
               one.energies.internal, one.energies.contact_work());

@@ -52,15 +52,15 @@ struct StressKernelArgs {
   std::size_t begin, end;      // the elements of this call
   const double* u;
   const double* v;  // for the viscous part (beta > 0)
-  double* f;        // the force buffer of this call's partition: node n's force at f[kForceStride (n - f_node_offset)]
-  std::size_t f_node_offset = 0;
+  double* f;        // the force buffer of this call's atom: corner k of tet e adds to f[kForceStride f_slot[4 e + k]]
+  const std::uint16_t* f_slot = nullptr;
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
   // ANP: the volume floor J0 (0: off) and its barrier's stiffness (material.hpp, volume_floor_barrier).
   double anp_volume_floor = 0, anp_floor_stiffness = 0;
   const char* rigid_node = nullptr;  // ANP: per node, 1 on a rigid piece (a tet with four such has no floor)
   // The nodal step bound (false: off): each tet adds its rows' sums to its nodes, after their forces
-  // (f[kForceStride (n - f_node_offset) + 3]); ANP tets take their volumetric rows from their constant
+  // (f[kForceStride slot + 3]); ANP tets take their volumetric rows from their constant
   // factors anp_bound_factor (per tet from block_begin; anp_step_bound_factors) and their
   // deviatoric ones from the P-wave modulus less anp_bulk.
   bool nodal_bound = false;
@@ -329,7 +329,7 @@ TACTUS_KERNEL_INLINE void record_element_step(const StressKernelArgs& a, double 
 // bound's rows (step_bound.hpp) after each node's force, in the same cache line.
 template <class T>
 TACTUS_KERNEL_INLINE void scatter_forces(const StressKernelArgs& a, std::size_t e, const M3<T>& P, const T* g, const T& V0, const T bound[4]) {
-  const std::int32_t* c = a.conn + 4 * e;
+  const std::uint16_t* s = a.f_slot + 4 * e;
   T h[4][3];
   for (int i = 0; i < 3; ++i) h[0][i] = lanes::splat<T>(0.0);
   for (int k = 0; k < 3; ++k)
@@ -339,7 +339,7 @@ TACTUS_KERNEL_INLINE void scatter_forces(const StressKernelArgs& a, std::size_t 
     }
   for (int l = 0; l < lanes::lanes_of<T>; ++l)
     for (int k : {1, 2, 3, 0}) {
-      double* fa = a.f + kForceStride * (static_cast<std::size_t>(c[4 * l + k]) - a.f_node_offset);
+      double* fa = a.f + kForceStride * std::size_t{s[4 * l + k]};
       for (int i = 0; i < 3; ++i) fa[i] += lanes::lane(h[k][i], l);
       if (a.nodal_bound) fa[3] += lanes::lane(bound[k], l);
     }
@@ -396,9 +396,10 @@ void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
     for (; e + lanes::kLanes <= a.end; e += lanes::kLanes) {
       if (e + kPrefetchAhead + lanes::kLanes <= a.end)
         for (int k = 0; k < 4 * lanes::kLanes; ++k) {
-          const auto node = static_cast<std::size_t>(a.conn[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]);
+          const std::size_t corner = 4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k);
+          const auto node = static_cast<std::size_t>(a.conn[corner]);
           __builtin_prefetch(a.u + 3 * node);
-          __builtin_prefetch(a.f + kForceStride * (node - a.f_node_offset), 1);
+          __builtin_prefetch(a.f + kForceStride * std::size_t{a.f_slot[corner]}, 1);
           if constexpr (kAnp) __builtin_prefetch(a.nodal_pressure + node);
         }
       element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);

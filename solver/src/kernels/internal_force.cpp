@@ -44,6 +44,8 @@ void times_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
 
 // The ANP tiles of a partition's tets (InternalForces::anp_tiles_).
 std::size_t tiles_of(std::size_t tets) { return (tets + kAnpTile - 1) / kAnpTile; }
+// Whole tiles per atom: every tile is then the same 16 tets of its block at any rank count.
+static_assert(kAtomTets % kAnpTile == 0);
 
 }  // namespace
 
@@ -88,7 +90,7 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
 // Not through F = I + grad u and not in SIMD lanes: the pass is gathers and scatters around a few
 // flops, and the nine reference gradients are 72 bytes per tet more to stream (bench: one thread,
 // 10k tets, J pass ~6.2 ns per tet in lanes through F, ~4.5 ns like this).
-void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, std::size_t node_offset) {
+void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, const std::uint16_t* slot) {
   const double* X = m.X.data();
   for (std::size_t e = begin; e < end; ++e) {
     const std::int32_t* c = &m.conn[4 * e];
@@ -97,7 +99,7 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
         const auto node = static_cast<std::size_t>(c[4 * kPrefetchAhead + k]);
         __builtin_prefetch(X + 3 * node);
         __builtin_prefetch(u + 3 * node);
-        __builtin_prefetch(node_volume + (node - node_offset), 1);
+        __builtin_prefetch(node_volume + (slot ? std::size_t{slot[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]} : node), 1);
       }
     const std::size_t n0 = 3 * static_cast<std::size_t>(c[0]);
     double edge[3][3];  // edge[k]: from node 0 to node k + 1
@@ -108,7 +110,8 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
     const double quarter = (1.0 / 24.0) * (edge[0][0] * (edge[1][1] * edge[2][2] - edge[1][2] * edge[2][1]) +
                                            edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
                                            edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
-    for (int k = 0; k < 4; ++k) node_volume[static_cast<std::size_t>(c[k]) - node_offset] += quarter;
+    for (int k = 0; k < 4; ++k)
+      node_volume[slot ? std::size_t{slot[4 * e + static_cast<std::size_t>(k)]} : static_cast<std::size_t>(c[k])] += quarter;
   }
 }
 
@@ -202,30 +205,7 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
     }
   for (const AnpBlock& a : anp_) block_pressure_[a.block] = a.pressure.data();
   if (!anp_.empty()) rigid_node_ = rigid_nodes(model);
-  // Fixed partitions (independent of the thread count) and the node range each touches; the
-  // Morton order of nodes and tets (model.cpp) keeps the ranges short.
-  std::size_t forces = 0, volumes = 0, tiles = 0;
-  for (std::size_t k = 0; k < model.blocks.size(); ++k) {
-    const MaterialBlock& b = model.blocks[k];
-    if (!b.has_stress_pass()) continue;  // moved as rigid bodies (time/rigid.cpp) or placed by them: no stress, no step limit
-    const std::size_t n = b.end - b.begin,
-                      parts = std::max<std::size_t>(1, std::min<std::size_t>(kPartitions, (n + kPartitionElements - 1) / kPartitionElements));
-    for (std::size_t p = 0; p < parts; ++p) {
-      Partition q{k, b.begin + n * p / parts, b.begin + n * (p + 1) / parts, model.num_nodes, 0, forces, volumes, tiles};
-      for (std::size_t e = q.begin; e < q.end; ++e)
-        for (int a = 0; a < 4; ++a) {
-          const auto node = static_cast<std::size_t>(model.conn[4 * e + a]);
-          q.node_lo = std::min(q.node_lo, node), q.node_hi = std::max(q.node_hi, node + 1);
-        }
-      if (q.begin == q.end) q.node_lo = q.node_hi = 0;
-      forces += kForceStride * (q.node_hi - q.node_lo);
-      if (b.material.anp()) volumes += q.node_hi - q.node_lo, tiles += tiles_of(q.end - q.begin);
-      partitions_.push_back(q);
-    }
-  }
-  partition_forces_.assign(forces, 0.0);
-  partition_volumes_.assign(volumes, 0.0);
-  anp_tiles_.assign(tiles, 0.0);
+  const std::size_t tiles = build_atoms();
   // Per node, the tiles holding its ANP tets (ascending: partitions and their tets in order).
   anp_node_tile_first_.assign(model.num_nodes + 1, 0);
   for (int fill = 0; fill < 2; ++fill) {
@@ -248,11 +228,54 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
       for (std::size_t a = 0; a < model.num_nodes; ++a) anp_node_tile_first_[a + 1] += anp_node_tile_first_[a];
   }
   partition_acc_.resize(partitions_.size());
-  chunk_partitions_.resize((model.num_nodes + kNodeChunk - 1) / kNodeChunk);
-  for (std::size_t p = 0; p < partitions_.size(); ++p)
-    for (std::size_t c = partitions_[p].node_lo / kNodeChunk; c * kNodeChunk < partitions_[p].node_hi; ++c) chunk_partitions_[c].push_back(p);
-  chunk_anp_energy_.assign(chunk_partitions_.size(), 0.0);
+  num_chunks_ = (model.num_nodes + kNodeChunk - 1) / kNodeChunk;
+  chunk_anp_energy_.assign(num_chunks_, 0.0);
   set_nodal_step_bound(model.mass.data());
+}
+
+// The partitions are the atoms (independent of the thread and rank count): each gets one slot per
+// node its tets touch, ascending, and each corner of its tets the slot of its node; each node the
+// list of its slots, which atom order makes ascending. Returns the number of ANP tiles.
+std::size_t InternalForces::build_atoms() {
+  const Model& model = model_;
+  std::size_t slots = 0, tiles = 0;
+  tet_slot_.assign(4 * model.num_elements, 0);
+  block_slot_begin_.assign(model.blocks.size(), 0), block_slot_end_.assign(model.blocks.size(), 0);
+  std::vector<std::uint32_t> nodes;
+  for (std::size_t k = 0; k < model.blocks.size(); ++k) {
+    const MaterialBlock& b = model.blocks[k];
+    block_slot_begin_[k] = slots;
+    if (b.has_stress_pass())  // else moved as rigid bodies (time/rigid.cpp) or placed by them: no stress, no step limit
+      for (std::size_t start = b.begin; start < std::max(b.end, b.begin + 1); start += kAtomTets) {
+        Partition q{k, start, std::min(b.end, start + kAtomTets), slots, slots, tiles};
+        nodes.assign(model.conn.begin() + static_cast<std::ptrdiff_t>(4 * q.begin), model.conn.begin() + static_cast<std::ptrdiff_t>(4 * q.end));
+        std::sort(nodes.begin(), nodes.end());
+        nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+        for (std::size_t corner = 4 * q.begin; corner < 4 * q.end; ++corner)
+          tet_slot_[corner] = static_cast<std::uint16_t>(
+              std::lower_bound(nodes.begin(), nodes.end(), static_cast<std::uint32_t>(model.conn[corner])) - nodes.begin());
+        q.slot_end = slots += nodes.size();
+        if (b.material.anp()) tiles += tiles_of(q.end - q.begin);
+        partitions_.push_back(q);
+      }
+    block_slot_end_[k] = slots;
+  }
+  static_assert(4 * kAtomTets <= 65536, "an atom's slots must fit tet_slot_'s 16 bits");
+  partition_forces_.assign(kForceStride * slots, 0.0);
+  partition_volumes_.assign(slots, 0.0);
+  anp_tiles_.assign(tiles, 0.0);
+  // Each node's slots, in atom order (a counting pass, then a filling one).
+  node_slot_first_.assign(model.num_nodes + 1, 0);
+  node_slots_.resize(slots);
+  std::vector<std::uint32_t> slot_node(slots);
+  for (const Partition& q : partitions_)
+    for (std::size_t corner = 4 * q.begin; corner < 4 * q.end; ++corner)
+      slot_node[q.slot_begin + tet_slot_[corner]] = static_cast<std::uint32_t>(model.conn[corner]);
+  for (std::uint32_t n : slot_node) ++node_slot_first_[n + 1];
+  for (std::size_t a = 0; a < model.num_nodes; ++a) node_slot_first_[a + 1] += node_slot_first_[a];
+  std::vector<std::size_t> next(node_slot_first_.begin(), node_slot_first_.end() - 1);
+  for (std::size_t s = 0; s < slots; ++s) node_slots_[next[slot_node[s]]++] = static_cast<std::uint32_t>(s);
+  return tiles;
 }
 
 int InternalForces::lanes() { return lanes::kLanes; }
@@ -270,30 +293,31 @@ std::size_t InternalForces::memory_bytes() const {
   b += anp_node_tile_first_.capacity() * sizeof(std::size_t) + anp_node_tiles_.capacity() * sizeof(std::uint32_t);
   b += node_moves_.capacity() + rigid_node_.capacity() + (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
-  for (const auto& list : chunk_partitions_) b += list.capacity() * sizeof(std::size_t);
+  b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
+       node_slots_.capacity() * sizeof(std::uint32_t);
+  b += (block_slot_begin_.capacity() + block_slot_end_.capacity()) * sizeof(std::size_t);
   for (const auto& a : anp_)
     b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_factor.capacity() + a.smoothed.capacity()) * sizeof(double) +
          a.averaging.memory_bytes();
   return b;
 }
 
-template <std::size_t kStride, std::size_t kWidth, class Use>
-void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, double* out, Use use,
+template <std::size_t kStride, std::size_t kWidth>
+void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
                                double* extra) const {
   static_assert(kWidth <= kStride);
   const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
-  std::fill(out + kWidth * lo, out + kWidth * hi, 0.0);
-  if (extra) std::fill(extra + lo, extra + hi, 0.0);
-  for (std::size_t p : chunk_partitions_[c]) {
-    const Partition& q = partitions_[p];
-    if (!use(q)) continue;
-    const double* theirs = arrays.data() + q.*offset;
-    for (std::size_t n = std::max(lo, q.node_lo); n < std::min(hi, q.node_hi); ++n) {
-      const double* t = theirs + kStride * (n - q.node_lo);
-      for (std::size_t i = 0; i < kWidth; ++i) out[kWidth * n + i] += t[i];
-      if constexpr (kWidth < kStride)
-        if (extra) extra[n] += t[kWidth];
+  for (std::size_t n = lo; n < hi; ++n) {
+    double sum[kWidth] = {}, more = 0;
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) {
+      const std::size_t s = node_slots_[k];
+      if (s < slot_lo || s >= slot_hi) continue;
+      const double* t = arrays.data() + kStride * s;
+      for (std::size_t i = 0; i < kWidth; ++i) sum[i] += t[i];
+      if constexpr (kWidth < kStride) more += t[kWidth];
     }
+    for (std::size_t i = 0; i < kWidth; ++i) out[kWidth * n + i] = sum[i];
+    if (extra) extra[n] = more;
   }
 }
 
@@ -320,21 +344,20 @@ void InternalForces::anp_pass(const double* u) {
   for (AnpBlock& a : anp_) {
     const MaterialBlock& b = model_.blocks[a.block];
     const double* V = a.reference_volume.data();
-    auto own = [&](const Partition& q) { return q.block == a.block; };
     // Per partition of the block: its tets' current volumes to its own nodal array.
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t p = 0; p < partitions_.size(); ++p) {
       const Partition& q = partitions_[p];
       if (q.block != a.block) continue;
-      double* mine = partition_volumes_.data() + q.volume_offset;
-      std::fill(mine, mine + (q.node_hi - q.node_lo), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, q.node_lo);
+      double* mine = partition_volumes_.data() + q.slot_begin;
+      std::fill(mine, mine + (q.slot_end - q.slot_begin), 0.0);
+      add_current_node_volumes(model_, q.begin, q.end, u, mine, tet_slot_.data());
     }
     // Per node chunk: the partitions' sums, then the pressures (no smoothing) or the volume ratio.
     const bool smoothing = b.material.pressure_smoothing() > 0;
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      sum_chunk<1, 1>(c, partition_volumes_, &Partition::volume_offset, a.pressure.data(), own);
+    for (std::size_t c = 0; c < num_chunks_; ++c) {
+      sum_chunk<1, 1>(c, partition_volumes_, block_slot_begin_[a.block], block_slot_end_[a.block], a.pressure.data());
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
       if (smoothing)
         divide_by_volume(V, a.pressure.data(), lo, hi);
@@ -347,7 +370,7 @@ void InternalForces::anp_pass(const double* u) {
     double *x = a.pressure.data(), *y = a.smoothed.data();
     smooth_to_pressure(b, a.averaging, V, x, y, chunk_anp_energy_.data(), [&](auto f) {
 #pragma omp for schedule(static)
-      for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) f(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
+      for (std::size_t c = 0; c < num_chunks_; ++c) f(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
     });
   }
 }
@@ -365,8 +388,8 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     for (std::size_t p = 0; p < partitions_.size(); ++p) {
       const Partition& q = partitions_[p];
       const MaterialBlock& b = model_.blocks[q.block];
-      double* f = partition_forces_.data() + q.force_offset;
-      std::fill(f, f + kForceStride * (q.node_hi - q.node_lo), 0.0);
+      double* f = partition_forces_.data() + kForceStride * q.slot_begin;
+      std::fill(f, f + kForceStride * (q.slot_end - q.slot_begin), 0.0);
       StressAccumulator acc;
       StressKernelArgs args{model_.conn.data(),
                             model_.grad.data(),
@@ -380,7 +403,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
                             u,
                             v,
                             f,
-                            q.node_lo,
+                            tet_slot_.data(),
                             viscous ? beta_ : 0.0};
       args.nodal_pressure = block_pressure_[q.block];
       if (args.nodal_pressure) {
@@ -402,10 +425,9 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       partition_acc_[p] = acc;
     }
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < chunk_partitions_.size(); ++c) {
-      // Each node's force and row sum: the partitions' in partition order, whatever the threads.
-      sum_chunk<kForceStride, 3>(
-          c, partition_forces_, &Partition::force_offset, f_out, [](const Partition&) { return true; }, nodal_mass_ ? nodal_bound_.data() : nullptr);
+    for (std::size_t c = 0; c < num_chunks_; ++c) {
+      // Each node's force and row sum: its atoms' in atom order, whatever the threads.
+      sum_chunk<kForceStride, 3>(c, partition_forces_, 0, partition_volumes_.size(), f_out, nodal_mass_ ? nodal_bound_.data() : nullptr);
       if (nodal_mass_) nodal_bound_of_chunk(c);
     }
   }

@@ -148,12 +148,12 @@ void InternalForces::set_nodal_step_bound(const double* nodal_mass) {
   for (std::size_t a = 0; a < model_.num_nodes; ++a)
     node_moves_[a] = !(model_.constrained[3 * a] && model_.constrained[3 * a + 1] && model_.constrained[3 * a + 2]);
   nodal_bound_.assign(model_.num_nodes, 0.0);
-  chunk_bound_.assign(chunk_partitions_.size(), 0.0);
-  chunk_bound_node_.assign(chunk_partitions_.size(), 0);
+  chunk_bound_.assign(num_chunks_, 0.0);
+  chunk_bound_node_.assign(num_chunks_, 0);
   static_assert(std::size(kEta.change) == kEtas);
   if (!anp_.empty()) {
-    chunk_eta_bound_.assign(kEtas * chunk_partitions_.size(), 0.0);
-    chunk_eta_node_.assign(kEtas * chunk_partitions_.size(), 0);
+    chunk_eta_bound_.assign(kEtas * num_chunks_, 0.0);
+    chunk_eta_node_.assign(kEtas * num_chunks_, 0);
   }
 }
 

@@ -41,7 +41,7 @@ struct Decomposition {
 
 // Atoms of the model and their ranks. `ranks` from 1 to the number of atoms; an InputError
 // otherwise (naming `what`, e.g. "--ranks").
-Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets = 128, const std::string& what = "ranks");
+Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets = kAtomTets, const std::string& what = "ranks");
 
 // A partition given by the user instead of METIS (a cut placed on purpose: `tactus-solve decompose
 // --partition FILE`): the JSON decomposition_json writes, of which "atom_tets", "ranks" and

@@ -1,11 +1,11 @@
 #pragma once
 // The stress pass: one loop over all tets computing the internal (and viscous) nodal forces,
 // the strain energy, the smallest Jacobian and the element stable step, in the same pass
-// (Laghos' qdata.dt_est idea). Race-free and deterministic assembly: each block's tets are cut
-// into at most kPartitions fixed partitions of at least kPartitionElements (by element count, not
-// by threads), each scattering into its own force array over the nodes it touches; every node's
-// sum is then taken in partition order, so the forces, energies and steps are bit-identical for
-// any number of threads.
+// (Laghos' qdata.dt_est idea). Race-free and deterministic assembly: the partitions are the
+// model's atoms (kAtomTets consecutive tets of a block, model.hpp), each scattering into its own
+// compact force array, one slot per node its tets touch; every node's sum is then taken over its
+// slots in atom order, so the forces, energies and steps are bit-identical for any number of
+// threads, and a rank that owns whole atoms can add the same terms in the same order.
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -52,9 +52,10 @@ struct StressPassResult {
 // [begin, end) at u to the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial:
 // for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
-// node_volume[n - node_offset] receives node n's share.
+// node_volume[n] receives node n's share, or node_volume[slot[4 e + k]] for corner k of tet e
+// when a slot map is given (an atom's compact array; InternalForces).
 void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
-                              std::size_t node_offset = 0);
+                              const std::uint16_t* slot = nullptr);
 // Per tet of the block (from its first): the constant factor of its ANP volumetric rows in the
 // nodal step bound (InternalForces; design.md, "Stable step").
 std::vector<double> anp_step_bound_factors(const Model& model, const MaterialBlock& block, const std::vector<double>& node_reference_volume);
@@ -116,7 +117,7 @@ struct StressSideTask {
 
 class InternalForces {
  public:
-  static constexpr std::size_t kPartitionElements = 1024, kPartitions = 8, kNodeChunk = 512;
+  static constexpr std::size_t kNodeChunk = 512;
   // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
   InternalForces(const Model& model, double beta, int threads);
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
@@ -150,17 +151,26 @@ class InternalForces {
   double beta_;
   int threads_;
   bool vectorised_ = true;
-  // A contiguous run of one block's tets, and the node range [node_lo, node_hi) they touch: its
-  // forces go to partition_forces_ from force_offset, 4 per node of the range: the force and its
-  // nodal step bound's row sum, side by side so the two scatters share a cache line (kernels/
-  // element_loop.hpp); its current nodal volumes (ANP blocks) to partition_volumes_ from
-  // volume_offset.
+  // An atom: a contiguous run of one block's tets and the slots [slot_begin, slot_end), one per
+  // node its tets touch (ascending node order). Its forces go to partition_forces_, 4 per slot from
+  // kForceStride slot_begin: the force and its nodal step bound's row sum, side by side so the two
+  // scatters share a cache line (kernels/element_loop.hpp); its current nodal volumes (ANP blocks)
+  // to partition_volumes_ from slot_begin. A slot array rather than the atom's node range: 128
+  // Morton-ordered tets touch ~60 nodes spread over thousands of indices (a range cost 8x the
+  // memory and 3.6x the time of the pass).
   struct Partition {
-    std::size_t block, begin, end, node_lo, node_hi, force_offset, volume_offset;
+    std::size_t block, begin, end, slot_begin, slot_end;
     std::size_t tile_offset = 0;  // ANP blocks: its tiles' first in anp_tiles_
   };
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
+  // Per tet corner (4 per tet, model numbering; stress-pass blocks only): its node's slot within
+  // its atom. Per node: its slots, ascending (= atom order), from node_slot_first_[n].
+  std::vector<std::uint16_t> tet_slot_;
+  std::vector<std::size_t> node_slot_first_;
+  std::vector<std::uint32_t> node_slots_;
+  // Per block: its atoms' slots [first, last) (a node's slots of one block, for the ANP volumes).
+  std::vector<std::size_t> block_slot_begin_, block_slot_end_;
   // The ANP blocks' second form of the nodal bound: per tile of kAnpTile tets of an ANP partition
   // (from its tile_offset) the largest c^2 >= |cof F - I|_2^2 (kernels/element_loop.hpp, anp_tiles), per
   // node the tiles holding its ANP tets (anp_node_tiles_ from anp_node_tile_first_[n]), the
@@ -179,8 +189,8 @@ class InternalForces {
   std::vector<double> nodal_bound_, chunk_bound_;
   std::vector<std::size_t> chunk_bound_node_;
   std::vector<StressAccumulator> partition_acc_;
-  // Nodes in chunks of kNodeChunk: the partitions whose node range meets each chunk, ascending.
-  std::vector<std::vector<std::size_t>> chunk_partitions_;
+  // Nodes in chunks of kNodeChunk (the unit of the nodal passes and their reductions).
+  std::size_t num_chunks_ = 0;
   // ANP blocks: their nodal reference volumes and, per step, the nodal pressures (which first
   // hold the current nodal volumes); per node chunk, that chunk's part of the volumetric energy.
   // bound_factor: per tet of the block, the constant factor of its volumetric rows in the nodal
@@ -200,15 +210,16 @@ class InternalForces {
   std::vector<double> chunk_anp_energy_;
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);
+  std::size_t build_atoms();  // partitions_, their slots and arrays; returns the ANP tiles
   // The nodal step bound's reduction (kernels/step_bound.cpp): one node chunk's largest rows, then
   // the step they give into r.
   void nodal_bound_of_chunk(std::size_t chunk);
   void nodal_critical_step(StressPassResult& r) const;
-  // Node chunk c of `out` (kWidth values per node) = the arrays of the partitions meeting it that
-  // `use` accepts (each from its `offset` in `arrays`, kStride values per node: the first kWidth
-  // to `out`, and value kWidth to `extra` when given), summed in partition order.
-  template <std::size_t kStride, std::size_t kWidth, class Use>
-  void sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t Partition::*offset, double* out, Use use,
+  // Node chunk c of `out` (kWidth values per node) = each node's slots in [slot_lo, slot_hi) of
+  // `arrays` (kStride values per slot: the first kWidth to `out`, and value kWidth to `extra` when
+  // given), summed in atom order.
+  template <std::size_t kStride, std::size_t kWidth>
+  void sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
                  double* extra = nullptr) const;
 };
 

@@ -16,6 +16,12 @@
 
 namespace tactus::solver {
 
+// The atom: a run of kAtomTets consecutive tets of one material block (a block's last may be
+// shorter), the unit every nodal sum is taken in. The stress pass scatters each atom's forces into
+// its own array and sums them per node in atom order; the decomposition gives ranks whole atoms.
+// Atoms do not depend on the thread or rank count, so neither do the sums (OpenRadioss' /PARITH/ON).
+inline constexpr std::size_t kAtomTets = 128;
+
 // Tets of one material, contiguous in element order: the force kernel dispatches on the
 // material once per block, never per element. The law's per-element data (hgo: fibre directions)
 // belongs to the block: its own array when the elements bring their own (a body's fibres file),
