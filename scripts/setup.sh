@@ -10,6 +10,7 @@ PACKAGES=(
   g++ cmake ninja-build pkg-config git
   libeigen3-dev libhdf5-dev libgmsh-dev libvtk9-dev libcgal-dev libopencv-dev libtbb-dev
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libgtest-dev libgdcm-dev zlib1g-dev libmetis-dev
+  libopenmpi-dev openmpi-bin
   xvfb xauth chromium
   python3 python3-numpy python3-h5py python3-meshio python3-vtk9
   python3-pydicom python3-nibabel dicom3tools black python3-flake8

@@ -3,6 +3,8 @@
 // once for each; the partitions' forces are then summed per node in partition order.
 #include "tactus/solver/internal_force.hpp"
 
+#include "tactus/core/error.hpp"
+
 #include "element_loop.hpp"
 #include "tactus/solver/rigid.hpp"
 
@@ -44,6 +46,7 @@ void times_volume(const double* V, double* x, std::size_t lo, std::size_t hi) {
 
 // The ANP tiles of a partition's tets (InternalForces::anp_tiles_).
 std::size_t tiles_of(std::size_t tets) { return (tets + kAnpTile - 1) / kAnpTile; }
+static_assert(kForceStride == InternalForces::kSlotDoubles);
 // Whole tiles per atom: every tile is then the same 16 tets of its block at any rank count.
 static_assert(kAtomTets % kAnpTile == 0);
 
@@ -261,6 +264,7 @@ std::size_t InternalForces::build_atoms() {
     block_slot_end_[k] = slots;
   }
   static_assert(4 * kAtomTets <= 65536, "an atom's slots must fit tet_slot_'s 16 bits");
+  for (std::size_t p = 0; p < partitions_.size(); ++p) interior_atoms_.push_back(p);
   partition_forces_.assign(kForceStride * slots, 0.0);
   partition_volumes_.assign(slots, 0.0);
   anp_tiles_.assign(tiles, 0.0);
@@ -375,7 +379,37 @@ void InternalForces::anp_pass(const double* u) {
   }
 }
 
-StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
+// One atom's stress pass into its slots and partition_acc_[p].
+void InternalForces::stress_partition(std::size_t p, const double* u, const double* v, bool viscous) {
+  const Partition& q = partitions_[p];
+  const MaterialBlock& b = model_.blocks[q.block];
+  double* f = partition_forces_.data() + kForceStride * q.slot_begin;
+  std::fill(f, f + kForceStride * (q.slot_end - q.slot_begin), 0.0);
+  StressAccumulator acc;
+  StressKernelArgs args{
+      model_.conn.data(), model_.grad.data(),   model_.volume.data(), b.material.law(), b.data(), b.data_stride(), b.begin, q.begin, q.end, u, v, f,
+      tet_slot_.data(),   viscous ? beta_ : 0.0};
+  args.nodal_pressure = block_pressure_[q.block];
+  if (args.nodal_pressure) {
+    args.anp_volume_floor = b.material.volume_floor(), args.anp_floor_stiffness = b.material.small_strain_bulk();
+    args.rigid_node = rigid_node_.data();
+  }
+  if (nodal_mass_) {
+    args.nodal_bound = true;
+    for (const AnpBlock& an : anp_)
+      if (an.block == q.block) {
+        args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
+        args.anp_tiles = anp_tiles_.data() + q.tile_offset;
+        std::fill(args.anp_tiles, args.anp_tiles + tiles_of(q.end - q.begin), 0.0);
+      }
+  }
+  args.vectorised = vectorised_;
+  if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
+  b.material.type().stress_pass(args, acc);
+  partition_acc_[p] = acc;
+}
+
+StressPassResult InternalForces::compute(const double* u, const double* v, double* f_out, StressSideTask side, StressExchange exchange) {
   const bool viscous = beta_ > 0;
 #pragma omp parallel num_threads(threads_)
   {
@@ -384,45 +418,21 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
 #pragma omp single nowait
       side.run(side.context);  // the partitions below are taken dynamically: this thread joins when done
     }
+    // On ranks: the atoms whose slots other ranks need first, then their exchange starts (the
+    // master thread: MPI_THREAD_FUNNELED) while the others' interior atoms run, and it ends before
+    // the sums. One process: every atom is interior.
 #pragma omp for schedule(dynamic, 1)
-    for (std::size_t p = 0; p < partitions_.size(); ++p) {
-      const Partition& q = partitions_[p];
-      const MaterialBlock& b = model_.blocks[q.block];
-      double* f = partition_forces_.data() + kForceStride * q.slot_begin;
-      std::fill(f, f + kForceStride * (q.slot_end - q.slot_begin), 0.0);
-      StressAccumulator acc;
-      StressKernelArgs args{model_.conn.data(),
-                            model_.grad.data(),
-                            model_.volume.data(),
-                            b.material.law(),
-                            b.data(),
-                            b.data_stride(),
-                            b.begin,
-                            q.begin,
-                            q.end,
-                            u,
-                            v,
-                            f,
-                            tet_slot_.data(),
-                            viscous ? beta_ : 0.0};
-      args.nodal_pressure = block_pressure_[q.block];
-      if (args.nodal_pressure) {
-        args.anp_volume_floor = b.material.volume_floor(), args.anp_floor_stiffness = b.material.small_strain_bulk();
-        args.rigid_node = rigid_node_.data();
-      }
-      if (nodal_mass_) {
-        args.nodal_bound = true;
-        for (const AnpBlock& an : anp_)
-          if (an.block == q.block) {
-            args.anp_bound_factor = an.bound_factor.data(), args.anp_bulk = b.material.small_strain_bulk();
-            args.anp_tiles = anp_tiles_.data() + q.tile_offset;
-            std::fill(args.anp_tiles, args.anp_tiles + tiles_of(q.end - q.begin), 0.0);
-          }
-      }
-      args.vectorised = vectorised_;
-      if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
-      b.material.type().stress_pass(args, acc);
-      partition_acc_[p] = acc;
+    for (std::size_t i = 0; i < boundary_atoms_.size(); ++i) stress_partition(boundary_atoms_[i], u, v, viscous);
+    if (exchange.start) {
+#pragma omp master
+      exchange.start(exchange.context);
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (std::size_t i = 0; i < interior_atoms_.size(); ++i) stress_partition(interior_atoms_[i], u, v, viscous);
+    if (exchange.finish) {
+#pragma omp master
+      exchange.finish(exchange.context);
+#pragma omp barrier
     }
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < num_chunks_; ++c) {
@@ -431,9 +441,16 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       if (nodal_mass_) nodal_bound_of_chunk(c);
     }
   }
-  // The partitions' sums in partition order; ties of the smallest step or Jacobian go to the first.
+  StressPassResult r = combine_atoms(partition_acc_);
+  if (nodal_mass_) nodal_critical_step(r);
+  return r;
+}
+
+// The atoms' sums in atom order; ties of the smallest step or Jacobian go to the first.
+StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulator>& atoms) const {
+  const bool viscous = beta_ > 0;
   StressAccumulator total;
-  for (const StressAccumulator& acc : partition_acc_) {
+  for (const StressAccumulator& acc : atoms) {
     total.energy += acc.energy;
     total.viscous_power += acc.viscous_power;
     if (acc.min_J < total.min_J) total.min_J = acc.min_J, total.min_J_element = acc.min_J_element;
@@ -451,10 +468,55 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
   r.element_critical_step = r.critical_step = viscous ? total.dt : std::sqrt(total.dt2);
   r.limiting_element = total.dt_element;
   r.nodal_critical_step = 0;  // no bound (off, or no moving node under a tet): the element estimate alone
-  if (nodal_mass_) nodal_critical_step(r);
   r.min_jacobian = total.min_J;
   r.min_jacobian_element = total.min_J_element;
   return r;
+}
+
+// Ranks: the partitions this process runs and, per other rank, the slots of shared nodes that go
+// each way. Both sides list a pair's slots node by node (ascending), each node's slots in atom
+// order, so a buffer needs no index.
+void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
+  if (!anp_.empty())
+    throw InputError("decomposition", "material blocks", "no average-nodal-pressure tets on ranks yet (their J pass needs a second exchange)",
+                     "an ANP block");
+  if (tet_atom.size() != model_.num_elements)
+    throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
+  partition_rank_.assign(partitions_.size(), 0);
+  std::vector<std::uint32_t> slot_partition(partition_volumes_.size());
+  for (std::size_t p = 0; p < partitions_.size(); ++p) {
+    const Partition& q = partitions_[p];
+    if (q.begin < q.end) partition_rank_[p] = atom_rank.at(tet_atom[q.begin]);
+    for (std::size_t sl = q.slot_begin; sl < q.slot_end; ++sl) slot_partition[sl] = static_cast<std::uint32_t>(p);
+  }
+  halo_.clear();
+  std::vector<std::size_t> halo_of_rank;  // index in halo_ + 1, per rank
+  std::vector<char> sends(partitions_.size(), 0);
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    bool mine = false;
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) mine |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
+    if (!mine) continue;
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) {
+      const int other = partition_rank_[slot_partition[node_slots_[k]]];
+      if (other == rank) continue;
+      if (halo_of_rank.size() <= static_cast<std::size_t>(other)) halo_of_rank.resize(static_cast<std::size_t>(other) + 1, 0);
+      std::size_t& h = halo_of_rank[static_cast<std::size_t>(other)];
+      if (!h) halo_.push_back({other, {}, {}, std::numeric_limits<std::size_t>::max()}), h = halo_.size();
+      HaloSlots& pair = halo_[h - 1];
+      if (pair.last_node == n) continue;  // this node's slots are listed already
+      pair.last_node = n;
+      for (std::size_t kk = node_slot_first_[n]; kk < node_slot_first_[n + 1]; ++kk) {
+        const std::uint32_t sl = node_slots_[kk];
+        const int owner = partition_rank_[slot_partition[sl]];
+        if (owner == rank) pair.send.push_back(sl), sends[slot_partition[sl]] = 1;
+        if (owner == other) pair.receive.push_back(sl);
+      }
+    }
+  }
+  std::sort(halo_.begin(), halo_.end(), [](const HaloSlots& a, const HaloSlots& b) { return a.rank < b.rank; });
+  boundary_atoms_.clear(), interior_atoms_.clear();
+  for (std::size_t p = 0; p < partitions_.size(); ++p)
+    if (partition_rank_[p] == rank) (sends[p] ? boundary_atoms_ : interior_atoms_).push_back(p);
 }
 
 }  // namespace tactus::solver

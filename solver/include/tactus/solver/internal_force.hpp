@@ -115,15 +115,45 @@ struct StressSideTask {
   void* context = nullptr;
 };
 
+// On ranks (solver/ranks.hpp): called by the master thread once the atoms whose slots other ranks
+// need are done (start: send and receive them) and before the nodal sums (finish: wait, unpack).
+struct StressExchange {
+  void (*start)(void* context) = nullptr;
+  void (*finish)(void* context) = nullptr;
+  void* context = nullptr;
+};
+
+// The slots of the nodes one rank shares with another: those this rank's atoms fill and sends, and
+// those the other's fill and it receives (InternalForces::kSlotDoubles each, in the listed order).
+struct HaloSlots {
+  int rank = 0;
+  std::vector<std::uint32_t> send, receive;
+  std::size_t last_node = 0;  // while listing
+};
+
 class InternalForces {
  public:
   static constexpr std::size_t kNodeChunk = 512;
+  static constexpr std::size_t kSlotDoubles = 4;  // per slot of slot_forces(): the force and its nodal bound row sum
   // beta: Rayleigh stiffness-proportional damping (s); threads <= 0: all cores, at most one per ~4000 tets.
   InternalForces(const Model& model, double beta, int threads);
   // f_out (3 per node) = -(f_int + f_visc) at displacement u and velocity v (v used if beta > 0).
   // side: work that may run on one thread while the others take the stress partitions (the next
   // step's contact detection, which reads the same u); that thread then joins them.
-  StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side = StressSideTask{});
+  StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side = StressSideTask{},
+                           StressExchange exchange = StressExchange{});
+  // Ranks: from now on only the atoms of `rank` run (tet_atom and atom_rank: a Decomposition of
+  // this model with kAtomTets atoms); f_out is then right at the nodes they touch once the halo()
+  // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
+  // one: combine_atoms over every rank's atom_results() in atom order). Standard tets only.
+  void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
+  const std::vector<HaloSlots>& halo() const { return halo_; }
+  double* slot_forces() { return partition_forces_.data(); }
+  // Per atom of the stress pass (atom order): its rank (after own_atoms) and its last results.
+  const std::vector<int>& atom_ranks() const { return partition_rank_; }
+  const std::vector<StressAccumulator>& atom_results() const { return partition_acc_; }
+  // The pass's result from every atom's accumulator, in atom order (the nodal bound not included).
+  StressPassResult combine_atoms(const std::vector<StressAccumulator>& atoms) const;
   int threads() const { return threads_; }
   // The threads of the next passes (the sums do not depend on them: ThreadTuner changes them as a run goes).
   void set_threads(int threads) { threads_ = threads; }
@@ -211,6 +241,12 @@ class InternalForces {
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);
   std::size_t build_atoms();  // partitions_, their slots and arrays; returns the ANP tiles
+  void stress_partition(std::size_t p, const double* u, const double* v, bool viscous);
+  // The atoms this process runs: those whose slots go to other ranks, then the rest (one process:
+  // all of them, in order); per atom its rank; per other rank the shared slots.
+  std::vector<std::size_t> boundary_atoms_, interior_atoms_;
+  std::vector<int> partition_rank_;
+  std::vector<HaloSlots> halo_;
   // The nodal step bound's reduction (kernels/step_bound.cpp): one node chunk's largest rows, then
   // the step they give into r.
   void nodal_bound_of_chunk(std::size_t chunk);
