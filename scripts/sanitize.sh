@@ -24,7 +24,7 @@ else
   cmake --build "$BUILD" -j"$(nproc)" --target tactus_test_core tactus_test_solver tactus_test_postproc tactus_test_data_samples \
     tactus-sanitizer-canary
   # Tests labelled needs_mesher run tactus-mesh, which this pass does not build. The nine longest
-  # under the sanitizers (20-43 s each, 2-6 s in the suite: half of this pass's time, measured
+  # under the sanitizers (20-43 s each, 1-3 s in the suite: half of this pass's time, measured
   # 2026-12-06) run only in the suite: each is a long contact or ANP run whose code the shorter
   # tests of the same files also drive here.
   long="Contact\.SphereSlidesOverTheEdgeAndCornerOfABlock|Contact\.NodeComingBackOverAMastersEdge|Mortar\.BlockedUzawaSweepMatchesTheSequential"
