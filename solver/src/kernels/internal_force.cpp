@@ -299,7 +299,9 @@ std::size_t InternalForces::memory_bytes() const {
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
-  b += (block_slot_begin_.capacity() + block_slot_end_.capacity()) * sizeof(std::size_t);
+  b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
+  b += partition_rank_.capacity() * sizeof(int) + halo_.capacity() * sizeof(HaloSlots);
+  for (const HaloSlots& h : halo_) b += (h.send.capacity() + h.receive.capacity()) * sizeof(std::uint32_t);
   for (const auto& a : anp_)
     b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_factor.capacity() + a.smoothed.capacity()) * sizeof(double) +
          a.averaging.memory_bytes();
