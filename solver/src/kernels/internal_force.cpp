@@ -244,7 +244,7 @@ std::size_t InternalForces::build_atoms() {
   std::size_t slots = 0, tiles = 0;
   tet_slot_.assign(4 * model.num_elements, 0);
   block_slot_begin_.assign(model.blocks.size(), 0), block_slot_end_.assign(model.blocks.size(), 0);
-  std::vector<std::uint32_t> nodes;
+  std::vector<std::uint32_t> nodes, slot_node;  // slot_node: each slot's node (the atoms' sorted node lists, in atom order)
   for (std::size_t k = 0; k < model.blocks.size(); ++k) {
     const MaterialBlock& b = model.blocks[k];
     block_slot_begin_[k] = slots;
@@ -258,6 +258,7 @@ std::size_t InternalForces::build_atoms() {
           tet_slot_[corner] = static_cast<std::uint16_t>(
               std::lower_bound(nodes.begin(), nodes.end(), static_cast<std::uint32_t>(model.conn[corner])) - nodes.begin());
         q.slot_end = slots += nodes.size();
+        slot_node.insert(slot_node.end(), nodes.begin(), nodes.end());
         if (b.material.anp()) tiles += tiles_of(q.end - q.begin);
         partitions_.push_back(q);
       }
@@ -271,10 +272,6 @@ std::size_t InternalForces::build_atoms() {
   // Each node's slots, in atom order (a counting pass, then a filling one).
   node_slot_first_.assign(model.num_nodes + 1, 0);
   node_slots_.resize(slots);
-  std::vector<std::uint32_t> slot_node(slots);
-  for (const Partition& q : partitions_)
-    for (std::size_t corner = 4 * q.begin; corner < 4 * q.end; ++corner)
-      slot_node[q.slot_begin + tet_slot_[corner]] = static_cast<std::uint32_t>(model.conn[corner]);
   for (std::uint32_t n : slot_node) ++node_slot_first_[n + 1];
   for (std::size_t a = 0; a < model.num_nodes; ++a) node_slot_first_[a + 1] += node_slot_first_[a];
   std::vector<std::size_t> next(node_slot_first_.begin(), node_slot_first_.end() - 1);
@@ -439,7 +436,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
 #pragma omp for schedule(static)
     for (std::size_t c = 0; c < num_chunks_; ++c) {
       // Each node's force and row sum: its atoms' in atom order, whatever the threads.
-      sum_chunk<kForceStride, 3>(c, partition_forces_, 0, partition_volumes_.size(), f_out, nodal_mass_ ? nodal_bound_.data() : nullptr);
+      sum_chunk<kForceStride, 3>(c, partition_forces_, 0, node_slots_.size(), f_out, nodal_mass_ ? nodal_bound_.data() : nullptr);
       if (nodal_mass_) nodal_bound_of_chunk(c);
     }
   }
@@ -493,6 +490,7 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
   }
   halo_.clear();
   std::vector<std::size_t> halo_of_rank;  // index in halo_ + 1, per rank
+  std::vector<std::size_t> listed;        // per entry of halo_: the last node whose slots it lists
   std::vector<char> sends(partitions_.size(), 0);
   for (std::size_t n = 0; n < model_.num_nodes; ++n) {
     bool mine = false;
@@ -503,10 +501,10 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
       if (other == rank) continue;
       if (halo_of_rank.size() <= static_cast<std::size_t>(other)) halo_of_rank.resize(static_cast<std::size_t>(other) + 1, 0);
       std::size_t& h = halo_of_rank[static_cast<std::size_t>(other)];
-      if (!h) halo_.push_back({other, {}, {}, std::numeric_limits<std::size_t>::max()}), h = halo_.size();
+      if (!h) halo_.push_back({other, {}, {}}), listed.push_back(n + 1), h = halo_.size();
       HaloSlots& pair = halo_[h - 1];
-      if (pair.last_node == n) continue;  // this node's slots are listed already
-      pair.last_node = n;
+      if (listed[h - 1] == n) continue;  // this node's slots are listed already
+      listed[h - 1] = n;
       for (std::size_t kk = node_slot_first_[n]; kk < node_slot_first_[n + 1]; ++kk) {
         const std::uint32_t sl = node_slots_[kk];
         const int owner = partition_rank_[slot_partition[sl]];

@@ -22,7 +22,7 @@ void check(int code, const char* what) {
 }  // namespace
 
 RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_Comm comm, double beta, int threads)
-    : model_(model), comm_(comm), forces_(model, beta, threads) {
+    : comm_(comm), forces_(model, beta, threads) {
   check(MPI_Comm_rank(comm, &rank_), "MPI_Comm_rank");
   check(MPI_Comm_size(comm, &ranks_), "MPI_Comm_size");
   if (d.atom_tets != kAtomTets)

@@ -128,7 +128,6 @@ struct StressExchange {
 struct HaloSlots {
   int rank = 0;
   std::vector<std::uint32_t> send, receive;
-  std::size_t last_node = 0;  // while listing
 };
 
 class InternalForces {

@@ -31,7 +31,6 @@ class RankStressPass {
  private:
   static void start_exchange(void* self);
   static void finish_exchange(void* self);
-  const Model& model_;
   MPI_Comm comm_;
   int rank_ = 0, ranks_ = 1;
   InternalForces forces_;
