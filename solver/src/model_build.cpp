@@ -208,7 +208,8 @@ void rotate_element_data(const MaterialType& type, const BodySpec& body, double*
 }
 
 // The skeleton body's joint gaps (MaterialBlock::joint_gap), on input numbering: its deformable
-// tets whose four nodes all lie on its rigid tets.
+// tets whose four nodes all lie on its rigid tets, or three of them on the tets of two different
+// bones (the bones' physical groups).
 std::vector<char> joint_gap_tets(const Scenario& sc, const Model& m, const TetAssignment& tets) {
   std::vector<char> gap(m.num_elements, 0);
   if (!sc.skeleton) return gap;
@@ -218,13 +219,23 @@ std::vector<char> joint_gap_tets(const Scenario& sc, const Model& m, const TetAs
   };
   for (const BodyRange& body : m.bodies) {
     if (body.name != sc.skeleton->body) continue;
-    std::vector<char> on_bone(m.num_nodes, 0);
+    constexpr int kFree = -1;
+    std::vector<int> bone_of(m.num_nodes, kFree);  // the group of a rigid tet the node lies on
     for (std::size_t e = body.tet_begin; e < body.tet_end; ++e)
       if (rigid(e))
-        for (int v : m.input_mesh.tets[e]) on_bone[static_cast<std::size_t>(v)] = 1;
+        for (int v : m.input_mesh.tets[e]) bone_of[static_cast<std::size_t>(v)] = m.input_mesh.tet_group[e];
     for (std::size_t e = body.tet_begin; e < body.tet_end; ++e) {
-      const auto& t = m.input_mesh.tets[e];
-      gap[e] = !rigid(e) && std::all_of(t.begin(), t.end(), [&](int v) { return on_bone[static_cast<std::size_t>(v)] != 0; });
+      if (rigid(e)) continue;
+      int on_bones = 0, first = kFree;
+      bool two_bones = false;
+      for (int v : m.input_mesh.tets[e]) {
+        const int bone = bone_of[static_cast<std::size_t>(v)];
+        if (bone == kFree) continue;
+        ++on_bones;
+        two_bones = two_bones || (first != kFree && bone != first);
+        first = first == kFree ? bone : first;
+      }
+      gap[e] = on_bones == 4 || (on_bones == 3 && two_bones);
     }
   }
   return gap;
@@ -249,7 +260,7 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
       b.end = order.size();
       if (b.end == b.begin) continue;
       if (in_gap)
-        log::info() << "joint gaps: " << b.end - b.begin << " tets of '" << name << "' lie wholly on the bones of body '" << sc.skeleton->body
+        log::info() << "joint gaps: " << b.end - b.begin << " tets of '" << name << "' lie on the bones of body '" << sc.skeleton->body
                     << "' (placed by the joints; no stress, no step of their own): material '" << b.name << "'";
       const MaterialType& type = b.material.type();
       const std::size_t n = type.element_data_size;

@@ -32,9 +32,11 @@ struct MaterialBlock {
   std::size_t begin = 0, end = 0;    // element range
   std::vector<double> element_data;  // material.type().element_data_size per element, or empty
   // The joint gaps of a skeleton's body: its deformable tets whose four nodes all lie on its bones
-  // (rigid pieces). The joints place those nodes, so such a tet has no degree of freedom of its own;
-  // flexing a joint about its centre crushes it whatever its material (the cartilage it stands for
-  // slides), so it carries no stress and sets no step. Named "<material>_joint_gap".
+  // (rigid pieces), or three of them on two different bones. The joints place those nodes: a tet
+  // with four has no degree of freedom of its own, and one with three has a face that spans the
+  // joint, which flexing squeezes flat whatever the fourth node does. Flexing a joint about its
+  // centre crushes such a tet whatever its material (the cartilage and capsule it stands for
+  // slide and fold), so it carries no stress and sets no step. Named "<material>_joint_gap".
   bool joint_gap = false;
 
   bool has_stress_pass() const { return !joint_gap && !material.rigid(); }
