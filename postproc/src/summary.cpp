@@ -356,9 +356,15 @@ std::string summary_markdown(const Summary& s) {
     o << " the added mass's kinetic energy is booked in the energy balance.\n\n";
   }
   o << "## Peak von Mises stress (over the output states)\n\n| material | peak (MPa) | time (ms) | where (element centroid) |\n|---|---|---|---|\n";
-  for (const auto& m : s.von_mises)
+  for (const auto& m : s.von_mises) {
+    // No tet of the material had any stress (rigid, a joint gap, or unloaded): no peak to place.
+    if (m.von_mises.index < 0) {
+      o << "| " << m.material << " | 0 | - | no stress in any output state (rigid, a joint gap placed by the bones, or unloaded) |\n";
+      continue;
+    }
     o << "| " << m.material << " | " << m.von_mises.value / 1e6 << " | " << m.von_mises.time * 1e3 << " | element " << m.von_mises.index << ", "
       << mm(m.von_mises.position) << " |\n";
+  }
   if (s.fibre_stretch.value > 0)
     o << "\nLargest isochoric fibre stretch (sqrt(J4bar), hgo) over the output states: " << s.fibre_stretch.value << " (family " << s.fibre_family
       << ") at t = " << s.fibre_stretch.time * 1e3 << " ms, element " << s.fibre_stretch.index << ", " << mm(s.fibre_stretch.position)
