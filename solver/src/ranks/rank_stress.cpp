@@ -46,6 +46,8 @@ std::size_t RankStressPass::halo_doubles() const {
   return n;
 }
 
+std::size_t RankStressPass::gathered_bytes() const { return forces_.atom_ranks().size() * kAtomRecord * sizeof(double); }
+
 // The master thread, once the boundary atoms are done: their shared slots out, the others' in.
 void RankStressPass::start_exchange(void* self) {
   auto& me = *static_cast<RankStressPass*>(self);

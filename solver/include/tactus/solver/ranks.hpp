@@ -25,8 +25,12 @@ class RankStressPass {
   StressPassResult compute(const double* u, const double* v, double* f_out);
   const std::vector<char>& touched() const { return touched_; }
   int rank() const { return rank_; }
-  // Doubles sent to other ranks per pass (the halo's size).
+  // Doubles sent to other ranks per pass (the halo's size), and the messages: one per rank that
+  // shares a node with this one.
   std::size_t halo_doubles() const;
+  std::size_t halo_ranks() const { return send_.size(); }
+  // Bytes of the per-atom records (energies, steps, smallest J) every rank receives per pass.
+  std::size_t gathered_bytes() const;
 
  private:
   static void start_exchange(void* self);
