@@ -7,7 +7,8 @@
 # median of its passes; this script prints the medians of those medians and their ratio.
 # All tets run as neo-Hookean standard tets (the rank pass refuses ANP blocks today).
 #   bench/mpi_scaling.sh [ROUNDS]      (default 5; TACTUS_BUILD_DIR: default build/)
-# Never time it while something else runs.
+# Open MPI binds each of up to 2 ranks to one core: the 1 x 2 run is started with --bind-to none,
+# or its two threads would share one core. Never time it while something else runs.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
@@ -23,9 +24,9 @@ for case in "box --cells 55" "hand --mesh $W/mesh/mesh.msh"; do
   args=${case#* }
   for round in $(seq "$ROUNDS"); do
     # shellcheck disable=SC2086
-    mpiexec -np 1 "$BENCH" $args --threads 2 --rounds 7 > "$W/$name.1x2.$round"
+    mpiexec -np 1 --bind-to none "$BENCH" $args --threads 2 --rounds 31 > "$W/$name.1x2.$round"
     # shellcheck disable=SC2086
-    mpiexec -np 2 --bind-to core "$BENCH" $args --threads 1 --rounds 7 > "$W/$name.2x1.$round"
+    mpiexec -np 2 --bind-to core "$BENCH" $args --threads 1 --rounds 31 > "$W/$name.2x1.$round"
   done
   cat "$W/$name.1x2.1" "$W/$name.2x1.1"
   for np in 4 8; do
@@ -52,8 +53,8 @@ done
 # on 8 / 32 / 128 ranks of one thread each, from the hand's measured per-tet cost (2 ranks x 1
 # thread) and its halo at 8 ranks, scaled as a surface, (tets per rank)^(2/3); the network 10 Gb/s
 # with 5 us per message. Per step and rank: the stress pass, the halo (no overlap counted: an upper
-# bound), the step's MINLOC (2 log2 P latencies), and the per-atom records as gathered today
-# (every atom's 64 bytes to every rank, a ring: (P-1)/P of them through each rank's link).
+# bound), the minima's MINLOC (2 log2 P latencies), and the per-atom sums as gathered today
+# (every atom's record to every rank, a ring: (P-1)/P of them through each rank's link).
 /usr/bin/python3 - "$W" <<'PY'
 import math, re, sys
 work = sys.argv[1]
@@ -69,11 +70,13 @@ for r in range(1, 100):
 t_tet = sorted(per_tet)[len(per_tet) // 2]
 halo8 = max(grab(f"{work}/hand.8", r"halo doubles sent per rank per pass: ([0-9 ]+)\n", int))
 msgs8 = max(grab(f"{work}/hand.8", r"halo messages sent per rank per pass: ([0-9 ]+)\n", int))
+atoms = grab(f"{work}/hand.8", r"tets, (\d+) atoms", int)[0]
+record = grab(f"{work}/hand.8", r"MPI_Allgatherv\): (\d+) bytes", int)[0] / atoms
 c = halo8 / (tets / 8) ** (2 / 3)
 N, bandwidth, latency = 5e6, 10e9 / 8, 5e-6
 print(f"model: per-tet cost {t_tet * 1e9:.1f} ns (hand, 2 ranks x 1 thread); halo at 8 ranks {halo8} doubles, {msgs8} messages per rank "
-      f"(c = {c:.2f} doubles per (tets per rank)^(2/3)); 10 Gb/s, 5 us per message")
-print("| ranks | tets per rank | stress pass (ms) | halo per rank (kB) | halo time (ms) | step MINLOC (ms) | records gathered (ms) | efficiency, records each step | efficiency, records at history rows only |")
+      f"(c = {c:.2f} doubles per (tets per rank)^(2/3)); records {record:.0f} bytes per atom of 128 tets; 10 Gb/s, 5 us per message")
+print("| ranks | tets per rank | stress pass (ms) | halo per rank (kB) | halo time (ms) | minima MINLOC (ms) | records gathered (ms) | efficiency, records each step | efficiency, records at history rows only |")
 print("|---|---|---|---|---|---|---|---|---|")
 for P in (8, 32, 128):
     n = N / P
@@ -81,7 +84,7 @@ for P in (8, 32, 128):
     halo_bytes = 8 * c * n ** (2 / 3)
     halo = msgs8 * latency + halo_bytes / bandwidth
     minloc = 2 * math.log2(P) * latency
-    records = (P - 1) / P * (N / 128) * 64 / bandwidth + math.log2(P) * latency
+    records = (P - 1) / P * (N / 128) * record / bandwidth + math.log2(P) * latency
     serial = N * t_tet
     e_now = serial / (P * (compute + halo + minloc + records))
     e_next = serial / (P * (compute + halo + minloc))

@@ -11,9 +11,8 @@ namespace tactus::solver {
 
 namespace {
 
-// What a rank contributes to the global result per atom it runs: the atom's index, then its
-// accumulator, as doubles (element indices are exact below 2^53).
-constexpr int kAtomRecord = 8;
+// What a rank contributes to the sums per atom it runs: its energy and viscous power.
+constexpr std::size_t kAtomRecord = 2;
 
 void check(int code, const char* what) {
   if (code != MPI_SUCCESS) throw Error(std::string("MPI: ") + what + " failed (code " + std::to_string(code) + ")");
@@ -38,6 +37,18 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
     receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size());
   }
   requests_.resize(2 * forces_.halo().size());
+  // Tets and nodes travel as MPI ints in the MINLOC.
+  if (model.num_elements > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+      model.num_nodes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw InputError("model", "size", "fewer than 2^31 tets and nodes on ranks", std::to_string(model.num_elements) + " tets");
+  // Which rank sends which atoms' records is fixed: the gather's counts and offsets once.
+  const auto& owner = forces_.atom_ranks();
+  counts_.assign(static_cast<std::size_t>(ranks_), 0), offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+  for (int r : owner) counts_[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
+  for (std::size_t r = 1; r < counts_.size(); ++r) offsets_[r] = offsets_[r - 1] + counts_[r - 1];
+  gathered_.resize(kAtomRecord * owner.size());
+  records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
+  atoms_.resize(owner.size()), mine_.resize(owner.size()), next_.resize(counts_.size());
 }
 
 std::size_t RankStressPass::halo_doubles() const {
@@ -46,7 +57,7 @@ std::size_t RankStressPass::halo_doubles() const {
   return n;
 }
 
-std::size_t RankStressPass::gathered_bytes() const { return forces_.atom_ranks().size() * kAtomRecord * sizeof(double); }
+std::size_t RankStressPass::gathered_bytes() const { return gathered_.size() * sizeof(double); }
 
 // The master thread, once the boundary atoms are done: their shared slots out, the others' in.
 void RankStressPass::start_exchange(void* self) {
@@ -79,39 +90,42 @@ void RankStressPass::finish_exchange(void* self) {
 
 StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out) {
   const StressPassResult local = forces_.compute(u, v, f_out, StressSideTask{}, StressExchange{&start_exchange, &finish_exchange, this});
-  // Every atom's accumulator on every rank, then the sums in atom order.
+  // The sums: every atom's energy and viscous power on every rank (each rank's atoms in atom
+  // order, so a record needs no index), then added in atom order.
   const auto& owner = forces_.atom_ranks();
   const auto& mine = forces_.atom_results();
-  std::vector<double> records;
+  records_.clear();
   for (std::size_t p = 0; p < owner.size(); ++p)
-    if (owner[p] == rank_) {
-      const StressAccumulator& a = mine[p];
-      records.insert(records.end(), {static_cast<double>(p), a.energy, a.viscous_power, a.dt2, a.dt, static_cast<double>(a.dt_element), a.min_J,
-                                     static_cast<double>(a.min_J_element)});
-    }
-  std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_), 0);
-  const int count = static_cast<int>(records.size());
-  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "MPI_Allgather");
-  for (std::size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
-  std::vector<double> all(static_cast<std::size_t>(offsets.back() + counts.back()));
-  check(MPI_Allgatherv(records.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, comm_), "MPI_Allgatherv");
-  std::vector<StressAccumulator> atoms(owner.size());
-  for (std::size_t i = 0; i + kAtomRecord <= all.size(); i += kAtomRecord) {
-    StressAccumulator& a = atoms[static_cast<std::size_t>(all[i])];
-    a.energy = all[i + 1], a.viscous_power = all[i + 2], a.dt2 = all[i + 3], a.dt = all[i + 4];
-    a.dt_element = static_cast<std::size_t>(all[i + 5]), a.min_J = all[i + 6], a.min_J_element = static_cast<std::size_t>(all[i + 7]);
+    if (owner[p] == rank_) records_.insert(records_.end(), {mine[p].energy, mine[p].viscous_power});
+  check(MPI_Allgatherv(records_.data(), static_cast<int>(records_.size()), MPI_DOUBLE, gathered_.data(), counts_.data(), offsets_.data(), MPI_DOUBLE,
+                       comm_),
+        "MPI_Allgatherv");
+  for (std::size_t r = 0; r < next_.size(); ++r) next_[r] = static_cast<std::size_t>(offsets_[r]);
+  for (std::size_t p = 0; p < owner.size(); ++p) {
+    std::size_t& at = next_[static_cast<std::size_t>(owner[p])];
+    atoms_[p].energy = gathered_[at], atoms_[p].viscous_power = gathered_[at + 1];
+    at += kAtomRecord;
+    mine_[p] = owner[p] == rank_ ? mine[p] : StressAccumulator{};
   }
-  StressPassResult r = forces_.combine_atoms(atoms);
-  // The nodal bound: each rank's over the nodes it touches (the others' row sums are 0 there);
-  // the smallest step, ties to the smallest node (the serial pass's first chunk).
-  struct {
-    double step;
-    int node;
-  } in{local.nodal_critical_step > 0 ? local.nodal_critical_step : std::numeric_limits<double>::infinity(), static_cast<int>(local.limiting_node)},
-      out{};
-  check(MPI_Allreduce(&in, &out, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");
-  if (out.step < std::numeric_limits<double>::infinity()) {
-    r.nodal_critical_step = out.step, r.limiting_node = static_cast<std::size_t>(out.node);
+  StressPassResult r = forces_.combine_atoms(atoms_);
+  // The minima: the element step, the smallest J and the nodal bound, each with its tet or node,
+  // as the one-process pass takes them (ties to the first atom, whose tets come first: the
+  // smallest index), in one MINLOC.
+  const StressPassResult mine_min = forces_.combine_atoms(mine_);
+  struct Pair {
+    double value;
+    int index;
+  };
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  const Pair in[3] = {{mine_min.element_critical_step, static_cast<int>(mine_min.limiting_element)},
+                      {mine_min.min_jacobian, static_cast<int>(mine_min.min_jacobian_element)},
+                      {local.nodal_critical_step > 0 ? local.nodal_critical_step : kNone, static_cast<int>(local.limiting_node)}};
+  Pair out[3];
+  check(MPI_Allreduce(in, out, 3, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");
+  r.element_critical_step = r.critical_step = out[0].value, r.limiting_element = static_cast<std::size_t>(out[0].index);
+  r.min_jacobian = out[1].value, r.min_jacobian_element = static_cast<std::size_t>(out[1].index);
+  if (out[2].value < kNone) {
+    r.nodal_critical_step = out[2].value, r.limiting_node = static_cast<std::size_t>(out[2].index);
     if (r.nodal_critical_step > r.critical_step) r.critical_step = r.nodal_critical_step, r.limited_by_node = true;
   }
   return r;

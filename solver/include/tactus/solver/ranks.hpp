@@ -3,8 +3,9 @@
 // -DTACTUS_MPI=ON): each rank runs the atoms a Decomposition gives it, sends the slots of the nodes
 // it shares to the ranks that share them (non-blocking, while its interior atoms run), and sums
 // every node it touches over all the node's slots in atom order, so its forces are the bits of one
-// process at any rank count. The per-atom energies and steps are gathered and combined in atom
-// order on every rank; the nodal step bound is a global MINLOC. Every rank holds the whole model
+// process at any rank count. The per-atom energies and viscous powers are gathered and added in
+// atom order on every rank; the element step, the smallest J and the nodal step bound are one
+// global MINLOC. Every rank holds the whole model
 // for now (scattering it is the next step), and ANP blocks are refused (their J pass needs a
 // second exchange).
 #include <mpi.h>
@@ -29,7 +30,7 @@ class RankStressPass {
   // shares a node with this one.
   std::size_t halo_doubles() const;
   std::size_t halo_ranks() const { return send_.size(); }
-  // Bytes of the per-atom records (energies, steps, smallest J) every rank receives per pass.
+  // Bytes of the per-atom records (energy, viscous power) every rank receives per pass.
   std::size_t gathered_bytes() const;
 
  private:
@@ -41,6 +42,11 @@ class RankStressPass {
   std::vector<char> touched_;
   std::vector<std::vector<double>> send_, receive_;
   std::vector<MPI_Request> requests_;
+  // The sums' gather: counts and offsets per rank (fixed), this rank's records, everyone's.
+  std::vector<int> counts_, offsets_;
+  std::vector<double> records_, gathered_;
+  std::vector<StressAccumulator> atoms_, mine_;  // every atom's sums; this rank's minima
+  std::vector<std::size_t> next_;
 };
 
 }  // namespace tactus::solver
