@@ -432,6 +432,7 @@ void add_rigid_motion(const Scenario& sc, Model& m) {
     const BodySpec& spec = sc.bodies[bi];
     BodyRange& body = m.bodies[bi];
     const std::string key = "bodies[" + std::to_string(bi) + "]";
+    if (spec.rigid_guide) body.rigid_guide = (1.0 / norm(*spec.rigid_guide)) * *spec.rigid_guide;
     if (spec.rigid_velocity) {
       // It moves the body's rigid pieces: on a body without one it would be silently ignored.
       std::string used;
@@ -489,11 +490,21 @@ Skeleton placed_skeleton(const Scenario& sc, std::size_t bi, const Model& m) {
 // [grasp].handle_centre: the handle's bounding box centred on that point of the palm frame, its
 // longest side turned across the palm (the rotation that takes one to the other, Rodrigues).
 void place_handle(const Scenario& sc, Model& m) {
-  if (!sc.skeleton || !sc.grasp.on() || !sc.grasp.handle_centre) return;
+  if (!sc.skeleton || !sc.grasp.on() || (!sc.grasp.handle_centre && !sc.grasp.handle_guided)) return;
   std::size_t hand = 0, handle = 0;
   while (sc.bodies[hand].name != sc.skeleton->body) ++hand;
   while (sc.bodies[handle].name != sc.grasp.handle) ++handle;
   const PalmFrame frame = palm_frame(placed_skeleton(sc, hand, m), sc.skeleton->file.string());
+  if (sc.grasp.handle_guided) {
+    const BodySpec& spec = sc.bodies[handle];
+    if (spec.rigid_velocity || spec.rigid_guide)
+      throw InputError(sc.file.string(), "grasp.handle_guided", "a free handle (no rigid_velocity or rigid_guide on body '" + spec.name + "')",
+                       spec.rigid_velocity ? "a prescribed handle" : "a handle with its own rigid_guide");
+    m.bodies[handle].rigid_guide = frame.normal;
+    log::info() << "grasp: handle '" << sc.grasp.handle << "' on a rail along the palm's normal (" << frame.normal[0] << ", " << frame.normal[1]
+                << ", " << frame.normal[2] << ")";
+  }
+  if (!sc.grasp.handle_centre) return;
   const BodyRange& body = m.bodies[handle];
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   for (std::size_t i = body.node_begin; i < body.node_end; ++i)

@@ -165,6 +165,10 @@ const Section<BodySpec>& body_section() {
        bind_key(&BodySpec::rigid_angular_velocity,
                 declare("rigid_angular_velocity", "rad/s", "prescribed angular velocity of each rigid piece of this body, about its centre")),
        bind_key(&BodySpec::rigid_curve, declare("rigid_curve", "", "a [curves] name scaling rigid_velocity and rigid_angular_velocity")),
+       bind_key(&BodySpec::rigid_guide,
+                declare("rigid_guide", "",
+                        "a direction (any length but 0): the body's free rigid pieces only translate along it and do not turn, as on a rail "
+                        "whose reaction does no work (default: free in all six degrees of freedom)")),
        bind_key(&BodySpec::against, declare("against", "",
                                             "place this body next to an earlier body: after translate, it is moved along against_axis only, "
                                             "so that against_gap separates the two bounding boxes along that axis")),
@@ -432,7 +436,12 @@ const Section<GraspSpec>& grasp_section() {
                 declare("handle_centre", "m",
                         "[across, along, out]: the handle's bounding-box centre moved to this point of the skeleton's palm frame (origin the "
                         "mean of the fingers' MCP joint centres, along their metacarpals, out of the palm), its longest side turned across "
-                        "the palm (default: the handle stays where its [[bodies]] keys put it)"))}};
+                        "the palm (default: the handle stays where its [[bodies]] keys put it)")),
+       bind_key(&GraspSpec::handle_guided,
+                declare("handle_guided", "",
+                        "true: the handle (free, no rigid_velocity) only moves along the palm frame's normal and does not turn, as a grip "
+                        "dynamometer's handle: the palm then reacts what the fingers squeeze (default false: a free handle is free in all "
+                        "six degrees of freedom)"))}};
   return s;
 }
 
@@ -584,6 +593,9 @@ void read_bodies(const Reader& r, const toml::table& root, Scenario& sc, const f
     } else if (t.contains("rigid_curve")) {
       r.fail(path + ".rigid_curve", "rigid_velocity or rigid_angular_velocity with it", "a curve alone");
     }
+    if (b.rigid_guide && (b.rigid_velocity || !(norm(*b.rigid_guide) > 0)))
+      r.fail(path + ".rigid_guide", "a direction of non-zero length on a body whose rigid pieces are free (no rigid_velocity)",
+             b.rigid_velocity ? "a prescribed body" : "a zero vector");
     if (!b.fibres.empty()) b.fibres = base / b.fibres;
     if (t.contains("against")) {
       if (!names.count(b.against) || b.against == b.name)

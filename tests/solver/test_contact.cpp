@@ -996,12 +996,18 @@ void sliding_over_a_coarser_slab(const std::string& method) {
 TEST(Contact, FrictionalSlidingOverACoarserSlabMortar) { sliding_over_a_coarser_slab("mortar"); }
 TEST(Contact, FrictionalSlidingOverACoarserSlabNodeToSurface) { sliding_over_a_coarser_slab("node_to_surface"); }
 
+namespace {
 // Oracle: Hertz's impact (HertzImpact), the other way round: a rigid sphere (material type rigid)
 // dropped on a soft elastic block fixed at its base (E* = E / (1 - nu^2) of the block, m the
 // sphere's mass): duration and peak force within 10 %, v chosen
 // so that the contact radius is 0.1 R. The block (40 x 40 x 20 mm, 20 contact radii wide) is graded
 // from 0.25 mm under the pole to 4 mm; its top is the slave, the rigid sphere the mortar master.
-TEST(Contact, RigidSphereDroppedOnASoftBlock) {
+// guided: the sphere on a rail along z (bodies.rigid_guide) is thrown obliquely, (0.6, -0.4, -1) v,
+// onto the block with friction 0.3: the rail removes the sideways throw at the start and every
+// sideways and turning load after, so the impact is the vertical one (Hertz as above), its centre's
+// x and y stay the start's to the bit, it never turns (rotation the identity, bit for bit), and
+// the energy audit still closes (the rail's reaction does no work).
+void rigid_sphere_dropped(bool guided) {
   testkit::TempDir dir;
   const double R = 0.01, E = 1e7, nu = 0.3, rho = 1000;
   const double Es = E / (1 - nu * nu), d_target = 0.01 * R;
@@ -1028,18 +1034,22 @@ TEST(Contact, RigidSphereDroppedOnASoftBlock) {
   sc.boundaries.push_back(testkit::boundary("block", "zmin", solver::BoundaryType::fixed, {true, true, true}, "base"));
   ContactSpec c;
   c.slave_body = "block", c.slave_surface = "zmax", c.master_body = "sphere", c.master_surface = "surface";
+  if (guided) c.friction = 0.3;
   sc.contacts.push_back(c);
   sc.contact_solver.tolerance = 1e-8;
   sc.contact_solver.max_iterations = 1000;
   sc.run.threads = 1;
   const double m_sphere = rho * 4.0 / 3.0 * M_PI * R * R * R;
   const double v = HertzImpact::speed_for(d_target, m_sphere, R, Es);
-  sc.bodies.back().initial_velocity = {0, 0, -v};
+  sc.bodies.back().initial_velocity = {guided ? 0.6 * v : 0.0, guided ? -0.4 * v : 0.0, -v};
+  if (guided) sc.bodies.back().rigid_guide = Vec3{0, 0, 2};
   sc.run.end_time = 1.4 * HertzImpact{m_sphere, R, Es, v}.duration();
   const Model model = build_model(sc);
   ExplicitSolver solver(model, sc.run, sc.damping);
   ASSERT_EQ(solver.rigid_bodies().size(), 1u);
   const RigidBody& ball = solver.rigid_bodies()[0];
+  const Vec3d start = ball.centre;
+  bool stayed_on_rail = true;
   // Hertz for the faceted sphere's own mass (1.8 % below the exact sphere's).
   const HertzImpact hertz{ball.mass, R, Es, v};
   const double F_model = hertz.peak_force(), T_model = hertz.duration();
@@ -1049,16 +1059,26 @@ TEST(Contact, RigidSphereDroppedOnASoftBlock) {
     solver.advance_velocity();
     impact.add(solver.time(), solver.contact_report().normal_force);
     worst_balance = std::max(worst_balance, std::abs(solver.energies().balance_error()));
+    stayed_on_rail = stayed_on_rail && ball.centre[0] == start[0] && ball.centre[1] == start[1] && ball.rotation == Mat3::Identity();
     if (solver.finished()) break;
     solver.advance_position();
   }
   const double e0 = 0.5 * m_sphere * v * v;
   std::printf(
-      "rigid sphere on a soft block: %zu tets, %zu steps; mass %.5g kg (exact %.5g); duration %.4e s (Hertz %.4e, %+.1f %%), peak force %.4f N "
-      "(Hertz %.4f, %+.1f %%); rebound %.4f m/s of %.4f; energy balance %.2e of the impact energy\n",
+      "%s: %zu tets, %zu steps; mass %.5g kg (exact %.5g); duration %.4e s (Hertz %.4e, %+.1f %%), peak force %.4f N "
+      "(Hertz %.4f, %+.1f %%); rebound %.4f m/s of %.4f; energy balance %.2e of the impact energy%s\n",
+      guided ? "rigid sphere on a rail along z, thrown obliquely onto a soft block (friction 0.3)" : "rigid sphere on a soft block",
       model.num_elements, solver.step_index(), ball.mass, m_sphere, impact.duration(), T_model, 100 * (impact.duration() / T_model - 1), impact.peak,
-      F_model, 100 * (impact.peak / F_model - 1), ball.momentum[2] / ball.mass, v, worst_balance / e0);
+      F_model, 100 * (impact.peak / F_model - 1), ball.momentum[2] / ball.mass, v, worst_balance / e0,
+      guided ? (stayed_on_rail ? "; centre x, y and rotation unchanged to the bit at every step" : "; LEFT THE RAIL") : "");
   EXPECT_NEAR(impact.duration() / T_model, 1.0, 0.10);
   EXPECT_NEAR(impact.peak / F_model, 1.0, 0.10);
   EXPECT_LE(worst_balance / e0, 0.02);
+  if (guided) {
+    EXPECT_TRUE(stayed_on_rail);
+  }
 }
+}  // namespace
+
+TEST(Contact, RigidSphereDroppedOnASoftBlock) { rigid_sphere_dropped(false); }
+TEST(Contact, RigidSphereOnARailThrownObliquelyOnASoftBlock) { rigid_sphere_dropped(true); }

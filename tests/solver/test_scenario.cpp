@@ -130,6 +130,12 @@ TEST_F(ScenarioFile, PerElementFibresFromFile) {
                {"other.vtu", "bodies[0].fibres", "27 nodes, 48 tets"}, true);
 }
 
+TEST_F(ScenarioFile, RailOfZeroLengthOrOnAPrescribedBody) {
+  expect_error(replace(kValid, "mesh = \"pad.msh\"", "mesh = \"pad.msh\"\nrigid_guide = [0, 0, 0]"),
+               {"bodies[0].rigid_guide", "non-zero length", "a zero vector"});
+  expect_error(replace(kValid, "mesh = \"pad.msh\"", "mesh = \"pad.msh\"\nrigid_guide = [0, 0, 1]\nrigid_velocity = [0, 0, 0]"),
+               {"bodies[0].rigid_guide", "a prescribed body"});
+}
 TEST_F(ScenarioFile, UnknownKey) { expect_error(replace(kValid, "end_time", "end_tme"), {"run.end_tme", "unknown key"}); }
 TEST_F(ScenarioFile, MissingRequiredKey) { expect_error(replace(kValid, "k2 = 882.847\n", ""), {"materials.skin.k2", "missing"}); }
 TEST_F(ScenarioFile, NegativeDensity) {

@@ -39,8 +39,8 @@ inline void apply(const ContactRows& rows, std::size_t k, const Vec3& dr, double
     if (const int b = rigid ? rigid->body(n) : -1; b >= 0) {
       const auto bi = static_cast<std::size_t>(b);
       const Vec3 f{c * wt * dr[0], c * wt * dr[1], c * wt * dr[2]};
-      const Vec3 dw = rigid->turn(b, cross(rigid->arm(n, b), f));
-      for (int d = 0; d < 3; ++d) rigid->V[bi][d] += f[d] * rigid->inv_mass[bi], rigid->w[bi][d] += dw[d];
+      const Vec3 dw = rigid->turn(b, cross(rigid->arm(n, b), f)), push = rigid->along_rail(b, f);
+      for (int d = 0; d < 3; ++d) rigid->V[bi][d] += push[d] * rigid->inv_mass[bi], rigid->w[bi][d] += dw[d];
       rigid->moved[bi] = 1;
       continue;
     }
@@ -73,8 +73,10 @@ double row_compliance(const ContactRows& rows, std::size_t k, const double* n, c
     const Vec3 t = cross(rigid->arm(node, b), nn);
     for (int d = 0; d < 3; ++d) push[slot][d] += wt * nn[d], twist[slot][d] += wt * t[d];
   }
-  for (int s = 0; s < nb; ++s)
-    w += dot(push[s], push[s]) * rigid->inv_mass[static_cast<std::size_t>(bodies[s])] + dot(twist[s], rigid->turn(bodies[s], twist[s]));
+  for (int s = 0; s < nb; ++s) {
+    const Vec3 moved = rigid->along_rail(bodies[s], push[s]);
+    w += dot(moved, moved) * rigid->inv_mass[static_cast<std::size_t>(bodies[s])] + dot(twist[s], rigid->turn(bodies[s], twist[s]));
+  }
   return w;
 }
 

@@ -20,7 +20,15 @@ struct RigidRows {
   std::vector<Vec3> centre, V, w;                  // per body; V and w (at t^{n+1/2}) are updated by the solve
   std::vector<char> moved;                         // per body: the solve changed V or w
   std::vector<double> inv_mass;                    // per body
-  std::vector<std::array<double, 9>> inv_inertia;  // per body, world frame at t^n, row by row
+  std::vector<std::array<double, 9>> inv_inertia;  // per body, world frame at t^n, row by row (0 on a rail)
+  std::vector<Vec3> guide;                         // per body: its rail's unit direction, or 0 (free)
+  // An impulse as it moves body b's centre: along its rail only when it has one.
+  Vec3 along_rail(int b, const Vec3& f) const {
+    const Vec3& g = guide[static_cast<std::size_t>(b)];
+    if (g[0] == 0 && g[1] == 0 && g[2] == 0) return f;
+    const double s = dot(g, f);
+    return {s * g[0], s * g[1], s * g[2]};
+  }
   int body(std::int32_t node) const { return body_of_node && body_of_node[node] >= 0 ? body_of_node[node] : -1; }
   Vec3 arm(std::int32_t node, int b) const;       // x_node - c_b
   Vec3 velocity(std::int32_t node, int b) const;  // V_b + w_b x arm

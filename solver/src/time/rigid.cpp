@@ -130,6 +130,7 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
     r.prescribed = body.rigid_prescribed;
     r.motion.velocity = Vec3d(body.rigid_velocity.data()), r.motion.angular_velocity = Vec3d(body.rigid_angular_velocity.data());
     r.motion.curve = body.rigid_curve;
+    r.guide = Vec3d(body.rigid_guide.data());
     for (std::int32_t a : r.nodes)
       for (int d = 0; d < 3; ++d)
         if (m.constrained[3 * static_cast<std::size_t>(a) + static_cast<std::size_t>(d)])
@@ -204,7 +205,7 @@ void RigidBodies::init(const Model& model, double* v_half, double* v_prev_half, 
   rows.body_of_node = piece_of_node_.data();
   const std::size_t nb = bodies_.size();
   rows.centre.resize(nb), rows.V.resize(nb), rows.w.resize(nb), rows.inv_mass.resize(nb), rows.inv_inertia.resize(nb);
-  rows.moved.resize(nb);
+  rows.moved.resize(nb), rows.guide.resize(nb);
   for (RigidBody& b : bodies_) {
     const BodyRange& body = model.bodies[b.body];
     const auto a0 = static_cast<std::size_t>(b.nodes.front());
@@ -217,7 +218,9 @@ void RigidBodies::init(const Model& model, double* v_half, double* v_prev_half, 
     } else {  // the body's initial velocity field v0 + w x (X - c_body), at this piece's centre
       w = Vec3d(body.initial_angular_velocity.data());
       V = Vec3d(&model.initial_velocity[3 * a0]) + w.cross(b.centre0 - Vec3d(&model.X[3 * a0]));
+      if (b.guided()) V = b.guide * b.guide.dot(V), w.setZero();  // on its rail from the start
     }
+    for (int d = 0; d < 3; ++d) rows.guide[static_cast<std::size_t>(&b - bodies_.data())][static_cast<std::size_t>(d)] = b.guide[d];
     b.momentum_before = b.momentum = b.mass * V;
     b.angular_momentum_before = b.angular_momentum = b.inertia0 * w;
     for (std::size_t k = 0; k < b.nodes.size(); ++k) {
@@ -291,10 +294,16 @@ void RigidBodies::kick(const Model& model, const double* u, double time, double 
     } else {
       b.momentum = (c_minus * b.momentum_before + dtbar * F) * c_plus;
       b.angular_momentum = (c_minus * b.angular_momentum_before + dtbar * T) * c_plus;
+      if (b.guided()) {
+        // The rail takes the load across it and every moment: its reaction, which does no work
+        // (the piece only moves along the rail and does not turn).
+        b.momentum = b.guide * b.guide.dot(b.momentum), b.angular_momentum.setZero();
+        b.reaction_force = b.guide * b.guide.dot(F) - F, b.reaction_moment = -T;
+      }
     }
     // As the contact sweep sees it: velocity and angular velocity at t^{n+1/2}, centre and inverse
     // inertia at t^n.
-    const Mat3 inv_inertia = b.inverse_inertia();
+    const Mat3 inv_inertia = b.guided() ? Mat3::Zero() : b.inverse_inertia();
     const Vec3d w = inv_inertia * b.angular_momentum;
     for (int d = 0; d < 3; ++d) {
       rows.centre[k][static_cast<std::size_t>(d)] = b.centre[d], rows.V[k][static_cast<std::size_t>(d)] = b.momentum[d] / b.mass;
@@ -322,7 +331,7 @@ void RigidBodies::drift(const Model& model, const double* u, double dt, double* 
         b.momentum = b.mass * Vec3d(rows.V[k].data());
         b.angular_momentum = b.inertia() * Vec3d(rows.w[k].data());
       }
-      next_rotation = free_rotation(b, b.rotation, b.angular_momentum, dt);
+      next_rotation = b.guided() ? b.rotation : free_rotation(b, b.rotation, b.angular_momentum, dt);
     }
     next_[k] = {b.centre + dt * b.momentum / b.mass, next_rotation};
     // The nodes' velocities over the step: the secant ones, so u^{n+1} = u^n + dt v^{n+1/2} lands

@@ -44,6 +44,10 @@ struct GraspSpec {
   // frame (across, along, out of the palm; core/skeleton.hpp), its longest side turned across
   // the palm. Unset: the handle body stays where its own keys put it.
   std::optional<Vec3> handle_centre;
+  // The handle on a rail along the palm frame's normal (bodies.rigid_guide set to it): it can only
+  // move towards or away from the palm, as a grip dynamometer's handle, so the palm reacts what
+  // the fingers squeeze. The handle must be free (no rigid_velocity).
+  bool handle_guided = false;
   bool on() const { return !handle.empty(); }
 };
 

@@ -60,6 +60,7 @@ struct BodyRange {
   bool rigid_prescribed = false;
   Vec3 rigid_velocity{0, 0, 0}, rigid_angular_velocity{0, 0, 0};
   std::int32_t rigid_curve = -1;
+  Vec3 rigid_guide{0, 0, 0};    // a unit direction: its free pieces translate along it only (0: free)
   Vec3 against_shift{0, 0, 0};  // what `against` moved it by after scale, rotate and translate
 };
 

@@ -59,6 +59,11 @@ struct RigidBody {
   Vec3d principal = Vec3d::Zero();  // principal moments
   bool prescribed = false;          // moves as `motion` says (bodies.rigid_velocity, or RigidBodies::prescribe)
   RigidMotion motion;
+  // A free piece on a rail (bodies.rigid_guide; [grasp] handle_guided): it translates along this
+  // unit direction only and does not turn; the rail takes the rest of the load (its reaction,
+  // which does no work). Zero: free in all six degrees of freedom.
+  Vec3d guide = Vec3d::Zero();
+  bool guided() const { return guide.squaredNorm() > 0; }
   // State: centre and rotation at t^n, momentum and spatial angular momentum at t^{n+1/2} (after
   // advance_velocity; at t^{n-1/2} before it), and the previous half step's.
   Vec3d centre = Vec3d::Zero();

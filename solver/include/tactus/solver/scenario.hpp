@@ -47,7 +47,8 @@ struct BodySpec {
   // Its rigid pieces' prescribed motion (rigid.hpp); either given: prescribed.
   std::optional<Vec3> rigid_velocity, rigid_angular_velocity;
   std::string rigid_curve;
-  std::filesystem::path fibres;  // optional .vtu with per-tet cell data fibre_1, fibre_2
+  std::optional<Vec3> rigid_guide;  // its free rigid pieces translate along this direction only
+  std::filesystem::path fibres;     // optional .vtu with per-tet cell data fibre_1, fibre_2
   // Placement against an earlier body: moved along one axis to leave against_gap between the
   // bounding boxes (e.g. the block 0.5 mm from the hand, whatever the hand mesh).
   std::string against;
