@@ -482,6 +482,7 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
   partition_rank_.assign(partitions_.size(), 0);
+  partition_acc_.assign(partitions_.size(), StressAccumulator{});  // the other ranks' atoms never run here: they stay empty
   std::vector<std::uint32_t> slot_partition(partition_volumes_.size());
   for (std::size_t p = 0; p < partitions_.size(); ++p) {
     const Partition& q = partitions_[p];

@@ -48,7 +48,7 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   for (std::size_t r = 1; r < counts_.size(); ++r) offsets_[r] = offsets_[r - 1] + counts_[r - 1];
   gathered_.resize(kAtomRecord * owner.size());
   records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
-  atoms_.resize(owner.size()), mine_.resize(owner.size()), next_.resize(counts_.size());
+  atoms_.resize(owner.size()), next_.resize(counts_.size());
 }
 
 std::size_t RankStressPass::halo_doubles() const {
@@ -105,20 +105,18 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
     std::size_t& at = next_[static_cast<std::size_t>(owner[p])];
     atoms_[p].energy = gathered_[at], atoms_[p].viscous_power = gathered_[at + 1];
     at += kAtomRecord;
-    mine_[p] = owner[p] == rank_ ? mine[p] : StressAccumulator{};
   }
   StressPassResult r = forces_.combine_atoms(atoms_);
   // The minima: the element step, the smallest J and the nodal bound, each with its tet or node,
   // as the one-process pass takes them (ties to the first atom, whose tets come first: the
-  // smallest index), in one MINLOC.
-  const StressPassResult mine_min = forces_.combine_atoms(mine_);
+  // smallest index), in one MINLOC; `local` holds this rank's (its atoms alone have results).
   struct Pair {
     double value;
     int index;
   };
   constexpr double kNone = std::numeric_limits<double>::infinity();
-  const Pair in[3] = {{mine_min.element_critical_step, static_cast<int>(mine_min.limiting_element)},
-                      {mine_min.min_jacobian, static_cast<int>(mine_min.min_jacobian_element)},
+  const Pair in[3] = {{local.element_critical_step, static_cast<int>(local.limiting_element)},
+                      {local.min_jacobian, static_cast<int>(local.min_jacobian_element)},
                       {local.nodal_critical_step > 0 ? local.nodal_critical_step : kNone, static_cast<int>(local.limiting_node)}};
   Pair out[3];
   check(MPI_Allreduce(in, out, 3, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");

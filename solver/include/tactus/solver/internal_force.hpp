@@ -144,7 +144,8 @@ class InternalForces {
   // Ranks: from now on only the atoms of `rank` run (tet_atom and atom_rank: a Decomposition of
   // this model with kAtomTets atoms); f_out is then right at the nodes they touch once the halo()
   // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
-  // one: combine_atoms over every rank's atom_results() in atom order). Standard tets only.
+  // one: combine_atoms over every rank's atom_results() in atom order; the other ranks' atoms
+  // keep empty results here, so the result's minima are this rank's). Standard tets only.
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }

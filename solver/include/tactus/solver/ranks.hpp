@@ -45,7 +45,7 @@ class RankStressPass {
   // The sums' gather: counts and offsets per rank (fixed), this rank's records, everyone's.
   std::vector<int> counts_, offsets_;
   std::vector<double> records_, gathered_;
-  std::vector<StressAccumulator> atoms_, mine_;  // every atom's sums; this rank's minima
+  std::vector<StressAccumulator> atoms_;  // every atom's sums
   std::vector<std::size_t> next_;
 };
 
