@@ -1,8 +1,11 @@
 // tactus-solve: explicit dynamic simulation of a scenario.toml. Thin driver over tactus::solver.
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <optional>
+#include <sstream>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/file_io.hpp"
@@ -17,6 +20,9 @@
 #include "tactus/solver/reference.hpp"
 #include "tactus/solver/run.hpp"
 #include "tactus/solver/scenario.hpp"
+#ifdef TACTUS_MPI
+#include "tactus/solver/ranks.hpp"
+#endif
 
 namespace {
 
@@ -24,7 +30,7 @@ using namespace tactus;
 
 // The options of a run (the tool's main job).
 struct SolveOptions {
-  std::string scenario_file, restart_dir, mesh_dir, check_file, write_reference;
+  std::string scenario_file, restart_dir, mesh_dir, check_file, write_reference, partition;
   std::vector<std::string> overrides;
   bool resume = false;
   double end_time = 0;
@@ -54,6 +60,10 @@ void add_solve_options(CLI::App& app, SolveOptions& o) {
   app.add_option("--check", o.check_file,
                  "compare the run's figures with a stored reference (JSON) and print each difference; "
                  "exit 5 when one is beyond its tolerance")
+      ->check(CLI::ExistingFile);
+  app.add_option("--partition", o.partition,
+                 "under mpirun: the ranks' atoms from this file (JSON: atom_tets, ranks, atom_rank; tactus-solve decompose -o writes one) "
+                 "instead of METIS's cut")
       ->check(CLI::ExistingFile);
   app.add_option("--write-reference", o.write_reference,
                  "write the run's figures as a reference with default tolerances "
@@ -162,18 +172,25 @@ void check_against(const solver::RunSummary& summary, const nlohmann::json& refe
   log::info() << "all " << checks.size() << " figures within their tolerances of " << file;
 }
 
-void solve(const SolveOptions& o, const cli::CommonOptions& common) {
+// ranks: this process's part in a run over MPI ranks (run.hpp), or none.
+void solve(const SolveOptions& o, const cli::CommonOptions& common, const solver::RankRun* ranks = nullptr) {
   solver::SolveRequest request{o.scenario_file, o.mesh_dir, common.output, o.restart_dir, std::nullopt, o.resume, o.overrides};
+  request.follower = ranks && ranks->rank != 0;
   if (*o.end_time_option) request.end_time = o.end_time;
   if (o.restart_dir.empty() && o.scenario_file.empty()) throw CLI::RequiredError("scenario");
-  solver::PreparedRun run = solver::prepare_run(request);  // a restart's scenario, output and checkpoint (checkpoint.hpp)
+  if (!o.partition.empty() && !ranks) throw InputError("command line", "--partition", "a run under mpirun (the atoms' ranks)", o.partition);
+  if (ranks && ranks->rank != 0) log::set_level(log::Level::quiet);  // rank 0 speaks for the run
+  solver::PreparedRun run = solver::prepare_run(request);            // a restart's scenario, output and checkpoint (checkpoint.hpp)
+  // Every rank has read the checkpoint before rank 0 takes the folder, and it is the same one.
+  if (ranks) ranks->check_same_restart(run.from ? run.from->step + 1 : 0);
+  if (ranks && ranks->rank != 0) return solver::follow_simulation(run.scenario, run.from ? &*run.from : nullptr, *ranks);
   const std::string scenario_file = run.scenario_file.string();
   const nlohmann::json reference = o.check_file.empty() ? nlohmann::json() : read_reference(o.check_file);
   // A reference replaces only a reference tactus wrote there (its manifest says so), checked before the run.
   std::optional<OutputFiles> reference_out;
   if (!o.write_reference.empty()) reference_out.emplace(std::vector<std::filesystem::path>{o.write_reference}, common.output_rules({scenario_file}));
   OutputFolder output(run.output, common.output_rules(solver::scenario_inputs(run.scenario)), run.from ? run.from->staging : std::filesystem::path());
-  const solver::RunSummary summary = solver::run_simulation(run.scenario, output, run.identity, run.from ? &*run.from : nullptr);
+  const solver::RunSummary summary = solver::run_simulation(run.scenario, output, run.identity, run.from ? &*run.from : nullptr, ranks);
   if (reference_out) {
     write_file(reference_out->staged(0),
                solver::make_reference(summary.run_json, std::filesystem::path(scenario_file).stem().string()).dump(2) + '\n');
@@ -185,6 +202,29 @@ void solve(const SolveOptions& o, const cli::CommonOptions& common) {
 
 }  // namespace
 
+#ifdef TACTUS_MPI
+// Under mpirun: every rank runs the command, rank 0 alone writes and speaks. A failure every rank
+// meets at the same point (bad input, a numerical failure) ends them all with rank 0's message and
+// exit code; one rank's own failure (a full disk on rank 0, a file missing on another machine) is
+// printed with its rank and ends every rank within 10 s (MPI_Abort).
+int run_on_ranks(CLI::App& app, int argc, char** argv, cli::CommonOptions& common, const SolveOptions& options, const Tools& tools,
+                 solver::RankSession& session) {
+  std::ostringstream follower_errors;
+  std::streambuf* const cerr = session.rank() == 0 ? nullptr : std::cerr.rdbuf(follower_errors.rdbuf());
+  const int code = cli::run(app, argc, argv, common, [&] {
+    session.check_same_build();
+    if (tools.run(common)) return;
+    const solver::RankRun ranks = session.run(options.partition);
+    solve(options, common, &ranks);
+  });
+  if (cerr) std::cerr.rdbuf(cerr);
+  if (code == 0 || session.all_stopped_within(10.0)) return code;
+  if (session.rank() != 0) std::cerr << "tactus-solve (MPI rank " << session.rank() << "): " << follower_errors.str();
+  std::cerr << "tactus-solve: MPI rank " << session.rank() << " stopped (exit code " << code << ") while the other ranks ran on: ending them all\n";
+  session.abort(code);
+}
+#endif
+
 int main(int argc, char** argv) {
   CLI::App app{"tactus-solve: explicit total-Lagrangian dynamics (HGO soft tissue, elastic bone) of a scenario.toml", "tactus-solve"};
   cli::CommonOptions common;
@@ -193,6 +233,20 @@ int main(int argc, char** argv) {
   add_solve_options(app, options);
   app.require_subcommand(0, 1);
   const Tools tools(app);
+#ifdef TACTUS_MPI
+  if (solver::started_by_mpirun()) {
+    solver::RankSession session(&argc, &argv);
+    return run_on_ranks(app, argc, argv, common, options, tools, session);
+  }
+#else
+  // Several copies of a build without MPI would each run the whole model into the same folder.
+  if (const char* n = std::getenv("OMPI_COMM_WORLD_SIZE"); n && std::atoi(n) > 1) {
+    std::cerr << "tactus-solve: error: started by mpirun on " << n
+              << " processes, but this tactus-solve was built without MPI (TACTUS_MPI=OFF): rebuild with libopenmpi-dev installed, "
+                 "or run it without mpirun\n";
+    return 1;
+  }
+#endif
   return cli::run(app, argc, argv, common, [&] {
     if (!tools.run(common)) solve(options, common);
   });

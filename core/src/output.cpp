@@ -714,7 +714,7 @@ void OutputFolder::keep_for_resume() {
   unregister_staging_path(staging_);
 }
 
-std::vector<fs::path> resumable_staging(const fs::path& folder, const std::string& tool) {
+std::vector<fs::path> resumable_staging(const fs::path& folder, const std::string& tool, bool probe_locks) {
   std::vector<fs::path> found;
   fs::path final;
   try {
@@ -726,6 +726,10 @@ std::vector<fs::path> resumable_staging(const fs::path& folder, const std::strin
     if (s.marker.value("tool", "") != tool || s.marker.value("state", "") != "writing") continue;
     std::error_code ec;
     if (!fs::is_directory(s.path / kResumableDir, ec)) continue;
+    if (!probe_locks) {
+      found.push_back(s.path);
+      continue;
+    }
     int fd = -1;
     const LockState lock = try_lock(s.path, fd);
     release(fd);

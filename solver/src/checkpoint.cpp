@@ -155,10 +155,10 @@ std::vector<CheckpointListing> list_checkpoints(const fs::path& folder) {
   return found;
 }
 
-std::optional<RestartPoint> find_restart_point(const fs::path& output) {
+std::optional<RestartPoint> find_restart_point(const fs::path& output, bool probe_locks) {
   // Every complete checkpoint of every killed run writing `output`, newest (highest step) first.
   std::vector<CheckpointListing> found;
-  for (const fs::path& staging : resumable_staging(output, "tactus-solve")) {
+  for (const fs::path& staging : resumable_staging(output, "tactus-solve", probe_locks)) {
     std::vector<CheckpointListing> here = list_checkpoints(staging / kResumableDir);
     found.insert(found.end(), here.begin(), here.end());
   }
@@ -216,7 +216,7 @@ PreparedRun prepare_run(SolveRequest q) {
     if (!q.scenario.empty() || !q.meshes.empty() || q.end_time || !q.output.empty() || !q.overrides.empty())
       throw InputError("command line", "--restart", "the output folder alone (the scenario, --meshes, --end-time, --set and -o are the checkpoint's)",
                        "more arguments");
-    p.from = find_restart_point(q.restart);
+    p.from = find_restart_point(q.restart, !q.follower);
     if (!p.from)
       throw InputError(q.restart.string(), "--restart", "a killed tactus-solve run writing this folder, with a checkpoint (run.checkpoint_interval)",
                        "none: nothing to continue");
@@ -241,7 +241,7 @@ PreparedRun prepare_run(SolveRequest q) {
   p.identity = run_identity(p.scenario, q.meshes);
   if (p.from) check_restart_identity(*p.from, p.identity);
   if (q.resume && !p.from) {
-    p.from = find_restart_point(p.output);
+    p.from = find_restart_point(p.output, !q.follower);
     if (p.from) {
       try {
         check_restart_identity(*p.from, p.identity);
@@ -251,7 +251,7 @@ PreparedRun prepare_run(SolveRequest q) {
       }
     }
   }
-  if (!p.from && !q.resume)
+  if (!p.from && !q.resume && !q.follower)
     for (const auto& killed : resumable_staging(p.output, "tactus-solve"))
       log::warn("a killed run writing " + p.output.string() + " can still be continued (tactus-solve --restart " + p.output.string() +
                 "); its folder " + killed.string() + " is kept: delete it to drop it");

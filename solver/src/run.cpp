@@ -12,6 +12,7 @@
 #include <signal.h>
 
 #include <cstdlib>
+#include <exception>
 
 #include "output/results.hpp"
 #include "tactus/core/error.hpp"
@@ -464,7 +465,50 @@ class RunLoop {
 
 }  // namespace
 
-RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIdentity& identity, const RestartPoint* from) {
+namespace {
+
+// On ranks: this rank's part of the stress pass, at run.threads per rank (1 unless given).
+std::unique_ptr<SharedStressPass> rank_stress_pass(const Model& model, const Scenario& sc, const RankRun* ranks) {
+  if (!ranks) return nullptr;
+  return ranks->stress_pass(model, sc.damping.beta, sc.run.threads > 0 ? sc.run.threads : 1);
+}
+
+// What every rank measured, for run.json's "ranks" (collective).
+nlohmann::json rank_report(SharedStressPass* shared, const ExplicitSolver& solver, std::chrono::steady_clock::time_point start) {
+  if (!shared) return nullptr;
+  return shared->report({{"stress_seconds", solver.stress_seconds()},
+                         {"contact_seconds", solver.contact_seconds()},
+                         {"wall_seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}});
+}
+
+}  // namespace
+
+void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankRun& ranks) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const Model model = build_model(sc);
+  const std::unique_ptr<SharedStressPass> shared = rank_stress_pass(model, sc, &ranks);
+  ExplicitSolver solver(model, sc.run, sc.damping, shared.get());
+  if (from) {
+    StateArchive a(from->state, from->file.string());
+    solver.checkpoint(a);
+  }
+  // RunLoop::run's steps, less its writes (no collective happens in those).
+  std::exception_ptr failure;
+  try {
+    while (true) {
+      solver.advance_velocity();
+      solver.check_energy();
+      if (solver.finished() || solver.relaxed()) break;
+      solver.advance_position();
+    }
+  } catch (const NumericalError&) {
+    failure = std::current_exception();
+  }
+  rank_report(shared.get(), solver, wall_start);
+  if (failure) std::rethrow_exception(failure);
+}
+
+RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIdentity& identity, const RestartPoint* from, const RankRun* ranks) {
   const auto wall_start = std::chrono::steady_clock::now();
   const Model model = build_model(sc);
   log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size() << " materials, "
@@ -472,9 +516,11 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   for (const MaterialBlock& b : model.blocks)
     log::info() << "  " << b.name << ": " << b.material.type_name() << ", " << (b.end - b.begin) << " tets, "
                 << (b.material.anp() ? "average-nodal-pressure (ANP) tets" : "standard tets");
-  ExplicitSolver solver(model, sc.run, sc.damping);
+  const std::unique_ptr<SharedStressPass> shared = rank_stress_pass(model, sc, ranks);
+  ExplicitSolver solver(model, sc.run, sc.damping, shared.get());
   log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; " << solver.describe_step_limit() << "), "
-              << solver.threads() << " threads" << (sc.run.threads == 0 && solver.threads() > 1 ? " (or 1 while that is faster: automatic)" : "");
+              << solver.threads() << " threads" << (shared ? " per rank on " + std::to_string(shared->ranks()) + " MPI ranks" : "")
+              << (sc.run.threads == 0 && solver.threads() > 1 ? " (or 1 while that is faster: automatic)" : "");
   const double est_steps = check_runaway(sc, model, solver, staged);
 
   fs::create_directories(staged.path() / "results");
@@ -483,7 +529,9 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   loop.finishing([&] { failure = loop.finish(failure); });
   RunSummary& summary = loop.summary();
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  const nlohmann::json per_rank = rank_report(shared.get(), solver, wall_start);
   summary.run_json = run_json(sc, model, solver, summary, loop.peaks(), failure);
+  if (shared) summary.run_json["ranks"] = per_rank;
   loop.finishing([&] { write_file(staged.path() / "run.json", summary.run_json.dump(2) + '\n'); });
   loop.drop_checkpoints();  // the run is complete: they are no part of its results
   staged.commit();

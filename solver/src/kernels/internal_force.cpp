@@ -297,7 +297,7 @@ std::size_t InternalForces::memory_bytes() const {
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
-  b += partition_rank_.capacity() * sizeof(int) + halo_.capacity() * sizeof(HaloSlots);
+  b += partition_rank_.capacity() * sizeof(int) + node_rank_.capacity() * sizeof(std::int32_t) + halo_.capacity() * sizeof(HaloSlots);
   for (const HaloSlots& h : halo_) b += (h.send.capacity() + h.receive.capacity()) * sizeof(std::uint32_t);
   for (const auto& a : anp_)
     b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_factor.capacity() + a.smoothed.capacity()) * sizeof(double) +
@@ -477,8 +477,10 @@ StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulat
 // order, so a buffer needs no index.
 void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
   if (!anp_.empty())
-    throw InputError("decomposition", "material blocks", "no average-nodal-pressure tets on ranks yet (their J pass needs a second exchange)",
-                     "an ANP block");
+    throw InputError(model_.source, "materials." + model_.blocks[anp_.front().block].name + ".formulation",
+                     "\"standard\" tets on MPI ranks (average-nodal-pressure tets run on one process only, for now: their J pass needs a "
+                     "second exchange)",
+                     "\"anp\"");
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
   partition_rank_.assign(partitions_.size(), 0);
@@ -489,6 +491,9 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
     if (q.begin < q.end) partition_rank_[p] = atom_rank.at(tet_atom[q.begin]);
     for (std::size_t sl = q.slot_begin; sl < q.slot_end; ++sl) slot_partition[sl] = static_cast<std::uint32_t>(p);
   }
+  node_rank_.assign(model_.num_nodes, -1);
+  for (std::size_t n = 0; n < model_.num_nodes; ++n)
+    if (node_slot_first_[n] < node_slot_first_[n + 1]) node_rank_[n] = partition_rank_[slot_partition[node_slots_[node_slot_first_[n]]]];
   halo_.clear();
   std::vector<std::size_t> halo_of_rank;  // index in halo_ + 1, per rank
   std::vector<std::size_t> listed;        // per entry of halo_: the last node whose slots it lists

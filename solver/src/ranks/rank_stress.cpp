@@ -49,6 +49,30 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   gathered_.resize(kAtomRecord * owner.size());
   records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
   atoms_.resize(owner.size()), next_.resize(counts_.size());
+  for (std::size_t e = 0; e < model.num_elements; ++e) tets_ += d.atom_rank[d.tet_atom[e]] == rank_;
+  // The forces' gather: who owns which node is fixed, so its counts and order are too.
+  const std::vector<std::int32_t>& node_rank = forces_.node_ranks();
+  force_counts_.assign(static_cast<std::size_t>(ranks_), 0), force_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+  for (std::int32_t r : node_rank)
+    if (r >= 0) force_counts_[static_cast<std::size_t>(r)] += 3;
+  for (std::size_t r = 1; r < force_counts_.size(); ++r) force_offsets_[r] = force_offsets_[r - 1] + force_counts_[r - 1];
+  owned_nodes_.resize(static_cast<std::size_t>(force_offsets_.back() + force_counts_.back()) / 3);
+  std::vector<std::size_t> at(force_offsets_.begin(), force_offsets_.end());
+  for (std::size_t n = 0; n < node_rank.size(); ++n)
+    if (node_rank[n] >= 0) {
+      std::size_t& next = at[static_cast<std::size_t>(node_rank[n])];
+      owned_nodes_[next / 3] = static_cast<std::uint32_t>(n), next += 3;
+    }
+  owned_forces_.resize(static_cast<std::size_t>(force_counts_[static_cast<std::size_t>(rank_)]));
+  all_forces_.resize(3 * owned_nodes_.size());
+}
+
+std::size_t RankStressPass::memory_bytes() const {
+  std::size_t b = forces_.memory_bytes() + touched_.capacity() + owned_nodes_.capacity() * sizeof(std::uint32_t);
+  for (const auto& s : send_) b += s.capacity() * sizeof(double);
+  for (const auto& s : receive_) b += s.capacity() * sizeof(double);
+  b += (records_.capacity() + gathered_.capacity() + owned_forces_.capacity() + all_forces_.capacity()) * sizeof(double);
+  return b + atoms_.capacity() * sizeof(StressAccumulator);
 }
 
 std::size_t RankStressPass::halo_doubles() const {
@@ -88,8 +112,8 @@ void RankStressPass::finish_exchange(void* self) {
   }
 }
 
-StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out) {
-  const StressPassResult local = forces_.compute(u, v, f_out, StressSideTask{}, StressExchange{&start_exchange, &finish_exchange, this});
+StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
+  const StressPassResult local = forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, this});
   // The sums: every atom's energy and viscous power on every rank (each rank's atoms in atom
   // order, so a record needs no index), then added in atom order.
   const auto& owner = forces_.atom_ranks();
@@ -127,6 +151,41 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
     if (r.nodal_critical_step > r.critical_step) r.critical_step = r.nodal_critical_step, r.limited_by_node = true;
   }
   return r;
+}
+
+StressPassResult RankStressPass::compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) {
+  const StressPassResult r = compute(u, v, f_out, side);
+  const std::size_t mine = static_cast<std::size_t>(force_offsets_[static_cast<std::size_t>(rank_)]) / 3;
+  for (std::size_t k = 0; k < owned_forces_.size() / 3; ++k)
+    std::memcpy(&owned_forces_[3 * k], f_out + 3 * static_cast<std::size_t>(owned_nodes_[mine + k]), 3 * sizeof(double));
+  check(MPI_Allgatherv(owned_forces_.data(), static_cast<int>(owned_forces_.size()), MPI_DOUBLE, all_forces_.data(), force_counts_.data(),
+                       force_offsets_.data(), MPI_DOUBLE, comm_),
+        "MPI_Allgatherv");
+  for (std::size_t k = 0; k < owned_nodes_.size(); ++k)
+    std::memcpy(f_out + 3 * static_cast<std::size_t>(owned_nodes_[k]), &all_forces_[3 * k], 3 * sizeof(double));
+  return r;
+}
+
+nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, double>>& seconds) {
+  std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
+                           static_cast<double>(owned_forces_.size() / 3)};
+  for (const auto& [name, s] : seconds) mine.push_back(s);
+  std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
+  check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
+        "MPI_Gather");
+  nlohmann::json out = nlohmann::json::array();
+  if (rank_ != 0) return out;
+  for (int r = 0; r < ranks_; ++r) {
+    const double* x = all.data() + mine.size() * static_cast<std::size_t>(r);
+    nlohmann::json j = {{"rank", r},
+                        {"tets", static_cast<std::size_t>(x[0])},
+                        {"halo_doubles_per_pass", static_cast<std::size_t>(x[1])},
+                        {"halo_messages_per_pass", static_cast<std::size_t>(x[2])},
+                        {"owned_nodes", static_cast<std::size_t>(x[3])}};
+    for (std::size_t k = 0; k < seconds.size(); ++k) j[seconds[k].first] = x[4 + k];
+    out.push_back(j);
+  }
+  return out;
 }
 
 }  // namespace tactus::solver

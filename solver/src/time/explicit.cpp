@@ -13,13 +13,14 @@
 
 namespace tactus::solver {
 
-ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping)
+ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, SharedStressPass* shared)
     : model_(model),
       run_(run),
       damping_(damping),
-      forces_(model, damping.beta, run.threads),
+      shared_(shared),
+      forces_(model, damping.beta, shared ? 1 : run.threads),
       masses_(model, run.minimum_time_step),
-      max_threads_(forces_.threads()),
+      max_threads_(pass_threads()),
       tuner_(max_threads_, run.threads == 0),
       contact_tuner_(max_threads_, run.threads == 0),
       contact_(model),
@@ -34,11 +35,15 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   v_prev_half_ = v_half_;
   gravity_force_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];  // on the physical mass, also under mass scaling
+  if (mass_scaling() && shared_)
+    throw InputError(model.source, "run.minimum_time_step",
+                     "no mass scaling on MPI ranks yet (its per-tet steps live on the ranks): run it on one process",
+                     std::to_string(run.minimum_time_step) + " s");
   if (mass_scaling()) forces_.enable_mass_scaling();
   rigid_.init(model_, v_half_.data(), v_prev_half_.data(), masses_.contact_inverse_mass.data());
   if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
   if (drive_ && drive_->grasp()) regions_ = std::make_unique<GripRegions>(model_, rigid_, *drive_, contact_);
-  contact_.set_threads(forces_.threads());
+  contact_.set_threads(pass_threads());
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   schedule_ = output_schedule(run);
   while (next_target_ < schedule_.size() && schedule_[next_target_] <= 0) ++next_target_;
@@ -112,8 +117,14 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
               a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             },
             &ahead};
-  forces_.set_nodal_step_bound(run_.step_estimate == StepEstimate::nodal ? masses_.mass.data() : nullptr);  // the masses the run integrates with
-  pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data(), side);
+  const double* bound_masses = run_.step_estimate == StepEstimate::nodal ? masses_.mass.data() : nullptr;  // the masses the run integrates with
+  if (shared_) {
+    shared_->set_nodal_step_bound(bound_masses);
+    pass_ = shared_->compute_everywhere(u_.data(), v_half_.data(), f_.data(), side);
+  } else {
+    forces_.set_nodal_step_bound(bound_masses);
+    pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data(), side);
+  }
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   detection_ahead_seconds_ += ahead.seconds;
   if (ahead.error) std::rethrow_exception(ahead.error);
@@ -240,7 +251,7 @@ void ExplicitSolver::advance_velocity() {
   const auto started = std::chrono::steady_clock::now();
   // The stress passes and the contact sweep each take the thread count their own tuner found
   // faster: the sweep's many short parallel loops lose to one thread where the stress pass gains.
-  if (const int n = tuner_.threads(); n != forces_.threads()) forces_.set_threads(n);
+  if (const int n = tuner_.threads(); n != pass_threads()) (shared_ ? shared_->set_threads(n) : forces_.set_threads(n));
   if (const int n = contact_tuner_.threads(); n != contact_.threads()) contact_.set_threads(n);
   double contact_seconds = 0;
   const std::size_t ndof = 3 * model_.num_nodes;
@@ -252,7 +263,7 @@ void ExplicitSolver::advance_velocity() {
   double* __restrict v_new_of = v_half_.data();
   const double* inverse_mass = masses_.inverse_mass.data();
   const ExternalForces external = external_forces();
-#pragma omp parallel for num_threads(forces_.threads()) schedule(static)
+#pragma omp parallel for num_threads(pass_threads()) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i)
     v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i]);
   if (!rigid_.empty()) {
@@ -278,8 +289,7 @@ void ExplicitSolver::advance_velocity() {
         masses_.mass[i / 3] * (v_new_of[i] - h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i])) / (h.dtbar * h.c_plus);
   }
   accumulate_reactions();
-  audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_,
-                    forces_.threads());
+  audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_, pass_threads());
   if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
   relaxation_.measure(h, v_old_of, v_new_of, f_.data(), relaxed_dofs(), time_, drive_.get());
   velocity_advanced_ = true;
@@ -309,7 +319,7 @@ void ExplicitSolver::advance_position() {
   const auto started = std::chrono::steady_clock::now();
   const std::size_t ndof = 3 * model_.num_nodes;
   const double dt = dt_next_;
-#pragma omp parallel for num_threads(forces_.threads()) schedule(static)
+#pragma omp parallel for num_threads(pass_threads()) schedule(static)
   for (std::size_t i = 0; i < ndof; ++i) u_[i] += dt * v_half_[i];
   rigid_.place(model_, u_.data());
   min_step_ratio_ = std::min(min_step_ratio_, dt / nominal_next_);
@@ -340,7 +350,7 @@ void ExplicitSolver::advance_position() {
 std::size_t ExplicitSolver::memory_bytes() const {
   std::size_t doubles = u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + masses_.inverse_mass.capacity() +
                         gravity_force_.capacity() + masses_.mass.capacity() + masses_.pending_added.capacity();
-  return doubles * sizeof(double) + forces_.memory_bytes();
+  return doubles * sizeof(double) + forces_.memory_bytes() + (shared_ ? shared_->memory_bytes() : 0);
 }
 
 std::vector<double> ExplicitSolver::velocity_at_step() const {

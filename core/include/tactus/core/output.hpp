@@ -85,7 +85,10 @@ class OutputFolder {
 };
 
 // The staging folders of killed runs of `tool` writing `folder` that hold a kResumableDir, in name order.
-std::vector<std::filesystem::path> resumable_staging(const std::filesystem::path& folder, const std::string& tool);
+// probe_locks = false: every such folder whose marker says "writing", its lock not tried (a second
+// process that only reads what the first one found: two probing at once would each see the other's
+// probe as a live writer).
+std::vector<std::filesystem::path> resumable_staging(const std::filesystem::path& folder, const std::string& tool, bool probe_locks = true);
 
 class OutputFiles {
  public:

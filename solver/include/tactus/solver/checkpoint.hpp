@@ -87,7 +87,8 @@ struct RestartPoint {
 // The newest checkpoint that reads back whole over the interrupted tactus-solve runs that were
 // writing `output` (staging folders of processes that are gone). A checkpoint that does not read
 // back is named in a warning and the one before it is tried. None: std::nullopt.
-std::optional<RestartPoint> find_restart_point(const std::filesystem::path& output);
+// probe_locks: as resumable_staging's (false: a rank other than 0 of a run over MPI ranks).
+std::optional<RestartPoint> find_restart_point(const std::filesystem::path& output, bool probe_locks = true);
 
 // InputError when `point` cannot continue a run of `identity` (another scenario or end time, a
 // changed input, another tactus), naming what differs.
@@ -101,6 +102,9 @@ struct SolveRequest {
   std::optional<double> end_time;  // --end-time: later output times are dropped
   bool resume = false;
   std::vector<std::string> overrides;  // --set KEY=VALUE
+  // A rank other than 0 of a run over MPI ranks: finds the checkpoint as rank 0 does, without
+  // probing the staging folders' locks (rank 0 probes them at the same moment) and says nothing.
+  bool follower = false;
 };
 // The run a request comes to: the scenario read (end time applied), where it goes, its identity
 // and the checkpoint it continues from, if any. Refuses (InputError) a restart with more than the

@@ -23,6 +23,7 @@
 #include "tactus/solver/relaxation.hpp"
 #include "tactus/solver/rigid.hpp"
 #include "tactus/solver/run_settings.hpp"
+#include "tactus/solver/shared_stress_pass.hpp"
 #include "tactus/solver/thread_tuner.hpp"
 
 namespace tactus {
@@ -36,7 +37,10 @@ class ExplicitSolver {
   // Performs the initial stress pass and chooses the step. Throws InputError when the user's
   // time_step exceeds the stable limit without force_time_step or the run or its output times are
   // closer than half a step, NumericalError when the initial configuration is inverted.
-  ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping);
+  // shared: the stress pass spread over processes (shared_stress_pass.hpp), which then takes every
+  // pass (this process's InternalForces only checks a restored state); mass scaling is refused
+  // with it. nullptr: this process alone.
+  ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, SharedStressPass* shared = nullptr);
   ~ExplicitSolver();
 
   void advance_velocity();
@@ -65,6 +69,7 @@ class ExplicitSolver {
   std::vector<double> previous_displacement() const;
   const Model& model() const { return model_; }
   std::size_t memory_bytes() const;  // integrator state + per-thread force buffers (not the model)
+  SharedStressPass* shared_stress_pass() const { return shared_; }
   int threads() const { return max_threads_; }
   // The automatic thread count's probes (thread_tuner.hpp): how many, and how many chose one thread.
   // The stress passes' and the contact sweep's tuners apart.
@@ -149,9 +154,13 @@ class ExplicitSolver {
   void accumulate_reactions();
   RelaxedDofs relaxed_dofs() const { return {masses_.mass.data(), model_.constrained.data(), rigid_.piece_of_node()}; }
 
+  // The threads of the passes and the nodal loops now (the shared pass's when there is one).
+  int pass_threads() const { return shared_ ? shared_->threads() : forces_.threads(); }
+
   const Model& model_;
   RunSpec run_;
   DampingSpec damping_;
+  SharedStressPass* shared_;
   InternalForces forces_;
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_;

@@ -152,6 +152,10 @@ class InternalForces {
   // Per atom of the stress pass (atom order): its rank (after own_atoms) and its last results.
   const std::vector<int>& atom_ranks() const { return partition_rank_; }
   const std::vector<StressAccumulator>& atom_results() const { return partition_acc_; }
+  // Per node (after own_atoms): the rank of the first atom whose stress-pass tets hold it, the one
+  // rank certain to have its every slot after the exchange; -1 for a node no such tet holds (its
+  // force is 0 on every rank).
+  const std::vector<std::int32_t>& node_ranks() const { return node_rank_; }
   // The pass's result from every atom's accumulator, in atom order (the nodal bound not included).
   StressPassResult combine_atoms(const std::vector<StressAccumulator>& atoms) const;
   int threads() const { return threads_; }
@@ -246,6 +250,7 @@ class InternalForces {
   // all of them, in order); per atom its rank; per other rank the shared slots.
   std::vector<std::size_t> boundary_atoms_, interior_atoms_;
   std::vector<int> partition_rank_;
+  std::vector<std::int32_t> node_rank_;
   std::vector<HaloSlots> halo_;
   // The nodal step bound's reduction (kernels/step_bound.cpp): one node chunk's largest rows, then
   // the step they give into r.

@@ -5,27 +5,40 @@
 // every node it touches over all the node's slots in atom order, so its forces are the bits of one
 // process at any rank count. The per-atom energies and viscous powers are gathered and added in
 // atom order on every rank; the element step, the smallest J and the nodal step bound are one
-// global MINLOC. Every rank holds the whole model
-// for now (scattering it is the next step), and ANP blocks are refused (their J pass needs a
-// second exchange).
+// global MINLOC. For the integrator (SharedStressPass) the forces of the nodes each rank owns (those
+// whose first atom is its) are then gathered, so every rank holds the whole force vector and steps
+// the whole model as one process would. Every rank holds the whole model for now (scattering it is
+// the next step), and ANP blocks are refused (their J pass needs a second exchange).
 #include <mpi.h>
 
 #include <vector>
 
 #include "tactus/solver/decomposition.hpp"
 #include "tactus/solver/internal_force.hpp"
+#include "tactus/solver/shared_stress_pass.hpp"
 
 namespace tactus::solver {
 
-class RankStressPass {
+class RankStressPass : public SharedStressPass {
  public:
   // Collective over comm; d: the same decomposition (atoms of kAtomTets tets) on every rank.
   RankStressPass(const Model& model, const Decomposition& d, MPI_Comm comm, double beta, int threads);
   // f_out (3 per node of the model): right at the nodes touched() by this rank's atoms. The result
   // is the whole model's, the same bits on every rank and at any rank count. Collective.
-  StressPassResult compute(const double* u, const double* v, double* f_out);
+  StressPassResult compute(const double* u, const double* v, double* f_out) { return compute(u, v, f_out, StressSideTask{}); }
+  StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side);
+  // compute, then every rank's owned nodes' forces to every rank (one Allgatherv of 3 doubles per
+  // node, in rank then node order): f_out right at every node. Collective.
+  StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) override;
+  void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
+  void set_threads(int threads) override { forces_.set_threads(threads); }
+  int threads() const override { return forces_.threads(); }
+  nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) override;
+  std::size_t memory_bytes() const override;
   const std::vector<char>& touched() const { return touched_; }
-  int rank() const { return rank_; }
+  int rank() const override { return rank_; }
+  int ranks() const override { return ranks_; }
+  std::size_t tets() const { return tets_; }  // this rank's
   // Doubles sent to other ranks per pass (the halo's size), and the messages: one per rank that
   // shares a node with this one.
   std::size_t halo_doubles() const;
@@ -47,6 +60,56 @@ class RankStressPass {
   std::vector<double> records_, gathered_;
   std::vector<StressAccumulator> atoms_;  // every atom's sums
   std::vector<std::size_t> next_;
+  // The forces' gather: the nodes each rank owns (InternalForces::node_ranks), in rank then node
+  // order, the doubles per rank and their offsets, this rank's packed forces.
+  std::vector<std::uint32_t> owned_nodes_;
+  std::vector<int> force_counts_, force_offsets_;
+  std::vector<double> owned_forces_, all_forces_;
+  std::size_t tets_ = 0;
+};
+
+}  // namespace tactus::solver
+
+#include <filesystem>
+
+#include "tactus/solver/run.hpp"
+
+namespace tactus::solver {
+
+// True when mpirun (Open MPI) started this process: its environment says so.
+bool started_by_mpirun();
+// The number of processes mpirun started, from that environment (1 without it).
+int mpirun_processes();
+
+// MPI for one tactus-solve process under mpirun: MPI_Init_thread (FUNNELED: only the master
+// thread calls MPI, inside the stress pass) and MPI_Finalize.
+class RankSession {
+ public:
+  RankSession(int* argc, char*** argv);
+  ~RankSession();
+  RankSession(const RankSession&) = delete;
+  RankSession& operator=(const RankSession&) = delete;
+  int rank() const { return rank_; }
+  int ranks() const { return ranks_; }
+  // The build-hash handshake (collective): an InputError on every rank naming the first rank
+  // whose executable's bytes differ from rank 0's (mismatched binaries across machines).
+  void check_same_build() const;
+  // Ends every rank's process (MPI_Abort) with this exit code.
+  [[noreturn]] void abort(int code) const;
+  // After this process's run failed: true when every rank reaches this call within `seconds` (the
+  // failure was the same everywhere, at the same point: each may finalize and exit), false when
+  // one does not (it runs on, or waits in a collective this process left: abort). On a
+  // communicator of its own, so it cannot match a collective of the run.
+  bool all_stopped_within(double seconds) const;
+  // The RankRun of a run: the model's atoms (kAtomTets) cut by METIS into ranks() parts, or read
+  // from `partition` (decomposition.hpp, read_partition) when given; more ranks than tets / 8, or
+  // than atoms, is refused naming the limit. Every rank decomposes alike (METIS with a fixed seed):
+  // a checksum of the parts across ranks makes sure.
+  RankRun run(const std::filesystem::path& partition) const;
+
+ private:
+  int rank_ = 0, ranks_ = 1;
+  MPI_Comm stop_comm_ = MPI_COMM_NULL;
 };
 
 }  // namespace tactus::solver

@@ -14,6 +14,8 @@
 // interrupt publishes nothing (with checkpoints on, it writes one and keeps the staging folder
 // for tactus-solve --restart; checkpoint.hpp).
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,7 @@
 
 #include "tactus/core/output.hpp"
 #include "tactus/solver/scenario.hpp"
+#include "tactus/solver/shared_stress_pass.hpp"
 
 namespace tactus::solver {
 
@@ -38,12 +41,31 @@ struct RunSummary {
   nlohmann::json run_json;  // what run.json holds
 };
 
+// This process's part in a run over MPI ranks (tactus-solve under mpirun; docs/design.md,
+// "Decomposition into ranks"): every rank builds the model and steps all of it, the stress pass
+// spread over the ranks (each runs its atoms, and the forces are gathered), so every rank holds the
+// same state at every step; rank 0 alone writes (run_simulation), the others follow
+// (follow_simulation). The run's threads per rank: run.threads, or 1 when it is 0.
+struct RankRun {
+  int rank = 0, ranks = 1;
+  // This rank's part of the stress pass over the model (collective).
+  std::function<std::unique_ptr<SharedStressPass>(const Model& model, double beta, int threads)> stress_pass;
+  // Every rank must continue from rank 0's checkpoint (the step it was written at + 1, or 0 for a
+  // run from t = 0): an InputError on every rank otherwise (collective).
+  std::function<void(std::size_t restart_step)> check_same_restart;
+};
+
 struct RunIdentity;
 struct RestartPoint;
 // Writes into `out` (checks its free space against the estimated size first) and commits it.
 // `identity` goes into its checkpoints (checkpoint.hpp); `from`: continue from that checkpoint
-// (in `out`'s staging folder).
-RunSummary run_simulation(const Scenario& scenario, OutputFolder& out, const RunIdentity& identity, const RestartPoint* from = nullptr);
+// (in `out`'s staging folder). ranks: rank 0 of a run over ranks (run.json then has "ranks").
+RunSummary run_simulation(const Scenario& scenario, OutputFolder& out, const RunIdentity& identity, const RestartPoint* from = nullptr,
+                          const RankRun* ranks = nullptr);
+// Ranks other than 0: the same model and steps as rank 0's run_simulation, writing nothing, and its
+// collectives at the same points. A numerical failure (which every rank meets at the same step) is
+// rethrown after the run's last collective.
+void follow_simulation(const Scenario& scenario, const RestartPoint* from, const RankRun& ranks);
 // The same into a new folder (tests, benchmarks).
 RunSummary run_simulation(const Scenario& scenario, const std::filesystem::path& output_dir);
 // Every file a scenario reads (the scenario, meshes, fibre files): inputs an output may not replace.

@@ -1,0 +1,204 @@
+#!/usr/bin/env bash
+# ranks/solve: tactus-solve under mpirun gives the one-process run's bits (issue: MPI, "Tests").
+# Oracle: the same binary without mpirun, byte for byte (results/*.vtu, results.pvd, history.csv;
+# none of them holds a wall time). Cases: a pad with a bone inclusion (hgo, standard tets; Rayleigh
+# alpha and beta) sliding on a block through mortar contact with friction and onto a rigid wall
+# (node to surface) on 1 to 4 ranks; a rigid cube dropped under gravity onto the block (the rigid
+# body's 6-dof reduction) on 2 and 3 ranks; the pad with its atoms dealt round-robin over 2 ranks
+# by --partition (a cut through the contact patch); a run killed at 3 ranks and continued at 2.
+# Bad input: more ranks than tets / 8, ANP tets and mass scaling on ranks, mismatched binaries, and
+# a rank killed mid-run (the others stop within 10 s, naming it, and nothing is published).
+# Usage: solve.sh BUILD_DIR
+set -u
+B=$(cd "$1" && pwd)
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fail=0
+bad() { echo "FAIL: $*"; fail=1; }
+cd "$T" || exit 1
+S="$B/solver/tactus-solve"
+M="mpiexec --bind-to none"
+"$B/data_samples/tactus-sample-mesh" --size 0.02 0.02 0.008 --cells 8 8 4 --inclusion -1 -1 -1 1 1 0.003 -o pad.msh -q
+"$B/data_samples/tactus-sample-mesh" --size 0.03 0.03 0.01 --origin -0.005 -0.005 -0.0102 --cells 7 7 3 -o block.msh -q
+"$B/data_samples/tactus-sample-mesh" --size 0.01 0.01 0.01 --origin 0.005 0.005 0.0002 --cells 3 3 3 -o cube.msh -q
+"$B/data_samples/tactus-sample-mesh" --size 0.01 0.01 0.01 --cells 2 2 1 -o tiny.msh -q
+cat > pad.toml <<'TOML'
+[run]
+end_time = 0.6e-3
+output_times = [0.2e-3, 0.4e-3]
+history_every = 7
+[damping]
+alpha = 50.0
+beta = 1.0e-6
+[[bodies]]
+name = "pad"
+mesh = "pad.msh"
+materials = { soft_tissue = "skin", bone = "bone" }
+initial_velocity = [0.6, 0.2, -2.0]
+[[bodies]]
+name = "block"
+mesh = "block.msh"
+materials = { "*" = "block" }
+[materials.skin]
+type = "hgo"
+c1 = 10206.9
+k1 = 1.7
+k2 = 882.847
+k = 1.0e6
+formulation = "standard"
+density = 1050.0
+fibres = [[0.8660254, 0.5, 0.0], [0.8660254, -0.5, 0.0]]
+[materials.bone]
+type = "linear_elastic"
+E = 1.0e9
+nu = 0.22
+density = 2150.0
+[materials.block]
+type = "neo_hookean"
+mu = 3.0e5
+bulk = 3.0e6
+density = 1200.0
+[[boundary]]
+body = "block"
+group = "zmin"
+type = "fixed"
+[[contact]]
+slave_body = "pad"
+slave_surface = "zmin"
+master_body = "block"
+master_surface = "zmax"
+friction = 0.3
+[[contact]]
+slave_body = "pad"
+slave_surface = "xmax"
+plane = [[0.0203, 0.0, 0.0], [-1.0, 0.0, 0.0]]
+friction = 0.2
+TOML
+cat > drop.toml <<'TOML'
+[run]
+end_time = 1.5e-3
+output_times = [0.5e-3, 1.0e-3]
+history_every = 5
+gravity = [0.0, 0.0, -9.81]
+[damping]
+beta = 1.0e-6
+[[bodies]]
+name = "cube"
+mesh = "cube.msh"
+materials = { "*" = "steel" }
+initial_velocity = [0.3, 0.0, -1.5]
+[[bodies]]
+name = "block"
+mesh = "block.msh"
+materials = { "*" = "block" }
+[materials.steel]
+type = "rigid"
+density = 7800.0
+[materials.block]
+type = "neo_hookean"
+mu = 3.0e5
+bulk = 3.0e6
+density = 1200.0
+[[boundary]]
+body = "block"
+group = "zmin"
+type = "fixed"
+[[contact]]
+slave_body = "block"
+slave_surface = "zmax"
+master_body = "cube"
+master_surface = "zmin"
+friction = 0.2
+TOML
+same_as() {  # same_as ORACLE DIR WHAT
+  local f n=0
+  for f in history.csv results.pvd $(cd "$1" && ls results/*.vtu); do
+    cmp -s "$1/$f" "$2/$f" || { bad "$3: $f differs from the one-process run"; return; }
+    n=$((n + 1))
+  done
+  echo "$3: $n files the same bits as the one-process run"
+}
+figure() { python3 -c "import json,sys; j=json.load(open('$1/run.json')); print($2)"; }
+
+"$S" pad.toml -o pad1 -q || bad "the one-process pad run failed"
+echo "pad: $(figure pad1 "j['steps']") steps, $(figure pad1 "j['contact']['steps_in_contact']") in contact"
+for np in 1 2 3 4; do
+  $M -np "$np" "$S" pad.toml -o "pad_np$np" -q || { bad "the pad on $np ranks failed"; continue; }
+  same_as pad1 "pad_np$np" "pad on $np ranks"
+done
+echo "per rank (4 ranks): $(figure pad_np4 "[(r['tets'], r['halo_doubles_per_pass'], round(r['stress_seconds'], 3)) for r in j['ranks']]")"
+
+"$S" drop.toml -o drop1 -q || bad "the one-process drop failed"
+echo "rigid cube drop: $(figure drop1 "j['steps']") steps, $(figure drop1 "j['contact']['steps_in_contact']") in contact"
+for np in 2 3; do
+  $M -np "$np" "$S" drop.toml -o "drop_np$np" -q || { bad "the drop on $np ranks failed"; continue; }
+  same_as drop1 "drop_np$np" "rigid cube drop on $np ranks"
+done
+
+# A cut placed on purpose: the pad's atoms dealt round-robin between 2 ranks.
+"$S" decompose pad.toml --ranks 2 -o metis.json > /dev/null
+python3 - <<'PY'
+import json
+d = json.load(open("metis.json"))
+d["atom_rank"] = [a % 2 for a in range(len(d["atom_rank"]))]
+json.dump(d, open("dealt.json", "w"))
+PY
+$M -np 2 "$S" pad.toml -o pad_dealt -q --partition dealt.json || bad "the pad with a round-robin partition failed"
+same_as pad1 pad_dealt "pad, atoms dealt round-robin over 2 ranks"
+
+# Killed at 3 ranks (rank 0 raises SIGKILL at step 400), continued at 2.
+$M -np 3 env TACTUS_KILL_AT=step:400 "$S" pad.toml -o pad_cp -q --set run.checkpoint_interval=0.1e-3 >/dev/null 2>&1
+[ -e pad_cp/run.json ] && bad "a killed run published its folder"
+$M -np 2 "$S" --restart pad_cp -q || bad "the restart at 2 ranks failed"
+"$S" pad.toml -o pad_cp1 -q --set run.checkpoint_interval=0.1e-3
+same_as pad_cp1 pad_cp "killed at 3 ranks, continued at 2"
+
+# Refused: more ranks than tets / 8 (24 tets: at most 3), ANP tets, mass scaling.
+printf '[run]\nend_time = 1e-4\n[[bodies]]\nname = "tiny"\nmesh = "tiny.msh"\nmaterials = { "*" = "block" }\n' > tiny.toml
+sed -n '/^\[materials.block\]/,/^density/p' pad.toml >> tiny.toml
+expect() {  # expect WHAT TEXT COMMAND...: fails with exit 1 and a message containing TEXT
+  local what=$1 text=$2
+  shift 2
+  "$@" > out.txt 2>&1
+  local rc=$?
+  [ "$rc" = 1 ] || bad "$what: exit $rc, expected 1"
+  grep -q -- "$text" out.txt || bad "$what: no '$text' in: $(head -3 out.txt)"
+  [ "$(grep -c 'tactus-solve: error' out.txt)" = 1 ] || bad "$what: the message should be printed once: $(grep -c 'tactus-solve: error' out.txt) times"
+  echo "$what: $(grep 'tactus-solve: error' out.txt | head -1)"
+}
+expect "4 ranks for 24 tets" "at most 3 ranks" $M -np 4 "$S" tiny.toml -o tiny4 -q
+expect "ANP tets on ranks" "materials.skin.formulation" $M -np 2 "$S" pad.toml -o anp -q --set 'materials.skin.formulation="anp"'
+expect "mass scaling on ranks" "run.minimum_time_step" $M -np 2 "$S" pad.toml -o ms -q --set run.minimum_time_step=1e-6
+[ -e tiny4 ] || [ -e anp ] || [ -e ms ] && bad "a refused run left an output folder"
+
+# Mismatched binaries: rank 1 runs a copy whose bytes differ (one byte appended).
+cp "$S" other-solve && printf 'x' >> other-solve
+expect "mismatched binaries" "rank 1's hashes to" $M -np 1 "$S" pad.toml -o mixed -q : -np 1 ./other-solve pad.toml -o mixed -q
+
+# A rank killed mid-run: the others stop within 10 s, naming it, and nothing is published.
+$M -np 2 "$S" pad.toml -o dies -q --end-time 0.2 > dies.txt 2>&1 &
+launcher=$!
+victim=""
+for _ in $(seq 100); do
+  for p in $(pgrep -f "tactus-solve pad.toml -o dies"); do
+    grep -qz '^OMPI_COMM_WORLD_RANK=1$' "/proc/$p/environ" 2>/dev/null && victim=$p
+  done
+  [ -n "$victim" ] && break
+  sleep 0.1
+done
+if [ -z "$victim" ]; then
+  bad "rank 1 of the run to kill was not found"
+else
+  sleep 1
+  kill -9 "$victim"
+  start=$(date +%s.%N)
+  wait "$launcher"
+  rc=$?
+  took=$(python3 -c "print(round($(date +%s.%N) - $start, 2))")
+  echo "rank 1 killed: mpiexec exit $rc after $took s: $(grep -m1 -i 'rank 1\|signal 9' dies.txt)"
+  [ "$rc" != 0 ] || bad "a run whose rank died exited 0"
+  python3 -c "import sys; sys.exit(0 if $took <= 10 else 1)" || bad "the other ranks took $took s to stop (more than 10 s)"
+  grep -qi 'rank 1' dies.txt || bad "the message does not name rank 1: $(head -5 dies.txt)"
+  [ -e dies/run.json ] && bad "the killed run published its folder"
+fi
+exit $fail
