@@ -15,6 +15,7 @@
 #include <exception>
 
 #include "output/results.hpp"
+#include "tactus/core/contracts.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/core/file_io.hpp"
 #include "tactus/core/interrupt.hpp"
@@ -476,9 +477,9 @@ std::unique_ptr<SharedStressPass> rank_stress_pass(const Model& model, const Sce
 // What every rank measured, for run.json's "ranks" (collective).
 nlohmann::json rank_report(SharedStressPass* shared, const ExplicitSolver& solver, std::chrono::steady_clock::time_point start) {
   if (!shared) return nullptr;
-  return shared->report({{"stress_seconds", solver.stress_seconds()},
-                         {"contact_seconds", solver.contact_seconds()},
-                         {"wall_seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}});
+  return shared->report({{"stress_passes_s", solver.stress_seconds()},
+                         {"contact_s", solver.contact_seconds()},
+                         {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}});
 }
 
 }  // namespace
@@ -531,7 +532,7 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const nlohmann::json per_rank = rank_report(shared.get(), solver, wall_start);
   summary.run_json = run_json(sc, model, solver, summary, loop.peaks(), failure);
-  if (shared) summary.run_json["ranks"] = per_rank;
+  if (shared) summary.run_json[contracts::run_json::ranks] = per_rank;
   loop.finishing([&] { write_file(staged.path() / "run.json", summary.run_json.dump(2) + '\n'); });
   loop.drop_checkpoints();  // the run is complete: they are no part of its results
   staged.commit();

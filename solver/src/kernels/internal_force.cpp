@@ -298,7 +298,8 @@ std::size_t InternalForces::memory_bytes() const {
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
   b += partition_rank_.capacity() * sizeof(int) + node_rank_.capacity() * sizeof(std::int32_t) + halo_.capacity() * sizeof(HaloSlots);
-  for (const HaloSlots& h : halo_) b += (h.send.capacity() + h.receive.capacity()) * sizeof(std::uint32_t);
+  for (const HaloSlots& h : halo_)
+    b += (h.send.capacity() + h.receive.capacity() + h.send_tiles.capacity() + h.receive_tiles.capacity()) * sizeof(std::uint32_t);
   for (const auto& a : anp_)
     b += (a.reference_volume.capacity() + a.pressure.capacity() + a.bound_factor.capacity() + a.smoothed.capacity()) * sizeof(double) +
          a.averaging.memory_bytes();
@@ -474,22 +475,21 @@ StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulat
 
 // Ranks: the partitions this process runs and, per other rank, the slots of shared nodes that go
 // each way. Both sides list a pair's slots node by node (ascending), each node's slots in atom
-// order, so a buffer needs no index.
+// order, so a buffer needs no index; and the ANP tiles at those nodes, ascending. (The ANP J pass
+// runs every atom of an ANP block on every rank: each holds the whole displacement, and a tet's
+// volume is cheap beside its stress, so the nodal pressures need no exchange.)
 void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
-  if (!anp_.empty())
-    throw InputError(model_.source, "materials." + model_.blocks[anp_.front().block].name + ".formulation",
-                     "\"standard\" tets on MPI ranks (average-nodal-pressure tets run on one process only, for now: their J pass needs a "
-                     "second exchange)",
-                     "\"anp\"");
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
   partition_rank_.assign(partitions_.size(), 0);
   partition_acc_.assign(partitions_.size(), StressAccumulator{});  // the other ranks' atoms never run here: they stay empty
-  std::vector<std::uint32_t> slot_partition(partition_volumes_.size());
+  std::vector<std::uint32_t> slot_partition(partition_volumes_.size()), tile_partition(anp_tiles_.size());
   for (std::size_t p = 0; p < partitions_.size(); ++p) {
     const Partition& q = partitions_[p];
     if (q.begin < q.end) partition_rank_[p] = atom_rank.at(tet_atom[q.begin]);
     for (std::size_t sl = q.slot_begin; sl < q.slot_end; ++sl) slot_partition[sl] = static_cast<std::uint32_t>(p);
+    if (model_.blocks[q.block].material.anp())
+      for (std::size_t t = 0; t < tiles_of(q.end - q.begin); ++t) tile_partition[q.tile_offset + t] = static_cast<std::uint32_t>(p);
   }
   node_rank_.assign(model_.num_nodes, -1);
   for (std::size_t n = 0; n < model_.num_nodes; ++n)
@@ -517,9 +517,20 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
         if (owner == rank) pair.send.push_back(sl), sends[slot_partition[sl]] = 1;
         if (owner == other) pair.receive.push_back(sl);
       }
+      for (std::size_t t = anp_node_tile_first_[n]; t < anp_node_tile_first_[n + 1]; ++t) {
+        const std::uint32_t tile = anp_node_tiles_[t];
+        const int owner = partition_rank_[tile_partition[tile]];
+        if (owner == rank) pair.send_tiles.push_back(tile);
+        if (owner == other) pair.receive_tiles.push_back(tile);
+      }
     }
   }
   std::sort(halo_.begin(), halo_.end(), [](const HaloSlots& a, const HaloSlots& b) { return a.rank < b.rank; });
+  for (HaloSlots& h : halo_)  // a tile holds several shared nodes: once each, ascending
+    for (auto* tiles : {&h.send_tiles, &h.receive_tiles}) {
+      std::sort(tiles->begin(), tiles->end());
+      tiles->erase(std::unique(tiles->begin(), tiles->end()), tiles->end());
+    }
   boundary_atoms_.clear(), interior_atoms_.clear();
   for (std::size_t p = 0; p < partitions_.size(); ++p)
     if (partition_rank_[p] == rank) (sends[p] ? boundary_atoms_ : interior_atoms_).push_back(p);

@@ -202,19 +202,28 @@ void InternalForces::nodal_bound_of_chunk(std::size_t c) {
 
 // The step the bound gives, from the chunks' largest rows, into r (beside the element estimate;
 // the larger of the two is the critical step).
-void InternalForces::nodal_critical_step(StressPassResult& r) const {
-  // omega_max^2 <= the largest row sum / mass (design.md): the chunks' largest, ties to the first.
-  double omega2 = 0;
+void InternalForces::nodal_critical_step(StressPassResult& r) const { nodal_step(nodal_bound_rows(), r); }
+
+// The chunks' largest rows, ties to the first chunk (the smallest node).
+NodalBoundRows InternalForces::nodal_bound_rows() const {
+  NodalBoundRows rows;
   for (std::size_t c = 0; c < chunk_bound_.size(); ++c)
-    if (chunk_bound_[c] > omega2) omega2 = chunk_bound_[c], r.limiting_node = chunk_bound_node_[c];
-  // The second form: its best eta, when it bounds omega_max^2 lower (the chunks' largest per eta).
-  for (int j = 0; !chunk_eta_bound_.empty() && j < kEtas; ++j) {
-    double eta_omega2 = 0;
-    std::size_t at = 0;
+    if (chunk_bound_[c] > rows.plain) rows.plain = chunk_bound_[c], rows.plain_node = chunk_bound_node_[c];
+  rows.has_eta = !chunk_eta_bound_.empty();
+  for (int j = 0; rows.has_eta && j < kEtas; ++j)
     for (std::size_t c = 0; c < chunk_bound_.size(); ++c)
-      if (chunk_eta_bound_[kEtas * c + j] > eta_omega2) eta_omega2 = chunk_eta_bound_[kEtas * c + j], at = chunk_eta_node_[kEtas * c + j];
-    if (eta_omega2 < omega2) omega2 = eta_omega2, r.limiting_node = at;
-  }
+      if (chunk_eta_bound_[kEtas * c + j] > rows.eta[j])
+        rows.eta[j] = chunk_eta_bound_[kEtas * c + j], rows.eta_node[j] = chunk_eta_node_[kEtas * c + j];
+  return rows;
+}
+
+void InternalForces::nodal_step(const NodalBoundRows& rows, StressPassResult& r) const {
+  // omega_max^2 <= the largest row sum / mass (design.md): the chunks' largest, ties to the first.
+  double omega2 = rows.plain;
+  if (omega2 > 0) r.limiting_node = rows.plain_node;
+  // The second form: its best eta, when it bounds omega_max^2 lower (the chunks' largest per eta).
+  for (int j = 0; rows.has_eta && j < kEtas; ++j)
+    if (rows.eta[j] < omega2) omega2 = rows.eta[j], r.limiting_node = rows.eta_node[j];
   if (omega2 > 0) {
     const double omega = std::sqrt(omega2), xi = 0.5 * beta_ * omega;  // with beta: the damped mode's limit
     r.nodal_critical_step = beta_ > 0 ? 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi) : 2.0 / omega;

@@ -33,8 +33,8 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
     if (d.atom_rank[d.tet_atom[e]] == rank_)
       for (int k = 0; k < 4; ++k) touched_[static_cast<std::size_t>(model.conn[4 * e + static_cast<std::size_t>(k)])] = 1;
   for (const HaloSlots& h : forces_.halo()) {
-    send_.emplace_back(InternalForces::kSlotDoubles * h.send.size());
-    receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size());
+    send_.emplace_back(InternalForces::kSlotDoubles * h.send.size() + h.send_tiles.size());
+    receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size() + h.receive_tiles.size());
   }
   requests_.resize(2 * forces_.halo().size());
   // Tets and nodes travel as MPI ints in the MINLOC.
@@ -49,7 +49,8 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   gathered_.resize(kAtomRecord * owner.size());
   records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
   atoms_.resize(owner.size()), next_.resize(counts_.size());
-  for (std::size_t e = 0; e < model.num_elements; ++e) tets_ += d.atom_rank[d.tet_atom[e]] == rank_;
+  tet_rank_.resize(model.num_elements);
+  for (std::size_t e = 0; e < model.num_elements; ++e) tet_rank_[e] = d.atom_rank[d.tet_atom[e]], tets_ += tet_rank_[e] == rank_;
   // The forces' gather: who owns which node is fixed, so its counts and order are too.
   const std::vector<std::int32_t>& node_rank = forces_.node_ranks();
   force_counts_.assign(static_cast<std::size_t>(ranks_), 0), force_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
@@ -67,11 +68,38 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   all_forces_.resize(3 * owned_nodes_.size());
 }
 
+void RankStressPass::enable_mass_scaling() {
+  forces_.enable_mass_scaling();
+  const std::size_t tets = tet_rank_.size();
+  tet_counts_.assign(static_cast<std::size_t>(ranks_), 0), tet_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+  for (std::int32_t r : tet_rank_) ++tet_counts_[static_cast<std::size_t>(r)];
+  for (std::size_t r = 1; r < tet_counts_.size(); ++r) tet_offsets_[r] = tet_offsets_[r - 1] + tet_counts_[r - 1];
+  tets_by_rank_.resize(tets);
+  std::vector<int> at(tet_offsets_);
+  for (std::size_t e = 0; e < tets; ++e)
+    tets_by_rank_[static_cast<std::size_t>(at[static_cast<std::size_t>(tet_rank_[e])]++)] = static_cast<std::uint32_t>(e);
+  own_dt2_.resize(static_cast<std::size_t>(tet_counts_[static_cast<std::size_t>(rank_)]));
+  packed_dt2_.resize(tets), all_dt2_.resize(tets);
+}
+
+const std::vector<double>& RankStressPass::element_dt2_everywhere() {
+  const std::vector<double>& dt2 = forces_.element_dt2();
+  const auto first = static_cast<std::size_t>(tet_offsets_[static_cast<std::size_t>(rank_)]);
+  for (std::size_t k = 0; k < own_dt2_.size(); ++k) own_dt2_[k] = dt2[tets_by_rank_[first + k]];
+  check(MPI_Allgatherv(own_dt2_.data(), static_cast<int>(own_dt2_.size()), MPI_DOUBLE, packed_dt2_.data(), tet_counts_.data(), tet_offsets_.data(),
+                       MPI_DOUBLE, comm_),
+        "MPI_Allgatherv");
+  for (std::size_t k = 0; k < packed_dt2_.size(); ++k) all_dt2_[tets_by_rank_[k]] = packed_dt2_[k];
+  return all_dt2_;
+}
+
 std::size_t RankStressPass::memory_bytes() const {
   std::size_t b = forces_.memory_bytes() + touched_.capacity() + owned_nodes_.capacity() * sizeof(std::uint32_t);
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
   b += (records_.capacity() + gathered_.capacity() + owned_forces_.capacity() + all_forces_.capacity()) * sizeof(double);
+  b += tet_rank_.capacity() * sizeof(std::int32_t) + tets_by_rank_.capacity() * sizeof(std::uint32_t);
+  b += (own_dt2_.capacity() + packed_dt2_.capacity() + all_dt2_.capacity()) * sizeof(double);
   return b + atoms_.capacity() * sizeof(StressAccumulator);
 }
 
@@ -92,6 +120,7 @@ void RankStressPass::start_exchange(void* self) {
     double* out = me.send_[i].data();
     for (std::uint32_t s : halo[i].send)
       std::memcpy(out, slots + InternalForces::kSlotDoubles * s, InternalForces::kSlotDoubles * sizeof(double)), out += InternalForces::kSlotDoubles;
+    for (std::uint32_t t : halo[i].send_tiles) *out++ = me.forces_.anp_tile_values()[t];
     check(MPI_Irecv(me.receive_[i].data(), static_cast<int>(me.receive_[i].size()), MPI_DOUBLE, halo[i].rank, 0, me.comm_, &me.requests_[2 * i]),
           "MPI_Irecv");
     check(MPI_Isend(me.send_[i].data(), static_cast<int>(me.send_[i].size()), MPI_DOUBLE, halo[i].rank, 0, me.comm_, &me.requests_[2 * i + 1]),
@@ -109,11 +138,13 @@ void RankStressPass::finish_exchange(void* self) {
     const double* in = me.receive_[i].data();
     for (std::uint32_t s : halo[i].receive)
       std::memcpy(slots + InternalForces::kSlotDoubles * s, in, InternalForces::kSlotDoubles * sizeof(double)), in += InternalForces::kSlotDoubles;
+    for (std::uint32_t t : halo[i].receive_tiles) me.forces_.anp_tile_values()[t] = *in++;
   }
 }
 
 StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
   const StressPassResult local = forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, this});
+  const double start = MPI_Wtime();
   // The sums: every atom's energy and viscous power on every rank (each rank's atoms in atom
   // order, so a record needs no index), then added in atom order.
   const auto& owner = forces_.atom_ranks();
@@ -131,30 +162,40 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
     at += kAtomRecord;
   }
   StressPassResult r = forces_.combine_atoms(atoms_);
-  // The minima: the element step, the smallest J and the nodal bound, each with its tet or node,
-  // as the one-process pass takes them (ties to the first atom, whose tets come first: the
-  // smallest index), in one MINLOC; `local` holds this rank's (its atoms alone have results).
+  // The minima: the element step and the smallest J, each with its tet, as the one-process pass
+  // takes them (ties to the first atom, whose tets come first: the smallest index), and the nodal
+  // bound's largest rows (plain, and per eta of the ANP form: negated, ties to the smallest node,
+  // the first chunk's), in one MINLOC; `local` holds this rank's (its atoms alone have results).
+  // The nodal step then comes from the largest rows as in one process: a MIN of each rank's step
+  // would not do, for the ANP form takes, per eta, the largest row over every node first.
   struct Pair {
     double value;
     int index;
   };
-  constexpr double kNone = std::numeric_limits<double>::infinity();
-  const Pair in[3] = {{local.element_critical_step, static_cast<int>(local.limiting_element)},
-                      {local.min_jacobian, static_cast<int>(local.min_jacobian_element)},
-                      {local.nodal_critical_step > 0 ? local.nodal_critical_step : kNone, static_cast<int>(local.limiting_node)}};
-  Pair out[3];
-  check(MPI_Allreduce(in, out, 3, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");
+  constexpr int kPairs = 3 + NodalBoundRows::kEtas;
+  const NodalBoundRows rows = forces_.nodal_bound_rows();
+  Pair in[kPairs] = {{local.element_critical_step, static_cast<int>(local.limiting_element)},
+                     {local.min_jacobian, static_cast<int>(local.min_jacobian_element)},
+                     {-rows.plain, static_cast<int>(rows.plain_node)}};
+  for (int j = 0; j < NodalBoundRows::kEtas; ++j) in[3 + j] = {-rows.eta[j], static_cast<int>(rows.eta_node[j])};
+  Pair out[kPairs];
+  const int pairs = rows.has_eta ? kPairs : 3;
+  check(MPI_Allreduce(in, out, pairs, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");
   r.element_critical_step = r.critical_step = out[0].value, r.limiting_element = static_cast<std::size_t>(out[0].index);
   r.min_jacobian = out[1].value, r.min_jacobian_element = static_cast<std::size_t>(out[1].index);
-  if (out[2].value < kNone) {
-    r.nodal_critical_step = out[2].value, r.limiting_node = static_cast<std::size_t>(out[2].index);
-    if (r.nodal_critical_step > r.critical_step) r.critical_step = r.nodal_critical_step, r.limited_by_node = true;
+  if (forces_.nodal_bound_on()) {
+    NodalBoundRows all;
+    all.plain = -out[2].value, all.plain_node = static_cast<std::size_t>(out[2].index), all.has_eta = rows.has_eta;
+    for (int j = 0; j < pairs - 3; ++j) all.eta[j] = -out[3 + j].value, all.eta_node[j] = static_cast<std::size_t>(out[3 + j].index);
+    forces_.nodal_step(all, r);
   }
+  sums_seconds_ += MPI_Wtime() - start;
   return r;
 }
 
 StressPassResult RankStressPass::compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) {
   const StressPassResult r = compute(u, v, f_out, side);
+  const double start = MPI_Wtime();
   const std::size_t mine = static_cast<std::size_t>(force_offsets_[static_cast<std::size_t>(rank_)]) / 3;
   for (std::size_t k = 0; k < owned_forces_.size() / 3; ++k)
     std::memcpy(&owned_forces_[3 * k], f_out + 3 * static_cast<std::size_t>(owned_nodes_[mine + k]), 3 * sizeof(double));
@@ -163,6 +204,7 @@ StressPassResult RankStressPass::compute_everywhere(const double* u, const doubl
         "MPI_Allgatherv");
   for (std::size_t k = 0; k < owned_nodes_.size(); ++k)
     std::memcpy(f_out + 3 * static_cast<std::size_t>(owned_nodes_[k]), &all_forces_[3 * k], 3 * sizeof(double));
+  force_gather_seconds_ += MPI_Wtime() - start;
   return r;
 }
 
@@ -170,6 +212,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
   std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
                            static_cast<double>(owned_forces_.size() / 3)};
   for (const auto& [name, s] : seconds) mine.push_back(s);
+  mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_);
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
   check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
         "MPI_Gather");
@@ -183,6 +226,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
                         {"halo_messages_per_pass", static_cast<std::size_t>(x[2])},
                         {"owned_nodes", static_cast<std::size_t>(x[3])}};
     for (std::size_t k = 0; k < seconds.size(); ++k) j[seconds[k].first] = x[4 + k];
+    j["sums_s"] = x[4 + seconds.size()], j["force_gather_s"] = x[5 + seconds.size()];
     out.push_back(j);
   }
   return out;

@@ -161,7 +161,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"added_mass_body", &masses_.added_to_body},
                          {"body_mass", &masses_.body_mass}})
     a.io(std::string("integrator.") + name, *v, v->size());
-  if (mass_scaling()) a.io("integrator.mass_factor", forces_.mass_factor(), model_.num_elements);
+  if (mass_scaling()) a.io("integrator.mass_factor", shared_ ? shared_->mass_factor() : forces_.mass_factor(), model_.num_elements);
   a.io_record("integrator.added_momentum", masses_.added_momentum);
   a.io_record("integrator.stress_pass", pass_);
   a.io_record("integrator.energies", audit_.energy);

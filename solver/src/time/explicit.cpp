@@ -35,11 +35,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   v_prev_half_ = v_half_;
   gravity_force_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];  // on the physical mass, also under mass scaling
-  if (mass_scaling() && shared_)
-    throw InputError(model.source, "run.minimum_time_step",
-                     "no mass scaling on MPI ranks yet (its per-tet steps live on the ranks): run it on one process",
-                     std::to_string(run.minimum_time_step) + " s");
-  if (mass_scaling()) forces_.enable_mass_scaling();
+  if (mass_scaling()) (shared_ ? shared_->enable_mass_scaling() : forces_.enable_mass_scaling());
   rigid_.init(model_, v_half_.data(), v_prev_half_.data(), masses_.contact_inverse_mass.data());
   if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
   if (drive_ && drive_->grasp()) regions_ = std::make_unique<GripRegions>(model_, rigid_, *drive_, contact_);
@@ -144,7 +140,10 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
 }
 
 void ExplicitSolver::scale_mass() {
-  masses_.scale(forces_, pass_, rigid_, damping_.beta);
+  if (shared_)
+    masses_.scale(shared_->mass_factor(), shared_->element_dt2_everywhere(), pass_, rigid_, damping_.beta);
+  else
+    masses_.scale(forces_.mass_factor(), forces_.element_dt2(), pass_, rigid_, damping_.beta);
   const std::ptrdiff_t over = masses_.body_over(run_.added_mass_limit);
   if (over < 0) return;
   const auto b = static_cast<std::size_t>(over);

@@ -29,10 +29,8 @@ MassScaling::MassScaling(const Model& model, double floor) : model_(model), floo
   }
 }
 
-void MassScaling::scale(InternalForces& forces, StressPassResult& pass, const RigidBodies& rigid, double beta) {
+void MassScaling::scale(std::vector<double>& factor, const std::vector<double>& dt2, StressPassResult& pass, const RigidBodies& rigid, double beta) {
   const double floor2 = floor_ * floor_;
-  std::vector<double>& factor = forces.mass_factor();
-  const std::vector<double>& dt2 = forces.element_dt2();
   for (const MaterialBlock& b : model_.blocks) {
     if (!b.has_stress_pass()) continue;  // no step of their own
     const double rho = b.material.density();

@@ -38,8 +38,7 @@ class ExplicitSolver {
   // time_step exceeds the stable limit without force_time_step or the run or its output times are
   // closer than half a step, NumericalError when the initial configuration is inverted.
   // shared: the stress pass spread over processes (shared_stress_pass.hpp), which then takes every
-  // pass (this process's InternalForces only checks a restored state); mass scaling is refused
-  // with it. nullptr: this process alone.
+  // pass (this process's InternalForces only checks a restored state). nullptr: this process alone.
   ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, SharedStressPass* shared = nullptr);
   ~ExplicitSolver();
 

@@ -125,9 +125,24 @@ struct StressExchange {
 
 // The slots of the nodes one rank shares with another: those this rank's atoms fill and sends, and
 // those the other's fill and it receives (InternalForces::kSlotDoubles each, in the listed order).
+// With the nodal step bound and ANP blocks, also the ANP tiles (their c^2, kernels/element_loop.hpp)
+// that hold a node the two share: this rank's atoms' (sent) and the other's (received), ascending.
 struct HaloSlots {
   int rank = 0;
   std::vector<std::uint32_t> send, receive;
+  std::vector<std::uint32_t> send_tiles, receive_tiles;
+};
+
+// The nodal step bound's largest rows over some node chunks (InternalForces): the plain form's
+// omega^2 and node, and per splitting weight eta of the ANP form its own. Ranks take each one's
+// largest over all ranks (MAXLOC), then the step as one process does (InternalForces::nodal_step).
+struct NodalBoundRows {
+  static constexpr int kEtas = 13;
+  double plain = 0;
+  std::size_t plain_node = 0;
+  bool has_eta = false;
+  double eta[kEtas] = {};
+  std::size_t eta_node[kEtas] = {};
 };
 
 class InternalForces {
@@ -145,10 +160,17 @@ class InternalForces {
   // this model with kAtomTets atoms); f_out is then right at the nodes they touch once the halo()
   // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
   // one: combine_atoms over every rank's atom_results() in atom order; the other ranks' atoms
-  // keep empty results here, so the result's minima are this rank's). Standard tets only.
+  // keep empty results here, so the result's minima are this rank's). The ANP blocks' J pass still
+  // runs every atom (each rank holds the whole displacement).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }
+  double* anp_tile_values() { return anp_tiles_.data(); }
+  // The nodal bound of the last pass (nullptr-mass: off): this process's chunks' largest rows, and
+  // the step such rows give (into r, beside the element estimate).
+  bool nodal_bound_on() const { return nodal_mass_ != nullptr; }
+  NodalBoundRows nodal_bound_rows() const;
+  void nodal_step(const NodalBoundRows& rows, StressPassResult& r) const;
   // Per atom of the stress pass (atom order): its rank (after own_atoms) and its last results.
   const std::vector<int>& atom_ranks() const { return partition_rank_; }
   const std::vector<StressAccumulator>& atom_results() const { return partition_acc_; }
@@ -211,7 +233,7 @@ class InternalForces {
   // volumetric rows at the reference state (anp_reference_rows_) and the rest operator's rows
   // (anp_rest_rows_), each summed over the ANP blocks, and per node chunk and splitting weight eta
   // (kEtas of them) the largest row / mass and its node.
-  static constexpr int kEtas = 13;
+  static constexpr int kEtas = NodalBoundRows::kEtas;
   std::vector<double> anp_tiles_, anp_reference_rows_, anp_rest_rows_, chunk_eta_bound_;
   std::vector<std::size_t> anp_node_tile_first_;
   std::vector<std::uint32_t> anp_node_tiles_;

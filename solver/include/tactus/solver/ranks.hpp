@@ -31,6 +31,10 @@ class RankStressPass : public SharedStressPass {
   // node, in rank then node order): f_out right at every node. Collective.
   StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) override;
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
+  void enable_mass_scaling() override;
+  std::vector<double>& mass_factor() override { return forces_.mass_factor(); }
+  // One MPI_Allgatherv of each rank's tets' steps (8 bytes per tet, in rank then tet order).
+  const std::vector<double>& element_dt2_everywhere() override;
   void set_threads(int threads) override { forces_.set_threads(threads); }
   int threads() const override { return forces_.threads(); }
   nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) override;
@@ -66,6 +70,14 @@ class RankStressPass : public SharedStressPass {
   std::vector<int> force_counts_, force_offsets_;
   std::vector<double> owned_forces_, all_forces_;
   std::size_t tets_ = 0;
+  // Mass scaling: per tet its rank; the tets in rank then tet order, each rank's count and offset;
+  // this rank's steps packed, everyone's packed, everyone's by tet.
+  std::vector<std::int32_t> tet_rank_;
+  std::vector<std::uint32_t> tets_by_rank_;
+  std::vector<int> tet_counts_, tet_offsets_;
+  std::vector<double> own_dt2_, packed_dt2_, all_dt2_;
+  // Wall time in the sums' gather and MINLOC (compute) and in the forces' gather (compute_everywhere).
+  double sums_seconds_ = 0, force_gather_seconds_ = 0;
 };
 
 }  // namespace tactus::solver

@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Whole runs of tactus-solve over MPI ranks against OpenMP threads on this machine (issue: MPI,
+# "Performance"; docs/studies/mpi-scaling.md): 1 x 1, 1 rank x 2 threads and 2 ranks x 1 thread,
+# interleaved ROUNDS times, on two cases:
+#   cube   the benchmark cube (bench/cases/cube.toml, 48,000 neo-Hookean tets, no contact), 0.05 s;
+#   hand   the hand-block case on its pinned meshes (bench/references), its skin as standard tets
+#          (ranks refuse ANP tets today), mortar contact with friction, 0.3 ms.
+# Per layout: the median over rounds of run.json's wall_seconds (the whole run, outputs included),
+# of the stress passes' seconds and of contact's (the slowest rank's, on ranks), and the steps. The
+# results are compared bit for bit against the 1 x 1 run (history.csv and the last state).
+#   bench/mpi_solve_scaling.sh [ROUNDS]      (default 3; TACTUS_BUILD_DIR: default build/)
+# Never time it while something else runs.
+set -euo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+B=${TACTUS_BUILD_DIR:-$ROOT/build}
+ROUNDS=${1:-3}
+S=$B/solver/tactus-solve
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_vader_single_copy_mechanism=none
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+"$B/data_samples/tactus-sample-mesh" --size 0.1 0.1 0.1 --cells 20 20 20 -o "$W/cube.msh" -q
+TACTUS_BUILD_DIR=$B bash "$ROOT/bench/references/hand_block_meshes.sh" "$W/hand" > /dev/null
+run() {  # run CASE LAYOUT ROUND
+  local name=$1 layout=$2 round=$3 out="$W/$1.$2.$3" args
+  if [ "$name" = cube ]; then
+    args=("$ROOT/bench/cases/cube.toml" --meshes "$W" --end-time 0.05)
+  else
+    args=("$ROOT/pipeline/scenarios/hand_block.toml" --meshes "$W/hand" --end-time 0.3e-3 --set 'materials.soft_tissue.formulation="standard"'
+      --set run.checkpoint_wall_interval=0)
+  fi
+  case $layout in
+    1x1) "$S" "${args[@]}" -o "$out" -q --set run.threads=1 ;;
+    1x2) "$S" "${args[@]}" -o "$out" -q --set run.threads=2 ;;
+    2x1) mpiexec -np 2 --bind-to core "$S" "${args[@]}" -o "$out" -q --set run.threads=1 ;;
+  esac
+}
+for name in cube hand; do
+  for round in $(seq "$ROUNDS"); do
+    for layout in 1x1 1x2 2x1; do run "$name" "$layout" "$round"; done
+  done
+  /usr/bin/python3 - "$W" "$name" "$ROUNDS" <<'PY'
+import filecmp, json, os, statistics, sys
+work, name, rounds = sys.argv[1], sys.argv[2], int(sys.argv[3])
+rows = {}
+for layout in ("1x1", "1x2", "2x1"):
+    wall, stress, contact = [], [], []
+    for r in range(1, rounds + 1):
+        j = json.load(open(f"{work}/{name}.{layout}.{r}/run.json"))
+        wall.append(j["wall_time_s"])
+        ranks = j.get("ranks")
+        stress.append(max(x["stress_passes_s"] for x in ranks) if ranks else j["timing_s"]["stress_passes"])
+        contact.append(max(x["contact_s"] for x in ranks) if ranks else j["timing_s"]["contact"])
+    rows[layout] = (statistics.median(wall), statistics.median(stress), statistics.median(contact), j["steps"], ranks)
+base = f"{work}/{name}.1x1.1"
+states = sorted(os.listdir(f"{base}/results"))
+for layout in ("1x2", "2x1"):
+    other = f"{work}/{name}.{layout}.1"
+    same = filecmp.cmp(f"{base}/history.csv", f"{other}/history.csv", shallow=False) and filecmp.cmp(
+        f"{base}/results/{states[-1]}", f"{other}/results/{states[-1]}", shallow=False)
+    print(f"{name}: {layout} gives the 1 x 1 bits: {same}")
+for layout, (wall, stress, contact, steps, ranks) in rows.items():
+    print(f"{name} {layout}: {steps} steps, run {wall:.2f} s, stress passes {stress:.2f} s, contact {contact:.2f} s, "
+          f"{1e3 * wall / steps:.3f} ms per step" + (f"; per rank (tets, halo doubles, owned nodes): "
+          f"{[(x['tets'], x['halo_doubles_per_pass'], x['owned_nodes']) for x in ranks]}" if ranks else ""))
+print(f"{name}: 2 ranks x 1 thread / 1 rank x 2 threads, whole run: {rows['2x1'][0] / rows['1x2'][0]:.3f}; "
+      f"speed-up over 1 x 1: threads {rows['1x1'][0] / rows['1x2'][0]:.2f}, ranks {rows['1x1'][0] / rows['2x1'][0]:.2f}")
+PY
+done

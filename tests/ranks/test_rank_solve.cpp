@@ -1,0 +1,131 @@
+// The explicit integrator over MPI ranks steps as one process does (issue: MPI, "Rank-count
+// independence", the self-contact case). A free U-shaped strip (12 x 5 x 20 mm, arms 3 mm thick, a
+// 6 mm slot, E = 1 MPa, Rayleigh beta on) whose arms swing into each other at up to 2.5 m/s: its one
+// surface is slave and master of one node-to-surface pair. The same model is stepped twice in this
+// process, by ExplicitSolver alone (one thread) and with the stress pass spread over the ranks of
+// this mpiexec (RankStressPass, METIS atoms), in lockstep. Oracle: the one-process run. After every
+// step, every displacement and half-step velocity component, the energies and the contact force
+// must be the same bits on every rank. Run by CTest on 1 to 4 ranks.
+#include <mpi.h>
+
+#include <gmsh.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "material_kit.hpp"
+#include "tactus/core/gmsh_session.hpp"
+#include "tactus/solver/contact.hpp"
+#include "tactus/solver/decomposition.hpp"
+#include "tactus/solver/explicit.hpp"
+#include "tactus/solver/model.hpp"
+#include "tactus/solver/ranks.hpp"
+
+using namespace tactus;
+using namespace tactus::solver;
+
+namespace {
+
+constexpr double W = 0.012, D = 0.005, Hgt = 0.02, t = 0.003, h = 1.2e-3;
+
+Model u_strip() {
+  TetMesh mesh;
+  {
+    GmshSession session;
+    gmsh::model::add("u_strip");
+    const int outer = gmsh::model::occ::addBox(0, 0, 0, W, D, Hgt);
+    const int slot = gmsh::model::occ::addBox(t, -D, t, W - 2 * t, 3 * D, Hgt);
+    gmsh::vectorpair result;
+    std::vector<gmsh::vectorpair> map;
+    gmsh::model::occ::cut({{3, outer}}, {{3, slot}}, result, map);
+    gmsh::model::occ::synchronize();
+    gmsh::model::addPhysicalGroup(3, {result[0].second}, 1);
+    gmsh::model::setPhysicalName(3, 1, "strip");
+    gmsh::vectorpair faces;
+    gmsh::model::getBoundary(result, faces, false, false, false);
+    std::vector<int> tags;
+    for (const auto& f : faces) tags.push_back(f.second);
+    gmsh::model::addPhysicalGroup(2, tags, 20);
+    gmsh::model::setPhysicalName(2, 20, "surface");
+    gmsh::option::setNumber("Mesh.MeshSizeMin", h);
+    gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+    gmsh::option::setNumber("Mesh.RandomSeed", 1);
+    gmsh::option::setNumber("General.Verbosity", 0);
+    gmsh::model::mesh::generate(3);
+    mesh = tet_mesh_from_gmsh_model("u_strip");
+  }
+  Model model = build_model(mesh, testkit::linear_elastic(1e6, 0.3, 1000));
+  for (std::size_t i = 0; i < model.num_nodes; ++i) {
+    const double x = model.X[3 * i], z = model.X[3 * i + 2];
+    model.initial_velocity[3 * i] = 2.5 * std::clamp((z - t) / (Hgt - t), 0.0, 1.0) * (x < W / 2 ? 1.0 : -1.0);
+  }
+  ContactPair self;
+  self.name = "strip self-contact";
+  set_self_contact_surface(self, model, surface_triangles(model, 20), "strip surface");
+  model.contact_pairs.push_back(self);
+  model.contact_settings.tolerance = 1e-10;
+  model.contact_settings.max_iterations = 1000;
+  return model;
+}
+
+bool same(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+bool same(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int provided = 0, rank = 0, ranks = 1;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  int failures = 0;
+  try {
+    const Model model = u_strip();
+    RunSpec run;
+    run.end_time = 3e-3;
+    run.threads = 1;
+    DampingSpec damping;
+    damping.beta = 2e-6;
+    const Decomposition d = decompose(model, ranks);
+    RankStressPass shared(model, d, MPI_COMM_WORLD, damping.beta, 1);
+    ExplicitSolver one(model, run, damping), on_ranks(model, run, damping, &shared);
+    std::size_t steps = 0, contact_steps = 0, first_differing = 0;
+    double peak_force = 0;
+    int differ = 0;
+    while (true) {
+      one.advance_velocity(), on_ranks.advance_velocity();
+      const ContactStepReport &a = one.contact_report(), &b = on_ranks.contact_report();
+      const bool step_same = same(one.displacement(), on_ranks.displacement()) && same(one.half_step_velocity(), on_ranks.half_step_velocity()) &&
+                             same(one.energies().kinetic, on_ranks.energies().kinetic) &&
+                             same(one.energies().internal, on_ranks.energies().internal) &&
+                             same(one.energies().balance_error(), on_ranks.energies().balance_error()) && same(a.normal_force, b.normal_force);
+      if (!step_same && !differ) differ = 1, first_differing = one.step_index();
+      contact_steps += a.normal_force > 0;
+      peak_force = std::max(peak_force, a.normal_force);
+      if (one.finished()) break;
+      one.advance_position(), on_ranks.advance_position();
+      ++steps;
+    }
+    int all_differ = 0;
+    MPI_Allreduce(&differ, &all_differ, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    if (rank == 0) {
+      std::printf(
+          "U strip self-contact, %zu tets, %d rank(s), %zu atoms, faces cut %zu: %zu steps, %zu in contact, peak normal force %.4f N; "
+          "%d rank(s) differ from the one-process run in any bit of u, v, the energies or the contact force",
+          model.num_elements, ranks, d.atom_rank.size(), d.edge_cut_faces, steps, contact_steps, peak_force, all_differ);
+      if (differ) std::printf(" (rank 0 first at step %zu)", first_differing);
+      std::printf("\n");
+    }
+    failures = all_differ + (contact_steps < 50 ? 1 : 0);
+    if (rank == 0 && contact_steps < 50) std::printf("FAIL: the arms should press on each other for 50 steps or more\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tactus_test_rank_solve: %s\n", e.what());
+    MPI_Abort(MPI_COMM_WORLD, 2);
+  }
+  MPI_Finalize();
+  return failures == 0 ? 0 : 1;
+}
