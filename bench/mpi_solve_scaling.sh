@@ -3,11 +3,12 @@
 # "Performance"; docs/studies/mpi-scaling.md): 1 x 1, 1 rank x 2 threads and 2 ranks x 1 thread,
 # interleaved ROUNDS times, on two cases:
 #   cube   the benchmark cube (bench/cases/cube.toml, 48,000 neo-Hookean tets, no contact), 0.05 s;
-#   hand   the hand-block case on its pinned meshes (bench/references), its skin as standard tets
-#          (ranks refuse ANP tets today), mortar contact with friction, 0.3 ms.
-# Per layout: the median over rounds of run.json's wall_seconds (the whole run, outputs included),
-# of the stress passes' seconds and of contact's (the slowest rank's, on ranks), and the steps. The
-# results are compared bit for bit against the 1 x 1 run (history.csv and the last state).
+#   hand   the hand-block case on its pinned meshes (bench/references): 69,739 tets, ANP hgo skin,
+#          rigid-free elastic bones, mortar contact with friction, the nodal step bound; 0.3 ms.
+# Per layout: the median over rounds of run.json's wall time (the whole run, outputs included), of
+# the stress passes' and of contact's (the slowest rank's, on ranks), the steps, and the peak
+# resident memory of each process (of the first round). The results are compared bit for bit
+# against the 1 x 1 run (history.csv and the last state).
 #   bench/mpi_solve_scaling.sh [ROUNDS]      (default 3; TACTUS_BUILD_DIR: default build/)
 # Never time it while something else runs.
 set -euo pipefail
@@ -25,12 +26,14 @@ run() {  # run CASE LAYOUT ROUND
   if [ "$name" = cube ]; then
     args=("$ROOT/bench/cases/cube.toml" --meshes "$W" --end-time 0.05)
   else
-    args=("$ROOT/pipeline/scenarios/hand_block.toml" --meshes "$W/hand" --end-time 0.3e-3 --set 'materials.soft_tissue.formulation="standard"'
-      --set run.checkpoint_wall_interval=0)
+    args=("$ROOT/pipeline/scenarios/hand_block.toml" --meshes "$W/hand" --end-time 0.3e-3 --set run.checkpoint_wall_interval=0)
   fi
+  # The child's peak resident memory (kB) beside the output (on ranks run.json has each rank's).
+  local peak=(/usr/bin/python3 -c "import resource, subprocess, sys; subprocess.run(sys.argv[2:], check=True)
+open(sys.argv[1], 'w').write(str(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss))" "$W/$1.$2.$3.kB")
   case $layout in
-    1x1) "$S" "${args[@]}" -o "$out" -q --set run.threads=1 ;;
-    1x2) "$S" "${args[@]}" -o "$out" -q --set run.threads=2 ;;
+    1x1) "${peak[@]}" "$S" "${args[@]}" -o "$out" -q --set run.threads=1 ;;
+    1x2) "${peak[@]}" "$S" "${args[@]}" -o "$out" -q --set run.threads=2 ;;
     2x1) mpiexec -np 2 --bind-to core "$S" "${args[@]}" -o "$out" -q --set run.threads=1 ;;
   esac
 }
@@ -50,7 +53,11 @@ for layout in ("1x1", "1x2", "2x1"):
         ranks = j.get("ranks")
         stress.append(max(x["stress_passes_s"] for x in ranks) if ranks else j["timing_s"]["stress_passes"])
         contact.append(max(x["contact_s"] for x in ranks) if ranks else j["timing_s"]["contact"])
-    rows[layout] = (statistics.median(wall), statistics.median(stress), statistics.median(contact), j["steps"], ranks)
+    if ranks:
+        memory = [x["peak_resident_bytes"] / 2**20 for x in json.load(open(f"{work}/{name}.{layout}.1/run.json"))["ranks"]]
+    else:
+        memory = [int(open(f"{work}/{name}.{layout}.1.kB").read()) / 1024]
+    rows[layout] = (statistics.median(wall), statistics.median(stress), statistics.median(contact), j["steps"], ranks, memory)
 base = f"{work}/{name}.1x1.1"
 states = sorted(os.listdir(f"{base}/results"))
 for layout in ("1x2", "2x1"):
@@ -58,10 +65,12 @@ for layout in ("1x2", "2x1"):
     same = filecmp.cmp(f"{base}/history.csv", f"{other}/history.csv", shallow=False) and filecmp.cmp(
         f"{base}/results/{states[-1]}", f"{other}/results/{states[-1]}", shallow=False)
     print(f"{name}: {layout} gives the 1 x 1 bits: {same}")
-for layout, (wall, stress, contact, steps, ranks) in rows.items():
+for layout, (wall, stress, contact, steps, ranks, memory) in rows.items():
     print(f"{name} {layout}: {steps} steps, run {wall:.2f} s, stress passes {stress:.2f} s, contact {contact:.2f} s, "
-          f"{1e3 * wall / steps:.3f} ms per step" + (f"; per rank (tets, halo doubles, owned nodes): "
-          f"{[(x['tets'], x['halo_doubles_per_pass'], x['owned_nodes']) for x in ranks]}" if ranks else ""))
+          f"{1e3 * wall / steps:.3f} ms per step; peak memory per process {', '.join(f'{m:.0f}' for m in memory)} MiB"
+          + (f"; per rank (tets, halo doubles, owned nodes, sums s, force gather s): "
+             f"{[(x['tets'], x['halo_doubles_per_pass'], x['owned_nodes'], round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
+             if ranks else ""))
 print(f"{name}: 2 ranks x 1 thread / 1 rank x 2 threads, whole run: {rows['2x1'][0] / rows['1x2'][0]:.3f}; "
       f"speed-up over 1 x 1: threads {rows['1x1'][0] / rows['1x2'][0]:.2f}, ranks {rows['1x1'][0] / rows['2x1'][0]:.2f}")
 PY

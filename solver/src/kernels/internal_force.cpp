@@ -297,6 +297,7 @@ std::size_t InternalForces::memory_bytes() const {
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
+  b += rank_chunks_.capacity() * sizeof(std::size_t);
   b += partition_rank_.capacity() * sizeof(int) + node_rank_.capacity() * sizeof(std::int32_t) + halo_.capacity() * sizeof(HaloSlots);
   for (const HaloSlots& h : halo_)
     b += (h.send.capacity() + h.receive.capacity() + h.send_tiles.capacity() + h.receive_tiles.capacity()) * sizeof(std::uint32_t);
@@ -434,8 +435,12 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       exchange.finish(exchange.context);
 #pragma omp barrier
     }
+    // On ranks only the chunks holding a node this rank's atoms touch: the others' forces come from
+    // their owners (ranks.hpp), and their rows stay 0 here (the owners reduce them).
+    const std::size_t chunks = rank_chunks_.empty() ? num_chunks_ : rank_chunks_.size();
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < num_chunks_; ++c) {
+    for (std::size_t i = 0; i < chunks; ++i) {
+      const std::size_t c = rank_chunks_.empty() ? i : rank_chunks_[i];
       // Each node's force and row sum: its atoms' in atom order, whatever the threads.
       sum_chunk<kForceStride, 3>(c, partition_forces_, 0, node_slots_.size(), f_out, nodal_mass_ ? nodal_bound_.data() : nullptr);
       if (nodal_mass_) nodal_bound_of_chunk(c);
@@ -490,6 +495,12 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
     for (std::size_t sl = q.slot_begin; sl < q.slot_end; ++sl) slot_partition[sl] = static_cast<std::uint32_t>(p);
     if (model_.blocks[q.block].material.anp())
       for (std::size_t t = 0; t < tiles_of(q.end - q.begin); ++t) tile_partition[q.tile_offset + t] = static_cast<std::uint32_t>(p);
+  }
+  rank_chunks_.clear();
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    bool mine = false;
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) mine |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
+    if (mine && (rank_chunks_.empty() || rank_chunks_.back() != n / kNodeChunk)) rank_chunks_.push_back(n / kNodeChunk);
   }
   node_rank_.assign(model_.num_nodes, -1);
   for (std::size_t n = 0; n < model_.num_nodes; ++n)

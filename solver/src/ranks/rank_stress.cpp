@@ -1,6 +1,7 @@
 // The stress pass over MPI ranks (ranks.hpp).
 #include <algorithm>
 #include <cstring>
+#include <fstream>
 #include <limits>
 #include <string>
 
@@ -13,6 +14,16 @@ namespace {
 
 // What a rank contributes to the sums per atom it runs: its energy and viscous power.
 constexpr std::size_t kAtomRecord = 2;
+
+// This process's peak resident memory (Linux: VmHWM), bytes; 0 where it cannot be read.
+double peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  double kilobytes = 0;
+  while (status >> key)
+    if (key == "VmHWM:" && status >> kilobytes) return 1024 * kilobytes;
+  return 0;
+}
 
 void check(int code, const char* what) {
   if (code != MPI_SUCCESS) throw Error(std::string("MPI: ") + what + " failed (code " + std::to_string(code) + ")");
@@ -212,7 +223,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
   std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
                            static_cast<double>(owned_forces_.size() / 3)};
   for (const auto& [name, s] : seconds) mine.push_back(s);
-  mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_);
+  mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(peak_resident_bytes());
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
   check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
         "MPI_Gather");
@@ -227,6 +238,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
                         {"owned_nodes", static_cast<std::size_t>(x[3])}};
     for (std::size_t k = 0; k < seconds.size(); ++k) j[seconds[k].first] = x[4 + k];
     j["sums_s"] = x[4 + seconds.size()], j["force_gather_s"] = x[5 + seconds.size()];
+    j["peak_resident_bytes"] = x[6 + seconds.size()];
     out.push_back(j);
   }
   return out;

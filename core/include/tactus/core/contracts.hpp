@@ -208,7 +208,8 @@ inline constexpr const char* reactions = "reactions";  // [{name, moment_about, 
 inline constexpr const char* mass_scaling = "mass_scaling";
 // Only under mpirun: per rank {rank, tets, halo_doubles_per_pass, halo_messages_per_pass, owned_nodes (whose forces
 // it sends to every rank each step), stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the sums'
-// gather and the minima's MINLOC), force_gather_s (of stress_passes_s: the forces' gather)}
+// gather and the minima's MINLOC), force_gather_s (of stress_passes_s: the forces' gather), peak_resident_bytes (the
+// rank's process, Linux VmHWM)}
 inline constexpr const char* ranks = "ranks";
 inline constexpr std::array<const char*, 20> all{
     status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,

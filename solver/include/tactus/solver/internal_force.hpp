@@ -273,6 +273,7 @@ class InternalForces {
   std::vector<std::size_t> boundary_atoms_, interior_atoms_;
   std::vector<int> partition_rank_;
   std::vector<std::int32_t> node_rank_;
+  std::vector<std::size_t> rank_chunks_;  // the node chunks the pass sums on this rank (empty: all)
   std::vector<HaloSlots> halo_;
   // The nodal step bound's reduction (kernels/step_bound.cpp): one node chunk's largest rows, then
   // the step they give into r.

@@ -32,7 +32,8 @@ class SharedStressPass {
   virtual int ranks() const = 0;
   // What each process did (collective; the array on rank 0, empty elsewhere): per rank its tets,
   // halo doubles and messages per pass, its owned nodes, `seconds` (its measured wall times by name)
-  // and the pass's own (RankStressPass: sums_s, the sums' gather and MINLOC; force_gather_s).
+  // and the pass's own (RankStressPass: sums_s, the sums' gather and MINLOC; force_gather_s;
+  // peak_resident_bytes, the process's peak memory).
   virtual nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) = 0;
   virtual std::size_t memory_bytes() const = 0;
 };
