@@ -349,9 +349,12 @@ void InternalForces::anp_pass(const double* u) {
   for (AnpBlock& a : anp_) {
     const MaterialBlock& b = model_.blocks[a.block];
     const double* V = a.reference_volume.data();
-    // Per partition of the block: its tets' current volumes to its own nodal array.
+    // Per partition of the block: its tets' current volumes to its own nodal array (on ranks,
+    // those of the ghost region's atoms).
+    const std::size_t atoms = on_ranks_ ? anp_volume_atoms_.size() : partitions_.size();
 #pragma omp for schedule(dynamic, 1)
-    for (std::size_t p = 0; p < partitions_.size(); ++p) {
+    for (std::size_t i = 0; i < atoms; ++i) {
+      const std::size_t p = on_ranks_ ? anp_volume_atoms_[i] : i;
       const Partition& q = partitions_[p];
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.slot_begin;
@@ -360,8 +363,10 @@ void InternalForces::anp_pass(const double* u) {
     }
     // Per node chunk: the partitions' sums, then the pressures (no smoothing) or the volume ratio.
     const bool smoothing = b.material.pressure_smoothing() > 0;
+    const std::size_t chunks = on_ranks_ ? anp_chunks_.size() : num_chunks_;
 #pragma omp for schedule(static)
-    for (std::size_t c = 0; c < num_chunks_; ++c) {
+    for (std::size_t i = 0; i < chunks; ++i) {
+      const std::size_t c = on_ranks_ ? anp_chunks_[i] : i;
       sum_chunk<1, 1>(c, partition_volumes_, block_slot_begin_[a.block], block_slot_end_[a.block], a.pressure.data());
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
       if (smoothing)
@@ -375,7 +380,10 @@ void InternalForces::anp_pass(const double* u) {
     double *x = a.pressure.data(), *y = a.smoothed.data();
     smooth_to_pressure(b, a.averaging, V, x, y, chunk_anp_energy_.data(), [&](auto f) {
 #pragma omp for schedule(static)
-      for (std::size_t c = 0; c < num_chunks_; ++c) f(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
+      for (std::size_t i = 0; i < chunks; ++i) {
+        const std::size_t c = on_ranks_ ? anp_chunks_[i] : i;
+        f(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
+      }
     });
   }
 }
@@ -497,14 +505,16 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
       for (std::size_t t = 0; t < tiles_of(q.end - q.begin); ++t) tile_partition[q.tile_offset + t] = static_cast<std::uint32_t>(p);
   }
   rank_chunks_.clear();
+  std::vector<char> touched(model_.num_nodes, 0);
   for (std::size_t n = 0; n < model_.num_nodes; ++n) {
-    bool mine = false;
-    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) mine |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
-    if (mine && (rank_chunks_.empty() || rank_chunks_.back() != n / kNodeChunk)) rank_chunks_.push_back(n / kNodeChunk);
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) touched[n] |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
+    if (touched[n] && (rank_chunks_.empty() || rank_chunks_.back() != n / kNodeChunk)) rank_chunks_.push_back(n / kNodeChunk);
   }
   node_rank_.assign(model_.num_nodes, -1);
   for (std::size_t n = 0; n < model_.num_nodes; ++n)
     if (node_slot_first_[n] < node_slot_first_[n + 1]) node_rank_[n] = partition_rank_[slot_partition[node_slots_[node_slot_first_[n]]]];
+  on_ranks_ = true;
+  anp_ghost_region(rank, touched);
   halo_.clear();
   std::vector<std::size_t> halo_of_rank;  // index in halo_ + 1, per rank
   std::vector<std::size_t> listed;        // per entry of halo_: the last node whose slots it lists
@@ -545,6 +555,70 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
   boundary_atoms_.clear(), interior_atoms_.clear();
   for (std::size_t p = 0; p < partitions_.size(); ++p)
     if (partition_rank_[p] == rank) (sends[p] ? boundary_atoms_ : interior_atoms_).push_back(p);
+}
+
+// The ANP J pass of one rank (docs/design.md, "The stress pass over MPI ranks"): with s smoothing
+// passes (the largest of the ANP blocks), a node's pressure reads the raw volume ratio up to 2s
+// tets away (s passes on J, then s on the pressure) and a chunk's energy up to s tets away. So the
+// rank adds the volumes of every ANP atom with a tet at a node within 2s rings (over the ANP tets)
+// of the nodes it touches, or within s rings of the nodes of the chunks whose energy it reports
+// (each chunk: the rank of its first node that has an owner), and runs the node loops over the
+// chunks that hold such a node: every value it uses is then the one-process value, and no message
+// is needed. Elsewhere in those chunks the values are partial and never read for a result.
+void InternalForces::anp_ghost_region(int rank, const std::vector<char>& touched) {
+  anp_volume_atoms_.clear(), anp_chunks_.clear();
+  chunk_rank_.assign(num_chunks_, 0);
+  for (std::size_t c = 0; c < num_chunks_; ++c)
+    for (std::size_t n = c * kNodeChunk; n < std::min(model_.num_nodes, (c + 1) * kNodeChunk); ++n)
+      if (node_rank_[n] >= 0) {
+        chunk_rank_[c] = node_rank_[n];
+        break;
+      }
+  if (anp_.empty()) return;
+  int passes = 0;
+  for (const AnpBlock& a : anp_) passes = std::max(passes, model_.blocks[a.block].material.pressure_smoothing());
+  // The ANP tets at each node (CSR), for the rings.
+  std::vector<std::size_t> first(model_.num_nodes + 1, 0), tets;
+  for (int fill = 0; fill < 2; ++fill) {
+    std::vector<std::size_t> next(first.begin(), first.end() - 1);
+    if (fill) tets.resize(first.back());
+    for (const AnpBlock& a : anp_)
+      for (std::size_t e = model_.blocks[a.block].begin; e < model_.blocks[a.block].end; ++e)
+        for (int k = 0; k < 4; ++k) {
+          const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
+          if (fill)
+            tets[next[n]++] = e;
+          else
+            ++first[n + 1];
+        }
+    if (!fill)
+      for (std::size_t n = 0; n < model_.num_nodes; ++n) first[n + 1] += first[n];
+  }
+  // depth[n]: how many more rings reach out from n (-1: not in the region).
+  std::vector<int> depth(model_.num_nodes, -1);
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    if (touched[n]) depth[n] = 2 * passes;
+    if (chunk_rank_[n / kNodeChunk] == rank) depth[n] = std::max(depth[n], passes);
+  }
+  for (int ring = 2 * passes; ring > 0; --ring)
+    for (std::size_t n = 0; n < model_.num_nodes; ++n)
+      if (depth[n] == ring)
+        for (std::size_t t = first[n]; t < first[n + 1]; ++t)
+          for (int k = 0; k < 4; ++k) {
+            const auto m = static_cast<std::size_t>(model_.conn[4 * tets[t] + static_cast<std::size_t>(k)]);
+            depth[m] = std::max(depth[m], ring - 1);
+          }
+  std::vector<char> atom(partitions_.size(), 0);
+  std::vector<std::size_t> tet_partition(model_.num_elements, partitions_.size());
+  for (std::size_t p = 0; p < partitions_.size(); ++p)
+    for (std::size_t e = partitions_[p].begin; e < partitions_[p].end; ++e) tet_partition[e] = p;
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    if (depth[n] < 0) continue;
+    if (anp_chunks_.empty() || anp_chunks_.back() != n / kNodeChunk) anp_chunks_.push_back(n / kNodeChunk);
+    for (std::size_t t = first[n]; t < first[n + 1]; ++t) atom[tet_partition[tets[t]]] = 1;
+  }
+  for (std::size_t p = 0; p < partitions_.size(); ++p)
+    if (atom[p]) anp_volume_atoms_.push_back(p);
 }
 
 }  // namespace tactus::solver

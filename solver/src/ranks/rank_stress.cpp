@@ -56,8 +56,13 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   const auto& owner = forces_.atom_ranks();
   counts_.assign(static_cast<std::size_t>(ranks_), 0), offsets_.assign(static_cast<std::size_t>(ranks_), 0);
   for (int r : owner) counts_[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
+  // With ANP blocks, after its atoms' records each rank sends the volumetric energy of the node
+  // chunks it reports (InternalForces::chunk_ranks: its J pass runs over a ghost region only).
+  anp_ = std::any_of(model.blocks.begin(), model.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
+  if (anp_)
+    for (std::int32_t r : forces_.chunk_ranks()) ++counts_[static_cast<std::size_t>(r)];
   for (std::size_t r = 1; r < counts_.size(); ++r) offsets_[r] = offsets_[r - 1] + counts_[r - 1];
-  gathered_.resize(kAtomRecord * owner.size());
+  gathered_.resize(static_cast<std::size_t>(offsets_.back() + counts_.back()));
   records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
   atoms_.resize(owner.size()), next_.resize(counts_.size());
   tet_rank_.resize(model.num_elements);
@@ -163,6 +168,10 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
   records_.clear();
   for (std::size_t p = 0; p < owner.size(); ++p)
     if (owner[p] == rank_) records_.insert(records_.end(), {mine[p].energy, mine[p].viscous_power});
+  std::vector<double>& chunk_energy = forces_.chunk_anp_energy();
+  const std::vector<std::int32_t>& chunk_rank = forces_.chunk_ranks();
+  for (std::size_t c = 0; anp_ && c < chunk_energy.size(); ++c)
+    if (chunk_rank[c] == rank_) records_.push_back(chunk_energy[c]);
   check(MPI_Allgatherv(records_.data(), static_cast<int>(records_.size()), MPI_DOUBLE, gathered_.data(), counts_.data(), offsets_.data(), MPI_DOUBLE,
                        comm_),
         "MPI_Allgatherv");
@@ -172,6 +181,7 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
     atoms_[p].energy = gathered_[at], atoms_[p].viscous_power = gathered_[at + 1];
     at += kAtomRecord;
   }
+  for (std::size_t c = 0; anp_ && c < chunk_energy.size(); ++c) chunk_energy[c] = gathered_[next_[static_cast<std::size_t>(chunk_rank[c])]++];
   StressPassResult r = forces_.combine_atoms(atoms_);
   // The minima: the element step and the smallest J, each with its tet, as the one-process pass
   // takes them (ties to the first atom, whose tets come first: the smallest index), and the nodal

@@ -178,6 +178,11 @@ class InternalForces {
   // rank certain to have its every slot after the exchange; -1 for a node no such tet holds (its
   // force is 0 on every rank).
   const std::vector<std::int32_t>& node_ranks() const { return node_rank_; }
+  // ANP blocks on ranks: per node chunk the rank whose pass has its volumetric energy right (each
+  // rank runs the J pass over a ghost region only), and every chunk's energy of the last pass (the
+  // rank pass replaces the others' with theirs before combine_atoms).
+  const std::vector<std::int32_t>& chunk_ranks() const { return chunk_rank_; }
+  std::vector<double>& chunk_anp_energy() { return chunk_anp_energy_; }
   // The pass's result from every atom's accumulator, in atom order (the nodal bound not included).
   StressPassResult combine_atoms(const std::vector<StressAccumulator>& atoms) const;
   int threads() const { return threads_; }
@@ -264,6 +269,13 @@ class InternalForces {
   // by the rigid pieces (tissue in a joint's gap between two bones), so its volume floor is off.
   std::vector<char> rigid_node_;
   std::vector<double> chunk_anp_energy_;
+  // On ranks (own_atoms): the ANP atoms whose tets' volumes this rank adds and the node chunks its
+  // J pass runs over (a ghost region deep enough for its own nodes' pressures and its chunks'
+  // energies; own_atoms), and per chunk the rank that reports its ANP energy.
+  bool on_ranks_ = false;
+  std::vector<std::size_t> anp_volume_atoms_, anp_chunks_;
+  std::vector<std::int32_t> chunk_rank_;
+  void anp_ghost_region(int rank, const std::vector<char>& touched);
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u);
   std::size_t build_atoms();  // partitions_, their slots and arrays; returns the ANP tiles

@@ -70,6 +70,7 @@ class RankStressPass : public SharedStressPass {
   std::vector<int> force_counts_, force_offsets_;
   std::vector<double> owned_forces_, all_forces_;
   std::size_t tets_ = 0;
+  bool anp_ = false;  // the model has ANP blocks: their chunks' energies are gathered too
   // Mass scaling: per tet its rank; the tets in rank then tet order, each rank's count and offset;
   // this rank's steps packed, everyone's packed, everyone's by tet.
   std::vector<std::int32_t> tet_rank_;
