@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# cli/restart: checkpoints and restart (issue "runs that survive interruption"). A pad with a bone
+# cli/restart: checkpoints and restart (issue "runs that survive interruption"). A pad (pad_case.sh) with a bone
 # inclusion (ANP hgo + linear elastic) hits a block (neo-Hookean) through mortar contact with
 # friction and slides onto a rigid wall (node to surface, Verlet lists), with mass scaling and
 # mass damping on: every kind of state the integrator and contact carry between steps. The run is
@@ -9,68 +9,14 @@
 # before it used; nothing to continue is one clear error; --resume continues or starts afresh.
 # Usage: restart.sh BUILD_DIR
 set -u
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 B=$(cd "$1" && pwd)
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 fail=0
 bad() { echo "FAIL: $*"; fail=1; }
 cd "$T" || exit 1
-"$B/data_samples/tactus-sample-mesh" --size 0.02 0.02 0.008 --cells 8 8 4 --inclusion -1 -1 -1 1 1 0.003 -o pad.msh -q
-"$B/data_samples/tactus-sample-mesh" --size 0.03 0.03 0.01 --origin -0.005 -0.005 -0.0102 --cells 7 7 3 -o block.msh -q
-cat > s.toml <<'TOML'
-[run]
-end_time = 1.0e-3
-output_times = [0.25e-3, 0.5e-3, 0.75e-3]
-checkpoint_interval = 0.2e-3
-history_every = 7
-minimum_time_step = 1.3e-6
-added_mass_limit = 0.5
-[damping]
-alpha = 50.0
-[[bodies]]
-name = "pad"
-mesh = "pad.msh"
-materials = { soft_tissue = "skin", bone = "bone" }
-initial_velocity = [0.6, 0.2, -2.0]
-[[bodies]]
-name = "block"
-mesh = "block.msh"
-materials = { "*" = "block" }
-[materials.skin]
-type = "hgo"
-c1 = 10206.9
-k1 = 1.7
-k2 = 882.847
-k = 1.0e7
-formulation = "anp"
-density = 1050.0
-fibres = [[0.8660254, 0.5, 0.0], [0.8660254, -0.5, 0.0]]
-[materials.bone]
-type = "linear_elastic"
-E = 1.0e9
-nu = 0.22
-density = 2150.0
-[materials.block]
-type = "neo_hookean"
-mu = 3.0e5
-bulk = 3.0e6
-density = 1200.0
-[[boundary]]
-body = "block"
-group = "zmin"
-type = "fixed"
-[[contact]]
-slave_body = "pad"
-slave_surface = "zmin"
-master_body = "block"
-master_surface = "zmax"
-friction = 0.3
-[[contact]]
-slave_body = "pad"
-slave_surface = "xmax"
-plane = [[0.0203, 0.0, 0.0], [-1.0, 0.0, 0.0]]
-friction = 0.2
-TOML
+source "$HERE/pad_case.sh"
 S="$B/solver/tactus-solve"
 "$S" s.toml -o full -q || { echo "FAIL: the uninterrupted run failed"; exit 1; }
 steps=$(python3 -c "import json; print(json.load(open('full/run.json'))['steps'])")

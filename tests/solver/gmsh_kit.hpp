@@ -69,4 +69,31 @@ inline TetMesh generate_tet_mesh(const std::string& model) {
   return tet_mesh_from_gmsh_model(model);
 }
 
+// A U-shaped strip, W x D x H, its arms and base t thick (a slot of W - 2t), meshed at size h:
+// one volume group "strip" (1) and its whole boundary as the surface group "surface" (20). The
+// self-contact tests swing its arms into each other.
+inline TetMesh u_strip_mesh(double W, double D, double H, double t, double h) {
+  GmshSession session;
+  gmsh::model::add("u_strip");
+  const int outer = gmsh::model::occ::addBox(0, 0, 0, W, D, H);
+  const int slot = gmsh::model::occ::addBox(t, -D, t, W - 2 * t, 3 * D, H);
+  gmsh::vectorpair result;
+  std::vector<gmsh::vectorpair> map;
+  gmsh::model::occ::cut({{3, outer}}, {{3, slot}}, result, map);
+  gmsh::model::occ::synchronize();
+  gmsh::model::addPhysicalGroup(3, {result[0].second}, 1);
+  gmsh::model::setPhysicalName(3, 1, "strip");
+  gmsh::vectorpair faces;
+  gmsh::model::getBoundary(result, faces, false, false, false);
+  std::vector<int> tags;
+  for (const auto& f : faces) tags.push_back(f.second);
+  gmsh::model::addPhysicalGroup(2, tags, 20);
+  gmsh::model::setPhysicalName(2, 20, "surface");
+  gmsh::option::setNumber("Mesh.MeshSizeMin", h);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+  gmsh::option::setNumber("Mesh.RandomSeed", 1);
+  gmsh::model::mesh::generate(3);
+  return tet_mesh_from_gmsh_model("u_strip");
+}
+
 }  // namespace tactus::testkit

@@ -551,30 +551,7 @@ TEST(Contact, ImpactPressureOfTwoBarsIsWindowedNotPerStep) { impact_pressure_is_
 // initial energy; the arms must actually have pressed on each other.
 TEST(Contact, SelfContactOfAUShapedStrip) {
   const double W = 0.012, D = 0.005, Hgt = 0.02, t = 0.003, E = 1e6, v = 2.5, h = 1.2e-3;
-  TetMesh mesh;
-  {
-    GmshSession session;
-    gmsh::model::add("u_strip");
-    const int outer = gmsh::model::occ::addBox(0, 0, 0, W, D, Hgt);
-    const int slot = gmsh::model::occ::addBox(t, -D, t, W - 2 * t, 3 * D, Hgt);
-    gmsh::vectorpair result;
-    std::vector<gmsh::vectorpair> map;
-    gmsh::model::occ::cut({{3, outer}}, {{3, slot}}, result, map);
-    gmsh::model::occ::synchronize();
-    gmsh::model::addPhysicalGroup(3, {result[0].second}, 1);
-    gmsh::model::setPhysicalName(3, 1, "strip");
-    gmsh::vectorpair faces;
-    gmsh::model::getBoundary(result, faces, false, false, false);
-    std::vector<int> tags;
-    for (const auto& f : faces) tags.push_back(f.second);
-    gmsh::model::addPhysicalGroup(2, tags, 20);
-    gmsh::model::setPhysicalName(2, 20, "surface");
-    gmsh::option::setNumber("Mesh.MeshSizeMin", h);
-    gmsh::option::setNumber("Mesh.MeshSizeMax", h);
-    gmsh::option::setNumber("Mesh.RandomSeed", 1);
-    gmsh::model::mesh::generate(3);
-    mesh = tet_mesh_from_gmsh_model("u_strip");
-  }
+  const TetMesh mesh = testkit::u_strip_mesh(W, D, Hgt, t, h);
   Model model = build_model(mesh, linear_elastic(E, 0.3, 1000));
   double mv = 0;  // sum m |v|
   for (std::size_t i = 0; i < model.num_nodes; ++i) {

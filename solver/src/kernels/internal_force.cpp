@@ -528,7 +528,7 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
       if (other == rank) continue;
       if (halo_of_rank.size() <= static_cast<std::size_t>(other)) halo_of_rank.resize(static_cast<std::size_t>(other) + 1, 0);
       std::size_t& h = halo_of_rank[static_cast<std::size_t>(other)];
-      if (!h) halo_.push_back({other, {}, {}}), listed.push_back(n + 1), h = halo_.size();
+      if (!h) halo_.push_back({other, {}, {}, {}, {}}), listed.push_back(n + 1), h = halo_.size();
       HaloSlots& pair = halo_[h - 1];
       if (listed[h - 1] == n) continue;  // this node's slots are listed already
       listed[h - 1] = n;
