@@ -29,9 +29,12 @@ using namespace tactus::solver;
 
 namespace {
 
-Material neo_hookean() {
+// formulation: "standard", or "anp" (average nodal pressure tets, 2 smoothing passes: the ranks'
+// J pass over their ghost regions).
+Material neo_hookean(const std::string& formulation) {
   MaterialValues v;
   v.numbers = {{"mu", 3000.0}, {"bulk", 50000.0}, {"density", 1000.0}};
+  v.strings = {{"formulation", formulation}};
   return Material::make("neo_hookean", v, "bench");
 }
 
@@ -70,7 +73,7 @@ std::string listed(const std::vector<T>& x) {
 
 int run(int argc, char** argv) {
   int cells = 55, rounds = 7, threads = 1;
-  std::string mesh_file;
+  std::string mesh_file, formulation = "standard";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
     if (key == "--cells")
@@ -81,14 +84,16 @@ int run(int argc, char** argv) {
       threads = std::stoi(value);
     else if (key == "--mesh")
       mesh_file = value;
+    else if (key == "--formulation")
+      formulation = value;
     else
-      throw Error("tactus-bench-mpi: unknown option " + key + " (--cells N | --mesh FILE.msh, --rounds K, --threads T)");
+      throw Error("tactus-bench-mpi: unknown option " + key + " (--cells N | --mesh FILE.msh, --rounds K, --threads T, --formulation standard|anp)");
   }
   int rank = 0, ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   const TetMesh mesh = mesh_file.empty() ? samples::make_box_mesh(cells, cells, cells, 0.1, 0.1, 0.1) : read_msh(mesh_file);
-  const Model model = build_model(mesh, neo_hookean(), "soft");
+  const Model model = build_model(mesh, neo_hookean(formulation), "soft");
   std::vector<double> u(3 * model.num_nodes), v(3 * model.num_nodes), f(3 * model.num_nodes);
   for (std::size_t n = 0; n < model.num_nodes; ++n) {  // a smooth stretch and twist, and a velocity
     const double x = model.X[3 * n], y = model.X[3 * n + 1], z = model.X[3 * n + 2];

@@ -18,7 +18,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
       run_(run),
       damping_(damping),
       shared_(shared),
-      forces_(model, damping.beta, shared ? 1 : run.threads),
+      forces_(shared ? std::optional<InternalForces>() : std::optional<InternalForces>(std::in_place, model, damping.beta, run.threads)),
       masses_(model, run.minimum_time_step),
       max_threads_(pass_threads()),
       tuner_(max_threads_, run.threads == 0),
@@ -35,7 +35,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   v_prev_half_ = v_half_;
   gravity_force_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];  // on the physical mass, also under mass scaling
-  if (mass_scaling()) (shared_ ? shared_->enable_mass_scaling() : forces_.enable_mass_scaling());
+  if (mass_scaling()) (shared_ ? shared_->enable_mass_scaling() : forces_->enable_mass_scaling());
   rigid_.init(model_, v_half_.data(), v_prev_half_.data(), masses_.contact_inverse_mass.data());
   if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
   if (drive_ && drive_->grasp()) regions_ = std::make_unique<GripRegions>(model_, rigid_, *drive_, contact_);
@@ -118,8 +118,8 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
     shared_->set_nodal_step_bound(bound_masses);
     pass_ = shared_->compute_everywhere(u_.data(), v_half_.data(), f_.data(), side);
   } else {
-    forces_.set_nodal_step_bound(bound_masses);
-    pass_ = forces_.compute(u_.data(), v_half_.data(), f_.data(), side);
+    forces_->set_nodal_step_bound(bound_masses);
+    pass_ = forces_->compute(u_.data(), v_half_.data(), f_.data(), side);
   }
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   detection_ahead_seconds_ += ahead.seconds;
@@ -143,7 +143,7 @@ void ExplicitSolver::scale_mass() {
   if (shared_)
     masses_.scale(shared_->mass_factor(), shared_->element_dt2_everywhere(), pass_, rigid_, damping_.beta);
   else
-    masses_.scale(forces_.mass_factor(), forces_.element_dt2(), pass_, rigid_, damping_.beta);
+    masses_.scale(forces_->mass_factor(), forces_->element_dt2(), pass_, rigid_, damping_.beta);
   const std::ptrdiff_t over = masses_.body_over(run_.added_mass_limit);
   if (over < 0) return;
   const auto b = static_cast<std::size_t>(over);
@@ -250,7 +250,7 @@ void ExplicitSolver::advance_velocity() {
   const auto started = std::chrono::steady_clock::now();
   // The stress passes and the contact sweep each take the thread count their own tuner found
   // faster: the sweep's many short parallel loops lose to one thread where the stress pass gains.
-  if (const int n = tuner_.threads(); n != pass_threads()) (shared_ ? shared_->set_threads(n) : forces_.set_threads(n));
+  if (const int n = tuner_.threads(); n != pass_threads()) (shared_ ? shared_->set_threads(n) : forces_->set_threads(n));
   if (const int n = contact_tuner_.threads(); n != contact_.threads()) contact_.set_threads(n);
   double contact_seconds = 0;
   const std::size_t ndof = 3 * model_.num_nodes;
@@ -349,7 +349,7 @@ void ExplicitSolver::advance_position() {
 std::size_t ExplicitSolver::memory_bytes() const {
   std::size_t doubles = u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + masses_.inverse_mass.capacity() +
                         gravity_force_.capacity() + masses_.mass.capacity() + masses_.pending_added.capacity();
-  return doubles * sizeof(double) + forces_.memory_bytes() + (shared_ ? shared_->memory_bytes() : 0);
+  return doubles * sizeof(double) + (forces_ ? forces_->memory_bytes() : 0) + (shared_ ? shared_->memory_bytes() : 0);
 }
 
 std::vector<double> ExplicitSolver::velocity_at_step() const {

@@ -10,6 +10,7 @@
 //   advance_position(): gives u^{n+1}, t^{n+1} and the stress pass at u^{n+1}.
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,7 @@ class ExplicitSolver {
   // time_step exceeds the stable limit without force_time_step or the run or its output times are
   // closer than half a step, NumericalError when the initial configuration is inverted.
   // shared: the stress pass spread over processes (shared_stress_pass.hpp), which then takes every
-  // pass (this process's InternalForces only checks a restored state). nullptr: this process alone.
+  // pass (this process then holds no InternalForces of its own). nullptr: this process alone.
   ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, SharedStressPass* shared = nullptr);
   ~ExplicitSolver();
 
@@ -154,13 +155,13 @@ class ExplicitSolver {
   RelaxedDofs relaxed_dofs() const { return {masses_.mass.data(), model_.constrained.data(), rigid_.piece_of_node()}; }
 
   // The threads of the passes and the nodal loops now (the shared pass's when there is one).
-  int pass_threads() const { return shared_ ? shared_->threads() : forces_.threads(); }
+  int pass_threads() const { return shared_ ? shared_->threads() : forces_->threads(); }
 
   const Model& model_;
   RunSpec run_;
   DampingSpec damping_;
   SharedStressPass* shared_;
-  InternalForces forces_;
+  std::optional<InternalForces> forces_;  // this process's pass (none with a shared one)
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_;
   MassScaling masses_;  // the masses the run integrates with, and what mass scaling added
