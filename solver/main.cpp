@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -206,7 +207,9 @@ void solve(const SolveOptions& o, const cli::CommonOptions& common, const solver
 // Under mpirun: every rank runs the command, rank 0 alone writes and speaks. A failure every rank
 // meets at the same point (bad input, a numerical failure) ends them all with rank 0's message and
 // exit code; one rank's own failure (a full disk on rank 0, a file missing on another machine) is
-// printed with its rank and ends every rank within 10 s (MPI_Abort).
+// printed with its rank and ends every rank within 10 s (MPI_Abort). A rank that succeeded waits
+// for the others however long rank 0 takes to write (and then fails only if rank 0 does, after
+// the run: a --check beyond tolerance, its exit code).
 int run_on_ranks(CLI::App& app, int argc, char** argv, cli::CommonOptions& common, const SolveOptions& options, const Tools& tools,
                  solver::RankSession& session) {
   std::ostringstream follower_errors;
@@ -218,7 +221,7 @@ int run_on_ranks(CLI::App& app, int argc, char** argv, cli::CommonOptions& commo
     solve(options, common, &ranks);
   });
   if (cerr) std::cerr.rdbuf(cerr);
-  if (code == 0 || session.all_stopped_within(10.0)) return code;
+  if (session.all_stopped_within(code == 0 ? std::numeric_limits<double>::infinity() : 10.0)) return code;
   if (session.rank() != 0) std::cerr << "tactus-solve (MPI rank " << session.rank() << "): " << follower_errors.str();
   std::cerr << "tactus-solve: MPI rank " << session.rank() << " stopped (exit code " << code << ") while the other ranks ran on: ending them all\n";
   session.abort(code);

@@ -7,8 +7,9 @@
 # dropped under gravity onto the block (the rigid body's 6-dof reduction; Rayleigh beta) on 2 and 3
 # ranks; the pad with its atoms dealt round-robin over 2 ranks by --partition (a cut through the
 # contact patch); the pad killed at 3 ranks and continued at 2. (Self-contact:
-# ranks/self_contact_on_N_ranks.) Bad input: more ranks than tets / 8, mismatched binaries, and a
-# rank killed mid-run (the others stop within 10 s, naming it, and nothing is published).
+# ranks/self_contact_on_N_ranks.) Bad input: more ranks than tets / 8, mismatched binaries, a
+# --check that fails on rank 0 alone after the run (exit 5 at once), and a rank killed mid-run (the
+# others stop within 10 s, naming it, and nothing is published).
 # Usage: solve.sh BUILD_DIR
 set -u
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -115,6 +116,19 @@ expect "4 ranks for 24 tets" "at most 3 ranks" $M -np 4 "$S" tiny.toml -o tiny4 
 # Mismatched binaries: rank 1 runs a copy whose bytes differ (one byte appended).
 cp "$S" other-solve && printf 'x' >> other-solve
 expect "mismatched binaries" "rank 1's hashes to" $M -np 1 "$S" pad.toml -o mixed -q : -np 1 ./other-solve pad.toml -o mixed -q
+
+# A failure of rank 0 alone after the run (--check beyond its tolerance): exit 5 at once, the other
+# rank waiting for it rather than giving up after 10 s and ending the job.
+"$S" drop.toml -o drop_ref -q --write-reference ref.json
+python3 -c "import json; r = json.load(open('ref.json')); r['figures']['end_time']['value'] *= 2; json.dump(r, open('ref.json', 'w'))"
+start=$(date +%s.%N)
+$M -np 2 "$S" drop.toml -o drop_check -q --check ref.json > check.txt 2>&1
+rc=$?
+took=$(python3 -c "print(round($(date +%s.%N) - $start, 2))")
+echo "--check beyond tolerance on 2 ranks: exit $rc after $took s"
+[ "$rc" = 5 ] || bad "--check beyond tolerance under mpirun: exit $rc, expected 5: $(head -3 check.txt)"
+python3 -c "import sys; sys.exit(0 if $took < 8 else 1)" || bad "--check beyond tolerance took $took s (the other rank gave up waiting?)"
+grep -q MPI_ABORT check.txt && bad "--check beyond tolerance aborted the job: $(grep -m1 'stopped' check.txt)"
 
 # A rank killed mid-run: the others stop within 10 s, naming it, and nothing is published.
 $M -np 2 "$S" pad.toml -o dies -q --end-time 0.2 > dies.txt 2>&1 &
