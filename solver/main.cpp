@@ -212,15 +212,18 @@ void solve(const SolveOptions& o, const cli::CommonOptions& common, const solver
 // the run: a --check beyond tolerance, its exit code).
 int run_on_ranks(CLI::App& app, int argc, char** argv, cli::CommonOptions& common, const SolveOptions& options, const Tools& tools,
                  solver::RankSession& session) {
-  std::ostringstream follower_errors;
+  // The other ranks say nothing (their output would repeat rank 0's); their errors are kept for the
+  // case where they are theirs alone.
+  std::ostringstream follower_errors, follower_output;
   std::streambuf* const cerr = session.rank() == 0 ? nullptr : std::cerr.rdbuf(follower_errors.rdbuf());
+  std::streambuf* const cout = session.rank() == 0 ? nullptr : std::cout.rdbuf(follower_output.rdbuf());
   const int code = cli::run(app, argc, argv, common, [&] {
     session.check_same_build();
     if (tools.run(common)) return;
     const solver::RankRun ranks = session.run(options.partition);
     solve(options, common, &ranks);
   });
-  if (cerr) std::cerr.rdbuf(cerr);
+  if (cerr) std::cerr.rdbuf(cerr), std::cout.rdbuf(cout);
   if (session.all_stopped_within(code == 0 ? std::numeric_limits<double>::infinity() : 10.0)) return code;
   if (session.rank() != 0) std::cerr << "tactus-solve (MPI rank " << session.rank() << "): " << follower_errors.str();
   std::cerr << "tactus-solve: MPI rank " << session.rank() << " stopped (exit code " << code << ") while the other ranks ran on: ending them all\n";
