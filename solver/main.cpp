@@ -223,7 +223,10 @@ int run_on_ranks(CLI::App& app, int argc, char** argv, cli::CommonOptions& commo
     const solver::RankRun ranks = session.run(options.partition);
     solve(options, common, &ranks);
   });
-  if (cerr) std::cerr.rdbuf(cerr), std::cout.rdbuf(cout);
+  if (cerr) {
+    std::cerr.rdbuf(cerr);
+    std::cout.rdbuf(cout);
+  }
   if (session.all_stopped_within(code == 0 ? std::numeric_limits<double>::infinity() : 10.0)) return code;
   if (session.rank() != 0) std::cerr << "tactus-solve (MPI rank " << session.rank() << "): " << follower_errors.str();
   std::cerr << "tactus-solve: MPI rank " << session.rank() << " stopped (exit code " << code << ") while the other ranks ran on: ending them all\n";
