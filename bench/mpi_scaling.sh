@@ -5,7 +5,7 @@
 # mesh of bench/references); then the halo per rank at 4 and 8 ranks (oversubscribed: their times
 # mean nothing here, their halo and record bytes do). Each line of tactus-bench-mpi gives the
 # median of its passes; this script prints the medians of those medians and their ratio.
-# All tets run as neo-Hookean standard tets (the rank pass refuses ANP blocks today).
+# All tets run as neo-Hookean standard tets (tactus-bench-mpi --formulation anp runs them as ANP tets).
 #   bench/mpi_scaling.sh [ROUNDS]      (default 5; TACTUS_BUILD_DIR: default build/)
 # Open MPI binds each of up to 2 ranks to one core: the 1 x 2 run is started with --bind-to none,
 # or its two threads would share one core. Never time it while something else runs.

@@ -4,7 +4,7 @@
 # interleaved ROUNDS times, on two cases:
 #   cube   the benchmark cube (bench/cases/cube.toml, 48,000 neo-Hookean tets, no contact), 0.05 s;
 #   hand   the hand-block case on its pinned meshes (bench/references): 69,739 tets, ANP hgo skin,
-#          rigid-free elastic bones, mortar contact with friction, the nodal step bound; 0.3 ms.
+#          linear elastic bones, mortar contact with friction, the nodal step bound; 0.3 ms.
 # Per layout: the median over rounds of run.json's wall time (the whole run, outputs included), of
 # the stress passes' and of contact's (the slowest rank's, on ranks), the steps, and the peak
 # resident memory of each process (of the first round). The results are compared bit for bit

@@ -1,6 +1,6 @@
 // The stress pass over MPI ranks, timed (issue: MPI, "Performance"; run by bench/mpi_scaling.sh).
 // Every rank builds the same model (a Morton-ordered box of 6 n^3 tets, or one .msh file's tets,
-// all neo-Hookean standard tets: the rank pass refuses ANP blocks today), splits it with METIS
+// all neo-Hookean, standard tets or with --formulation anp ANP tets), splits it with METIS
 // into the mpiexec's ranks (atoms of kAtomTets tets) and times --rounds passes of RankStressPass
 // (the halo exchange overlapped with the interior atoms, the per-atom records gathered, the nodal
 // bound reduced) on a smooth deformation: per round the slowest rank's time, between barriers.
@@ -109,9 +109,7 @@ int run(int argc, char** argv) {
     rank_times.push_back(timed([&] { pass.compute(u.data(), v.data(), f.data()); }));
     if (ranks == 1) one_times.push_back(timed([&] { one.compute(u.data(), v.data(), f.data()); }));
   }
-  long tets = 0, messages = 0;
-  for (std::size_t e = 0; e < model.num_elements; ++e) tets += d.atom_rank[d.tet_atom[e]] == rank;
-  messages = static_cast<long>(pass.halo_ranks());
+  const auto tets = static_cast<long>(pass.tets()), messages = static_cast<long>(pass.halo_ranks());
   const auto all_tets = gathered(tets, MPI_LONG, ranks);
   const auto all_halo = gathered(static_cast<long>(pass.halo_doubles()), MPI_LONG, ranks);
   const auto all_messages = gathered(messages, MPI_LONG, ranks);

@@ -469,13 +469,13 @@ class RunLoop {
 namespace {
 
 // On ranks: this rank's part of the stress pass, at run.threads per rank (1 unless given).
-std::unique_ptr<SharedStressPass> rank_stress_pass(const Model& model, const Scenario& sc, const RankRun* ranks) {
+std::unique_ptr<StressPassEngine> rank_stress_pass(const Model& model, const Scenario& sc, const RankRun* ranks) {
   if (!ranks) return nullptr;
   return ranks->stress_pass(model, sc.damping.beta, sc.run.threads > 0 ? sc.run.threads : 1);
 }
 
 // What every rank measured, for run.json's "ranks" (collective).
-nlohmann::json rank_report(SharedStressPass* shared, const ExplicitSolver& solver, std::chrono::steady_clock::time_point start) {
+nlohmann::json rank_report(StressPassEngine* shared, const ExplicitSolver& solver, std::chrono::steady_clock::time_point start) {
   if (!shared) return nullptr;
   return shared->report({{"stress_passes_s", solver.stress_seconds()},
                          {"contact_s", solver.contact_seconds()},
@@ -487,7 +487,7 @@ nlohmann::json rank_report(SharedStressPass* shared, const ExplicitSolver& solve
 void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankRun& ranks) {
   const auto wall_start = std::chrono::steady_clock::now();
   const Model model = build_model(sc);
-  const std::unique_ptr<SharedStressPass> shared = rank_stress_pass(model, sc, &ranks);
+  const std::unique_ptr<StressPassEngine> shared = rank_stress_pass(model, sc, &ranks);
   ExplicitSolver solver(model, sc.run, sc.damping, shared.get());
   if (from) {
     StateArchive a(from->state, from->file.string());
@@ -517,7 +517,7 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   for (const MaterialBlock& b : model.blocks)
     log::info() << "  " << b.name << ": " << b.material.type_name() << ", " << (b.end - b.begin) << " tets, "
                 << (b.material.anp() ? "average-nodal-pressure (ANP) tets" : "standard tets");
-  const std::unique_ptr<SharedStressPass> shared = rank_stress_pass(model, sc, ranks);
+  const std::unique_ptr<StressPassEngine> shared = rank_stress_pass(model, sc, ranks);
   ExplicitSolver solver(model, sc.run, sc.damping, shared.get());
   log::info() << "time step " << solver.time_step() << " s (safety " << sc.run.time_step_safety << "; " << solver.describe_step_limit() << "), "
               << solver.threads() << " threads" << (shared ? " per rank on " + std::to_string(shared->ranks()) + " MPI ranks" : "")

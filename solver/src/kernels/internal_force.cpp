@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <iterator>
 #include <limits>
+#include <numeric>
 #include <utility>
 
 namespace tactus::solver {
@@ -232,6 +233,11 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   }
   partition_acc_.resize(partitions_.size());
   num_chunks_ = (model.num_nodes + kNodeChunk - 1) / kNodeChunk;
+  // One process runs every atom and chunk (own_atoms narrows these to a rank's).
+  sum_chunks_.resize(num_chunks_), anp_chunks_.resize(num_chunks_), anp_volume_atoms_.resize(partitions_.size());
+  std::iota(sum_chunks_.begin(), sum_chunks_.end(), std::size_t{0});
+  std::iota(anp_chunks_.begin(), anp_chunks_.end(), std::size_t{0});
+  std::iota(anp_volume_atoms_.begin(), anp_volume_atoms_.end(), std::size_t{0});
   chunk_anp_energy_.assign(num_chunks_, 0.0);
   set_nodal_step_bound(model.mass.data());
 }
@@ -297,7 +303,7 @@ std::size_t InternalForces::memory_bytes() const {
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
-  b += rank_chunks_.capacity() * sizeof(std::size_t);
+  b += (sum_chunks_.capacity() + anp_chunks_.capacity() + anp_volume_atoms_.capacity()) * sizeof(std::size_t);
   b += partition_rank_.capacity() * sizeof(int) + node_rank_.capacity() * sizeof(std::int32_t) + halo_.capacity() * sizeof(HaloSlots);
   for (const HaloSlots& h : halo_)
     b += (h.send.capacity() + h.receive.capacity() + h.send_tiles.capacity() + h.receive_tiles.capacity()) * sizeof(std::uint32_t);
@@ -351,10 +357,9 @@ void InternalForces::anp_pass(const double* u) {
     const double* V = a.reference_volume.data();
     // Per partition of the block: its tets' current volumes to its own nodal array (on ranks,
     // those of the ghost region's atoms).
-    const std::size_t atoms = on_ranks_ ? anp_volume_atoms_.size() : partitions_.size();
 #pragma omp for schedule(dynamic, 1)
-    for (std::size_t i = 0; i < atoms; ++i) {
-      const std::size_t p = on_ranks_ ? anp_volume_atoms_[i] : i;
+    for (std::size_t i = 0; i < anp_volume_atoms_.size(); ++i) {
+      const std::size_t p = anp_volume_atoms_[i];
       const Partition& q = partitions_[p];
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.slot_begin;
@@ -363,10 +368,9 @@ void InternalForces::anp_pass(const double* u) {
     }
     // Per node chunk: the partitions' sums, then the pressures (no smoothing) or the volume ratio.
     const bool smoothing = b.material.pressure_smoothing() > 0;
-    const std::size_t chunks = on_ranks_ ? anp_chunks_.size() : num_chunks_;
 #pragma omp for schedule(static)
-    for (std::size_t i = 0; i < chunks; ++i) {
-      const std::size_t c = on_ranks_ ? anp_chunks_[i] : i;
+    for (std::size_t i = 0; i < anp_chunks_.size(); ++i) {
+      const std::size_t c = anp_chunks_[i];
       sum_chunk<1, 1>(c, partition_volumes_, block_slot_begin_[a.block], block_slot_end_[a.block], a.pressure.data());
       const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
       if (smoothing)
@@ -380,8 +384,8 @@ void InternalForces::anp_pass(const double* u) {
     double *x = a.pressure.data(), *y = a.smoothed.data();
     smooth_to_pressure(b, a.averaging, V, x, y, chunk_anp_energy_.data(), [&](auto f) {
 #pragma omp for schedule(static)
-      for (std::size_t i = 0; i < chunks; ++i) {
-        const std::size_t c = on_ranks_ ? anp_chunks_[i] : i;
+      for (std::size_t i = 0; i < anp_chunks_.size(); ++i) {
+        const std::size_t c = anp_chunks_[i];
         f(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
       }
     });
@@ -445,10 +449,9 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     }
     // On ranks only the chunks holding a node this rank's atoms touch: the others' forces come from
     // their owners (ranks.hpp), and their rows stay 0 here (the owners reduce them).
-    const std::size_t chunks = rank_chunks_.empty() ? num_chunks_ : rank_chunks_.size();
 #pragma omp for schedule(static)
-    for (std::size_t i = 0; i < chunks; ++i) {
-      const std::size_t c = rank_chunks_.empty() ? i : rank_chunks_[i];
+    for (std::size_t i = 0; i < sum_chunks_.size(); ++i) {
+      const std::size_t c = sum_chunks_[i];
       // Each node's force and row sum: its atoms' in atom order, whatever the threads.
       sum_chunk<kForceStride, 3>(c, partition_forces_, 0, node_slots_.size(), f_out, nodal_mass_ ? nodal_bound_.data() : nullptr);
       if (nodal_mass_) nodal_bound_of_chunk(c);
@@ -488,9 +491,8 @@ StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulat
 
 // Ranks: the partitions this process runs and, per other rank, the slots of shared nodes that go
 // each way. Both sides list a pair's slots node by node (ascending), each node's slots in atom
-// order, so a buffer needs no index; and the ANP tiles at those nodes, ascending. (The ANP J pass
-// runs every atom of an ANP block on every rank: each holds the whole displacement, and a tet's
-// volume is cheap beside its stress, so the nodal pressures need no exchange.)
+// order, so a buffer needs no index; and the ANP tiles at those nodes, ascending. The ANP J pass
+// runs over the rank's ghost region (anp_ghost_region), which needs no exchange.
 void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
@@ -504,25 +506,22 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
     if (model_.blocks[q.block].material.anp())
       for (std::size_t t = 0; t < tiles_of(q.end - q.begin); ++t) tile_partition[q.tile_offset + t] = static_cast<std::uint32_t>(p);
   }
-  rank_chunks_.clear();
-  std::vector<char> touched(model_.num_nodes, 0);
+  sum_chunks_.clear();
+  std::vector<char> touched(model_.num_nodes, 0);  // by this rank's atoms
   for (std::size_t n = 0; n < model_.num_nodes; ++n) {
     for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) touched[n] |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
-    if (touched[n] && (rank_chunks_.empty() || rank_chunks_.back() != n / kNodeChunk)) rank_chunks_.push_back(n / kNodeChunk);
+    if (touched[n] && (sum_chunks_.empty() || sum_chunks_.back() != n / kNodeChunk)) sum_chunks_.push_back(n / kNodeChunk);
   }
   node_rank_.assign(model_.num_nodes, -1);
   for (std::size_t n = 0; n < model_.num_nodes; ++n)
     if (node_slot_first_[n] < node_slot_first_[n + 1]) node_rank_[n] = partition_rank_[slot_partition[node_slots_[node_slot_first_[n]]]];
-  on_ranks_ = true;
   anp_ghost_region(rank, touched);
   halo_.clear();
   std::vector<std::size_t> halo_of_rank;  // index in halo_ + 1, per rank
   std::vector<std::size_t> listed;        // per entry of halo_: the last node whose slots it lists
   std::vector<char> sends(partitions_.size(), 0);
   for (std::size_t n = 0; n < model_.num_nodes; ++n) {
-    bool mine = false;
-    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) mine |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
-    if (!mine) continue;
+    if (!touched[n]) continue;
     for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) {
       const int other = partition_rank_[slot_partition[node_slots_[k]]];
       if (other == rank) continue;

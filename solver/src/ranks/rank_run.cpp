@@ -5,10 +5,10 @@
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "tactus/core/error.hpp"
 #include "tactus/core/log.hpp"
@@ -18,33 +18,42 @@ namespace tactus::solver {
 
 namespace {
 
-// 64-bit FNV-1a over a file's bytes (0 when it cannot be read).
+// 64-bit FNV-1a, one value at a time.
+struct Fnv1a {
+  std::uint64_t h = 1469598103934665603ull;
+  void add(std::uint64_t x) { h = (h ^ x) * 1099511628211ull; }
+};
+
+// Of a file's bytes (0 when it cannot be read).
 std::uint64_t file_hash(const char* path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return 0;
-  std::uint64_t h = 1469598103934665603ull;
+  Fnv1a f;
   char buffer[1 << 16];
   while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
-    for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ static_cast<unsigned char>(buffer[i])) * 1099511628211ull;
+    for (std::streamsize i = 0; i < in.gcount(); ++i) f.add(static_cast<unsigned char>(buffer[i]));
     if (!in) break;
   }
-  return h;
+  return f.h;
 }
 
 std::uint64_t parts_checksum(const Decomposition& d) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (std::int32_t r : d.atom_rank) h = (h ^ static_cast<std::uint64_t>(r)) * 1099511628211ull;
-  return h ^ d.atom_rank.size();
+  Fnv1a f;
+  for (std::int32_t r : d.atom_rank) f.add(static_cast<std::uint64_t>(r));
+  return f.h ^ d.atom_rank.size();
+}
+
+// The smallest and the largest of a value over every rank (collective): equal when every rank has it.
+std::pair<unsigned long long, unsigned long long> range_over_ranks(unsigned long long mine) {
+  unsigned long long low = 0, high = 0;
+  MPI_Allreduce(&mine, &low, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(&mine, &high, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+  return {low, high};
 }
 
 }  // namespace
 
 bool started_by_mpirun() { return std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK"); }
-
-int mpirun_processes() {
-  const char* n = std::getenv("OMPI_COMM_WORLD_SIZE");
-  return n ? std::max(1, std::atoi(n)) : 1;
-}
 
 RankSession::RankSession(int* argc, char*** argv) {
   int provided = 0;
@@ -95,7 +104,7 @@ RankRun RankSession::run(const std::filesystem::path& partition) const {
   RankRun run;
   run.rank = rank_, run.ranks = ranks_;
   const int ranks = ranks_, rank = rank_;
-  run.stress_pass = [partition, ranks, rank](const Model& model, double beta, int threads) -> std::unique_ptr<SharedStressPass> {
+  run.stress_pass = [partition, ranks, rank](const Model& model, double beta, int threads) -> std::unique_ptr<StressPassEngine> {
     const std::size_t limit = model.num_elements / 8;
     if (static_cast<std::size_t>(ranks) > limit)
       throw InputError("mpirun", "-np",
@@ -103,20 +112,14 @@ RankRun RankSession::run(const std::filesystem::path& partition) const {
                        std::to_string(ranks));
     const Decomposition d = partition.empty() ? decompose(model, ranks, kAtomTets, "mpirun -np") : read_partition(model, partition);
     if (d.ranks != ranks) throw InputError(partition.string(), "ranks", std::to_string(ranks) + " (mpirun -np)", std::to_string(d.ranks));
-    const auto mine = static_cast<unsigned long long>(parts_checksum(d));
-    unsigned long long low = 0, high = 0;
-    MPI_Allreduce(&mine, &low, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
-    MPI_Allreduce(&mine, &high, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+    const auto [low, high] = range_over_ranks(parts_checksum(d));
     if (low != high) throw Error("MPI: the ranks decomposed the model differently (METIS gave different parts on different ranks)");
     if (rank == 0)
       log::info() << "decomposition" << (partition.empty() ? " (METIS)" : " (" + partition.string() + ")") << ":\n" << format_decomposition(d);
     return std::make_unique<RankStressPass>(model, d, MPI_COMM_WORLD, beta, threads);
   };
   run.check_same_restart = [](std::size_t step) {
-    const auto mine = static_cast<unsigned long long>(step);
-    unsigned long long low = 0, high = 0;
-    MPI_Allreduce(&mine, &low, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
-    MPI_Allreduce(&mine, &high, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+    const auto [low, high] = range_over_ranks(step);
     if (low != high)
       throw InputError("mpirun", "checkpoint", "every rank continuing from the same checkpoint (another process may be writing that folder)",
                        "steps " + std::to_string(low == 0 ? 0 : low - 1) + " and " + std::to_string(high - 1));

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <numeric>
 #include <string>
 
 #include "tactus/core/error.hpp"
@@ -32,16 +33,18 @@ void check(int code, const char* what) {
 }  // namespace
 
 RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_Comm comm, double beta, int threads)
-    : comm_(comm), forces_(model, beta, threads) {
+    : model_(model), beta_(beta), comm_(comm), forces_(model, beta, threads) {
   check(MPI_Comm_rank(comm, &rank_), "MPI_Comm_rank");
   check(MPI_Comm_size(comm, &ranks_), "MPI_Comm_size");
   if (d.atom_tets != kAtomTets)
     throw InputError("decomposition", "atom_tets", std::to_string(kAtomTets) + " (the stress pass's atom)", std::to_string(d.atom_tets));
   if (d.ranks != ranks_) throw InputError("decomposition", "ranks", std::to_string(ranks_) + " (the MPI ranks)", std::to_string(d.ranks));
   forces_.own_atoms(d.tet_atom, d.atom_rank, rank_);
+  tet_rank_.resize(model.num_elements);
+  for (std::size_t e = 0; e < model.num_elements; ++e) tet_rank_[e] = d.atom_rank[d.tet_atom[e]], tets_ += tet_rank_[e] == rank_;
   touched_.assign(model.num_nodes, 0);
   for (std::size_t e = 0; e < model.num_elements; ++e)
-    if (d.atom_rank[d.tet_atom[e]] == rank_)
+    if (tet_rank_[e] == rank_)
       for (int k = 0; k < 4; ++k) touched_[static_cast<std::size_t>(model.conn[4 * e + static_cast<std::size_t>(k)])] = 1;
   for (const HaloSlots& h : forces_.halo()) {
     send_.emplace_back(InternalForces::kSlotDoubles * h.send.size() + h.send_tiles.size());
@@ -61,61 +64,58 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   anp_ = std::any_of(model.blocks.begin(), model.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
   if (anp_)
     for (std::int32_t r : forces_.chunk_ranks()) ++counts_[static_cast<std::size_t>(r)];
-  for (std::size_t r = 1; r < counts_.size(); ++r) offsets_[r] = offsets_[r - 1] + counts_[r - 1];
+  std::exclusive_scan(counts_.begin(), counts_.end(), offsets_.begin(), 0);
   gathered_.resize(static_cast<std::size_t>(offsets_.back() + counts_.back()));
   records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
   atoms_.resize(owner.size()), next_.resize(counts_.size());
-  tet_rank_.resize(model.num_elements);
-  for (std::size_t e = 0; e < model.num_elements; ++e) tet_rank_[e] = d.atom_rank[d.tet_atom[e]], tets_ += tet_rank_[e] == rank_;
   // The forces' gather: who owns which node is fixed, so its counts and order are too.
-  const std::vector<std::int32_t>& node_rank = forces_.node_ranks();
-  force_counts_.assign(static_cast<std::size_t>(ranks_), 0), force_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
-  for (std::int32_t r : node_rank)
-    if (r >= 0) force_counts_[static_cast<std::size_t>(r)] += 3;
-  for (std::size_t r = 1; r < force_counts_.size(); ++r) force_offsets_[r] = force_offsets_[r - 1] + force_counts_[r - 1];
-  owned_nodes_.resize(static_cast<std::size_t>(force_offsets_.back() + force_counts_.back()) / 3);
-  std::vector<std::size_t> at(force_offsets_.begin(), force_offsets_.end());
-  for (std::size_t n = 0; n < node_rank.size(); ++n)
-    if (node_rank[n] >= 0) {
-      std::size_t& next = at[static_cast<std::size_t>(node_rank[n])];
-      owned_nodes_[next / 3] = static_cast<std::uint32_t>(n), next += 3;
-    }
-  owned_forces_.resize(static_cast<std::size_t>(force_counts_[static_cast<std::size_t>(rank_)]));
-  all_forces_.resize(3 * owned_nodes_.size());
+  forces_order_.build(forces_.node_ranks(), ranks_, rank_, 3);
+}
+
+void RankStressPass::RankOrder::build(const std::vector<std::int32_t>& item_rank, int ranks, int rank, std::size_t per_item) {
+  width = per_item;
+  counts.assign(static_cast<std::size_t>(ranks), 0), offsets.assign(static_cast<std::size_t>(ranks), 0);
+  for (std::int32_t r : item_rank)
+    if (r >= 0) counts[static_cast<std::size_t>(r)] += static_cast<int>(width);
+  std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
+  items.resize(static_cast<std::size_t>(offsets.back() + counts.back()) / width);
+  std::vector<std::size_t> next(static_cast<std::size_t>(ranks));
+  for (std::size_t r = 0; r < next.size(); ++r) next[r] = static_cast<std::size_t>(offsets[r]) / width;
+  for (std::size_t i = 0; i < item_rank.size(); ++i)
+    if (item_rank[i] >= 0) items[next[static_cast<std::size_t>(item_rank[i])]++] = static_cast<std::uint32_t>(i);
+  mine.resize(static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]));
+  all.resize(width * items.size());
+}
+
+void RankStressPass::RankOrder::gather(const double* from, double* to, int rank, MPI_Comm comm) {
+  const std::size_t first = static_cast<std::size_t>(offsets[static_cast<std::size_t>(rank)]) / width;
+  for (std::size_t k = 0; k < own_items(rank); ++k) std::memcpy(&mine[width * k], from + width * items[first + k], width * sizeof(double));
+  check(MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, comm),
+        "MPI_Allgatherv");
+  for (std::size_t k = 0; k < items.size(); ++k) std::memcpy(to + width * items[k], &all[width * k], width * sizeof(double));
+}
+
+std::size_t RankStressPass::RankOrder::memory_bytes() const {
+  return items.capacity() * sizeof(std::uint32_t) + (counts.capacity() + offsets.capacity()) * sizeof(int) +
+         (mine.capacity() + all.capacity()) * sizeof(double);
 }
 
 void RankStressPass::enable_mass_scaling() {
   forces_.enable_mass_scaling();
-  const std::size_t tets = tet_rank_.size();
-  tet_counts_.assign(static_cast<std::size_t>(ranks_), 0), tet_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
-  for (std::int32_t r : tet_rank_) ++tet_counts_[static_cast<std::size_t>(r)];
-  for (std::size_t r = 1; r < tet_counts_.size(); ++r) tet_offsets_[r] = tet_offsets_[r - 1] + tet_counts_[r - 1];
-  tets_by_rank_.resize(tets);
-  std::vector<int> at(tet_offsets_);
-  for (std::size_t e = 0; e < tets; ++e)
-    tets_by_rank_[static_cast<std::size_t>(at[static_cast<std::size_t>(tet_rank_[e])]++)] = static_cast<std::uint32_t>(e);
-  own_dt2_.resize(static_cast<std::size_t>(tet_counts_[static_cast<std::size_t>(rank_)]));
-  packed_dt2_.resize(tets), all_dt2_.resize(tets);
+  tets_order_.build(tet_rank_, ranks_, rank_, 1);
+  all_dt2_.resize(tet_rank_.size());
 }
 
 const std::vector<double>& RankStressPass::element_dt2_everywhere() {
-  const std::vector<double>& dt2 = forces_.element_dt2();
-  const auto first = static_cast<std::size_t>(tet_offsets_[static_cast<std::size_t>(rank_)]);
-  for (std::size_t k = 0; k < own_dt2_.size(); ++k) own_dt2_[k] = dt2[tets_by_rank_[first + k]];
-  check(MPI_Allgatherv(own_dt2_.data(), static_cast<int>(own_dt2_.size()), MPI_DOUBLE, packed_dt2_.data(), tet_counts_.data(), tet_offsets_.data(),
-                       MPI_DOUBLE, comm_),
-        "MPI_Allgatherv");
-  for (std::size_t k = 0; k < packed_dt2_.size(); ++k) all_dt2_[tets_by_rank_[k]] = packed_dt2_[k];
+  tets_order_.gather(forces_.element_dt2().data(), all_dt2_.data(), rank_, comm_);
   return all_dt2_;
 }
 
 std::size_t RankStressPass::memory_bytes() const {
-  std::size_t b = forces_.memory_bytes() + touched_.capacity() + owned_nodes_.capacity() * sizeof(std::uint32_t);
+  std::size_t b = forces_.memory_bytes() + touched_.capacity() + forces_order_.memory_bytes() + tets_order_.memory_bytes();
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
-  b += (records_.capacity() + gathered_.capacity() + owned_forces_.capacity() + all_forces_.capacity()) * sizeof(double);
-  b += tet_rank_.capacity() * sizeof(std::int32_t) + tets_by_rank_.capacity() * sizeof(std::uint32_t);
-  b += (own_dt2_.capacity() + packed_dt2_.capacity() + all_dt2_.capacity()) * sizeof(double);
+  b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_rank_.capacity() * sizeof(std::int32_t);
   return b + atoms_.capacity() * sizeof(StressAccumulator);
 }
 
@@ -217,21 +217,19 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
 StressPassResult RankStressPass::compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) {
   const StressPassResult r = compute(u, v, f_out, side);
   const double start = MPI_Wtime();
-  const std::size_t mine = static_cast<std::size_t>(force_offsets_[static_cast<std::size_t>(rank_)]) / 3;
-  for (std::size_t k = 0; k < owned_forces_.size() / 3; ++k)
-    std::memcpy(&owned_forces_[3 * k], f_out + 3 * static_cast<std::size_t>(owned_nodes_[mine + k]), 3 * sizeof(double));
-  check(MPI_Allgatherv(owned_forces_.data(), static_cast<int>(owned_forces_.size()), MPI_DOUBLE, all_forces_.data(), force_counts_.data(),
-                       force_offsets_.data(), MPI_DOUBLE, comm_),
-        "MPI_Allgatherv");
-  for (std::size_t k = 0; k < owned_nodes_.size(); ++k)
-    std::memcpy(f_out + 3 * static_cast<std::size_t>(owned_nodes_[k]), &all_forces_[3 * k], 3 * sizeof(double));
+  forces_order_.gather(f_out, f_out, rank_, comm_);
   force_gather_seconds_ += MPI_Wtime() - start;
   return r;
 }
 
+StressPassResult RankStressPass::compute_alone(const double* u, const double* v, double* f_out) {
+  InternalForces one(model_, beta_, 1);  // this rank's forces_ runs only its atoms
+  return one.compute(u, v, f_out);
+}
+
 nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, double>>& seconds) {
   std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
-                           static_cast<double>(owned_forces_.size() / 3)};
+                           static_cast<double>(forces_order_.own_items(rank_))};
   for (const auto& [name, s] : seconds) mine.push_back(s);
   mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(peak_resident_bytes());
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));

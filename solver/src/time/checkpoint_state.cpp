@@ -5,7 +5,6 @@
 // against the size this model gives it, so a checkpoint of another model is refused by name.
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <string>
 
 #include "../contact/detection.hpp"
@@ -162,7 +161,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"added_mass_body", &masses_.added_to_body},
                          {"body_mass", &masses_.body_mass}})
     a.io(std::string("integrator.") + name, *v, v->size());
-  if (mass_scaling()) a.io("integrator.mass_factor", shared_ ? shared_->mass_factor() : forces_->mass_factor(), model_.num_elements);
+  if (mass_scaling()) a.io("integrator.mass_factor", passes_->mass_factor(), model_.num_elements);
   a.io_record("integrator.added_momentum", masses_.added_momentum);
   a.io_record("integrator.stress_pass", pass_);
   a.io_record("integrator.energies", audit_.energy);
@@ -242,11 +241,8 @@ void ExplicitSolver::validate_restored(const StateArchive& a) {
   // The state must be the one its energies describe: the strain energy of the restored
   // displacements, computed again, against the one the checkpoint stored (edited displacements of
   // 1e300 once ran on to an 18 % energy error). The sum's order may differ with the thread count.
-  // On ranks, a one-thread pass of this process's own for this one check.
   std::vector<double> force(f_.size());
-  std::optional<InternalForces> once;
-  if (!forces_) once.emplace(model_, damping_.beta, 1);
-  const StressPassResult again = (forces_ ? *forces_ : *once).compute(u_.data(), v_half_.data(), force.data());
+  const StressPassResult again = passes_->compute_alone(u_.data(), v_half_.data(), force.data());
   const double stored = pass_.strain_energy;
   const double scale = std::max({std::abs(stored), audit_.energy.scale(), 1e-300});
   if (!(again.min_jacobian > 0) || !std::isfinite(again.strain_energy) || std::abs(again.strain_energy - stored) > 1e-8 * scale)

@@ -13,12 +13,12 @@
 
 namespace tactus::solver {
 
-ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, SharedStressPass* shared)
+ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, StressPassEngine* on_ranks)
     : model_(model),
       run_(run),
       damping_(damping),
-      shared_(shared),
-      forces_(shared ? std::optional<InternalForces>() : std::optional<InternalForces>(std::in_place, model, damping.beta, run.threads)),
+      own_passes_(on_ranks ? nullptr : std::make_unique<OneProcessStressPass>(model, damping.beta, run.threads)),
+      passes_(on_ranks ? on_ranks : own_passes_.get()),
       masses_(model, run.minimum_time_step),
       max_threads_(pass_threads()),
       tuner_(max_threads_, run.threads == 0),
@@ -35,7 +35,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   v_prev_half_ = v_half_;
   gravity_force_.resize(ndof);
   for (std::size_t i = 0; i < ndof; ++i) gravity_force_[i] = model.mass[i / 3] * run.gravity[i % 3];  // on the physical mass, also under mass scaling
-  if (mass_scaling()) (shared_ ? shared_->enable_mass_scaling() : forces_->enable_mass_scaling());
+  if (mass_scaling()) passes_->enable_mass_scaling();
   rigid_.init(model_, v_half_.data(), v_prev_half_.data(), masses_.contact_inverse_mass.data());
   if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
   if (drive_ && drive_->grasp()) regions_ = std::make_unique<GripRegions>(model_, rigid_, *drive_, contact_);
@@ -114,13 +114,8 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
             },
             &ahead};
   const double* bound_masses = run_.step_estimate == StepEstimate::nodal ? masses_.mass.data() : nullptr;  // the masses the run integrates with
-  if (shared_) {
-    shared_->set_nodal_step_bound(bound_masses);
-    pass_ = shared_->compute_everywhere(u_.data(), v_half_.data(), f_.data(), side);
-  } else {
-    forces_->set_nodal_step_bound(bound_masses);
-    pass_ = forces_->compute(u_.data(), v_half_.data(), f_.data(), side);
-  }
+  passes_->set_nodal_step_bound(bound_masses);
+  pass_ = passes_->compute_everywhere(u_.data(), v_half_.data(), f_.data(), side);
   stress_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   detection_ahead_seconds_ += ahead.seconds;
   if (ahead.error) std::rethrow_exception(ahead.error);
@@ -140,10 +135,7 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
 }
 
 void ExplicitSolver::scale_mass() {
-  if (shared_)
-    masses_.scale(shared_->mass_factor(), shared_->element_dt2_everywhere(), pass_, rigid_, damping_.beta);
-  else
-    masses_.scale(forces_->mass_factor(), forces_->element_dt2(), pass_, rigid_, damping_.beta);
+  masses_.scale(passes_->mass_factor(), passes_->element_dt2_everywhere(), pass_, rigid_, damping_.beta);
   const std::ptrdiff_t over = masses_.body_over(run_.added_mass_limit);
   if (over < 0) return;
   const auto b = static_cast<std::size_t>(over);
@@ -250,7 +242,7 @@ void ExplicitSolver::advance_velocity() {
   const auto started = std::chrono::steady_clock::now();
   // The stress passes and the contact sweep each take the thread count their own tuner found
   // faster: the sweep's many short parallel loops lose to one thread where the stress pass gains.
-  if (const int n = tuner_.threads(); n != pass_threads()) (shared_ ? shared_->set_threads(n) : forces_->set_threads(n));
+  if (const int n = tuner_.threads(); n != pass_threads()) passes_->set_threads(n);
   if (const int n = contact_tuner_.threads(); n != contact_.threads()) contact_.set_threads(n);
   double contact_seconds = 0;
   const std::size_t ndof = 3 * model_.num_nodes;
@@ -349,7 +341,7 @@ void ExplicitSolver::advance_position() {
 std::size_t ExplicitSolver::memory_bytes() const {
   std::size_t doubles = u_.capacity() + v_half_.capacity() + v_prev_half_.capacity() + f_.capacity() + masses_.inverse_mass.capacity() +
                         gravity_force_.capacity() + masses_.mass.capacity() + masses_.pending_added.capacity();
-  return doubles * sizeof(double) + (forces_ ? forces_->memory_bytes() : 0) + (shared_ ? shared_->memory_bytes() : 0);
+  return doubles * sizeof(double) + passes_->memory_bytes();
 }
 
 std::vector<double> ExplicitSolver::velocity_at_step() const {

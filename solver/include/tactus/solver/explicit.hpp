@@ -10,7 +10,6 @@
 //   advance_position(): gives u^{n+1}, t^{n+1} and the stress pass at u^{n+1}.
 #include <array>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +23,7 @@
 #include "tactus/solver/relaxation.hpp"
 #include "tactus/solver/rigid.hpp"
 #include "tactus/solver/run_settings.hpp"
-#include "tactus/solver/shared_stress_pass.hpp"
+#include "tactus/solver/stress_pass_engine.hpp"
 #include "tactus/solver/thread_tuner.hpp"
 
 namespace tactus {
@@ -38,9 +37,9 @@ class ExplicitSolver {
   // Performs the initial stress pass and chooses the step. Throws InputError when the user's
   // time_step exceeds the stable limit without force_time_step or the run or its output times are
   // closer than half a step, NumericalError when the initial configuration is inverted.
-  // shared: the stress pass spread over processes (shared_stress_pass.hpp), which then takes every
-  // pass (this process then holds no InternalForces of its own). nullptr: this process alone.
-  ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, SharedStressPass* shared = nullptr);
+  // on_ranks: the stress pass spread over processes (RankStressPass, stress_pass_engine.hpp), which
+  // then takes every pass; nullptr: this process's own (OneProcessStressPass).
+  ExplicitSolver(const Model& model, const RunSpec& run, const DampingSpec& damping, StressPassEngine* on_ranks = nullptr);
   ~ExplicitSolver();
 
   void advance_velocity();
@@ -69,7 +68,6 @@ class ExplicitSolver {
   std::vector<double> previous_displacement() const;
   const Model& model() const { return model_; }
   std::size_t memory_bytes() const;  // integrator state + per-thread force buffers (not the model)
-  SharedStressPass* shared_stress_pass() const { return shared_; }
   int threads() const { return max_threads_; }
   // The automatic thread count's probes (thread_tuner.hpp): how many, and how many chose one thread.
   // The stress passes' and the contact sweep's tuners apart.
@@ -154,14 +152,14 @@ class ExplicitSolver {
   void accumulate_reactions();
   RelaxedDofs relaxed_dofs() const { return {masses_.mass.data(), model_.constrained.data(), rigid_.piece_of_node()}; }
 
-  // The threads of the passes and the nodal loops now (the shared pass's when there is one).
-  int pass_threads() const { return shared_ ? shared_->threads() : forces_->threads(); }
+  // The threads of the passes and the nodal loops now.
+  int pass_threads() const { return passes_->threads(); }
 
   const Model& model_;
   RunSpec run_;
   DampingSpec damping_;
-  SharedStressPass* shared_;
-  std::optional<InternalForces> forces_;  // this process's pass (none with a shared one)
+  std::unique_ptr<StressPassEngine> own_passes_;  // this process's, when no engine over ranks is given
+  StressPassEngine* passes_;                      // the one that computes them
   StressPassResult pass_;
   std::vector<double> u_, v_half_, v_prev_half_, f_;
   MassScaling masses_;  // the masses the run integrates with, and what mass scaling added

@@ -160,8 +160,8 @@ class InternalForces {
   // this model with kAtomTets atoms); f_out is then right at the nodes they touch once the halo()
   // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
   // one: combine_atoms over every rank's atom_results() in atom order; the other ranks' atoms
-  // keep empty results here, so the result's minima are this rank's). The ANP blocks' J pass still
-  // runs every atom (each rank holds the whole displacement).
+  // keep empty results here, so the result's minima are this rank's). The ANP blocks' J pass runs
+  // over the rank's ghost region (each rank holds the whole displacement; anp_ghost_region).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }
@@ -269,10 +269,9 @@ class InternalForces {
   // by the rigid pieces (tissue in a joint's gap between two bones), so its volume floor is off.
   std::vector<char> rigid_node_;
   std::vector<double> chunk_anp_energy_;
-  // On ranks (own_atoms): the ANP atoms whose tets' volumes this rank adds and the node chunks its
-  // J pass runs over (a ghost region deep enough for its own nodes' pressures and its chunks'
-  // energies; own_atoms), and per chunk the rank that reports its ANP energy.
-  bool on_ranks_ = false;
+  // The ANP atoms whose tets' volumes this process adds and the node chunks its J pass runs over
+  // (all of them; on ranks a ghost region deep enough for the rank's own nodes' pressures and its
+  // chunks' energies, own_atoms), and per chunk the rank that reports its ANP energy (on ranks).
   std::vector<std::size_t> anp_volume_atoms_, anp_chunks_;
   std::vector<std::int32_t> chunk_rank_;
   void anp_ghost_region(int rank, const std::vector<char>& touched);
@@ -285,7 +284,7 @@ class InternalForces {
   std::vector<std::size_t> boundary_atoms_, interior_atoms_;
   std::vector<int> partition_rank_;
   std::vector<std::int32_t> node_rank_;
-  std::vector<std::size_t> rank_chunks_;  // the node chunks the pass sums on this rank (empty: all)
+  std::vector<std::size_t> sum_chunks_;  // the node chunks the pass sums (all; on ranks those this rank's atoms touch)
   std::vector<HaloSlots> halo_;
   // The nodal step bound's reduction (kernels/step_bound.cpp): one node chunk's largest rows, then
   // the step they give into r.

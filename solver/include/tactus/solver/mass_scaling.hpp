@@ -29,7 +29,7 @@ class MassScaling {
   // own, and far larger). beta: Rayleigh stiffness damping, which shortens the step as the kernel
   // computes it.
   // factor: the stress pass's per-tet mass factors (raised here); dt2: every tet's unscaled squared
-  // step of the pass (InternalForces::element_dt2, or SharedStressPass::element_dt2_everywhere).
+  // step of the pass (StressPassEngine::element_dt2_everywhere).
   void scale(std::vector<double>& factor, const std::vector<double>& dt2, StressPassResult& pass, const RigidBodies& rigid, double beta);
   // The first body (model.bodies order) whose added mass exceeds `limit` times its own mass, or -1.
   std::ptrdiff_t body_over(double limit) const;

@@ -5,21 +5,21 @@
 // every node it touches over all the node's slots in atom order, so its forces are the bits of one
 // process at any rank count. The per-atom energies and viscous powers are gathered and added in
 // atom order on every rank; the element step, the smallest J and the nodal step bound are one
-// global MINLOC. For the integrator (SharedStressPass) the forces of the nodes each rank owns (those
+// global MINLOC. For the integrator (StressPassEngine) the forces of the nodes each rank owns (those
 // whose first atom is its) are then gathered, so every rank holds the whole force vector and steps
 // the whole model as one process would. Every rank holds the whole model for now (scattering it is
-// the next step), and ANP blocks are refused (their J pass needs a second exchange).
+// a later step); the ANP blocks' J pass runs over each rank's ghost region (InternalForces).
 #include <mpi.h>
 
 #include <vector>
 
 #include "tactus/solver/decomposition.hpp"
 #include "tactus/solver/internal_force.hpp"
-#include "tactus/solver/shared_stress_pass.hpp"
+#include "tactus/solver/stress_pass_engine.hpp"
 
 namespace tactus::solver {
 
-class RankStressPass : public SharedStressPass {
+class RankStressPass : public StressPassEngine {
  public:
   // Collective over comm; d: the same decomposition (atoms of kAtomTets tets) on every rank.
   RankStressPass(const Model& model, const Decomposition& d, MPI_Comm comm, double beta, int threads);
@@ -40,7 +40,8 @@ class RankStressPass : public SharedStressPass {
   nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) override;
   std::size_t memory_bytes() const override;
   const std::vector<char>& touched() const { return touched_; }
-  int rank() const override { return rank_; }
+  StressPassResult compute_alone(const double* u, const double* v, double* f_out) override;
+  int rank() const { return rank_; }
   int ranks() const override { return ranks_; }
   std::size_t tets() const { return tets_; }  // this rank's
   // Doubles sent to other ranks per pass (the halo's size), and the messages: one per rank that
@@ -53,6 +54,8 @@ class RankStressPass : public SharedStressPass {
  private:
   static void start_exchange(void* self);
   static void finish_exchange(void* self);
+  const Model& model_;
+  double beta_;
   MPI_Comm comm_;
   int rank_ = 0, ranks_ = 1;
   InternalForces forces_;
@@ -64,19 +67,30 @@ class RankStressPass : public SharedStressPass {
   std::vector<double> records_, gathered_;
   std::vector<StressAccumulator> atoms_;  // every atom's sums
   std::vector<std::size_t> next_;
-  // The forces' gather: the nodes each rank owns (InternalForces::node_ranks), in rank then node
-  // order, the doubles per rank and their offsets, this rank's packed forces.
-  std::vector<std::uint32_t> owned_nodes_;
-  std::vector<int> force_counts_, force_offsets_;
-  std::vector<double> owned_forces_, all_forces_;
   std::size_t tets_ = 0;
   bool anp_ = false;  // the model has ANP blocks: their chunks' energies are gathered too
-  // Mass scaling: per tet its rank; the tets in rank then tet order, each rank's count and offset;
-  // this rank's steps packed, everyone's packed, everyone's by tet.
+  // Values of items (nodes, tets) that each rank has right for its own items, sent to every rank:
+  // the items in rank then item order, each rank's doubles and where they land, this rank's
+  // values packed and everyone's (`width` doubles per item). Fixed once built.
+  struct RankOrder {
+    std::size_t width = 1;
+    std::vector<std::uint32_t> items;
+    std::vector<int> counts, offsets;
+    std::vector<double> mine, all;
+    // item_rank: per item its rank, or -1 (an item no rank sends).
+    void build(const std::vector<std::int32_t>& item_rank, int ranks, int rank, std::size_t width);
+    // One MPI_Allgatherv: this rank's items' values from `from` (width per item, by item index) to
+    // every rank, each into `to` at its item (collective).
+    void gather(const double* from, double* to, int rank, MPI_Comm comm);
+    std::size_t own_items(int rank) const { return static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]) / width; }
+    std::size_t memory_bytes() const;
+  };
+  RankOrder forces_order_;  // the nodes each rank owns (InternalForces::node_ranks), 3 doubles each
+  // Mass scaling: per tet its rank; the tets' order (1 double each, built when scaling is on), and
+  // every tet's step.
   std::vector<std::int32_t> tet_rank_;
-  std::vector<std::uint32_t> tets_by_rank_;
-  std::vector<int> tet_counts_, tet_offsets_;
-  std::vector<double> own_dt2_, packed_dt2_, all_dt2_;
+  RankOrder tets_order_;
+  std::vector<double> all_dt2_;
   // Wall time in the sums' gather and MINLOC (compute) and in the forces' gather (compute_everywhere).
   double sums_seconds_ = 0, force_gather_seconds_ = 0;
 };
@@ -91,8 +105,6 @@ namespace tactus::solver {
 
 // True when mpirun (Open MPI) started this process: its environment says so.
 bool started_by_mpirun();
-// The number of processes mpirun started, from that environment (1 without it).
-int mpirun_processes();
 
 // MPI for one tactus-solve process under mpirun: MPI_Init_thread (FUNNELED: only the master
 // thread calls MPI, inside the stress pass) and MPI_Finalize.

@@ -23,7 +23,7 @@
 
 #include "tactus/core/output.hpp"
 #include "tactus/solver/scenario.hpp"
-#include "tactus/solver/shared_stress_pass.hpp"
+#include "tactus/solver/stress_pass_engine.hpp"
 
 namespace tactus::solver {
 
@@ -49,7 +49,7 @@ struct RunSummary {
 struct RankRun {
   int rank = 0, ranks = 1;
   // This rank's part of the stress pass over the model (collective).
-  std::function<std::unique_ptr<SharedStressPass>(const Model& model, double beta, int threads)> stress_pass;
+  std::function<std::unique_ptr<StressPassEngine>(const Model& model, double beta, int threads)> stress_pass;
   // Every rank must continue from rank 0's checkpoint (the step it was written at + 1, or 0 for a
   // run from t = 0): an InputError on every rank otherwise (collective).
   std::function<void(std::size_t restart_step)> check_same_restart;

@@ -1,0 +1,68 @@
+#pragma once
+// The stress pass as the explicit integrator calls it: this process's (OneProcessStressPass, over
+// InternalForces) or one spread over MPI ranks (RankStressPass, ranks.hpp). Either gives, every
+// step, what InternalForces::compute gives one process - the internal forces at every node and the
+// whole model's sums and minima - with the same bits, so that every process of a run over ranks
+// goes on with the same state (docs/design.md, "tactus-solve under mpirun"). The solver library
+// itself needs no MPI: only this interface.
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tactus/solver/internal_force.hpp"
+
+namespace tactus::solver {
+
+class StressPassEngine {
+ public:
+  virtual ~StressPassEngine() = default;
+  // f_out (3 per node of the model) at every node, and the whole model's result: the bits of one
+  // process's InternalForces::compute. On ranks collective: every process calls it at the same step.
+  virtual StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) = 0;
+  // The same pass by this process alone, not collective (a restored state's check, once).
+  virtual StressPassResult compute_alone(const double* u, const double* v, double* f_out) = 0;
+  virtual void set_nodal_step_bound(const double* nodal_mass) = 0;  // as InternalForces::set_nodal_step_bound
+  // Mass scaling (as InternalForces's): the per-tet mass factors, the same on every process (each
+  // raises them alike from the same steps), and every tet's unscaled squared step of the last pass,
+  // gathered to every process (on ranks collective: only when the run scales, which every process
+  // knows alike).
+  virtual void enable_mass_scaling() = 0;
+  virtual std::vector<double>& mass_factor() = 0;
+  virtual const std::vector<double>& element_dt2_everywhere() = 0;
+  virtual void set_threads(int threads) = 0;
+  virtual int threads() const = 0;
+  virtual int ranks() const = 0;
+  // What each process did (on ranks collective; the array on rank 0, empty elsewhere; null for one
+  // process): per rank its tets, halo doubles and messages per pass, its owned nodes, `seconds` (its
+  // measured wall times by name) and the pass's own (RankStressPass: sums_s, the sums' gather and
+  // MINLOC; force_gather_s; peak_resident_bytes, the process's peak memory).
+  virtual nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) = 0;
+  virtual std::size_t memory_bytes() const = 0;
+};
+
+// One process: InternalForces as it is.
+class OneProcessStressPass final : public StressPassEngine {
+ public:
+  OneProcessStressPass(const Model& model, double beta, int threads) : forces_(model, beta, threads) {}
+  StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) override {
+    return forces_.compute(u, v, f_out, side);
+  }
+  StressPassResult compute_alone(const double* u, const double* v, double* f_out) override { return forces_.compute(u, v, f_out); }
+  void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
+  void enable_mass_scaling() override { forces_.enable_mass_scaling(); }
+  std::vector<double>& mass_factor() override { return forces_.mass_factor(); }
+  const std::vector<double>& element_dt2_everywhere() override { return forces_.element_dt2(); }
+  void set_threads(int threads) override { forces_.set_threads(threads); }
+  int threads() const override { return forces_.threads(); }
+  int ranks() const override { return 1; }
+  nlohmann::json report(const std::vector<std::pair<std::string, double>>&) override { return nullptr; }
+  std::size_t memory_bytes() const override { return forces_.memory_bytes(); }
+
+ private:
+  InternalForces forces_;
+};
+
+}  // namespace tactus::solver
