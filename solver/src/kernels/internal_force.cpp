@@ -121,28 +121,25 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
 
 namespace {
 
-// The node stages of pressure smoothing (s >= 1 passes of S), shared by the parallel J pass and
+// The node stages of pressure smoothing (s passes of S, s >= 0), shared by the parallel J pass and
 // the serial form below. x holds the nodal volume ratio J_a, y is scratch; `for_nodes(f)` calls
-// f(chunk, lo, hi) over all nodes and returns once every node is done (a barrier in the parallel
-// pass). The ratio is averaged s times, turned into pressures U' (energy[chunk] receives
-// sum_a V_a U), and the pressures averaged s more times; they end in x (2s buffer swaps).
-template <class ForNodes>
-void smooth_to_pressure(const MaterialBlock& b, const NodeAveraging& S, const double* V, double*& x, double*& y, double* energy, ForNodes for_nodes) {
-  const int passes = b.material.pressure_smoothing();
+// f(lo, hi) over the nodes whose values this process computes and returns once they are done (a
+// barrier in the parallel pass), `share(x)` then brings the values other processes computed (on
+// ranks; else nothing), and `to_pressure(x)` turns volume ratios into pressures U' (and the
+// energy sum_a V_a U). The ratio is averaged s times, turned into pressures, and the pressures
+// averaged s more times; they end in x (2s buffer swaps).
+template <class ForNodes, class Share, class ToPressure>
+void smooth_to_pressure(const NodeAveraging& S, int passes, double*& x, double*& y, ForNodes for_nodes, Share share, ToPressure to_pressure) {
   for (int i = 0; i < passes; ++i) {
-    const bool last = i + 1 == passes;
-    for_nodes([&](std::size_t c, std::size_t lo, std::size_t hi) {
-      S.apply(x, y, lo, hi);
-      if (last) {
-        times_volume(V, y, lo, hi);
-        energy[c] += b.material.type().anp_nodal_pressure(b.material.law(), V, y, lo, hi);
-      }
-    });
+    for_nodes([&](std::size_t lo, std::size_t hi) { S.apply(x, y, lo, hi); });
     std::swap(x, y);
+    share(x);
   }
+  to_pressure(x);
   for (int i = 0; i < passes; ++i) {
-    for_nodes([&](std::size_t, std::size_t lo, std::size_t hi) { S.apply(x, y, lo, hi); });
+    for_nodes([&](std::size_t lo, std::size_t hi) { S.apply(x, y, lo, hi); });
     std::swap(x, y);
+    if (i + 1 < passes) share(x);  // the stress pass reads only the nodes this process computes
   }
 }
 
@@ -154,7 +151,6 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
   const std::size_t n = m.num_nodes;
   std::vector<double> x(n, 0.0);
   add_current_node_volumes(m, b.begin, b.end, u, x.data());
-  double energy = 0;
   if (b.material.pressure_smoothing() == 0) {
     b.material.type().anp_nodal_pressure(b.material.law(), V.data(), x.data(), 0, n);
     return x;
@@ -162,7 +158,12 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
   divide_by_volume(V.data(), x.data(), 0, n);
   std::vector<double> y(n);
   double *in = x.data(), *out = y.data();
-  smooth_to_pressure(b, NodeAveraging(m, b, V), V.data(), in, out, &energy, [&](auto f) { f(0, 0, n); });
+  smooth_to_pressure(
+      NodeAveraging(m, b, V), b.material.pressure_smoothing(), in, out, [&](auto f) { f(0, n); }, [](double*) {},
+      [&](double* ratio) {
+        times_volume(V.data(), ratio, 0, n);
+        b.material.type().anp_nodal_pressure(b.material.law(), V.data(), ratio, 0, n);
+      });
   return in == x.data() ? x : y;
 }
 
@@ -234,11 +235,13 @@ InternalForces::InternalForces(const Model& model, double beta, int threads)
   partition_acc_.resize(partitions_.size());
   num_chunks_ = (model.num_nodes + kNodeChunk - 1) / kNodeChunk;
   // One process runs every atom and chunk (own_atoms narrows these to a rank's).
-  sum_chunks_.resize(num_chunks_), anp_chunks_.resize(num_chunks_), anp_volume_atoms_.resize(partitions_.size());
+  sum_chunks_.resize(num_chunks_), anp_volume_atoms_.resize(partitions_.size());
   std::iota(sum_chunks_.begin(), sum_chunks_.end(), std::size_t{0});
-  std::iota(anp_chunks_.begin(), anp_chunks_.end(), std::size_t{0});
   std::iota(anp_volume_atoms_.begin(), anp_volume_atoms_.end(), std::size_t{0});
   chunk_anp_energy_.assign(num_chunks_, 0.0);
+  chunk_rank_.assign(num_chunks_, 0);
+  const std::vector<char> every(model.num_nodes, 1);
+  set_anp_runs(every, every, 0);
   set_nodal_step_bound(model.mass.data());
 }
 
@@ -303,7 +306,9 @@ std::size_t InternalForces::memory_bytes() const {
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
-  b += (sum_chunks_.capacity() + anp_chunks_.capacity() + anp_volume_atoms_.capacity()) * sizeof(std::size_t);
+  b += (sum_chunks_.capacity() + anp_volume_atoms_.capacity()) * sizeof(std::size_t) +
+       (anp_runs_.capacity() + anp_convert_runs_.capacity()) * sizeof(NodeRun) + convert_energy_.capacity() * sizeof(double);
+  for (const NodeGhosts& g : anp_ghosts_) b += (g.send.capacity() + g.receive.capacity()) * sizeof(std::uint32_t);
   b += partition_rank_.capacity() * sizeof(int) + node_rank_.capacity() * sizeof(std::int32_t) + halo_.capacity() * sizeof(HaloSlots);
   for (const HaloSlots& h : halo_)
     b += (h.send.capacity() + h.receive.capacity() + h.send_tiles.capacity() + h.receive_tiles.capacity()) * sizeof(std::uint32_t);
@@ -314,10 +319,9 @@ std::size_t InternalForces::memory_bytes() const {
 }
 
 template <std::size_t kStride, std::size_t kWidth>
-void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
-                               double* extra) const {
+void InternalForces::sum_nodes(std::size_t lo, std::size_t hi, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi,
+                               double* out, double* extra) const {
   static_assert(kWidth <= kStride);
-  const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
   for (std::size_t n = lo; n < hi; ++n) {
     double sum[kWidth] = {}, more = 0;
     for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) {
@@ -333,9 +337,9 @@ void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays,
 }
 
 // The J pass of the ANP blocks, inside the parallel region (every thread calls it): the
-// partitions' current tet volumes to their own nodal arrays, then per node chunk their sum in
-// partition order, turned into pressures; chunk_anp_energy_ receives each chunk's part of the
-// volumetric energy sum_a V_a U(J_a).
+// partitions' current tet volumes to their own nodal arrays, then per node their sum in partition
+// order, turned into pressures; chunk_anp_energy_ receives each chunk's part of the volumetric
+// energy sum_a V_a U(J_a).
 //
 // With pressure smoothing (s passes of the averaging S: node -> tet -> node, V-weighted), the
 // energy is sum_a V_a U((S^s J)_a): the nodal volume ratio is averaged s times before U' turns it
@@ -349,14 +353,28 @@ void InternalForces::sum_chunk(std::size_t c, const std::vector<double>& arrays,
 // node-to-node operator NodeAveraging (built once): each pass is one read of the node rows, where
 // applying it tet by tet (a scatter into the partitions' arrays, then their sums per chunk) cost
 // two loops and two barriers per pass.
-void InternalForces::anp_pass(const double* u) {
+//
+// On ranks each node pass runs over the rank's own nodes, and the master thread then brings its
+// ghost nodes' values from their owners (exchange.nodes, between barriers); the ANP atoms' volumes
+// at shared nodes travel once, before the sums (exchange.volumes). Every value a rank uses is then
+// the one-process value (anp_ghosts_of_rank).
+void InternalForces::anp_pass(const double* u, const StressExchange& exchange) {
+  const auto share = [&](double* values) {
+    if (!exchange.nodes) return;
+#pragma omp master
+    exchange.nodes(exchange.context, values);
+#pragma omp barrier
+  };
+  const auto for_nodes = [&](auto f) {
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < anp_runs_.size(); ++i) f(anp_runs_[i].lo, anp_runs_[i].hi);
+  };
 #pragma omp single
   std::fill(chunk_anp_energy_.begin(), chunk_anp_energy_.end(), 0.0);
   for (AnpBlock& a : anp_) {
     const MaterialBlock& b = model_.blocks[a.block];
     const double* V = a.reference_volume.data();
-    // Per partition of the block: its tets' current volumes to its own nodal array (on ranks,
-    // those of the ghost region's atoms).
+    // Per partition of the block: its tets' current volumes to its own nodal array.
 #pragma omp for schedule(dynamic, 1)
     for (std::size_t i = 0; i < anp_volume_atoms_.size(); ++i) {
       const std::size_t p = anp_volume_atoms_[i];
@@ -366,28 +384,29 @@ void InternalForces::anp_pass(const double* u) {
       std::fill(mine, mine + (q.slot_end - q.slot_begin), 0.0);
       add_current_node_volumes(model_, q.begin, q.end, u, mine, tet_slot_.data());
     }
-    // Per node chunk: the partitions' sums, then the pressures (no smoothing) or the volume ratio.
-    const bool smoothing = b.material.pressure_smoothing() > 0;
-#pragma omp for schedule(static)
-    for (std::size_t i = 0; i < anp_chunks_.size(); ++i) {
-      const std::size_t c = anp_chunks_[i];
-      sum_chunk<1, 1>(c, partition_volumes_, block_slot_begin_[a.block], block_slot_end_[a.block], a.pressure.data());
-      const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
-      if (smoothing)
-        divide_by_volume(V, a.pressure.data(), lo, hi);
-      else
-        chunk_anp_energy_[c] += b.material.type().anp_nodal_pressure(b.material.law(), V, a.pressure.data(), lo, hi);
+    if (exchange.volumes) {
+#pragma omp master
+      exchange.volumes(exchange.context);
+#pragma omp barrier
     }
-    if (!smoothing) continue;
-    // The smoothing passes, node by node through the block's averaging operator: one loop over
-    // node chunks (and one barrier) per pass, no scatter.
+    // Per node: the partitions' sums (the current nodal volume), and with smoothing the ratio to V.
+    const bool smoothing = b.material.pressure_smoothing() > 0;
+    for_nodes([&](std::size_t lo, std::size_t hi) {
+      sum_nodes<1, 1>(lo, hi, partition_volumes_, block_slot_begin_[a.block], block_slot_end_[a.block], a.pressure.data());
+      if (smoothing) divide_by_volume(V, a.pressure.data(), lo, hi);
+    });
+    share(a.pressure.data());
     double *x = a.pressure.data(), *y = a.smoothed.data();
-    smooth_to_pressure(b, a.averaging, V, x, y, chunk_anp_energy_.data(), [&](auto f) {
+    smooth_to_pressure(a.averaging, b.material.pressure_smoothing(), x, y, for_nodes, share, [&](double* ratio) {
 #pragma omp for schedule(static)
-      for (std::size_t i = 0; i < anp_chunks_.size(); ++i) {
-        const std::size_t c = anp_chunks_[i];
-        f(c, c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk));
+      for (std::size_t i = 0; i < anp_convert_runs_.size(); ++i) {
+        const NodeRun& r = anp_convert_runs_[i];
+        if (smoothing) times_volume(V, ratio, r.lo, r.hi);
+        convert_energy_[i] = b.material.type().anp_nodal_pressure(b.material.law(), V, ratio, r.lo, r.hi);
       }
+#pragma omp single
+      for (std::size_t i = 0; i < anp_convert_runs_.size(); ++i)
+        if (anp_convert_runs_[i].reported) chunk_anp_energy_[anp_convert_runs_[i].chunk] += convert_energy_[i];
     });
   }
 }
@@ -426,7 +445,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
   const bool viscous = beta_ > 0;
 #pragma omp parallel num_threads(threads_)
   {
-    if (!anp_.empty()) anp_pass(u);
+    if (!anp_.empty()) anp_pass(u, exchange);
     if (side.run) {
 #pragma omp single nowait
       side.run(side.context);  // the partitions below are taken dynamically: this thread joins when done
@@ -453,7 +472,8 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
     for (std::size_t i = 0; i < sum_chunks_.size(); ++i) {
       const std::size_t c = sum_chunks_[i];
       // Each node's force and row sum: its atoms' in atom order, whatever the threads.
-      sum_chunk<kForceStride, 3>(c, partition_forces_, 0, node_slots_.size(), f_out, nodal_mass_ ? nodal_bound_.data() : nullptr);
+      sum_nodes<kForceStride, 3>(c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk), partition_forces_, 0, node_slots_.size(), f_out,
+                                 nodal_mass_ ? nodal_bound_.data() : nullptr);
       if (nodal_mass_) nodal_bound_of_chunk(c);
     }
   }
@@ -492,7 +512,7 @@ StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulat
 // Ranks: the partitions this process runs and, per other rank, the slots of shared nodes that go
 // each way. Both sides list a pair's slots node by node (ascending), each node's slots in atom
 // order, so a buffer needs no index; and the ANP tiles at those nodes, ascending. The ANP J pass
-// runs over the rank's ghost region (anp_ghost_region), which needs no exchange.
+// runs over the rank's own nodes, with ghost nodes exchanged after each node pass (anp_ghosts_of_rank).
 void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
@@ -515,7 +535,7 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
   node_rank_.assign(model_.num_nodes, -1);
   for (std::size_t n = 0; n < model_.num_nodes; ++n)
     if (node_slot_first_[n] < node_slot_first_[n + 1]) node_rank_[n] = partition_rank_[slot_partition[node_slots_[node_slot_first_[n]]]];
-  anp_ghost_region(rank, touched);
+  anp_ghosts_of_rank(rank, touched, slot_partition);
   halo_.clear();
   std::vector<std::size_t> halo_of_rank;  // index in halo_ + 1, per rank
   std::vector<std::size_t> listed;        // per entry of halo_: the last node whose slots it lists
@@ -556,16 +576,40 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
     if (partition_rank_[p] == rank) (sends[p] ? boundary_atoms_ : interior_atoms_).push_back(p);
 }
 
-// The ANP J pass of one rank (docs/design.md, "The stress pass over MPI ranks"): with s smoothing
-// passes (the largest of the ANP blocks), a node's pressure reads the raw volume ratio up to 2s
-// tets away (s passes on J, then s on the pressure) and a chunk's energy up to s tets away. So the
-// rank adds the volumes of every ANP atom with a tet at a node within 2s rings (over the ANP tets)
-// of the nodes it touches, or within s rings of the nodes of the chunks whose energy it reports
-// (each chunk: the rank of its first node that has an owner), and runs the node loops over the
-// chunks that hold such a node: every value it uses is then the one-process value, and no message
-// is needed. Elsewhere in those chunks the values are partial and never read for a result.
-void InternalForces::anp_ghost_region(int rank, const std::vector<char>& touched) {
-  anp_volume_atoms_.clear(), anp_chunks_.clear();
+// The node runs of the ANP J pass (anp_pass): where `computed` holds, in runs of consecutive nodes
+// within a node chunk; where U' turns ratios into pressures: each chunk that `rank` reports whole,
+// and elsewhere the runs where `read` holds.
+void InternalForces::set_anp_runs(const std::vector<char>& computed, const std::vector<char>& read, int rank) {
+  const auto runs = [&](const std::vector<char>& in, std::size_t c, std::vector<NodeRun>& out) {
+    const std::size_t end = std::min(model_.num_nodes, (c + 1) * kNodeChunk);
+    for (std::size_t n = c * kNodeChunk; n < end; ++n)
+      if (in[n]) {
+        std::size_t hi = n + 1;
+        while (hi < end && in[hi]) ++hi;
+        out.push_back({n, hi, c, false});
+        n = hi;
+      }
+  };
+  anp_runs_.clear(), anp_convert_runs_.clear();
+  for (std::size_t c = 0; c < num_chunks_; ++c) {
+    runs(computed, c, anp_runs_);
+    if (chunk_rank_[c] == rank)
+      anp_convert_runs_.push_back({c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk), c, true});
+    else
+      runs(read, c, anp_convert_runs_);
+  }
+  convert_energy_.assign(anp_convert_runs_.size(), 0.0);
+}
+
+// The ANP J pass of one rank (docs/design.md, "The stress pass over MPI ranks"). The rank computes
+// the nodes its atoms touch (and those no stress-pass tet holds, which need nothing): their sums
+// need only the halo slots' volumes. A node pass of S at such a node reads its neighbours over the
+// ANP tets, so after each pass the rank receives, from their owners (node_ranks), the values of its
+// ghost nodes: the neighbours it does not compute, and the nodes of the chunks whose volumetric
+// energy it reports (each chunk: the rank of its first node that has an owner) that it does not
+// compute. Each rank works out every rank's ghosts alike (it holds the whole model), so the lists
+// of a pair agree without a message.
+void InternalForces::anp_ghosts_of_rank(int rank, const std::vector<char>& touched, const std::vector<std::uint32_t>& slot_partition) {
   chunk_rank_.assign(num_chunks_, 0);
   for (std::size_t c = 0; c < num_chunks_; ++c)
     for (std::size_t n = c * kNodeChunk; n < std::min(model_.num_nodes, (c + 1) * kNodeChunk); ++n)
@@ -573,12 +617,31 @@ void InternalForces::anp_ghost_region(int rank, const std::vector<char>& touched
         chunk_rank_[c] = node_rank_[n];
         break;
       }
-  if (anp_.empty()) return;
-  int passes = 0;
-  for (const AnpBlock& a : anp_) passes = std::max(passes, model_.blocks[a.block].material.pressure_smoothing());
-  // The ANP tets at each node (CSR), for the rings.
+  anp_volume_atoms_.clear(), anp_ghosts_.clear();
+  std::vector<char> computed(model_.num_nodes), read(model_.num_nodes);
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) computed[n] = read[n] = touched[n] || node_rank_[n] < 0;
+  if (anp_.empty()) return set_anp_runs(computed, read, rank);
+  for (std::size_t p = 0; p < partitions_.size(); ++p)
+    if (partition_rank_[p] == rank && model_.blocks[partitions_[p].block].material.anp()) anp_volume_atoms_.push_back(p);
+  // Per node the ranks whose atoms touch it (CSR), and with smoothing the ANP tets at it.
+  std::vector<std::size_t> touch_first(model_.num_nodes + 1, 0);
+  std::vector<std::int32_t> touch;
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    const std::size_t from = touch.size();
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) {
+      const std::int32_t r = partition_rank_[slot_partition[node_slots_[k]]];
+      if (std::find(touch.begin() + static_cast<std::ptrdiff_t>(from), touch.end(), r) == touch.end()) touch.push_back(r);
+    }
+    touch_first[n + 1] = touch.size();
+  }
+  const auto touches = [&](std::size_t n, std::int32_t r) {
+    return std::find(touch.begin() + static_cast<std::ptrdiff_t>(touch_first[n]), touch.begin() + static_cast<std::ptrdiff_t>(touch_first[n + 1]),
+                     r) != touch.begin() + static_cast<std::ptrdiff_t>(touch_first[n + 1]);
+  };
+  bool smoothing = false;
+  for (const AnpBlock& a : anp_) smoothing |= model_.blocks[a.block].material.pressure_smoothing() > 0;
   std::vector<std::size_t> first(model_.num_nodes + 1, 0), tets;
-  for (int fill = 0; fill < 2; ++fill) {
+  for (int fill = 0; smoothing && fill < 2; ++fill) {
     std::vector<std::size_t> next(first.begin(), first.end() - 1);
     if (fill) tets.resize(first.back());
     for (const AnpBlock& a : anp_)
@@ -593,31 +656,37 @@ void InternalForces::anp_ghost_region(int rank, const std::vector<char>& touched
     if (!fill)
       for (std::size_t n = 0; n < model_.num_nodes; ++n) first[n + 1] += first[n];
   }
-  // depth[n]: how many more rings reach out from n (-1: not in the region).
-  std::vector<int> depth(model_.num_nodes, -1);
+  // Per node with an owner: the ranks that read it without computing it, in rank order.
+  std::vector<std::vector<std::uint32_t>> send, receive;
+  std::vector<std::int32_t> readers;
   for (std::size_t n = 0; n < model_.num_nodes; ++n) {
-    if (touched[n]) depth[n] = 2 * passes;
-    if (chunk_rank_[n / kNodeChunk] == rank) depth[n] = std::max(depth[n], passes);
+    const std::int32_t owner = node_rank_[n];
+    if (owner < 0) continue;
+    readers.clear();
+    if (const std::int32_t r = chunk_rank_[n / kNodeChunk]; !touches(n, r)) readers.push_back(r);
+    for (std::size_t t = first[n]; smoothing && t < first[n + 1]; ++t)
+      for (int k = 0; k < 4; ++k) {
+        const auto m = static_cast<std::size_t>(model_.conn[4 * tets[t] + static_cast<std::size_t>(k)]);
+        for (std::size_t i = touch_first[m]; i < touch_first[m + 1]; ++i)
+          if (!touches(n, touch[i])) readers.push_back(touch[i]);
+      }
+    std::sort(readers.begin(), readers.end());
+    readers.erase(std::unique(readers.begin(), readers.end()), readers.end());
+    for (std::int32_t r : readers) {
+      const auto grow = [](std::vector<std::vector<std::uint32_t>>& lists, std::int32_t at) -> std::vector<std::uint32_t>& {
+        if (lists.size() <= static_cast<std::size_t>(at)) lists.resize(static_cast<std::size_t>(at) + 1);
+        return lists[static_cast<std::size_t>(at)];
+      };
+      if (owner == rank) grow(send, r).push_back(static_cast<std::uint32_t>(n));
+      if (r == rank) grow(receive, owner).push_back(static_cast<std::uint32_t>(n)), read[n] = 1;
+    }
   }
-  for (int ring = 2 * passes; ring > 0; --ring)
-    for (std::size_t n = 0; n < model_.num_nodes; ++n)
-      if (depth[n] == ring)
-        for (std::size_t t = first[n]; t < first[n + 1]; ++t)
-          for (int k = 0; k < 4; ++k) {
-            const auto m = static_cast<std::size_t>(model_.conn[4 * tets[t] + static_cast<std::size_t>(k)]);
-            depth[m] = std::max(depth[m], ring - 1);
-          }
-  std::vector<char> atom(partitions_.size(), 0);
-  std::vector<std::size_t> tet_partition(model_.num_elements, partitions_.size());
-  for (std::size_t p = 0; p < partitions_.size(); ++p)
-    for (std::size_t e = partitions_[p].begin; e < partitions_[p].end; ++e) tet_partition[e] = p;
-  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
-    if (depth[n] < 0) continue;
-    if (anp_chunks_.empty() || anp_chunks_.back() != n / kNodeChunk) anp_chunks_.push_back(n / kNodeChunk);
-    for (std::size_t t = first[n]; t < first[n + 1]; ++t) atom[tet_partition[tets[t]]] = 1;
+  for (std::size_t r = 0; r < std::max(send.size(), receive.size()); ++r) {
+    NodeGhosts g{static_cast<int>(r), r < send.size() ? std::move(send[r]) : std::vector<std::uint32_t>{},
+                 r < receive.size() ? std::move(receive[r]) : std::vector<std::uint32_t>{}};
+    if (!g.send.empty() || !g.receive.empty()) anp_ghosts_.push_back(std::move(g));
   }
-  for (std::size_t p = 0; p < partitions_.size(); ++p)
-    if (atom[p]) anp_volume_atoms_.push_back(p);
+  set_anp_runs(computed, read, rank);
 }
 
 }  // namespace tactus::solver

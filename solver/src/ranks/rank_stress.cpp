@@ -51,6 +51,8 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
     receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size() + h.receive_tiles.size());
   }
   requests_.resize(2 * forces_.halo().size());
+  for (const NodeGhosts& g : forces_.anp_ghosts()) ghost_send_.emplace_back(g.send.size()), ghost_receive_.emplace_back(g.receive.size());
+  ghost_requests_.resize(2 * forces_.anp_ghosts().size());
   // Tets and nodes travel as MPI ints in the MINLOC.
   if (model.num_elements > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
       model.num_nodes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
@@ -60,7 +62,7 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   counts_.assign(static_cast<std::size_t>(ranks_), 0), offsets_.assign(static_cast<std::size_t>(ranks_), 0);
   for (int r : owner) counts_[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
   // With ANP blocks, after its atoms' records each rank sends the volumetric energy of the node
-  // chunks it reports (InternalForces::chunk_ranks: its J pass runs over a ghost region only).
+  // chunks it reports (InternalForces::chunk_ranks: its J pass runs over its own and ghost nodes only).
   anp_ = std::any_of(model.blocks.begin(), model.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
   if (anp_)
     for (std::int32_t r : forces_.chunk_ranks()) ++counts_[static_cast<std::size_t>(r)];
@@ -115,6 +117,8 @@ std::size_t RankStressPass::memory_bytes() const {
   std::size_t b = forces_.memory_bytes() + touched_.capacity() + forces_order_.memory_bytes() + tets_order_.memory_bytes();
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
+  for (const auto& s : ghost_send_) b += s.capacity() * sizeof(double);
+  for (const auto& s : ghost_receive_) b += s.capacity() * sizeof(double);
   b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_rank_.capacity() * sizeof(std::int32_t);
   return b + atoms_.capacity() * sizeof(StressAccumulator);
 }
@@ -158,8 +162,52 @@ void RankStressPass::finish_exchange(void* self) {
   }
 }
 
+// The master thread, in the ANP J pass once this rank's ANP atoms have their nodal volumes: the
+// shared slots' volumes out, the others' in (the halo's slots, 1 double each; blocking).
+void RankStressPass::exchange_volumes(void* self) {
+  auto& me = *static_cast<RankStressPass*>(self);
+  double* volumes = me.forces_.slot_volumes();
+  const auto& halo = me.forces_.halo();
+  for (std::size_t i = 0; i < halo.size(); ++i) {
+    double* out = me.send_[i].data();
+    for (std::uint32_t s : halo[i].send) *out++ = volumes[s];
+    check(MPI_Irecv(me.receive_[i].data(), static_cast<int>(halo[i].receive.size()), MPI_DOUBLE, halo[i].rank, 1, me.comm_, &me.requests_[2 * i]),
+          "MPI_Irecv");
+    check(MPI_Isend(me.send_[i].data(), static_cast<int>(halo[i].send.size()), MPI_DOUBLE, halo[i].rank, 1, me.comm_, &me.requests_[2 * i + 1]),
+          "MPI_Isend");
+  }
+  check(MPI_Waitall(static_cast<int>(me.requests_.size()), me.requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+  for (std::size_t i = 0; i < halo.size(); ++i) {
+    const double* in = me.receive_[i].data();
+    for (std::uint32_t s : halo[i].receive) volumes[s] = *in++;
+  }
+}
+
+// The master thread, after each node pass of the ANP J pass: the values of the nodes this rank
+// owns that others read, out; those of its ghost nodes, in (blocking).
+void RankStressPass::exchange_nodes(void* self, double* values) {
+  auto& me = *static_cast<RankStressPass*>(self);
+  const auto& ghosts = me.forces_.anp_ghosts();
+  for (std::size_t i = 0; i < ghosts.size(); ++i) {
+    double* out = me.ghost_send_[i].data();
+    for (std::uint32_t n : ghosts[i].send) *out++ = values[n];
+    check(MPI_Irecv(me.ghost_receive_[i].data(), static_cast<int>(ghosts[i].receive.size()), MPI_DOUBLE, ghosts[i].rank, 2, me.comm_,
+                    &me.ghost_requests_[2 * i]),
+          "MPI_Irecv");
+    check(MPI_Isend(me.ghost_send_[i].data(), static_cast<int>(ghosts[i].send.size()), MPI_DOUBLE, ghosts[i].rank, 2, me.comm_,
+                    &me.ghost_requests_[2 * i + 1]),
+          "MPI_Isend");
+  }
+  check(MPI_Waitall(static_cast<int>(me.ghost_requests_.size()), me.ghost_requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+  for (std::size_t i = 0; i < ghosts.size(); ++i) {
+    const double* in = me.ghost_receive_[i].data();
+    for (std::uint32_t n : ghosts[i].receive) values[n] = *in++;
+  }
+}
+
 StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
-  const StressPassResult local = forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, this});
+  const StressPassResult local =
+      forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, &exchange_volumes, &exchange_nodes, this});
   const double start = MPI_Wtime();
   // The sums: every atom's energy and viscous power on every rank (each rank's atoms in atom
   // order, so a record needs no index), then added in atom order.

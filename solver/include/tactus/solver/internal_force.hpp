@@ -117,10 +117,22 @@ struct StressSideTask {
 
 // On ranks (solver/ranks.hpp): called by the master thread once the atoms whose slots other ranks
 // need are done (start: send and receive them) and before the nodal sums (finish: wait, unpack).
+// With ANP blocks, in their J pass: the halo slots' nodal volumes once the rank's ANP atoms have
+// added theirs (volumes), and a nodal array's values at the rank's ghost nodes from their owners
+// after each node pass (nodes: InternalForces::anp_ghosts).
 struct StressExchange {
   void (*start)(void* context) = nullptr;
   void (*finish)(void* context) = nullptr;
+  void (*volumes)(void* context) = nullptr;
+  void (*nodes)(void* context, double* values) = nullptr;
   void* context = nullptr;
+};
+
+// The nodes of the ANP J pass one rank sends another after each node pass (those it owns and the
+// other reads but does not compute) and those it receives from it (ascending, both sides alike).
+struct NodeGhosts {
+  int rank = 0;
+  std::vector<std::uint32_t> send, receive;
 };
 
 // The slots of the nodes one rank shares with another: those this rank's atoms fill and sends, and
@@ -161,10 +173,13 @@ class InternalForces {
   // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
   // one: combine_atoms over every rank's atom_results() in atom order; the other ranks' atoms
   // keep empty results here, so the result's minima are this rank's). The ANP blocks' J pass runs
-  // over the rank's ghost region (each rank holds the whole displacement; anp_ghost_region).
+  // over the rank's own nodes, with its ghost nodes' values exchanged after each node pass
+  // (anp_ghosts()).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }
+  double* slot_volumes() { return partition_volumes_.data(); }  // the ANP atoms' nodal volumes, 1 per slot
+  const std::vector<NodeGhosts>& anp_ghosts() const { return anp_ghosts_; }
   double* anp_tile_values() { return anp_tiles_.data(); }
   // The nodal bound of the last pass (nullptr-mass: off): this process's chunks' largest rows, and
   // the step such rows give (into r, beside the element estimate).
@@ -179,7 +194,7 @@ class InternalForces {
   // force is 0 on every rank).
   const std::vector<std::int32_t>& node_ranks() const { return node_rank_; }
   // ANP blocks on ranks: per node chunk the rank whose pass has its volumetric energy right (each
-  // rank runs the J pass over a ghost region only), and every chunk's energy of the last pass (the
+  // rank runs the J pass over its own and ghost nodes only), and every chunk's energy of the last pass (the
   // rank pass replaces the others' with theirs before combine_atoms).
   const std::vector<std::int32_t>& chunk_ranks() const { return chunk_rank_; }
   std::vector<double>& chunk_anp_energy() { return chunk_anp_energy_; }
@@ -269,14 +284,25 @@ class InternalForces {
   // by the rigid pieces (tissue in a joint's gap between two bones), so its volume floor is off.
   std::vector<char> rigid_node_;
   std::vector<double> chunk_anp_energy_;
-  // The ANP atoms whose tets' volumes this process adds and the node chunks its J pass runs over
-  // (all of them; on ranks a ghost region deep enough for the rank's own nodes' pressures and its
-  // chunks' energies, own_atoms), and per chunk the rank that reports its ANP energy (on ranks).
-  std::vector<std::size_t> anp_volume_atoms_, anp_chunks_;
+  // The ANP J pass's units (anp_pass): the ANP atoms whose tets' volumes this process adds, the
+  // node runs whose values it computes (runs of consecutive nodes within a node chunk), and those
+  // where it turns volume ratios into pressures, each with its part of the volumetric energy: one
+  // process, every atom and every chunk whole; on ranks (anp_ghosts_of_rank) its own atoms, the
+  // nodes its atoms touch (and those no stress-pass tet holds), and those plus its ghost nodes,
+  // with each chunk it reports whole. Per chunk the rank that reports its ANP energy (on ranks).
+  struct NodeRun {
+    std::size_t lo, hi, chunk;
+    bool reported;  // the chunk's energy is this run's (the run is the whole chunk)
+  };
+  std::vector<std::size_t> anp_volume_atoms_;
+  std::vector<NodeRun> anp_runs_, anp_convert_runs_;
+  std::vector<double> convert_energy_;  // per convert run, its energy of the last pass
   std::vector<std::int32_t> chunk_rank_;
-  void anp_ghost_region(int rank, const std::vector<char>& touched);
+  std::vector<NodeGhosts> anp_ghosts_;
+  void set_anp_runs(const std::vector<char>& computed, const std::vector<char>& read, int rank);
+  void anp_ghosts_of_rank(int rank, const std::vector<char>& touched, const std::vector<std::uint32_t>& slot_partition);
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
-  void anp_pass(const double* u);
+  void anp_pass(const double* u, const StressExchange& exchange);
   std::size_t build_atoms();  // partitions_, their slots and arrays; returns the ANP tiles
   void stress_partition(std::size_t p, const double* u, const double* v, bool viscous);
   // The atoms this process runs: those whose slots go to other ranks, then the rest (one process:
@@ -290,11 +316,11 @@ class InternalForces {
   // the step they give into r.
   void nodal_bound_of_chunk(std::size_t chunk);
   void nodal_critical_step(StressPassResult& r) const;
-  // Node chunk c of `out` (kWidth values per node) = each node's slots in [slot_lo, slot_hi) of
+  // Nodes [lo, hi) of `out` (kWidth values per node) = each node's slots in [slot_lo, slot_hi) of
   // `arrays` (kStride values per slot: the first kWidth to `out`, and value kWidth to `extra` when
   // given), summed in atom order.
   template <std::size_t kStride, std::size_t kWidth>
-  void sum_chunk(std::size_t c, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
+  void sum_nodes(std::size_t lo, std::size_t hi, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
                  double* extra = nullptr) const;
 };
 

@@ -8,7 +8,8 @@
 // global MINLOC. For the integrator (StressPassEngine) the forces of the nodes each rank owns (those
 // whose first atom is its) are then gathered, so every rank holds the whole force vector and steps
 // the whole model as one process would. Every rank holds the whole model for now (scattering it is
-// a later step); the ANP blocks' J pass runs over each rank's ghost region (InternalForces).
+// a later step); the ANP blocks' J pass runs over each rank's own nodes, with the volumes at shared
+// nodes and the ghost nodes' values exchanged (InternalForces::anp_ghosts).
 #include <mpi.h>
 
 #include <vector>
@@ -54,6 +55,8 @@ class RankStressPass : public StressPassEngine {
  private:
   static void start_exchange(void* self);
   static void finish_exchange(void* self);
+  static void exchange_volumes(void* self);
+  static void exchange_nodes(void* self, double* values);
   const Model& model_;
   double beta_;
   MPI_Comm comm_;
@@ -62,6 +65,8 @@ class RankStressPass : public StressPassEngine {
   std::vector<char> touched_;
   std::vector<std::vector<double>> send_, receive_;
   std::vector<MPI_Request> requests_;
+  std::vector<std::vector<double>> ghost_send_, ghost_receive_;  // per InternalForces::anp_ghosts() pair
+  std::vector<MPI_Request> ghost_requests_;
   // The sums' gather: counts and offsets per rank (fixed), this rank's records, everyone's.
   std::vector<int> counts_, offsets_;
   std::vector<double> records_, gathered_;
