@@ -57,21 +57,26 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   if (model.num_elements > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
       model.num_nodes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw InputError("model", "size", "fewer than 2^31 tets and nodes on ranks", std::to_string(model.num_elements) + " tets");
-  // Which rank sends which atoms' records is fixed: the gather's counts and offsets once.
+  // What each rank sends in the pass's gather is fixed: its atoms' records, with ANP blocks the
+  // volumetric energy of the node chunks it reports (InternalForces::chunk_ranks: its J pass runs
+  // over its own and ghost nodes only), its minima, and for the integrator its owned nodes' forces
+  // (who owns which node is fixed too).
   const auto& owner = forces_.atom_ranks();
-  counts_.assign(static_cast<std::size_t>(ranks_), 0), offsets_.assign(static_cast<std::size_t>(ranks_), 0);
-  for (int r : owner) counts_[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
-  // With ANP blocks, after its atoms' records each rank sends the volumetric energy of the node
-  // chunks it reports (InternalForces::chunk_ranks: its J pass runs over its own and ghost nodes only).
+  std::vector<int> records(static_cast<std::size_t>(ranks_), 0);
+  for (int r : owner) records[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
   anp_ = std::any_of(model.blocks.begin(), model.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
   if (anp_)
-    for (std::int32_t r : forces_.chunk_ranks()) ++counts_[static_cast<std::size_t>(r)];
-  std::exclusive_scan(counts_.begin(), counts_.end(), offsets_.begin(), 0);
-  gathered_.resize(static_cast<std::size_t>(offsets_.back() + counts_.back()));
-  records_.reserve(static_cast<std::size_t>(counts_[static_cast<std::size_t>(rank_)]));
-  atoms_.resize(owner.size()), next_.resize(counts_.size());
-  // The forces' gather: who owns which node is fixed, so its counts and order are too.
+    for (std::int32_t r : forces_.chunk_ranks()) ++records[static_cast<std::size_t>(r)];
   forces_order_.build(forces_.node_ranks(), ranks_, rank_, 3);
+  for (Gather* g : {&sums_only_, &with_forces_}) {
+    g->counts.resize(records.size()), g->offsets.resize(records.size()), g->forces_at.resize(records.size());
+    for (std::size_t r = 0; r < records.size(); ++r) g->counts[r] = records[r] + 2 * kMinima + (g == &with_forces_ ? forces_order_.counts[r] : 0);
+    std::exclusive_scan(g->counts.begin(), g->counts.end(), g->offsets.begin(), 0);
+    for (std::size_t r = 0; r < records.size(); ++r) g->forces_at[r] = static_cast<std::size_t>(g->offsets[r] + records[r] + 2 * kMinima);
+  }
+  gathered_.resize(static_cast<std::size_t>(with_forces_.offsets.back() + with_forces_.counts.back()));
+  records_.reserve(static_cast<std::size_t>(with_forces_.counts[static_cast<std::size_t>(rank_)]));
+  atoms_.resize(owner.size()), next_.resize(records.size());
 }
 
 void RankStressPass::RankOrder::build(const std::vector<std::int32_t>& item_rank, int ranks, int rank, std::size_t per_item) {
@@ -97,6 +102,21 @@ void RankStressPass::RankOrder::gather(const double* from, double* to, int rank,
   for (std::size_t k = 0; k < items.size(); ++k) std::memcpy(to + width * items[k], &all[width * k], width * sizeof(double));
 }
 
+void RankStressPass::RankOrder::pack(const double* from, int rank, std::vector<double>& out) const {
+  const std::size_t first = static_cast<std::size_t>(offsets[static_cast<std::size_t>(rank)]) / width;
+  for (std::size_t k = 0; k < own_items(rank); ++k) out.insert(out.end(), from + width * items[first + k], from + width * (items[first + k] + 1));
+}
+
+void RankStressPass::RankOrder::unpack(const double* all_ranks, const std::vector<std::size_t>& rank_at, int rank, double* to) const {
+  for (std::size_t r = 0; r < rank_at.size(); ++r) {
+    if (static_cast<int>(r) == rank) continue;  // its own items are in place
+    const std::size_t first = static_cast<std::size_t>(offsets[r]) / width;
+    const double* in = all_ranks + rank_at[r];
+    for (std::size_t k = 0; k < own_items(static_cast<int>(r)); ++k)
+      std::memcpy(to + width * items[first + k], in + width * k, width * sizeof(double));
+  }
+}
+
 std::size_t RankStressPass::RankOrder::memory_bytes() const {
   return items.capacity() * sizeof(std::uint32_t) + (counts.capacity() + offsets.capacity()) * sizeof(int) +
          (mine.capacity() + all.capacity()) * sizeof(double);
@@ -115,6 +135,8 @@ const std::vector<double>& RankStressPass::element_dt2_everywhere() {
 
 std::size_t RankStressPass::memory_bytes() const {
   std::size_t b = forces_.memory_bytes() + touched_.capacity() + forces_order_.memory_bytes() + tets_order_.memory_bytes();
+  for (const Gather* g : {&sums_only_, &with_forces_})
+    b += (g->counts.capacity() + g->offsets.capacity()) * sizeof(int) + g->forces_at.capacity() * sizeof(std::size_t);
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
   for (const auto& s : ghost_send_) b += s.capacity() * sizeof(double);
@@ -206,11 +228,23 @@ void RankStressPass::exchange_nodes(void* self, double* values) {
 }
 
 StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
+  return pass_and_gather(u, v, f_out, side, false);
+}
+
+StressPassResult RankStressPass::compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) {
+  return pass_and_gather(u, v, f_out, side, true);
+}
+
+// The pass, then one MPI_Allgatherv per pass of what every rank needs from every other, each
+// rank's in a fixed layout (Gather): its atoms' sums, its minima and, for the integrator, its
+// owned nodes' forces. One collective rather than three: each costs a synchronisation of the
+// ranks, and on the hand-block the three cost more than their bytes.
+StressPassResult RankStressPass::pass_and_gather(const double* u, const double* v, double* f_out, StressSideTask side, bool everywhere) {
   const StressPassResult local =
       forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, &exchange_volumes, &exchange_nodes, this});
   const double start = MPI_Wtime();
-  // The sums: every atom's energy and viscous power on every rank (each rank's atoms in atom
-  // order, so a record needs no index), then added in atom order.
+  // The sums: every atom's energy and viscous power (each rank's atoms in atom order, so a record
+  // needs no index), and the ANP chunks' energies, added in atom and chunk order below.
   const auto& owner = forces_.atom_ranks();
   const auto& mine = forces_.atom_results();
   records_.clear();
@@ -220,10 +254,21 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
   const std::vector<std::int32_t>& chunk_rank = forces_.chunk_ranks();
   for (std::size_t c = 0; anp_ && c < chunk_energy.size(); ++c)
     if (chunk_rank[c] == rank_) records_.push_back(chunk_energy[c]);
-  check(MPI_Allgatherv(records_.data(), static_cast<int>(records_.size()), MPI_DOUBLE, gathered_.data(), counts_.data(), offsets_.data(), MPI_DOUBLE,
-                       comm_),
+  // The minima, as value-index pairs: the element step and the smallest J, each with its tet, and
+  // the nodal bound's largest rows (plain, and per eta of the ANP form), negated; `local` holds
+  // this rank's (its atoms alone have results).
+  const NodalBoundRows rows = forces_.nodal_bound_rows();
+  records_.insert(records_.end(), {local.element_critical_step, static_cast<double>(local.limiting_element), local.min_jacobian,
+                                   static_cast<double>(local.min_jacobian_element), -rows.plain, static_cast<double>(rows.plain_node)});
+  for (int j = 0; j < NodalBoundRows::kEtas; ++j) records_.insert(records_.end(), {-rows.eta[j], static_cast<double>(rows.eta_node[j])});
+  double packing = MPI_Wtime();
+  if (everywhere) forces_order_.pack(f_out, rank_, records_);
+  packing = MPI_Wtime() - packing;
+  const Gather& g = everywhere ? with_forces_ : sums_only_;
+  check(MPI_Allgatherv(records_.data(), static_cast<int>(records_.size()), MPI_DOUBLE, gathered_.data(), g.counts.data(), g.offsets.data(),
+                       MPI_DOUBLE, comm_),
         "MPI_Allgatherv");
-  for (std::size_t r = 0; r < next_.size(); ++r) next_[r] = static_cast<std::size_t>(offsets_[r]);
+  for (std::size_t r = 0; r < next_.size(); ++r) next_[r] = static_cast<std::size_t>(g.offsets[r]);
   for (std::size_t p = 0; p < owner.size(); ++p) {
     std::size_t& at = next_[static_cast<std::size_t>(owner[p])];
     atoms_[p].energy = gathered_[at], atoms_[p].viscous_power = gathered_[at + 1];
@@ -231,42 +276,33 @@ StressPassResult RankStressPass::compute(const double* u, const double* v, doubl
   }
   for (std::size_t c = 0; anp_ && c < chunk_energy.size(); ++c) chunk_energy[c] = gathered_[next_[static_cast<std::size_t>(chunk_rank[c])]++];
   StressPassResult r = forces_.combine_atoms(atoms_);
-  // The minima: the element step and the smallest J, each with its tet, as the one-process pass
-  // takes them (ties to the first atom, whose tets come first: the smallest index), and the nodal
-  // bound's largest rows (plain, and per eta of the ANP form: negated, ties to the smallest node,
-  // the first chunk's), in one MINLOC; `local` holds this rank's (its atoms alone have results).
-  // The nodal step then comes from the largest rows as in one process: a MIN of each rank's step
-  // would not do, for the ANP form takes, per eta, the largest row over every node first.
-  struct Pair {
-    double value;
-    int index;
-  };
-  constexpr int kPairs = 3 + NodalBoundRows::kEtas;
-  const NodalBoundRows rows = forces_.nodal_bound_rows();
-  Pair in[kPairs] = {{local.element_critical_step, static_cast<int>(local.limiting_element)},
-                     {local.min_jacobian, static_cast<int>(local.min_jacobian_element)},
-                     {-rows.plain, static_cast<int>(rows.plain_node)}};
-  for (int j = 0; j < NodalBoundRows::kEtas; ++j) in[3 + j] = {-rows.eta[j], static_cast<int>(rows.eta_node[j])};
-  Pair out[kPairs];
-  const int pairs = rows.has_eta ? kPairs : 3;
-  check(MPI_Allreduce(in, out, pairs, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");
-  r.element_critical_step = r.critical_step = out[0].value, r.limiting_element = static_cast<std::size_t>(out[0].index);
-  r.min_jacobian = out[1].value, r.min_jacobian_element = static_cast<std::size_t>(out[1].index);
+  // Each minimum over the ranks as MPI_MINLOC takes it: the smallest value, ties to the smallest
+  // index (for the tets: the first atom's, as the one-process pass takes them; for the rows, the
+  // first chunk's). The nodal step then comes from the largest rows as in one process: a MIN of
+  // each rank's step would not do, for the ANP form takes, per eta, the largest row over every node
+  // first.
+  double best[kMinima][2];
+  for (std::size_t from = 0; from < next_.size(); ++from) {
+    const double* x = gathered_.data() + next_[from];  // after the rank's records
+    for (int k = 0; k < kMinima; ++k)
+      if (from == 0 || x[2 * k] < best[k][0] || (x[2 * k] == best[k][0] && x[2 * k + 1] < best[k][1]))
+        best[k][0] = x[2 * k], best[k][1] = x[2 * k + 1];
+  }
+  r.element_critical_step = r.critical_step = best[0][0], r.limiting_element = static_cast<std::size_t>(best[0][1]);
+  r.min_jacobian = best[1][0], r.min_jacobian_element = static_cast<std::size_t>(best[1][1]);
   if (forces_.nodal_bound_on()) {
     NodalBoundRows all;
-    all.plain = -out[2].value, all.plain_node = static_cast<std::size_t>(out[2].index), all.has_eta = rows.has_eta;
-    for (int j = 0; j < pairs - 3; ++j) all.eta[j] = -out[3 + j].value, all.eta_node[j] = static_cast<std::size_t>(out[3 + j].index);
+    all.plain = -best[2][0], all.plain_node = static_cast<std::size_t>(best[2][1]), all.has_eta = rows.has_eta;
+    for (int j = 0; rows.has_eta && j < NodalBoundRows::kEtas; ++j)
+      all.eta[j] = -best[3 + j][0], all.eta_node[j] = static_cast<std::size_t>(best[3 + j][1]);
     forces_.nodal_step(all, r);
   }
+  if (everywhere) {
+    const double unpacking = MPI_Wtime();
+    forces_order_.unpack(gathered_.data(), with_forces_.forces_at, rank_, f_out);
+    force_gather_seconds_ += packing + MPI_Wtime() - unpacking;
+  }
   sums_seconds_ += MPI_Wtime() - start;
-  return r;
-}
-
-StressPassResult RankStressPass::compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) {
-  const StressPassResult r = compute(u, v, f_out, side);
-  const double start = MPI_Wtime();
-  forces_order_.gather(f_out, f_out, rank_, comm_);
-  force_gather_seconds_ += MPI_Wtime() - start;
   return r;
 }
 

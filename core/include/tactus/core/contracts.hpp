@@ -207,8 +207,9 @@ inline constexpr const char* reactions = "reactions";  // [{name, moment_about, 
 // added_kinetic_energy, added_momentum}
 inline constexpr const char* mass_scaling = "mass_scaling";
 // Only under mpirun: per rank {rank, tets, halo_doubles_per_pass, halo_messages_per_pass, owned_nodes (whose forces
-// it sends to every rank each step), stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the sums'
-// gather and the minima's MINLOC), force_gather_s (of stress_passes_s: the forces' gather), peak_resident_bytes (the
+// it sends to every rank each step), stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the pass's one
+// gather of sums, minima and forces, with its wait for the slowest rank), force_gather_s (of sums_s: packing and unpacking
+// the forces), peak_resident_bytes (the
 // rank's process, Linux VmHWM)}
 inline constexpr const char* ranks = "ranks";
 inline constexpr std::array<const char*, 20> all{

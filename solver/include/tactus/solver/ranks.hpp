@@ -28,8 +28,8 @@ class RankStressPass : public StressPassEngine {
   // is the whole model's, the same bits on every rank and at any rank count. Collective.
   StressPassResult compute(const double* u, const double* v, double* f_out) { return compute(u, v, f_out, StressSideTask{}); }
   StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side);
-  // compute, then every rank's owned nodes' forces to every rank (one Allgatherv of 3 doubles per
-  // node, in rank then node order): f_out right at every node. Collective.
+  // compute, with every rank's owned nodes' forces to every rank in the same Allgatherv (3 doubles
+  // per node, in rank then node order): f_out right at every node. Collective.
   StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) override;
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
   void enable_mass_scaling() override;
@@ -67,9 +67,17 @@ class RankStressPass : public StressPassEngine {
   std::vector<MPI_Request> requests_;
   std::vector<std::vector<double>> ghost_send_, ghost_receive_;  // per InternalForces::anp_ghosts() pair
   std::vector<MPI_Request> ghost_requests_;
-  // The sums' gather: counts and offsets per rank (fixed), this rank's records, everyone's.
-  std::vector<int> counts_, offsets_;
+  // The pass's one gather (pass_and_gather): per rank its doubles and where they land (fixed), and
+  // where its owned nodes' forces begin; without the forces (compute) and with them
+  // (compute_everywhere). This rank's records, everyone's.
+  static constexpr int kMinima = 3 + NodalBoundRows::kEtas;  // value-index pairs
+  struct Gather {
+    std::vector<int> counts, offsets;
+    std::vector<std::size_t> forces_at;
+  };
+  Gather sums_only_, with_forces_;
   std::vector<double> records_, gathered_;
+  StressPassResult pass_and_gather(const double* u, const double* v, double* f_out, StressSideTask side, bool everywhere);
   std::vector<StressAccumulator> atoms_;  // every atom's sums
   std::vector<std::size_t> next_;
   std::size_t tets_ = 0;
@@ -87,6 +95,10 @@ class RankStressPass : public StressPassEngine {
     // One MPI_Allgatherv: this rank's items' values from `from` (width per item, by item index) to
     // every rank, each into `to` at its item (collective).
     void gather(const double* from, double* to, int rank, MPI_Comm comm);
+    // The same in pieces, for a gather that carries more: this rank's items' values appended to
+    // `out`; every other rank's from `all_ranks`, rank r's from rank_at[r], into `to`.
+    void pack(const double* from, int rank, std::vector<double>& out) const;
+    void unpack(const double* all_ranks, const std::vector<std::size_t>& rank_at, int rank, double* to) const;
     std::size_t own_items(int rank) const { return static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]) / width; }
     std::size_t memory_bytes() const;
   };
@@ -96,7 +108,8 @@ class RankStressPass : public StressPassEngine {
   std::vector<std::int32_t> tet_rank_;
   RankOrder tets_order_;
   std::vector<double> all_dt2_;
-  // Wall time in the sums' gather and MINLOC (compute) and in the forces' gather (compute_everywhere).
+  // Wall time from the end of the pass to the result (the gather, its waiting and the sums), and of
+  // it the forces' packing and unpacking (compute_everywhere).
   double sums_seconds_ = 0, force_gather_seconds_ = 0;
 };
 

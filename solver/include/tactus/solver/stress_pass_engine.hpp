@@ -37,8 +37,9 @@ class StressPassEngine {
   virtual int ranks() const = 0;
   // What each process did (on ranks collective; the array on rank 0, empty elsewhere; null for one
   // process): per rank its tets, halo doubles and messages per pass, its owned nodes, `seconds` (its
-  // measured wall times by name) and the pass's own (RankStressPass: sums_s, the sums' gather and
-  // MINLOC; force_gather_s; peak_resident_bytes, the process's peak memory).
+  // measured wall times by name) and the pass's own (RankStressPass: sums_s, its one gather of sums,
+  // minima and forces; force_gather_s, of that the forces' packing; peak_resident_bytes, the
+  // process's peak memory).
   virtual nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) = 0;
   virtual std::size_t memory_bytes() const = 0;
 };
