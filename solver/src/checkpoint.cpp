@@ -98,12 +98,13 @@ CheckpointListing read_manifest(const fs::path& file) {
 CheckpointStore::CheckpointStore(fs::path folder, int part, int parts) : folder_(std::move(folder)), part_(part), parts_(parts) {}
 
 fs::path CheckpointStore::write(std::size_t step, double time, const StateArrays& part, const std::function<void(const char*)>& phase,
-                                std::size_t keep) const {
+                                std::size_t keep, const std::function<void()>& all_parts_written) const {
   fs::create_directories(folder_);
   const fs::path file = folder_ / part_name(step, part_, parts_);
   write_state_file(file, part, phase);
   const fs::path manifest = folder_ / manifest_name(step);
   if (part_ != 0) return manifest;  // (with several parts, part 0 writes the manifest once all are down)
+  if (all_parts_written) all_parts_written();
   if (phase) phase("manifest");
   nlohmann::json parts = nlohmann::json::array();
   for (int k = 0; k < parts_; ++k) {
@@ -136,6 +137,90 @@ fs::path CheckpointStore::write(std::size_t step, double time, const StateArrays
   return manifest;
 }
 
+const std::vector<std::string> kCheckpointNodeArrays = {"integrator.u",
+                                                        "integrator.v_half",
+                                                        "integrator.v_prev_half",
+                                                        "integrator.force",
+                                                        "integrator.inverse_mass",
+                                                        "integrator.nodal_mass",
+                                                        "integrator.contact_inverse_mass",
+                                                        "integrator.prescribed_velocity",
+                                                        "integrator.pressure_force"};
+
+namespace {
+// Per part: the nodes it holds, and per array of kCheckpointNodeArrays its values per node (-1:
+// the run has no such array).
+constexpr const char* kPartNodes = "part.nodes";
+constexpr const char* kPartWidths = "part.widths";
+}  // namespace
+
+StateArrays checkpoint_part(const StateArrays& whole, const std::vector<std::uint32_t>& nodes, std::size_t num_nodes, bool first) {
+  StateArrays part;
+  if (first) part = whole;
+  part.kind = whole.kind;
+  part.integers[kPartNodes].assign(nodes.begin(), nodes.end());
+  std::vector<std::int64_t>& widths = part.integers[kPartWidths];
+  for (const std::string& name : kCheckpointNodeArrays) {
+    const auto it = whole.reals.find(name);
+    if (it == whole.reals.end()) {
+      widths.push_back(-1);
+      continue;
+    }
+    const std::size_t width = num_nodes ? it->second.size() / num_nodes : 0;  // 3 per node, 1, or 0 (an array the run leaves empty)
+    widths.push_back(static_cast<std::int64_t>(width));
+    std::vector<double>& mine = part.reals[name];
+    mine.clear();
+    for (std::uint32_t n : nodes)
+      mine.insert(mine.end(), it->second.begin() + static_cast<std::ptrdiff_t>(width * n),
+                  it->second.begin() + static_cast<std::ptrdiff_t>(width * (n + 1)));
+  }
+  return part;
+}
+
+StateArrays merge_checkpoint_parts(std::vector<StateArrays> parts, const std::vector<fs::path>& files) {
+  const auto refuse = [&](std::size_t k, const std::string& what, const std::string& expected, const std::string& found) {
+    throw InputError(files.at(k).string(), what, expected, found);
+  };
+  const auto integers = [&](std::size_t k, const char* name) -> const std::vector<std::int64_t>& {
+    const auto it = parts[k].integers.find(name);
+    if (it == parts[k].integers.end()) refuse(k, name, "a part of a checkpoint written over MPI ranks", "no " + std::string(name));
+    return it->second;
+  };
+  const std::vector<std::int64_t> widths = integers(0, kPartWidths);
+  if (widths.size() != kCheckpointNodeArrays.size())
+    refuse(0, kPartWidths, std::to_string(kCheckpointNodeArrays.size()) + " arrays", std::to_string(widths.size()));
+  std::size_t num_nodes = 0;
+  for (std::size_t k = 0; k < parts.size(); ++k) num_nodes += integers(k, kPartNodes).size();
+  std::vector<char> seen(num_nodes, 0);
+  std::vector<std::vector<double>> full(widths.size());
+  for (std::size_t j = 0; j < widths.size(); ++j) full[j].resize(static_cast<std::size_t>(std::max<std::int64_t>(widths[j], 0)) * num_nodes);
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    if (integers(k, kPartWidths) != widths) refuse(k, kPartWidths, "part 0's", "other values per node");
+    const std::vector<std::int64_t>& nodes = integers(k, kPartNodes);
+    for (std::int64_t n : nodes) {
+      if (n < 0 || static_cast<std::size_t>(n) >= num_nodes || seen[static_cast<std::size_t>(n)])
+        refuse(k, kPartNodes, "nodes 0 to " + std::to_string(num_nodes - 1) + " over the parts, each in one", "node " + std::to_string(n));
+      seen[static_cast<std::size_t>(n)] = 1;
+    }
+    for (std::size_t j = 0; j < widths.size(); ++j) {
+      if (widths[j] < 0) continue;
+      const auto width = static_cast<std::size_t>(widths[j]);
+      const auto it = parts[k].reals.find(kCheckpointNodeArrays[j]);
+      if (it == parts[k].reals.end() || it->second.size() != width * nodes.size())
+        refuse(k, kCheckpointNodeArrays[j], std::to_string(width * nodes.size()) + " values (" + std::to_string(width) + " per node)",
+               it == parts[k].reals.end() ? "none" : std::to_string(it->second.size()));
+      for (std::size_t i = 0; i < nodes.size(); ++i)
+        std::copy_n(it->second.begin() + static_cast<std::ptrdiff_t>(width * i), width,
+                    full[j].begin() + static_cast<std::ptrdiff_t>(width * static_cast<std::size_t>(nodes[i])));
+    }
+  }
+  StateArrays whole = std::move(parts[0]);
+  for (std::size_t j = 0; j < widths.size(); ++j)
+    if (widths[j] >= 0) whole.reals[kCheckpointNodeArrays[j]] = std::move(full[j]);
+  whole.integers.erase(kPartNodes), whole.integers.erase(kPartWidths);
+  return whole;
+}
+
 std::vector<CheckpointListing> list_checkpoints(const fs::path& folder) {
   std::vector<CheckpointListing> found;
   std::error_code ec;
@@ -165,12 +250,13 @@ std::optional<RestartPoint> find_restart_point(const fs::path& output, bool prob
   std::stable_sort(found.begin(), found.end(), [](const CheckpointListing& a, const CheckpointListing& b) { return a.step > b.step; });
   for (const CheckpointListing& c : found) {
     try {
-      if (c.parts.size() != 1)  // a run of several processes (MPI ranks) wrote it
-        throw InputError(c.manifest.string(), "parts", "one part (a run of one process)", std::to_string(c.parts.size()) + " parts");
       RestartPoint p;
       p.file = c.parts.front();
       p.staging = c.manifest.parent_path().parent_path();
-      StateArchive a(read_state_file(p.file, kCheckpointKind), p.file.string());
+      std::vector<StateArrays> parts;
+      for (const fs::path& part : c.parts) parts.push_back(read_state_file(part, kCheckpointKind));
+      // A run over MPI ranks wrote one part per rank: put together, whatever the ranks now.
+      StateArchive a(parts.size() == 1 ? std::move(parts[0]) : merge_checkpoint_parts(std::move(parts), c.parts), p.file.string());
       p.identity.io(a);
       a.io("integrator.step", p.step);
       a.io("integrator.time", p.time);

@@ -144,8 +144,9 @@ std::string state_name(std::size_t number) {
 // The steps of one run and what they write as they go.
 class RunLoop {
  public:
+  // ranks: rank 0 of a run over ranks, whose checkpoint part holds part_nodes (and all else).
   RunLoop(const Scenario& sc, const Model& model, ExplicitSolver& solver, OutputFolder& out, double est_steps, const RunIdentity& identity,
-          const RestartPoint* from)
+          const RestartPoint* from, const RankRun* ranks, std::vector<std::uint32_t> part_nodes)
       : sc_(sc),
         model_(model),
         solver_(solver),
@@ -157,7 +158,9 @@ class RunLoop {
         history_every_(history_interval(sc, est_steps)),
         progress_("solve", static_cast<std::size_t>(est_steps) + 1),
         next_checkpoint_time_(sc.run.checkpoint_interval),
-        last_checkpoint_wall_(std::chrono::steady_clock::now()) {
+        last_checkpoint_wall_(std::chrono::steady_clock::now()),
+        ranks_(ranks),
+        part_nodes_(std::move(part_nodes)) {
     summary_.dt_min = std::numeric_limits<double>::infinity();
     summary_.von_mises_peak.assign(model.blocks.size(), 0.0);
     if (from)
@@ -169,11 +172,14 @@ class RunLoop {
   // Steps to the end time; a numerical failure writes the last good state and is returned. An
   // interrupt with checkpoints on writes one first and keeps the staging folder for a restart.
   nlohmann::json run() {
+    // On ranks every rank writes its part of a checkpoint in this folder, when rank 0 finds one due.
+    const bool rank_parts = ranks_ && sc_.run.checkpoints();
+    if (rank_parts) ranks_->rank0_text((folder_ / kResumableDir).string());
     try {
       while (true) {
         kill_.at_step(solver_.step_index());
         check_interrupt();
-        if (checkpoint_due()) write_checkpoint();
+        if (const bool due = checkpoint_due(); rank_parts ? ranks_->rank0_decides(due) : due) write_checkpoint();
         solver_.advance_velocity();
         observe_step();
         solver_.check_energy();
@@ -205,7 +211,7 @@ class RunLoop {
       }
       return nullptr;
     } catch (const Interrupted& e) {
-      if (!sc_.run.checkpoints()) throw;
+      if (!sc_.run.checkpoints() || ranks_) throw;  // (on ranks every rank writes a part: the newest periodic one continues)
       write_checkpoint();
       out_.keep_for_resume();
       std::ostringstream kept;
@@ -294,10 +300,11 @@ class RunLoop {
     identity_.io(a);
     solver_.checkpoint(a);
     loop_state(a);
-    const fs::path manifest =
-        CheckpointStore(folder_ / kResumableDir).write(solver_.step_index(), solver_.time(), a.arrays(), [&](const char* phase) {
-          kill_.at_checkpoint(k, phase);
-        });
+    const auto phase = [&](const char* p) { kill_.at_checkpoint(k, p); };
+    const fs::path manifest = ranks_ ? CheckpointStore(folder_ / kResumableDir, 0, ranks_->ranks)
+                                           .write(solver_.step_index(), solver_.time(),
+                                                  checkpoint_part(a.arrays(), part_nodes_, model_.num_nodes, true), phase, 2, ranks_->all_meet)
+                                     : CheckpointStore(folder_ / kResumableDir).write(solver_.step_index(), solver_.time(), a.arrays(), phase);
     last_checkpoint_wall_ = std::chrono::steady_clock::now();
     log::debug() << "checkpoint at step " << solver_.step_index() << ", t = " << solver_.time() << " s: " << manifest.string();
   }
@@ -462,6 +469,8 @@ class RunLoop {
   std::chrono::steady_clock::time_point last_checkpoint_wall_;
   std::size_t checkpoints_written_ = 0;  // by this process
   KillHook kill_;
+  const RankRun* ranks_;
+  std::vector<std::uint32_t> part_nodes_;
 };
 
 }  // namespace
@@ -493,10 +502,22 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
     StateArchive a(from->state, from->file.string());
     solver.checkpoint(a);
   }
-  // RunLoop::run's steps, less its writes (no collective happens in those).
+  // RunLoop::run's steps, less its writes (no collective happens in those) but for this rank's
+  // part of each checkpoint.
+  const bool rank_parts = sc.run.checkpoints();
+  const std::string folder = rank_parts ? ranks.rank0_text("") : "";
+  const std::vector<std::uint32_t> part_nodes = shared->checkpoint_nodes();
   std::exception_ptr failure;
   try {
     while (true) {
+      if (rank_parts && ranks.rank0_decides(false)) {
+        StateArchive a;
+        a.arrays().kind = kCheckpointKind;
+        solver.checkpoint(a);
+        CheckpointStore(folder, ranks.rank, ranks.ranks)
+            .write(solver.step_index(), solver.time(), checkpoint_part(a.arrays(), part_nodes, model.num_nodes, false));
+        ranks.all_meet();
+      }
       solver.advance_velocity();
       solver.check_energy();
       if (solver.finished() || solver.relaxed()) break;
@@ -525,7 +546,7 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   const double est_steps = check_runaway(sc, model, solver, staged);
 
   fs::create_directories(staged.path() / "results");
-  RunLoop loop(sc, model, solver, staged, est_steps, identity, from);
+  RunLoop loop(sc, model, solver, staged, est_steps, identity, from, ranks, shared ? shared->checkpoint_nodes() : std::vector<std::uint32_t>{});
   nlohmann::json failure = loop.run();
   loop.finishing([&] { failure = loop.finish(failure); });
   RunSummary& summary = loop.summary();

@@ -6,7 +6,8 @@
 # rigid wall, node to surface; mass scaling and mass damping on) on 1 to 4 ranks; a rigid cube
 # dropped under gravity onto the block (the rigid body's 6-dof reduction; Rayleigh beta) on 2 and 3
 # ranks; the pad with its atoms dealt round-robin over 2 ranks by --partition (a cut through the
-# contact patch); the pad killed at 3 ranks and continued at 2. (Self-contact:
+# contact patch); the pad killed at 3 ranks and continued at 2, and killed at 2 and continued in
+# one process, from checkpoints of one part per rank. (Self-contact:
 # ranks/self_contact_on_N_ranks.) Bad input: more ranks than tets / 8, mismatched binaries, a
 # --check that fails on rank 0 alone after the run (exit 5 at once), and a rank killed mid-run (the
 # others stop within 10 s, naming it, and nothing is published).
@@ -91,11 +92,26 @@ PY
 $M -np 2 "$S" pad.toml -o pad_dealt -q --partition dealt.json || bad "the pad with a round-robin partition failed"
 same_as pad1 pad_dealt "pad, atoms dealt round-robin over 2 ranks"
 
-# Killed at 3 ranks (rank 0 raises SIGKILL at step 400), continued at 2.
+# Killed at 3 ranks (rank 0 raises SIGKILL at step 400), continued at 2; killed at 2, continued
+# by one process. Each checkpoint is one part per rank (each rank's own nodes) and a manifest.
+parts_of() {  # parts_of DIR: the part files of the newest complete checkpoint its killed run left
+  /usr/bin/python3 - "$1" <<'PY'
+import glob, json, sys
+manifests = sorted(glob.glob(sys.argv[1] + ".partial-*/checkpoints/checkpoint_*.json"))
+print(" ".join(p["file"] for p in json.load(open(manifests[-1]))["parts"]) if manifests else "none")
+PY
+}
 $M -np 3 env TACTUS_KILL_AT=step:400 "$S" pad.toml -o pad_cp -q >/dev/null 2>&1
 [ -e pad_cp/run.json ] && bad "a killed run published its folder"
+echo "checkpoint left by 3 ranks: $(parts_of pad_cp)"
+[[ "$(parts_of pad_cp)" =~ part0of3.h5\ .*part1of3.h5\ .*part2of3.h5$ ]] || bad "3 ranks should write 3 parts: $(parts_of pad_cp)"
 $M -np 2 "$S" --restart pad_cp -q || bad "the restart at 2 ranks failed"
 same_as pad1 pad_cp "killed at 3 ranks, continued at 2"
+$M -np 2 env TACTUS_KILL_AT=step:400 "$S" pad.toml -o pad_cp1 -q >/dev/null 2>&1
+echo "checkpoint left by 2 ranks: $(parts_of pad_cp1)"
+[[ "$(parts_of pad_cp1)" =~ part1of2.h5$ ]] || bad "2 ranks should write 2 parts: $(parts_of pad_cp1)"
+"$S" --restart pad_cp1 -q || bad "the restart in one process failed"
+same_as pad1 pad_cp1 "killed at 2 ranks, continued by one process"
 
 # Refused: more ranks than tets / 8 (24 tets: at most 3).
 printf '[run]\nend_time = 1e-4\n[[bodies]]\nname = "tiny"\nmesh = "tiny.msh"\nmaterials = { "*" = "block" }\n' > tiny.toml

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tactus/core/error.hpp"
 #include "tactus/solver/checkpoint.hpp"
 #include "temp_dir.hpp"
 
@@ -86,4 +87,43 @@ TEST(CheckpointStore, APartedCheckpointIsCompleteOnceEveryPartAndTheManifestAreD
   std::printf("two-part checkpoint of step %zu: part 0 holds %g, part 1 holds %g\n", found[0].step, u0, u1);
   EXPECT_EQ(u0, 40.0);
   EXPECT_EQ(u1, 41.0);
+}
+
+// A run over ranks writes one part per rank: each rank's nodes' per-node arrays, part 0 all else.
+// Oracle: the whole state the parts were cut from, exactly; and the merge refuses parts whose
+// nodes overlap or leave a node out, naming the part.
+TEST(CheckpointParts, PartsCutByNodesMergeBackIntoTheWholeState) {
+  const std::size_t nodes = 7;
+  StateArrays whole;
+  whole.kind = kCheckpointKind;
+  for (std::size_t i = 0; i < 3 * nodes; ++i) whole.reals["integrator.u"].push_back(0.5 + static_cast<double>(i));
+  for (std::size_t i = 0; i < nodes; ++i) whole.reals["integrator.nodal_mass"].push_back(10.0 + static_cast<double>(i));
+  whole.reals["integrator.pressure_force"] = {};  // a run without follower pressures
+  whole.reals["integrator.time"] = {0.25};
+  whole.integers["integrator.step"] = {12};
+  const std::vector<std::vector<std::uint32_t>> owned = {{0, 3, 6}, {1, 4}, {2, 5}};
+  std::vector<StateArrays> parts;
+  for (std::size_t k = 0; k < owned.size(); ++k) parts.push_back(checkpoint_part(whole, owned[k], nodes, k == 0));
+  std::printf("part sizes (u values): %zu %zu %zu; part 1 holds the step: %d\n", parts[0].reals["integrator.u"].size(),
+              parts[1].reals["integrator.u"].size(), parts[2].reals["integrator.u"].size(), int(parts[1].integers.count("integrator.step")));
+  EXPECT_EQ(parts[1].reals.at("integrator.u").size(), 6u);
+  EXPECT_EQ(parts[1].integers.count("integrator.step"), 0u);
+  const std::vector<fs::path> files = {"part0", "part1", "part2"};
+  const StateArrays merged = merge_checkpoint_parts(parts, files);
+  EXPECT_EQ(merged.reals, whole.reals);
+  EXPECT_EQ(merged.integers, whole.integers);
+  // Node 4 in two parts (and so node 5 in none): refused, naming part 2.
+  std::vector<StateArrays> overlapping = parts;
+  overlapping[2] = checkpoint_part(whole, {2, 4}, nodes, false);
+  try {
+    merge_checkpoint_parts(overlapping, files);
+    ADD_FAILURE() << "overlapping parts were merged";
+  } catch (const InputError& e) {
+    std::printf("overlapping parts: %s\n", e.what());
+    EXPECT_NE(std::string(e.what()).find("part2"), std::string::npos);
+  }
+  // A part whose arrays do not hold its nodes' values: refused.
+  std::vector<StateArrays> short_part = parts;
+  short_part[1].reals["integrator.u"].pop_back();
+  EXPECT_THROW(merge_checkpoint_parts(short_part, files), InputError);
 }

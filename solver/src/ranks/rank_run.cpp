@@ -118,6 +118,22 @@ RankRun RankSession::run(const std::filesystem::path& partition) const {
       log::info() << "decomposition" << (partition.empty() ? " (METIS)" : " (" + partition.string() + ")") << ":\n" << format_decomposition(d);
     return std::make_unique<RankStressPass>(model, d, MPI_COMM_WORLD, beta, threads);
   };
+  run.rank0_decides = [](bool due) {
+    int flag = due ? 1 : 0;
+    if (MPI_Bcast(&flag, 1, MPI_INT, 0, MPI_COMM_WORLD) != MPI_SUCCESS) throw Error("MPI: MPI_Bcast failed");
+    return flag != 0;
+  };
+  run.rank0_text = [rank](const std::string& text) {
+    unsigned long long size = text.size();
+    std::string out = text;
+    if (MPI_Bcast(&size, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD) != MPI_SUCCESS) throw Error("MPI: MPI_Bcast failed");
+    if (rank != 0) out.assign(size, '\0');
+    if (MPI_Bcast(out.data(), static_cast<int>(size), MPI_CHAR, 0, MPI_COMM_WORLD) != MPI_SUCCESS) throw Error("MPI: MPI_Bcast failed");
+    return out;
+  };
+  run.all_meet = [] {
+    if (MPI_Barrier(MPI_COMM_WORLD) != MPI_SUCCESS) throw Error("MPI: MPI_Barrier failed");
+  };
   run.check_same_restart = [](std::size_t step) {
     const auto [low, high] = range_over_ranks(step);
     if (low != high)

@@ -145,6 +145,14 @@ std::size_t RankStressPass::memory_bytes() const {
   return b + atoms_.capacity() * sizeof(StressAccumulator);
 }
 
+std::vector<std::uint32_t> RankStressPass::checkpoint_nodes() const {
+  std::vector<std::uint32_t> nodes;
+  const std::vector<std::int32_t>& owner = forces_.node_ranks();
+  for (std::size_t n = 0; n < owner.size(); ++n)
+    if (owner[n] == rank_ || (owner[n] < 0 && rank_ == 0)) nodes.push_back(static_cast<std::uint32_t>(n));
+  return nodes;
+}
+
 std::size_t RankStressPass::halo_doubles() const {
   std::size_t n = 0;
   for (const auto& s : send_) n += s.size();

@@ -4,8 +4,9 @@
 // Where: `<OUT>.partial-<pid>-<token>/checkpoints/`, inside the staging folder of the run writing
 // OUT (core/output.hpp), so a killed run and its checkpoints are found from OUT alone. A checkpoint
 // is its state in parts, `checkpoint_<step>.part<k>of<n>.h5` (one part per process of the run: one
-// today, one per MPI rank later), and a manifest, `checkpoint_<step>.json`, written last, naming the
-// parts and their sizes: a checkpoint is complete exactly when its manifest is there
+// in one process, one per MPI rank under mpirun, checkpoint_part), and a manifest,
+// `checkpoint_<step>.json`, written last, naming the parts and their sizes: a checkpoint is
+// complete exactly when its manifest is there
 // (CheckpointStore). Each file is written under a temporary name, flushed and renamed
 // (core/state_file.hpp); the newest two complete ones are kept, the older removed only after the
 // new manifest has its name, so a complete one is on the disk at every moment.
@@ -17,6 +18,7 @@
 // the checkpoint's row, and steps on: the finished folder holds the same results and history, bit
 // for bit, as an uninterrupted run of the same binary.
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -62,13 +64,29 @@ class CheckpointStore {
   // complete checkpoints, removing the older and any incomplete one before the newest. `phase` is
   // told each stage of the write (write_state_file's, then "manifest" before the manifest goes
   // down): the points where the restart tests kill the process. Returns the manifest's path.
+  // all_parts_written (part 0 of several): returns once every other part is on the disk (the
+  // ranks meet there before the manifest goes down).
   std::filesystem::path write(std::size_t step, double time, const StateArrays& part, const std::function<void(const char*)>& phase = {},
-                              std::size_t keep = 2) const;
+                              std::size_t keep = 2, const std::function<void()>& all_parts_written = {}) const;
 
  private:
   std::filesystem::path folder_;
   int part_, parts_;
 };
+
+// A run over MPI ranks writes one part per rank: each rank the integrator's per-node arrays
+// (kCheckpointNodeArrays: displacements, velocities, forces, masses) at the nodes it owns, listed in
+// "part.nodes", and part 0 everything else too. Every rank holds the whole state today; the parts
+// are the form a rank that holds only its own nodes writes, and a restart at any rank count reads
+// them all back into one state (merge_checkpoint_parts).
+extern const std::vector<std::string> kCheckpointNodeArrays;
+// The part of `whole` (a checkpoint of a model of num_nodes nodes) that holds `nodes`; `first`:
+// part 0, which holds every other array as well.
+StateArrays checkpoint_part(const StateArrays& whole, const std::vector<std::uint32_t>& nodes, std::size_t num_nodes, bool first);
+// The whole checkpoint from its parts (in part order; `files` name them in errors): part 0's arrays
+// with each per-node array put together from every part. InputError naming the part when a node
+// is missing, listed twice or out of range, or an array's size does not match its nodes.
+StateArrays merge_checkpoint_parts(std::vector<StateArrays> parts, const std::vector<std::filesystem::path>& files);
 
 // The complete checkpoints in `folder` (a manifest whose parts are all there with their sizes),
 // newest (highest step) first; a manifest that does not parse or whose parts are missing is

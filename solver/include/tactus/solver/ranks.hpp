@@ -40,6 +40,7 @@ class RankStressPass : public StressPassEngine {
   int threads() const override { return forces_.threads(); }
   nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) override;
   std::size_t memory_bytes() const override;
+  std::vector<std::uint32_t> checkpoint_nodes() const override;
   const std::vector<char>& touched() const { return touched_; }
   StressPassResult compute_alone(const double* u, const double* v, double* f_out) override;
   int rank() const { return rank_; }

@@ -53,6 +53,12 @@ struct RankRun {
   // Every rank must continue from rank 0's checkpoint (the step it was written at + 1, or 0 for a
   // run from t = 0): an InputError on every rank otherwise (collective).
   std::function<void(std::size_t restart_step)> check_same_restart;
+  // Checkpoints in parts, one per rank (checkpoint.hpp, checkpoint_part): rank 0's `due` on every
+  // rank (each step, when the run writes checkpoints), rank 0's text on every rank (the
+  // checkpoints' folder, once), and a meeting of every rank (before part 0's manifest). Collective.
+  std::function<bool(bool due)> rank0_decides;
+  std::function<std::string(const std::string& text)> rank0_text;
+  std::function<void()> all_meet;
 };
 
 struct RunIdentity;

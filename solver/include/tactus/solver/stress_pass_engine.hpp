@@ -6,6 +6,8 @@
 // goes on with the same state (docs/design.md, "tactus-solve under mpirun"). The solver library
 // itself needs no MPI: only this interface.
 #include <cstddef>
+#include <cstdint>
+#include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
@@ -42,12 +44,15 @@ class StressPassEngine {
   // process's peak memory).
   virtual nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) = 0;
   virtual std::size_t memory_bytes() const = 0;
+  // The nodes whose per-node state this process writes in its checkpoint part (checkpoint.hpp):
+  // one process, every node; on ranks those it owns (rank 0 also those no stress-pass tet holds).
+  virtual std::vector<std::uint32_t> checkpoint_nodes() const = 0;
 };
 
 // One process: InternalForces as it is.
 class OneProcessStressPass final : public StressPassEngine {
  public:
-  OneProcessStressPass(const Model& model, double beta, int threads) : forces_(model, beta, threads) {}
+  OneProcessStressPass(const Model& model, double beta, int threads) : forces_(model, beta, threads), nodes_(model.num_nodes) {}
   StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) override {
     return forces_.compute(u, v, f_out, side);
   }
@@ -61,9 +66,15 @@ class OneProcessStressPass final : public StressPassEngine {
   int ranks() const override { return 1; }
   nlohmann::json report(const std::vector<std::pair<std::string, double>>&) override { return nullptr; }
   std::size_t memory_bytes() const override { return forces_.memory_bytes(); }
+  std::vector<std::uint32_t> checkpoint_nodes() const override {
+    std::vector<std::uint32_t> all(nodes_);
+    std::iota(all.begin(), all.end(), std::uint32_t{0});
+    return all;
+  }
 
  private:
   InternalForces forces_;
+  std::size_t nodes_;
 };
 
 }  // namespace tactus::solver
