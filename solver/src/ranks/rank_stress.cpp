@@ -201,6 +201,7 @@ void RankStressPass::exchange_volumes(void* self) {
   for (std::size_t i = 0; i < halo.size(); ++i) {
     double* out = me.send_[i].data();
     for (std::uint32_t s : halo[i].send) *out++ = volumes[s];
+    me.anp_doubles_sent_ += static_cast<double>(halo[i].send.size()), ++me.anp_messages_sent_;
     check(MPI_Irecv(me.receive_[i].data(), static_cast<int>(halo[i].receive.size()), MPI_DOUBLE, halo[i].rank, 1, me.comm_, &me.requests_[2 * i]),
           "MPI_Irecv");
     check(MPI_Isend(me.send_[i].data(), static_cast<int>(halo[i].send.size()), MPI_DOUBLE, halo[i].rank, 1, me.comm_, &me.requests_[2 * i + 1]),
@@ -221,6 +222,7 @@ void RankStressPass::exchange_nodes(void* self, double* values) {
   for (std::size_t i = 0; i < ghosts.size(); ++i) {
     double* out = me.ghost_send_[i].data();
     for (std::uint32_t n : ghosts[i].send) *out++ = values[n];
+    me.anp_doubles_sent_ += static_cast<double>(ghosts[i].send.size()), ++me.anp_messages_sent_;
     check(MPI_Irecv(me.ghost_receive_[i].data(), static_cast<int>(ghosts[i].receive.size()), MPI_DOUBLE, ghosts[i].rank, 2, me.comm_,
                     &me.ghost_requests_[2 * i]),
           "MPI_Irecv");
@@ -251,6 +253,7 @@ StressPassResult RankStressPass::pass_and_gather(const double* u, const double* 
   const StressPassResult local =
       forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, &exchange_volumes, &exchange_nodes, this});
   const double start = MPI_Wtime();
+  ++passes_;
   // The sums: every atom's energy and viscous power (each rank's atoms in atom order, so a record
   // needs no index), and the ANP chunks' energies, added in atom and chunk order below.
   const auto& owner = forces_.atom_ranks();
@@ -324,6 +327,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
                            static_cast<double>(forces_order_.own_items(rank_))};
   for (const auto& [name, s] : seconds) mine.push_back(s);
   mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(peak_resident_bytes());
+  mine.push_back(passes_ > 0 ? anp_doubles_sent_ / passes_ : 0), mine.push_back(passes_ > 0 ? anp_messages_sent_ / passes_ : 0);
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
   check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
         "MPI_Gather");
@@ -339,6 +343,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
     for (std::size_t k = 0; k < seconds.size(); ++k) j[seconds[k].first] = x[4 + k];
     j["sums_s"] = x[4 + seconds.size()], j["force_gather_s"] = x[5 + seconds.size()];
     j["peak_resident_bytes"] = x[6 + seconds.size()];
+    j["anp_exchange_doubles_per_pass"] = x[7 + seconds.size()], j["anp_exchange_messages_per_pass"] = x[8 + seconds.size()];
     out.push_back(j);
   }
   return out;

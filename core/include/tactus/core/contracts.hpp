@@ -210,7 +210,8 @@ inline constexpr const char* mass_scaling = "mass_scaling";
 // it sends to every rank each step), stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the pass's one
 // gather of sums, minima and forces, with its wait for the slowest rank), force_gather_s (of sums_s: packing and unpacking
 // the forces), peak_resident_bytes (the
-// rank's process, Linux VmHWM)}
+// rank's process, Linux VmHWM), anp_exchange_doubles_per_pass and anp_exchange_messages_per_pass (the ANP J pass's
+// exchanges of volumes and ghost nodes' values; 0 without ANP blocks)}
 inline constexpr const char* ranks = "ranks";
 inline constexpr std::array<const char*, 20> all{
     status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,

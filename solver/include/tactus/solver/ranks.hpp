@@ -68,6 +68,8 @@ class RankStressPass : public StressPassEngine {
   std::vector<MPI_Request> requests_;
   std::vector<std::vector<double>> ghost_send_, ghost_receive_;  // per InternalForces::anp_ghosts() pair
   std::vector<MPI_Request> ghost_requests_;
+  // The ANP J pass's exchanges (volumes and ghost nodes): doubles and messages sent, over passes.
+  double anp_doubles_sent_ = 0, anp_messages_sent_ = 0, passes_ = 0;
   // The pass's one gather (pass_and_gather): per rank its doubles and where they land (fixed), and
   // where its owned nodes' forces begin; without the forces (compute) and with them
   // (compute_everywhere). This rank's records, everyone's.
