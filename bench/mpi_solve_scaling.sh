@@ -9,12 +9,12 @@
 # the stress passes' and of contact's (the slowest rank's, on ranks), the steps, and the peak
 # resident memory of each process (of the first round). The results are compared bit for bit
 # against the 1 x 1 run (history.csv and the last state).
-#   bench/mpi_solve_scaling.sh [ROUNDS]      (default 3; TACTUS_BUILD_DIR: default build/)
+#   bench/mpi_solve_scaling.sh [ROUNDS]      (default 5; TACTUS_BUILD_DIR: default build/)
 # Never time it while something else runs.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 B=${TACTUS_BUILD_DIR:-$ROOT/build}
-ROUNDS=${1:-3}
+ROUNDS=${1:-5}
 S=$B/solver/tactus-solve
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_vader_single_copy_mechanism=none
 W=$(mktemp -d)
@@ -68,8 +68,8 @@ for layout in ("1x2", "2x1"):
 for layout, (wall, stress, contact, steps, ranks, memory) in rows.items():
     print(f"{name} {layout}: {steps} steps, run {wall:.2f} s, stress passes {stress:.2f} s, contact {contact:.2f} s, "
           f"{1e3 * wall / steps:.3f} ms per step; peak memory per process {', '.join(f'{m:.0f}' for m in memory)} MiB"
-          + (f"; per rank (tets, halo doubles, owned nodes, sums s, force gather s): "
-             f"{[(x['tets'], x['halo_doubles_per_pass'], x['owned_nodes'], round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
+          + (f"; per rank (tets, halo doubles, ANP exchange doubles and messages, owned nodes, gather s, force packing s): "
+             f"{[(x['tets'], x['halo_doubles_per_pass'], x['anp_exchange_doubles_per_pass'], x['anp_exchange_messages_per_pass'], x['owned_nodes'], round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
              if ranks else ""))
 print(f"{name}: 2 ranks x 1 thread / 1 rank x 2 threads, whole run: {rows['2x1'][0] / rows['1x2'][0]:.3f}; "
       f"speed-up over 1 x 1: threads {rows['1x1'][0] / rows['1x2'][0]:.2f}, ranks {rows['1x1'][0] / rows['2x1'][0]:.2f}")

@@ -103,8 +103,10 @@ void RankStressPass::RankOrder::gather(const double* from, double* to, int rank,
 }
 
 void RankStressPass::RankOrder::pack(const double* from, int rank, std::vector<double>& out) const {
-  const std::size_t first = static_cast<std::size_t>(offsets[static_cast<std::size_t>(rank)]) / width;
-  for (std::size_t k = 0; k < own_items(rank); ++k) out.insert(out.end(), from + width * items[first + k], from + width * (items[first + k] + 1));
+  const std::size_t first = static_cast<std::size_t>(offsets[static_cast<std::size_t>(rank)]) / width, at = out.size();
+  out.resize(at + width * own_items(rank));  // within the reserved size: no allocation
+  double* to = out.data() + at;
+  for (std::size_t k = 0; k < own_items(rank); ++k) std::memcpy(to + width * k, from + width * items[first + k], width * sizeof(double));
 }
 
 void RankStressPass::RankOrder::unpack(const double* all_ranks, const std::vector<std::size_t>& rank_at, int rank, double* to) const {
