@@ -109,7 +109,13 @@ fs::path CheckpointStore::write(std::size_t step, double time, const StateArrays
   nlohmann::json parts = nlohmann::json::array();
   for (int k = 0; k < parts_; ++k) {
     const std::string name = part_name(step, k, parts_);
-    parts.push_back({{"file", name}, {"bytes", fs::file_size(folder_ / name)}});
+    std::error_code ec;
+    const auto bytes = fs::file_size(folder_ / name, ec);
+    if (ec)  // another machine's rank wrote its part into a folder of its own
+      throw WriteError((folder_ / name).string(), "part " + std::to_string(k) +
+                                                      " of the checkpoint is not there: every rank writes its part into this "
+                                                      "folder, so on several machines the output folder must be on a file system they share");
+    parts.push_back({{"file", name}, {"bytes", bytes}});
   }
   const nlohmann::json j{{"kind", kManifestKind}, {"step", step}, {"time", time}, {"parts", parts}};
   const fs::path temporary = manifest.string() + ".partial-" + unique_suffix();

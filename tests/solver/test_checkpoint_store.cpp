@@ -127,3 +127,20 @@ TEST(CheckpointParts, PartsCutByNodesMergeBackIntoTheWholeState) {
   short_part[1].reals["integrator.u"].pop_back();
   EXPECT_THROW(merge_checkpoint_parts(short_part, files), InputError);
 }
+
+// Part 0 of a run over ranks writes the manifest once the ranks have met; a part that is not in
+// the folder then (a rank on another machine wrote it into a folder of its own) is a clear error,
+// and no manifest is written.
+TEST(CheckpointParts, AManifestWithAPartMissingIsRefused) {
+  TempDir dir;
+  const fs::path folder = dir.path() / "checkpoints";
+  try {
+    CheckpointStore(folder, 0, 2).write(10, 0.01, part_state(1), {}, 2, [] {});
+    ADD_FAILURE() << "a manifest was written without part 1";
+  } catch (const WriteError& e) {
+    std::printf("part 1 missing: %s\n", e.what());
+    EXPECT_NE(std::string(e.what()).find("part 1 of the checkpoint is not there"), std::string::npos);
+  }
+  EXPECT_TRUE(list_checkpoints(folder).empty());
+  EXPECT_FALSE(fs::exists(folder / "checkpoint_000000000010.json"));
+}
