@@ -220,6 +220,7 @@ class RunLoop {
       throw Interrupted(e.signal_number(), kept.str());
     } catch (const NumericalError& e) {
       summary_.status = "failed";
+      solver_.gather_state();  // every rank meets a numerical failure at the same step (follow_simulation too)
       // The last good state: u^{n-1} (before the failing update), with the half-step velocity.
       write("last_good_state.vtu", solver_.previous_displacement(), solver_.half_step_velocity(), solver_.time() - 0.5 * solver_.time_step());
       return e.what();
@@ -525,6 +526,7 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
     }
   } catch (const NumericalError&) {
     failure = std::current_exception();
+    solver.gather_state();  // as rank 0 does before it writes the last good state
   }
   rank_report(shared.get(), solver, wall_start);
   if (failure) std::rethrow_exception(failure);

@@ -5,7 +5,9 @@
 # in ANP hgo tissue sliding on a neo-Hookean block through mortar contact with friction and onto a
 # rigid wall, node to surface; mass scaling and mass damping on) on 1 to 4 ranks; a rigid cube
 # dropped under gravity onto the block (the rigid body's 6-dof reduction; Rayleigh beta) on 2 and 3
-# ranks; the pad with its atoms dealt round-robin over 2 ranks by --partition (a cut through the
+# ranks; the pad without mass scaling (owned-node stepping: each rank integrates its own nodes) on 2
+# to 4 ranks and through a checkpoint; the pad with its atoms dealt round-robin over 2 ranks by
+# --partition (a cut through the
 # contact patch); the pad killed at 3 ranks and continued at 2, and killed at 2 and continued in
 # one process, from checkpoints of one part per rank. (Self-contact:
 # ranks/self_contact_on_N_ranks.) Bad input: more ranks than tets / 8, mismatched binaries, a
@@ -80,6 +82,26 @@ for np in 2 3; do
   $M -np "$np" "$S" drop.toml -o "drop_np$np" -q || { bad "the drop on $np ranks failed"; continue; }
   same_as drop1 "drop_np$np" "rigid cube drop on $np ranks"
 done
+
+# Owned-node stepping: the pad without mass scaling (whose booking sums every node in node order,
+# so the pad above steps the whole state on every rank) has each rank integrate only its own nodes
+# and the contact, supported and rigid ones, the nodes it reads arriving from their owners after
+# each update: the same bits on 2 to 4 ranks, and killed at 3 ranks and continued at 2.
+sed 's/^minimum_time_step = .*/minimum_time_step = 0.0/' pad.toml > padn.toml
+"$S" padn.toml -o padn1 -q || bad "the one-process pad without mass scaling failed"
+echo "pad without mass scaling: $(figure padn1 "j['steps']") steps, $(figure padn1 "j['contact']['steps_in_contact']") in contact"
+for np in 2 3 4; do
+  $M -np "$np" "$S" padn.toml -o "padn_np$np" -q || { bad "the pad without mass scaling on $np ranks failed"; continue; }
+  same_as padn1 "padn_np$np" "pad without mass scaling, owned-node stepping on $np ranks"
+done
+integrated() { figure "$1" "sum(r['integrated_nodes'] for r in j['ranks'])"; }
+echo "nodes integrated per rank, 3 ranks: $(figure padn_np3 "[(r['integrated_nodes'], r['ghost_doubles_per_exchange']) for r in j['ranks']]") of $(figure padn1 "j['nodes']")"
+[ "$(integrated padn_np3)" -gt 0 ] || bad "the pad without mass scaling should step owned nodes"
+[ "$(integrated pad_np3)" -eq 0 ] || bad "the pad with mass scaling should step the whole state on every rank"
+[ "$(integrated drop_np3)" -gt 0 ] || bad "the rigid cube drop should step owned nodes"
+$M -np 3 env TACTUS_KILL_AT=step:400 "$S" padn.toml -o padn_cp -q >/dev/null 2>&1
+$M -np 2 "$S" --restart padn_cp -q || bad "the restart at 2 ranks (owned-node stepping) failed"
+same_as padn1 padn_cp "pad without mass scaling killed at 3 ranks, continued at 2"
 
 # A cut placed on purpose: the pad's atoms dealt round-robin between 2 ranks.
 "$S" decompose pad.toml --ranks 2 -o metis.json > /dev/null

@@ -62,21 +62,26 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   // over its own and ghost nodes only), its minima, and for the integrator its owned nodes' forces
   // (who owns which node is fixed too).
   const auto& owner = forces_.atom_ranks();
-  std::vector<int> records(static_cast<std::size_t>(ranks_), 0);
-  for (int r : owner) records[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
+  records_per_rank_.assign(static_cast<std::size_t>(ranks_), 0);
+  for (int r : owner) records_per_rank_[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
   anp_ = std::any_of(model.blocks.begin(), model.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
   if (anp_)
-    for (std::int32_t r : forces_.chunk_ranks()) ++records[static_cast<std::size_t>(r)];
+    for (std::int32_t r : forces_.chunk_ranks()) ++records_per_rank_[static_cast<std::size_t>(r)];
   forces_order_.build(forces_.node_ranks(), ranks_, rank_, 3);
+  layout_gathers();
+  atoms_.resize(owner.size()), next_.resize(records_per_rank_.size());
+}
+
+void RankStressPass::layout_gathers() {
+  const std::vector<int>& records = records_per_rank_;
   for (Gather* g : {&sums_only_, &with_forces_}) {
     g->counts.resize(records.size()), g->offsets.resize(records.size()), g->forces_at.resize(records.size());
     for (std::size_t r = 0; r < records.size(); ++r) g->counts[r] = records[r] + 2 * kMinima + (g == &with_forces_ ? forces_order_.counts[r] : 0);
     std::exclusive_scan(g->counts.begin(), g->counts.end(), g->offsets.begin(), 0);
     for (std::size_t r = 0; r < records.size(); ++r) g->forces_at[r] = static_cast<std::size_t>(g->offsets[r] + records[r] + 2 * kMinima);
   }
-  gathered_.resize(static_cast<std::size_t>(with_forces_.offsets.back() + with_forces_.counts.back()));
+  gathered_.assign(static_cast<std::size_t>(with_forces_.offsets.back() + with_forces_.counts.back()), 0.0);
   records_.reserve(static_cast<std::size_t>(with_forces_.counts[static_cast<std::size_t>(rank_)]));
-  atoms_.resize(owner.size()), next_.resize(records.size());
 }
 
 void RankStressPass::RankOrder::build(const std::vector<std::int32_t>& item_rank, int ranks, int rank, std::size_t per_item) {
@@ -319,6 +324,116 @@ StressPassResult RankStressPass::pass_and_gather(const double* u, const double* 
   return r;
 }
 
+// Who integrates what: a node's owner (the rank of its first atom, whose forces there are whole
+// after the halo) integrates it, every rank integrates the `everywhere` nodes (their forces gathered
+// to all) and the nodes no stress-pass tet holds (force 0 on every rank). The audit's chunk goes to
+// the rank that integrates most of its nodes alone (ties to the lower rank). A rank then reads, and
+// receives after each update, every node of its tets and of its audit chunks that it does not
+// integrate. Every rank derives every rank's lists from the model, so both sides of an exchange
+// agree without a message.
+void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::size_t audit_chunk_dofs) {
+  const std::vector<std::int32_t>& node_owner = forces_.node_ranks();
+  const std::size_t nodes = model_.num_nodes, ndof = 3 * nodes;
+  // Per node the one rank that integrates it, or -1 (every rank does).
+  std::vector<std::int32_t> alone(nodes, -1);
+  for (std::size_t n = 0; n < nodes; ++n)
+    if (!everywhere[n]) alone[n] = node_owner[n];
+  integrated_dofs_.clear();
+  for (std::size_t n = 0; n < nodes; ++n)
+    if (alone[n] < 0 || alone[n] == rank_)
+      for (std::uint32_t d = 0; d < 3; ++d) integrated_dofs_.push_back(static_cast<std::uint32_t>(3 * n + d));
+  // The audit's chunks: the rank that integrates most of a chunk's nodes alone sums it.
+  const std::size_t chunks = (ndof + audit_chunk_dofs - 1) / audit_chunk_dofs;
+  std::vector<std::int32_t> chunk_rank(chunks, 0);
+  std::vector<std::size_t> count(static_cast<std::size_t>(ranks_));
+  auto chunk_nodes = [&](std::size_t c) {
+    return std::pair<std::size_t, std::size_t>(c * audit_chunk_dofs / 3, (std::min(ndof, (c + 1) * audit_chunk_dofs) + 2) / 3);
+  };
+  for (std::size_t c = 0; c < chunks; ++c) {
+    std::fill(count.begin(), count.end(), 0);
+    const auto [begin, end] = chunk_nodes(c);
+    for (std::size_t n = begin; n < end; ++n)
+      if (alone[n] >= 0) ++count[static_cast<std::size_t>(alone[n])];
+    chunk_rank[c] = static_cast<std::int32_t>(std::max_element(count.begin(), count.end()) - count.begin());
+  }
+  audit_mine_.assign(chunks, 0);
+  for (std::size_t c = 0; c < chunks; ++c) audit_mine_[c] = chunk_rank[c] == rank_;
+  audit_order_.build(chunk_rank, ranks_, rank_, 5);
+  // needs[r]: the nodes rank r reads but another integrates alone (ascending, once each).
+  std::vector<std::vector<std::uint32_t>> needs(static_cast<std::size_t>(ranks_));
+  std::vector<std::int32_t> marked(nodes, -1);
+  auto need = [&](std::size_t r, std::size_t n) {
+    if (alone[n] < 0 || alone[n] == static_cast<std::int32_t>(r) || marked[n] == static_cast<std::int32_t>(r)) return;
+    marked[n] = static_cast<std::int32_t>(r), needs[r].push_back(static_cast<std::uint32_t>(n));
+  };
+  std::vector<std::vector<std::uint32_t>> tets_of(static_cast<std::size_t>(ranks_));
+  for (std::size_t e = 0; e < model_.num_elements; ++e) tets_of[static_cast<std::size_t>(tet_rank_[e])].push_back(static_cast<std::uint32_t>(e));
+  for (std::size_t r = 0; r < needs.size(); ++r) {
+    for (std::uint32_t e : tets_of[r])
+      for (std::size_t k = 0; k < 4; ++k) need(r, static_cast<std::size_t>(model_.conn[4 * static_cast<std::size_t>(e) + k]));
+    for (std::size_t c = 0; c < chunks; ++c)
+      if (chunk_rank[c] == static_cast<std::int32_t>(r))
+        for (auto [n, end] = chunk_nodes(c); n < end; ++n) need(r, n);
+    std::sort(needs[r].begin(), needs[r].end());
+  }
+  state_ghosts_.clear();
+  for (int r = 0; r < ranks_; ++r) {
+    if (r == rank_) continue;
+    NodeGhosts g;
+    g.rank = r;
+    for (std::uint32_t n : needs[static_cast<std::size_t>(r)])
+      if (alone[n] == rank_) g.send.push_back(n);
+    for (std::uint32_t n : needs[static_cast<std::size_t>(rank_)])
+      if (alone[n] == r) g.receive.push_back(n);
+    if (!g.send.empty() || !g.receive.empty()) state_ghosts_.push_back(std::move(g));
+  }
+  state_send_.clear(), state_receive_.clear();
+  for (const NodeGhosts& g : state_ghosts_) state_send_.emplace_back(3 * g.send.size()), state_receive_.emplace_back(3 * g.receive.size());
+  state_requests_.resize(2 * state_ghosts_.size());
+  nodes_order_.build(alone, ranks_, rank_, 3);
+  // The pass's gather now carries the everywhere nodes' forces alone.
+  std::vector<std::int32_t> gathered_owner(nodes, -1);
+  for (std::size_t n = 0; n < nodes; ++n)
+    if (everywhere[n]) gathered_owner[n] = node_owner[n];
+  forces_order_.build(gathered_owner, ranks_, rank_, 3);
+  layout_gathers();
+}
+
+void RankStressPass::share_ghosts(double* values) {
+  for (std::size_t i = 0; i < state_ghosts_.size(); ++i) {
+    const NodeGhosts& g = state_ghosts_[i];
+    double* out = state_send_[i].data();
+    for (std::uint32_t n : g.send) std::memcpy(out, values + 3 * static_cast<std::size_t>(n), 3 * sizeof(double)), out += 3;
+    ghost_doubles_sent_ += static_cast<double>(state_send_[i].size());
+    check(MPI_Irecv(state_receive_[i].data(), static_cast<int>(state_receive_[i].size()), MPI_DOUBLE, g.rank, 3, comm_, &state_requests_[2 * i]),
+          "MPI_Irecv");
+    check(MPI_Isend(state_send_[i].data(), static_cast<int>(state_send_[i].size()), MPI_DOUBLE, g.rank, 3, comm_, &state_requests_[2 * i + 1]),
+          "MPI_Isend");
+  }
+  ++ghost_shares_;
+  check(MPI_Waitall(static_cast<int>(state_requests_.size()), state_requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+  for (std::size_t i = 0; i < state_ghosts_.size(); ++i) {
+    const double* in = state_receive_[i].data();
+    for (std::uint32_t n : state_ghosts_[i].receive) std::memcpy(values + 3 * static_cast<std::size_t>(n), in, 3 * sizeof(double)), in += 3;
+  }
+}
+
+void RankStressPass::gather_audit_chunks(double* chunks, std::size_t width) {
+  if (width != audit_order_.width) throw Error("gather_audit_chunks: " + std::to_string(width) + " doubles per chunk, built for 5");
+  audit_order_.gather(chunks, chunks, rank_, comm_);
+}
+
+void RankStressPass::gather_nodes(std::initializer_list<double*> arrays) {
+  if (integrated_dofs_.empty()) return;  // every rank steps every node
+  for (double* a : arrays) nodes_order_.gather(a, a, rank_, comm_);
+}
+
+std::size_t RankStressPass::ghost_doubles() const {
+  std::size_t n = 0;
+  for (const auto& s : state_send_) n += s.size();
+  return n;
+}
+
 StressPassResult RankStressPass::compute_alone(const double* u, const double* v, double* f_out) {
   InternalForces one(model_, beta_, 1);  // this rank's forces_ runs only its atoms
   return one.compute(u, v, f_out);
@@ -330,6 +445,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
   for (const auto& [name, s] : seconds) mine.push_back(s);
   mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(peak_resident_bytes());
   mine.push_back(passes_ > 0 ? anp_doubles_sent_ / passes_ : 0), mine.push_back(passes_ > 0 ? anp_messages_sent_ / passes_ : 0);
+  mine.push_back(static_cast<double>(integrated_nodes())), mine.push_back(ghost_shares_ > 0 ? ghost_doubles_sent_ / ghost_shares_ : 0);
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
   check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
         "MPI_Gather");
@@ -346,6 +462,8 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
     j["sums_s"] = x[4 + seconds.size()], j["force_gather_s"] = x[5 + seconds.size()];
     j["peak_resident_bytes"] = x[6 + seconds.size()];
     j["anp_exchange_doubles_per_pass"] = x[7 + seconds.size()], j["anp_exchange_messages_per_pass"] = x[8 + seconds.size()];
+    j["integrated_nodes"] = static_cast<std::size_t>(x[9 + seconds.size()]);
+    j["ghost_doubles_per_exchange"] = x[10 + seconds.size()];
     out.push_back(j);
   }
   return out;

@@ -40,6 +40,7 @@ ExplicitSolver::ExplicitSolver(const Model& model, const RunSpec& run, const Dam
   if (model.joint_drive.on()) drive_ = std::make_unique<JointDrive>(model_, rigid_);
   if (drive_ && drive_->grasp()) regions_ = std::make_unique<GripRegions>(model_, rigid_, *drive_, contact_);
   contact_.set_threads(pass_threads());
+  choose_stepping();
   if (!contact_.empty()) contact_.check_initial_overlap(u_.data());
   schedule_ = output_schedule(run);
   while (next_target_ < schedule_.size() && schedule_[next_target_] <= 0) ++next_target_;
@@ -91,6 +92,44 @@ void ExplicitSolver::check_schedule() const {
 }
 
 ExplicitSolver::~ExplicitSolver() = default;
+
+// Owned-node stepping needs every per-step sum over the nodes to be the energy audit's chunked one
+// (gathered per chunk) or over nodes every process integrates: mass scaling's booking of the added
+// kinetic energy, dynamic relaxation's sums and the joint drive's grasp check are sums in node
+// order over every node, so those runs step the whole state on every process.
+void ExplicitSolver::choose_stepping() {
+  if (passes_->ranks() < 2 || mass_scaling() || damping_.adaptive || damping_.residual_tolerance > 0 || drive_) return;
+  std::vector<char> everywhere(model_.num_nodes, 0);
+  for (std::int32_t n : contact_.contact_nodes()) everywhere[static_cast<std::size_t>(n)] = 1;
+  for (std::size_t n = 0; n < model_.num_nodes; ++n)
+    if (rigid_.holds(n) || model_.constrained[3 * n] || model_.constrained[3 * n + 1] || model_.constrained[3 * n + 2]) everywhere[n] = 1;
+  for (const PressureLoad& load : model_.pressure_loads)
+    for (std::int32_t n : load.triangles) everywhere[static_cast<std::size_t>(n)] = 1;
+  passes_->step_owned_nodes(everywhere, EnergyAudit::chunk_dofs());
+  audit_.share_chunks(
+      {passes_->audit_chunks_summed_here(),
+       [](void* engine, double* chunks, std::size_t width) { static_cast<StressPassEngine*>(engine)->gather_audit_chunks(chunks, width); }, passes_});
+  owned_stepping_ = true;
+}
+
+void ExplicitSolver::gather_state() {
+  if (owned_stepping_) passes_->gather_nodes({u_.data(), v_half_.data(), v_prev_half_.data()});
+}
+
+template <class Update>
+void ExplicitSolver::for_integrated_dofs(Update&& update) {
+  const std::vector<std::uint32_t>& dofs = passes_->integrated_dofs();
+  if (dofs.empty()) {
+    const std::size_t ndof = 3 * model_.num_nodes;
+#pragma omp parallel for num_threads(pass_threads()) schedule(static)
+    for (std::size_t i = 0; i < ndof; ++i) update(i);
+  } else {
+    const std::uint32_t* list = dofs.data();
+    const std::size_t n = dofs.size();
+#pragma omp parallel for num_threads(pass_threads()) schedule(static)
+    for (std::size_t k = 0; k < n; ++k) update(static_cast<std::size_t>(list[k]));
+  }
+}
 
 void ExplicitSolver::stress_pass(bool detect_ahead) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -245,7 +284,6 @@ void ExplicitSolver::advance_velocity() {
   if (const int n = tuner_.threads(); n != pass_threads()) passes_->set_threads(n);
   if (const int n = contact_tuner_.threads(); n != contact_.threads()) contact_.set_threads(n);
   double contact_seconds = 0;
-  const std::size_t ndof = 3 * model_.num_nodes;
   const HalfStep h(dt_prev_, dt_next_, relaxation_.alpha(), step_ == 0);  // [damping] alpha, or adaptive
   const double t_next = next_lands_ ? schedule_[next_target_] : time_ + h.dt;
   apply_loading(t_next, h.dt);
@@ -254,9 +292,9 @@ void ExplicitSolver::advance_velocity() {
   double* __restrict v_new_of = v_half_.data();
   const double* inverse_mass = masses_.inverse_mass.data();
   const ExternalForces external = external_forces();
-#pragma omp parallel for num_threads(pass_threads()) schedule(static)
-  for (std::size_t i = 0; i < ndof; ++i)
+  for_integrated_dofs([&](std::size_t i) {
     v_new_of[i] = model_.constrained[i] ? prescribed_v_[i] : h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i]);
+  });
   if (!rigid_.empty()) {
     rigid_.sum_loads(model_, f_.data(), external, u_.data());
     // The joints set the bones' motion over the step from those loads (joint_drive.hpp).
@@ -273,6 +311,7 @@ void ExplicitSolver::advance_velocity() {
     contact_tuner_.step_took(contact_seconds);
   }
   if (!rigid_.empty()) rigid_.drift(model_, u_.data(), h.dt, v_new_of);
+  if (owned_stepping_) passes_->share_ghosts(v_new_of);  // the next pass's and the audit's nodes of other ranks
   // The supports' forces: R = m (v_new - v_free) / (dtbar c_plus), exactly what the update added.
   for (std::size_t k = 0; k < constrained_dofs_.size(); ++k) {
     const auto i = static_cast<std::size_t>(constrained_dofs_[k]);
@@ -284,6 +323,8 @@ void ExplicitSolver::advance_velocity() {
   if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
   relaxation_.measure(h, v_old_of, v_new_of, f_.data(), relaxed_dofs(), time_, drive_.get());
   velocity_advanced_ = true;
+  // A scheduled output time (t^n landed on one): the state file needs every node.
+  if (owned_stepping_ && next_target_ > 0 && time_ == schedule_[next_target_ - 1]) gather_state();
   step_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - contact_seconds;
 }
 
@@ -308,11 +349,10 @@ void ExplicitSolver::check_energy() const {
 
 void ExplicitSolver::advance_position() {
   const auto started = std::chrono::steady_clock::now();
-  const std::size_t ndof = 3 * model_.num_nodes;
   const double dt = dt_next_;
-#pragma omp parallel for num_threads(pass_threads()) schedule(static)
-  for (std::size_t i = 0; i < ndof; ++i) u_[i] += dt * v_half_[i];
+  for_integrated_dofs([&](std::size_t i) { u_[i] += dt * v_half_[i]; });
   rigid_.place(model_, u_.data());
+  if (owned_stepping_) passes_->share_ghosts(u_.data());  // the pass reads its tets' nodes
   min_step_ratio_ = std::min(min_step_ratio_, dt / nominal_next_);
   if (next_lands_) {
     time_ = schedule_[next_target_++];  // exactly, not the sum of the steps

@@ -206,12 +206,15 @@ inline constexpr const char* reactions = "reactions";  // [{name, moment_about, 
 // Only with mass scaling on: {minimum_time_step, added_mass_limit, bodies: {name: {mass, added_mass, fraction}},
 // added_kinetic_energy, added_momentum}
 inline constexpr const char* mass_scaling = "mass_scaling";
-// Only under mpirun: per rank {rank, tets, halo_doubles_per_pass, halo_messages_per_pass, owned_nodes (whose forces
-// it sends to every rank each step), stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the pass's one
+// Only under mpirun: per rank {rank, tets, halo_doubles_per_pass, halo_messages_per_pass, owned_nodes (those its
+// atoms own; with owned-node stepping it sends every rank the forces of those that every rank integrates, else of all),
+// stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the pass's one
 // gather of sums, minima and forces, with its wait for the slowest rank), force_gather_s (of sums_s: packing and unpacking
 // the forces), peak_resident_bytes (the
 // rank's process, Linux VmHWM), anp_exchange_doubles_per_pass and anp_exchange_messages_per_pass (the ANP J pass's
-// exchanges of volumes and ghost nodes' values; 0 without ANP blocks)}
+// exchanges of volumes and ghost nodes' values; 0 without ANP blocks), integrated_nodes (the nodes it integrates: its
+// own and those every rank integrates; with whole-state stepping 0, meaning every node) and ghost_doubles_per_exchange
+// (what it sends after each update of u or v to the ranks that read its nodes; 0 with whole-state stepping)}
 inline constexpr const char* ranks = "ranks";
 inline constexpr std::array<const char*, 20> all{
     status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,

@@ -241,6 +241,8 @@ class ContactSolver {
   explicit ContactSolver(const Model& model);  // pairs and settings from the model
   ~ContactSolver();
   bool empty() const { return pairs_.empty(); }
+  // Every node the contact sweep reads or moves: the pairs' slave nodes and master vertices, ascending.
+  const std::vector<std::int32_t>& contact_nodes() const { return contact_nodes_; }
   void set_threads(int threads) { threads_ = threads; }  // detection runs in parallel over slave nodes
   int threads() const { return threads_; }
 

@@ -71,6 +71,17 @@ class EnergyAudit {
                   MassScaling& masses, const std::uint8_t* constrained, const RigidBodies& rigid, const ContactStepReport& contact,
                   const StressPassResult& pass, int threads);
 
+  // Owned-node stepping over ranks (stress_pass_engine.hpp): close_step sums only the chunks marked
+  // in `summed_here` (1 each; null: all) and then calls gather(context, chunks, 5) for the others'
+  // partial sums, which it adds in chunk order as ever: the same bits at any rank count.
+  struct ChunkShare {
+    const char* summed_here = nullptr;
+    void (*gather)(void* context, double* chunks, std::size_t width) = nullptr;
+    void* context = nullptr;
+  };
+  void share_chunks(ChunkShare share) { share_ = share; }
+  static constexpr std::size_t chunk_dofs() { return kChunk; }
+
   Energies energy;
   // The halves of the trapezoid rule carried to the next step: F^n . du^{n+1/2} per kind.
   double pending_external = 0, pending_damping = 0, pending_contact_normal = 0, pending_contact_friction = 0;
@@ -78,6 +89,7 @@ class EnergyAudit {
  private:
   static constexpr std::size_t kChunk = 4096;  // dofs per partial sum (fixed: thread-count independent)
   std::vector<std::array<double, 5>> chunks_;  // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
+  ChunkShare share_;
 };
 
 }  // namespace tactus::solver

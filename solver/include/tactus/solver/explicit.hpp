@@ -83,6 +83,15 @@ class ExplicitSolver {
   double contact_seconds() const { return contact_seconds_; }
   // Of stress_seconds(): the next steps' contact detection, run on one thread during the passes.
   double detection_ahead_seconds() const { return detection_ahead_seconds_; }
+  // Over ranks with owned-node stepping (stress_pass_engine.hpp), each process integrates only
+  // the nodes it owns and those every process integrates (contact, rigid, supported, loaded), so
+  // its arrays hold other nodes only where it reads them. gather_state (collective; a no-op
+  // otherwise) brings every node's u and half-step velocities to every process: advance_velocity
+  // calls it at each scheduled output time, and a run that fails calls it before writing the last
+  // good state. Runs with mass scaling, dynamic relaxation or a joint drive step the whole state on
+  // every process (their per-step sums run over every node in node order).
+  bool owned_node_stepping() const { return owned_stepping_; }
+  void gather_state();
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
   void check_energy() const;
   // What limits the stable step, as the log prints it: "limited by tet 65 of body 'cube' (group
@@ -152,6 +161,11 @@ class ExplicitSolver {
   void accumulate_reactions();
   RelaxedDofs relaxed_dofs() const { return {masses_.mass.data(), model_.constrained.data(), rigid_.piece_of_node()}; }
 
+  // Owned-node stepping when the engine is over ranks and the run allows it (constructor).
+  void choose_stepping();
+  // The free update and the position update over the dofs this process integrates.
+  template <class Update>
+  void for_integrated_dofs(Update&& update);
   // The threads of the passes and the nodal loops now.
   int pass_threads() const { return passes_->threads(); }
 
@@ -187,6 +201,7 @@ class ExplicitSolver {
   double nominal_next_ = 0, min_step_ratio_ = 1, initial_critical_ = 0;
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
+  bool owned_stepping_ = false;
   EnergyAudit audit_;                  // energies at t^n and the work halves carried to the next step (energy.hpp)
   RigidBodies rigid_;                  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
   std::unique_ptr<JointDrive> drive_;  // the bones' motion by their joints (joint_drive.hpp), or none

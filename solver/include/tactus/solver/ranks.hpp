@@ -43,6 +43,16 @@ class RankStressPass : public StressPassEngine {
   std::vector<std::uint32_t> checkpoint_nodes() const override;
   const std::vector<char>& touched() const { return touched_; }
   StressPassResult compute_alone(const double* u, const double* v, double* f_out) override;
+  void step_owned_nodes(const std::vector<char>& everywhere, std::size_t audit_chunk_dofs) override;
+  const std::vector<std::uint32_t>& integrated_dofs() const override { return integrated_dofs_; }
+  void share_ghosts(double* values) override;
+  const char* audit_chunks_summed_here() const override { return audit_mine_.empty() ? nullptr : audit_mine_.data(); }
+  void gather_audit_chunks(double* chunks, std::size_t width) override;
+  void gather_nodes(std::initializer_list<double*> arrays) override;
+  // Owned-node stepping: the nodes this process integrates, and the doubles and messages it sends
+  // in one share_ghosts.
+  std::size_t integrated_nodes() const { return integrated_dofs_.size() / 3; }
+  std::size_t ghost_doubles() const;
   int rank() const { return rank_; }
   int ranks() const override { return ranks_; }
   std::size_t tets() const { return tets_; }  // this rank's
@@ -111,6 +121,19 @@ class RankStressPass : public StressPassEngine {
   std::vector<std::int32_t> tet_rank_;
   RankOrder tets_order_;
   std::vector<double> all_dt2_;
+  // Owned-node stepping (step_owned_nodes): the dofs this process integrates; per other process the
+  // nodes it sends after each update and those it receives (3 doubles each); the audit's chunks
+  // summed here and their order (5 doubles each); the non-everywhere nodes by owner, for
+  // gather_nodes; the doubles sent by share_ghosts over its calls.
+  std::vector<std::uint32_t> integrated_dofs_;
+  std::vector<NodeGhosts> state_ghosts_;
+  std::vector<std::vector<double>> state_send_, state_receive_;
+  std::vector<MPI_Request> state_requests_;
+  std::vector<char> audit_mine_;
+  RankOrder audit_order_, nodes_order_;
+  double ghost_doubles_sent_ = 0, ghost_shares_ = 0;
+  std::vector<int> records_per_rank_;  // each rank's records in the pass's gather, before its minima
+  void layout_gathers();               // sums_only_ and with_forces_ from records_per_rank_ and forces_order_
   // Wall time from the end of the pass to the result (the gather, its waiting and the sums), and of
   // it the forces' packing and unpacking (compute_everywhere).
   double sums_seconds_ = 0, force_gather_seconds_ = 0;

@@ -7,6 +7,7 @@
 // itself needs no MPI: only this interface.
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <numeric>
 #include <string>
 #include <utility>
@@ -47,6 +48,31 @@ class StressPassEngine {
   // The nodes whose per-node state this process writes in its checkpoint part (checkpoint.hpp):
   // one process, every node; on ranks those it owns (rank 0 also those no stress-pass tet holds).
   virtual std::vector<std::uint32_t> checkpoint_nodes() const = 0;
+
+  // Owned-node stepping (ranks; docs/design.md, "tactus-solve under mpirun"). One process steps
+  // every node and these do nothing. On ranks, step_owned_nodes (collective, once, before the first
+  // pass) makes each process integrate only the nodes it owns and the `everywhere` ones (1 per node:
+  // contact, rigid, supported and loaded nodes, which every process integrates alike from the same
+  // forces): from then on compute_everywhere gathers only the everywhere nodes' forces, and the
+  // integrator calls share_ghosts after each update, so that every node a process reads (its tets'
+  // and those of the energy audit's chunks it sums) holds its owner's value. audit_chunk_bytes: the
+  // bytes of one partial sum of the audit, audit_chunk_dofs the dofs it covers (energy.hpp).
+  virtual void step_owned_nodes(const std::vector<char>& /*everywhere*/, std::size_t /*audit_chunk_dofs*/) {}
+  // The dofs this process integrates, ascending; empty: every dof.
+  virtual const std::vector<std::uint32_t>& integrated_dofs() const { return no_dofs_; }
+  // Collective: 3 values per node (u or v), the nodes this process reads but does not integrate
+  // from the processes that do.
+  virtual void share_ghosts(double* /*values*/) {}
+  // The energy audit's chunks this process sums (1 each), or null: all. gather_audit_chunks
+  // (collective) then fills every other chunk's `width` doubles from the process that summed it.
+  virtual const char* audit_chunks_summed_here() const { return nullptr; }
+  virtual void gather_audit_chunks(double* /*chunks*/, std::size_t /*width*/) {}
+  // Collective: every node's 3 values of each array from the process that integrates it, so that
+  // every process holds the whole state (before a state file or the last good state is written).
+  virtual void gather_nodes(std::initializer_list<double*> /*arrays*/) {}
+
+ private:
+  std::vector<std::uint32_t> no_dofs_;
 };
 
 // One process: InternalForces as it is.
