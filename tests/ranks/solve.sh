@@ -83,10 +83,10 @@ for np in 2 3; do
   same_as drop1 "drop_np$np" "rigid cube drop on $np ranks"
 done
 
-# Owned-node stepping: the pad without mass scaling (whose booking sums every node in node order,
-# so the pad above steps the whole state on every rank) has each rank integrate only its own nodes
-# and the contact, supported and rigid ones, the nodes it reads arriving from their owners after
-# each update: the same bits on 2 to 4 ranks, and killed at 3 ranks and continued at 2.
+# Owned-node stepping (every run over ranks): each rank integrates only its own nodes and the
+# contact, supported and rigid ones, the nodes it reads arriving from their owners after each
+# update. The pad above also gathers the nodes mass scaling raised; without mass scaling: the same
+# bits on 2 to 4 ranks, and killed at 3 ranks and continued at 2.
 sed 's/^minimum_time_step = .*/minimum_time_step = 0.0/' pad.toml > padn.toml
 "$S" padn.toml -o padn1 -q || bad "the one-process pad without mass scaling failed"
 echo "pad without mass scaling: $(figure padn1 "j['steps']") steps, $(figure padn1 "j['contact']['steps_in_contact']") in contact"
@@ -97,7 +97,7 @@ done
 integrated() { figure "$1" "sum(r['integrated_nodes'] for r in j['ranks'])"; }
 echo "nodes integrated per rank, 3 ranks: $(figure padn_np3 "[(r['integrated_nodes'], r['ghost_doubles_per_exchange']) for r in j['ranks']]") of $(figure padn1 "j['nodes']")"
 [ "$(integrated padn_np3)" -gt 0 ] || bad "the pad without mass scaling should step owned nodes"
-[ "$(integrated pad_np3)" -eq 0 ] || bad "the pad with mass scaling should step the whole state on every rank"
+[ "$(integrated pad_np3)" -gt 0 ] || bad "the pad with mass scaling should step owned nodes"
 [ "$(integrated drop_np3)" -gt 0 ] || bad "the rigid cube drop should step owned nodes"
 $M -np 3 env TACTUS_KILL_AT=step:400 "$S" padn.toml -o padn_cp -q >/dev/null 2>&1
 $M -np 2 "$S" --restart padn_cp -q || bad "the restart at 2 ranks (owned-node stepping) failed"

@@ -141,7 +141,9 @@ const std::vector<double>& RankStressPass::element_dt2_everywhere() {
 }
 
 std::size_t RankStressPass::memory_bytes() const {
-  std::size_t b = forces_.memory_bytes() + touched_.capacity() + forces_order_.memory_bytes() + tets_order_.memory_bytes();
+  std::size_t b = forces_.memory_bytes() + touched_.capacity() + forces_order_.memory_bytes() + tets_order_.memory_bytes() +
+                  nodes_order_.memory_bytes() + integrated_dofs_.capacity() * sizeof(std::uint32_t);
+  for (const RankOrder& o : chunk_orders_) b += o.memory_bytes();
   for (const Gather* g : {&sums_only_, &with_forces_})
     b += (g->counts.capacity() + g->offsets.capacity()) * sizeof(int) + g->forces_at.capacity() * sizeof(std::size_t);
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
@@ -335,7 +337,8 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
   const std::vector<std::int32_t>& node_owner = forces_.node_ranks();
   const std::size_t nodes = model_.num_nodes, ndof = 3 * nodes;
   // Per node the one rank that integrates it, or -1 (every rank does).
-  std::vector<std::int32_t> alone(nodes, -1);
+  std::vector<std::int32_t>& alone = alone_;
+  alone.assign(nodes, -1);
   for (std::size_t n = 0; n < nodes; ++n)
     if (!everywhere[n]) alone[n] = node_owner[n];
   integrated_dofs_.clear();
@@ -344,7 +347,8 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
       for (std::uint32_t d = 0; d < 3; ++d) integrated_dofs_.push_back(static_cast<std::uint32_t>(3 * n + d));
   // The audit's chunks: the rank that integrates most of a chunk's nodes alone sums it.
   const std::size_t chunks = (ndof + audit_chunk_dofs - 1) / audit_chunk_dofs;
-  std::vector<std::int32_t> chunk_rank(chunks, 0);
+  std::vector<std::int32_t>& chunk_rank = chunk_rank_;
+  chunk_rank.assign(chunks, 0);
   std::vector<std::size_t> count(static_cast<std::size_t>(ranks_));
   auto chunk_nodes = [&](std::size_t c) {
     return std::pair<std::size_t, std::size_t>(c * audit_chunk_dofs / 3, (std::min(ndof, (c + 1) * audit_chunk_dofs) + 2) / 3);
@@ -356,9 +360,9 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
       if (alone[n] >= 0) ++count[static_cast<std::size_t>(alone[n])];
     chunk_rank[c] = static_cast<std::int32_t>(std::max_element(count.begin(), count.end()) - count.begin());
   }
-  audit_mine_.assign(chunks, 0);
-  for (std::size_t c = 0; c < chunks; ++c) audit_mine_[c] = chunk_rank[c] == rank_;
-  audit_order_.build(chunk_rank, ranks_, rank_, 5);
+  chunk_mine_.assign(chunks, 0);
+  for (std::size_t c = 0; c < chunks; ++c) chunk_mine_[c] = chunk_rank[c] == rank_;
+  chunk_orders_.clear();
   // needs[r]: the nodes rank r reads but another integrates alone (ascending, once each).
   std::vector<std::vector<std::uint32_t>> needs(static_cast<std::size_t>(ranks_));
   std::vector<std::int32_t> marked(nodes, -1);
@@ -418,9 +422,38 @@ void RankStressPass::share_ghosts(double* values) {
   }
 }
 
-void RankStressPass::gather_audit_chunks(double* chunks, std::size_t width) {
-  if (width != audit_order_.width) throw Error("gather_audit_chunks: " + std::to_string(width) + " doubles per chunk, built for 5");
-  audit_order_.gather(chunks, chunks, rank_, comm_);
+void RankStressPass::gather_sum_chunks(double* chunks, std::size_t width) {
+  if (chunk_orders_.size() <= width) chunk_orders_.resize(width + 1);
+  RankOrder& order = chunk_orders_[width];
+  if (order.counts.empty()) order.build(chunk_rank_, ranks_, rank_, width);  // once per width
+  order.gather(chunks, chunks, rank_, comm_);
+}
+
+void RankStressPass::gather_some_nodes(const std::vector<std::uint32_t>& nodes, std::initializer_list<double*> arrays) {
+  if (integrated_dofs_.empty() || nodes.empty()) return;
+  // Each listed node's values travel from the rank that integrates it alone, in list order; every
+  // rank knows who that is, so the counts need no message.
+  const std::size_t per_node = 3 * arrays.size();
+  some_counts_.assign(static_cast<std::size_t>(ranks_), 0), some_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+  for (std::uint32_t n : nodes)
+    if (alone_[n] >= 0) some_counts_[static_cast<std::size_t>(alone_[n])] += static_cast<int>(per_node);
+  std::exclusive_scan(some_counts_.begin(), some_counts_.end(), some_offsets_.begin(), 0);
+  some_mine_.clear();
+  for (std::uint32_t n : nodes)
+    if (alone_[n] == rank_)
+      for (const double* a : arrays)
+        some_mine_.insert(some_mine_.end(), a + 3 * static_cast<std::size_t>(n), a + 3 * static_cast<std::size_t>(n) + 3);
+  some_all_.resize(static_cast<std::size_t>(some_offsets_.back() + some_counts_.back()));
+  check(MPI_Allgatherv(some_mine_.data(), static_cast<int>(some_mine_.size()), MPI_DOUBLE, some_all_.data(), some_counts_.data(),
+                       some_offsets_.data(), MPI_DOUBLE, comm_),
+        "MPI_Allgatherv");
+  std::vector<std::size_t>& at = next_;  // per rank where its next node's values are (the pass's scratch, free here)
+  for (std::size_t r = 0; r < at.size(); ++r) at[r] = static_cast<std::size_t>(some_offsets_[r]);
+  for (std::uint32_t n : nodes) {
+    if (alone_[n] < 0) continue;
+    std::size_t& k = at[static_cast<std::size_t>(alone_[n])];
+    for (double* a : arrays) std::memcpy(a + 3 * static_cast<std::size_t>(n), &some_all_[k], 3 * sizeof(double)), k += 3;
+  }
 }
 
 void RankStressPass::gather_nodes(std::initializer_list<double*> arrays) {

@@ -42,8 +42,8 @@ void EnergyAudit::close_step(const HalfStep& h, const ExternalForces& external, 
   chunks_.resize(chunks);
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (std::size_t k = 0; k < chunks; ++k) {
-    if (share_.summed_here && !share_.summed_here[k]) continue;  // another rank's: gathered below
-    std::array<double, 5> sum{};                                 // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
+    if (!share_.sums(k)) continue;  // another rank's: gathered below
+    std::array<double, 5> sum{};    // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
     for (std::size_t i = k * kChunk; i < std::min(ndof, (k + 1) * kChunk); ++i) {
       // A rigid body's nodes: their kinetic energy and damping are the body's (below).
       const double m = rigid_of && rigid_of[i / 3] != -1 ? 0.0 : mass_of[i / 3];

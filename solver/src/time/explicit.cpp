@@ -93,22 +93,25 @@ void ExplicitSolver::check_schedule() const {
 
 ExplicitSolver::~ExplicitSolver() = default;
 
-// Owned-node stepping needs every per-step sum over the nodes to be the energy audit's chunked one
-// (gathered per chunk) or over nodes every process integrates: mass scaling's booking of the added
-// kinetic energy, dynamic relaxation's sums and the joint drive's grasp check are sums in node
-// order over every node, so those runs step the whole state on every process.
+// Over ranks every process integrates its own nodes and those whose forces and motion the whole
+// model's parts share (contact, rigid, supported, loaded): every per-step sum over the dofs is then
+// either chunked (the energy audit, the relaxation: ChunkShare) or over nodes every process holds
+// (the supports' reactions, the rigid bodies, the contact sweep), or gathers the few nodes it reads
+// (mass scaling's newly raised nodes).
 void ExplicitSolver::choose_stepping() {
-  if (passes_->ranks() < 2 || mass_scaling() || damping_.adaptive || damping_.residual_tolerance > 0 || drive_) return;
+  if (passes_->ranks() < 2) return;
   std::vector<char> everywhere(model_.num_nodes, 0);
   for (std::int32_t n : contact_.contact_nodes()) everywhere[static_cast<std::size_t>(n)] = 1;
   for (std::size_t n = 0; n < model_.num_nodes; ++n)
     if (rigid_.holds(n) || model_.constrained[3 * n] || model_.constrained[3 * n + 1] || model_.constrained[3 * n + 2]) everywhere[n] = 1;
   for (const PressureLoad& load : model_.pressure_loads)
     for (std::int32_t n : load.triangles) everywhere[static_cast<std::size_t>(n)] = 1;
-  passes_->step_owned_nodes(everywhere, EnergyAudit::chunk_dofs());
-  audit_.share_chunks(
-      {passes_->audit_chunks_summed_here(),
-       [](void* engine, double* chunks, std::size_t width) { static_cast<StressPassEngine*>(engine)->gather_audit_chunks(chunks, width); }, passes_});
+  passes_->step_owned_nodes(everywhere, kSumChunkDofs);
+  const ChunkShare share{
+      passes_->sum_chunks_summed_here(),
+      [](void* engine, double* chunks, std::size_t width) { static_cast<StressPassEngine*>(engine)->gather_sum_chunks(chunks, width); }, passes_};
+  audit_.share_chunks(share);
+  relaxation_.share_chunks(share);
   owned_stepping_ = true;
 }
 
@@ -171,6 +174,7 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
     throw NumericalError(o.str());
   }
   if (mass_scaling() && pass_.critical_step < run_.minimum_time_step) scale_mass();
+  if (owned_stepping_ && relaxation_.reads_forces()) passes_->share_ghosts(f_.data());  // its chunks' nodes
 }
 
 void ExplicitSolver::scale_mass() {
@@ -319,6 +323,12 @@ void ExplicitSolver::advance_velocity() {
         masses_.mass[i / 3] * (v_new_of[i] - h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i])) / (h.dtbar * h.c_plus);
   }
   accumulate_reactions();
+  if (owned_stepping_ && masses_.on()) {  // the nodes whose mass was raised: their added kinetic energy is booked in node order
+    raised_nodes_.clear();
+    for (std::size_t n = 0; n < model_.num_nodes; ++n)
+      if (masses_.pending_added[n] != 0) raised_nodes_.push_back(static_cast<std::uint32_t>(n));
+    if (!raised_nodes_.empty()) passes_->gather_some_nodes(raised_nodes_, {v_prev_half_.data(), v_half_.data()});
+  }
   audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_, pass_threads());
   if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
   relaxation_.measure(h, v_old_of, v_new_of, f_.data(), relaxed_dofs(), time_, drive_.get());

@@ -17,16 +17,33 @@ void Relaxation::before_pass(const std::vector<double>& force) {
   if (spec_.adaptive) std::copy(force.begin(), force.end(), force_before_.begin());
 }
 
-// The sums run in dof order on one thread: the same bits for any thread count (a restart and the
-// determinism tests compare runs bit for bit), at the cost of one pass over the dofs per step.
+// The sums run over fixed chunks of dofs, each chunk in dof order, the chunks' sums in chunk order:
+// the same bits for any thread count (a restart and the determinism tests compare runs bit for
+// bit) and, each chunk summed by one rank, for any rank count.
+template <class Term>
+std::array<double, 2> Relaxation::chunked_sums(Term&& term) {
+  const std::size_t chunks = (ndof_ + kSumChunkDofs - 1) / kSumChunkDofs;
+  chunks_.resize(chunks);
+  for (std::size_t k = 0; k < chunks; ++k) {
+    if (!share_.sums(k)) continue;  // another rank's: gathered below
+    double a = 0, b = 0;
+    for (std::size_t i = k * kSumChunkDofs; i < std::min(ndof_, (k + 1) * kSumChunkDofs); ++i) term(i, a, b);
+    chunks_[k] = {a, b};
+  }
+  if (share_.gather) share_.gather(share_.context, chunks_.data()->data(), 2);
+  std::array<double, 2> sum{};
+  for (const auto& c : chunks_) sum[0] += c[0], sum[1] += c[1];
+  return sum;
+}
+
 void Relaxation::after_pass(const std::vector<double>& force, const double* v, double dt, const RelaxedDofs& dofs) {
   if (!spec_.adaptive || !(dt > 0)) return;
-  double stiffness = 0, inertia = 0;  // -(df . v) / dt and v . M v
-  for (std::size_t i = 0; i < force.size(); ++i) {
-    if (!dofs.free(i)) continue;
-    stiffness -= (force[i] - force_before_[i]) * v[i];  // the force array holds -f_int: a stiffening motion lowers it
-    inertia += dofs.mass[i / 3] * v[i] * v[i];
-  }
+  // -(df . v) / dt and v . M v
+  const auto [stiffness, inertia] = chunked_sums([&](std::size_t i, double& stiff, double& inert) {
+    if (!dofs.free(i)) return;
+    stiff -= (force[i] - force_before_[i]) * v[i];  // the force array holds -f_int: a stiffening motion lowers it
+    inert += dofs.mass[i / 3] * v[i] * v[i];
+  });
   const double omega2 = inertia > 0 ? stiffness / (dt * inertia) : 0.0;
   omega_ = omega2 > 0 ? std::sqrt(omega2) : 0.0;
   alpha_ = std::min(std::max(spec_.alpha, 2 * omega_), 1 / dt);
@@ -35,15 +52,14 @@ void Relaxation::after_pass(const std::vector<double>& force, const double* v, d
 void Relaxation::measure(const HalfStep& h, const double* v_old, const double* v_new, const double* force, const RelaxedDofs& dofs, double time,
                          const JointDrive* drive) {
   if (!(spec_.residual_tolerance > 0) || h.first) return;
-  double out_of_balance = 0, internal = 0;
-  for (std::size_t i = 0; i < ndof_; ++i) {
+  const auto [out_of_balance, internal] = chunked_sums([&](std::size_t i, double& out, double& in) {
     // The scale: the internal force on every dof, the supported and the bone-held ones too (on
     // the free dofs alone it vanishes with the residual at equilibrium wherever no load acts).
-    internal += force[i] * force[i];
-    if (!dofs.free(i)) continue;
+    in += force[i] * force[i];
+    if (!dofs.free(i)) return;
     const double r = dofs.mass[i / 3] * (v_new[i] / h.c_plus - h.c_minus * v_old[i]) / h.dtbar;
-    out_of_balance += r * r;
-  }
+    out += r * r;
+  });
   residual_ = internal > 0 ? std::sqrt(out_of_balance / internal) : (out_of_balance > 0 ? 1.0 : 0.0);
   bool grip_held = true;
   if (drive && drive->grasp())

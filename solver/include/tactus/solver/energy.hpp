@@ -58,6 +58,19 @@ struct ExternalForces {
   double at(std::size_t dof) const { return gravity_factor * gravity[dof] + (pressure ? pressure[dof] : 0.0); }
 };
 
+// Sums over the dofs taken in fixed chunks of kSumChunkDofs dofs, each chunk's partial sum added
+// in chunk order: the same bits at any thread count, and at any rank count when each chunk is
+// summed by one process and the partial sums gathered (owned-node stepping over ranks,
+// stress_pass_engine.hpp): a sum then computes only the chunks marked in `summed_here` (1 each;
+// null: all) and calls gather(context, partial sums, width) for the others'.
+inline constexpr std::size_t kSumChunkDofs = 4096;
+struct ChunkShare {
+  const char* summed_here = nullptr;
+  void (*gather)(void* context, double* chunks, std::size_t width) = nullptr;
+  void* context = nullptr;
+  bool sums(std::size_t chunk) const { return !summed_here || summed_here[chunk]; }
+};
+
 class EnergyAudit {
  public:
   // The energies at t = 0: the physical kinetic energy (mass added at t = 0 is booked as added,
@@ -71,23 +84,16 @@ class EnergyAudit {
                   MassScaling& masses, const std::uint8_t* constrained, const RigidBodies& rigid, const ContactStepReport& contact,
                   const StressPassResult& pass, int threads);
 
-  // Owned-node stepping over ranks (stress_pass_engine.hpp): close_step sums only the chunks marked
-  // in `summed_here` (1 each; null: all) and then calls gather(context, chunks, 5) for the others'
-  // partial sums, which it adds in chunk order as ever: the same bits at any rank count.
-  struct ChunkShare {
-    const char* summed_here = nullptr;
-    void (*gather)(void* context, double* chunks, std::size_t width) = nullptr;
-    void* context = nullptr;
-  };
+  // Owned-node stepping over ranks: close_step sums only the chunks this process sums and gathers
+  // the others' partial sums (ChunkShare).
   void share_chunks(ChunkShare share) { share_ = share; }
-  static constexpr std::size_t chunk_dofs() { return kChunk; }
 
   Energies energy;
   // The halves of the trapezoid rule carried to the next step: F^n . du^{n+1/2} per kind.
   double pending_external = 0, pending_damping = 0, pending_contact_normal = 0, pending_contact_friction = 0;
 
  private:
-  static constexpr std::size_t kChunk = 4096;  // dofs per partial sum (fixed: thread-count independent)
+  static constexpr std::size_t kChunk = kSumChunkDofs;
   std::vector<std::array<double, 5>> chunks_;  // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
   ChunkShare share_;
 };

@@ -88,8 +88,7 @@ class ExplicitSolver {
   // its arrays hold other nodes only where it reads them. gather_state (collective; a no-op
   // otherwise) brings every node's u and half-step velocities to every process: advance_velocity
   // calls it at each scheduled output time, and a run that fails calls it before writing the last
-  // good state. Runs with mass scaling, dynamic relaxation or a joint drive step the whole state on
-  // every process (their per-step sums run over every node in node order).
+  // good state.
   bool owned_node_stepping() const { return owned_stepping_; }
   void gather_state();
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
@@ -202,10 +201,11 @@ class ExplicitSolver {
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
   bool owned_stepping_ = false;
-  EnergyAudit audit_;                  // energies at t^n and the work halves carried to the next step (energy.hpp)
-  RigidBodies rigid_;                  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
-  std::unique_ptr<JointDrive> drive_;  // the bones' motion by their joints (joint_drive.hpp), or none
-  Relaxation relaxation_;              // adaptive damping and the stop on the residual (relaxation.hpp)
+  std::vector<std::uint32_t> raised_nodes_;  // owned-node stepping with mass scaling: the nodes raised this step
+  EnergyAudit audit_;                        // energies at t^n and the work halves carried to the next step (energy.hpp)
+  RigidBodies rigid_;                        // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
+  std::unique_ptr<JointDrive> drive_;        // the bones' motion by their joints (joint_drive.hpp), or none
+  Relaxation relaxation_;                    // adaptive damping and the stop on the residual (relaxation.hpp)
   std::unique_ptr<GripRegions> regions_;
 };
 

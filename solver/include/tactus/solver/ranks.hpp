@@ -46,8 +46,9 @@ class RankStressPass : public StressPassEngine {
   void step_owned_nodes(const std::vector<char>& everywhere, std::size_t audit_chunk_dofs) override;
   const std::vector<std::uint32_t>& integrated_dofs() const override { return integrated_dofs_; }
   void share_ghosts(double* values) override;
-  const char* audit_chunks_summed_here() const override { return audit_mine_.empty() ? nullptr : audit_mine_.data(); }
-  void gather_audit_chunks(double* chunks, std::size_t width) override;
+  const char* sum_chunks_summed_here() const override { return chunk_mine_.empty() ? nullptr : chunk_mine_.data(); }
+  void gather_sum_chunks(double* chunks, std::size_t width) override;
+  void gather_some_nodes(const std::vector<std::uint32_t>& nodes, std::initializer_list<double*> arrays) override;
   void gather_nodes(std::initializer_list<double*> arrays) override;
   // Owned-node stepping: the nodes this process integrates, and the doubles and messages it sends
   // in one share_ghosts.
@@ -122,15 +123,20 @@ class RankStressPass : public StressPassEngine {
   RankOrder tets_order_;
   std::vector<double> all_dt2_;
   // Owned-node stepping (step_owned_nodes): the dofs this process integrates; per other process the
-  // nodes it sends after each update and those it receives (3 doubles each); the audit's chunks
-  // summed here and their order (5 doubles each); the non-everywhere nodes by owner, for
+  // nodes it sends after each update and those it receives (3 doubles each); the chunks of the sums
+  // over dofs summed here and their order; the non-everywhere nodes by owner, for
   // gather_nodes; the doubles sent by share_ghosts over its calls.
   std::vector<std::uint32_t> integrated_dofs_;
   std::vector<NodeGhosts> state_ghosts_;
   std::vector<std::vector<double>> state_send_, state_receive_;
   std::vector<MPI_Request> state_requests_;
-  std::vector<char> audit_mine_;
-  RankOrder audit_order_, nodes_order_;
+  std::vector<std::int32_t> alone_;       // per node the one rank that integrates it, or -1: every rank
+  std::vector<std::int32_t> chunk_rank_;  // per chunk of the sums over dofs the rank that sums it
+  std::vector<char> chunk_mine_;
+  std::vector<RankOrder> chunk_orders_;  // per width (doubles per chunk), built when first gathered
+  RankOrder nodes_order_;
+  std::vector<int> some_counts_, some_offsets_;  // gather_some_nodes's layout and values (reused)
+  std::vector<double> some_mine_, some_all_;
   double ghost_doubles_sent_ = 0, ghost_shares_ = 0;
   std::vector<int> records_per_rank_;  // each rank's records in the pass's gather, before its minima
   void layout_gathers();               // sums_only_ and with_forces_ from records_per_rank_ and forces_order_

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "tactus/solver/energy.hpp"
 #include "tactus/solver/run_settings.hpp"
 
 namespace tactus {
@@ -54,8 +55,18 @@ class Relaxation {
   double relative_residual() const { return residual_; }
   bool relaxed() const { return relaxed_; }
   void checkpoint(StateArchive& archive);
+  // Its sums are over the dofs in fixed chunks (ChunkShare, energy.hpp); over ranks each process
+  // sums its own chunks and gathers the others'.
+  void share_chunks(ChunkShare share) { share_ = share; }
+  // Whether the sums read the forces at every dof (adaptive damping or the residual's stop).
+  bool reads_forces() const { return spec_.adaptive || spec_.residual_tolerance > 0; }
 
  private:
+  // Two sums over the dofs, term(dof, a, b) adding to a and b, per chunk then in chunk order.
+  template <class Term>
+  std::array<double, 2> chunked_sums(Term&& term);
+  ChunkShare share_;
+  std::vector<std::array<double, 2>> chunks_;
   DampingSpec spec_;
   double alpha_, omega_ = 0, residual_ = -1;
   std::size_t ndof_;

@@ -55,18 +55,23 @@ class StressPassEngine {
   // contact, rigid, supported and loaded nodes, which every process integrates alike from the same
   // forces): from then on compute_everywhere gathers only the everywhere nodes' forces, and the
   // integrator calls share_ghosts after each update, so that every node a process reads (its tets'
-  // and those of the energy audit's chunks it sums) holds its owner's value. audit_chunk_bytes: the
-  // bytes of one partial sum of the audit, audit_chunk_dofs the dofs it covers (energy.hpp).
-  virtual void step_owned_nodes(const std::vector<char>& /*everywhere*/, std::size_t /*audit_chunk_dofs*/) {}
+  // and those of the chunks of the sums over dofs it sums) holds its integrator's value.
+  // sum_chunk_dofs: a chunk's dofs (ChunkShare, energy.hpp).
+  virtual void step_owned_nodes(const std::vector<char>& /*everywhere*/, std::size_t /*sum_chunk_dofs*/) {}
   // The dofs this process integrates, ascending; empty: every dof.
   virtual const std::vector<std::uint32_t>& integrated_dofs() const { return no_dofs_; }
   // Collective: 3 values per node (u or v), the nodes this process reads but does not integrate
   // from the processes that do.
   virtual void share_ghosts(double* /*values*/) {}
-  // The energy audit's chunks this process sums (1 each), or null: all. gather_audit_chunks
-  // (collective) then fills every other chunk's `width` doubles from the process that summed it.
-  virtual const char* audit_chunks_summed_here() const { return nullptr; }
-  virtual void gather_audit_chunks(double* /*chunks*/, std::size_t /*width*/) {}
+  // The chunks of the sums over dofs (ChunkShare, energy.hpp) this process sums (1 each), or null:
+  // all. gather_sum_chunks (collective) then fills every other chunk's `width` doubles from the
+  // process that summed it.
+  virtual const char* sum_chunks_summed_here() const { return nullptr; }
+  virtual void gather_sum_chunks(double* /*chunks*/, std::size_t /*width*/) {}
+  // Collective: 3 values per listed node (the same list on every process, ascending) of each array
+  // from the process that integrates it (mass scaling's newly raised nodes, whose added kinetic
+  // energy is booked in node order).
+  virtual void gather_some_nodes(const std::vector<std::uint32_t>& /*nodes*/, std::initializer_list<double*> /*arrays*/) {}
   // Collective: every node's 3 values of each array from the process that integrates it, so that
   // every process holds the whole state (before a state file or the last good state is written).
   virtual void gather_nodes(std::initializer_list<double*> /*arrays*/) {}
