@@ -4,7 +4,9 @@
 # interleaved ROUNDS times, on two cases:
 #   cube   the benchmark cube (bench/cases/cube.toml, 48,000 neo-Hookean tets, no contact), 0.05 s;
 #   hand   the hand-block case on its pinned meshes (bench/references): 69,739 tets, ANP hgo skin,
-#          linear elastic bones, mortar contact with friction, the nodal step bound; 0.3 ms.
+#          linear elastic bones, mortar contact with friction, the nodal step bound; 0.3 ms;
+#   box    the cube's scenario on the throughput bench's 1M-tet box (55^3 cells, 998,250 tets),
+#          0.03 s (301 steps; about 4 minutes for 5 rounds): CASES="box" (default "cube hand").
 # Per layout: the median over rounds of run.json's wall time (the whole run, outputs included), of
 # the stress passes' and of contact's (the slowest rank's, on ranks), the steps, and the peak
 # resident memory of each process (of the first round). The results are compared bit for bit
@@ -20,11 +22,15 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_va
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 "$B/data_samples/tactus-sample-mesh" --size 0.1 0.1 0.1 --cells 20 20 20 -o "$W/cube.msh" -q
-TACTUS_BUILD_DIR=$B bash "$ROOT/bench/references/hand_block_meshes.sh" "$W/hand" > /dev/null
+CASES=${CASES:-cube hand}
+[[ " $CASES " == *" hand "* ]] && TACTUS_BUILD_DIR=$B bash "$ROOT/bench/references/hand_block_meshes.sh" "$W/hand" > /dev/null
+[[ " $CASES " == *" box "* ]] && mkdir -p "$W/box" && "$B/data_samples/tactus-sample-mesh" --size 0.1 0.1 0.1 --cells 55 55 55 -o "$W/box/cube.msh" -q
 run() {  # run CASE LAYOUT ROUND
   local name=$1 layout=$2 round=$3 out="$W/$1.$2.$3" args
   if [ "$name" = cube ]; then
     args=("$ROOT/bench/cases/cube.toml" --meshes "$W" --end-time 0.05)
+  elif [ "$name" = box ]; then
+    args=("$ROOT/bench/cases/cube.toml" --meshes "$W/box" --end-time 0.03 --set run.checkpoint_wall_interval=0)
   else
     args=("$ROOT/pipeline/scenarios/hand_block.toml" --meshes "$W/hand" --end-time 0.3e-3 --set run.checkpoint_wall_interval=0)
   fi
@@ -37,7 +43,7 @@ open(sys.argv[1], 'w').write(str(resource.getrusage(resource.RUSAGE_CHILDREN).ru
     2x1) mpiexec -np 2 --bind-to core "$S" "${args[@]}" -o "$out" -q --set run.threads=1 ;;
   esac
 }
-for name in cube hand; do
+for name in $CASES; do
   for round in $(seq "$ROUNDS"); do
     for layout in 1x1 1x2 2x1; do run "$name" "$layout" "$round"; done
   done
@@ -68,8 +74,8 @@ for layout in ("1x2", "2x1"):
 for layout, (wall, stress, contact, steps, ranks, memory) in rows.items():
     print(f"{name} {layout}: {steps} steps, run {wall:.2f} s, stress passes {stress:.2f} s, contact {contact:.2f} s, "
           f"{1e3 * wall / steps:.3f} ms per step; peak memory per process {', '.join(f'{m:.0f}' for m in memory)} MiB"
-          + (f"; per rank (tets, halo doubles, ANP exchange doubles and messages, owned nodes, gather s, force packing s): "
-             f"{[(x['tets'], x['halo_doubles_per_pass'], x['anp_exchange_doubles_per_pass'], x['anp_exchange_messages_per_pass'], x['owned_nodes'], round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
+          + (f"; per rank (tets, halo doubles, ANP exchange doubles and messages, owned nodes whose forces it sends, nodes it integrates, ghost doubles per update, gather s, force packing s): "
+             f"{[(x['tets'], x['halo_doubles_per_pass'], x['anp_exchange_doubles_per_pass'], x['anp_exchange_messages_per_pass'], x['owned_nodes'], x['integrated_nodes'], x['ghost_doubles_per_exchange'], round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
              if ranks else ""))
 print(f"{name}: 2 ranks x 1 thread / 1 rank x 2 threads, whole run: {rows['2x1'][0] / rows['1x2'][0]:.3f}; "
       f"speed-up over 1 x 1: threads {rows['1x1'][0] / rows['1x2'][0]:.2f}, ranks {rows['1x1'][0] / rows['2x1'][0]:.2f}")

@@ -16,13 +16,14 @@ namespace {
 // What a rank contributes to the sums per atom it runs: its energy and viscous power.
 constexpr std::size_t kAtomRecord = 2;
 
-// This process's peak resident memory (Linux: VmHWM), bytes; 0 where it cannot be read.
-double peak_resident_bytes() {
+// This process's resident memory (Linux: `VmHWM:` its peak, `VmRSS:` now), bytes; 0 where it
+// cannot be read.
+double resident_bytes(const char* which) {
   std::ifstream status("/proc/self/status");
   std::string key;
   double kilobytes = 0;
   while (status >> key)
-    if (key == "VmHWM:" && status >> kilobytes) return 1024 * kilobytes;
+    if (key == which && status >> kilobytes) return 1024 * kilobytes;
   return 0;
 }
 
@@ -476,9 +477,10 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
   std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
                            static_cast<double>(forces_order_.own_items(rank_))};
   for (const auto& [name, s] : seconds) mine.push_back(s);
-  mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(peak_resident_bytes());
+  mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(resident_bytes("VmHWM:"));
   mine.push_back(passes_ > 0 ? anp_doubles_sent_ / passes_ : 0), mine.push_back(passes_ > 0 ? anp_messages_sent_ / passes_ : 0);
   mine.push_back(static_cast<double>(integrated_nodes())), mine.push_back(ghost_shares_ > 0 ? ghost_doubles_sent_ / ghost_shares_ : 0);
+  mine.push_back(resident_bytes("VmRSS:"));
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
   check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
         "MPI_Gather");
@@ -497,6 +499,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
     j["anp_exchange_doubles_per_pass"] = x[7 + seconds.size()], j["anp_exchange_messages_per_pass"] = x[8 + seconds.size()];
     j["integrated_nodes"] = static_cast<std::size_t>(x[9 + seconds.size()]);
     j["ghost_doubles_per_exchange"] = x[10 + seconds.size()];
+    j["resident_bytes_at_end"] = x[11 + seconds.size()];
     out.push_back(j);
   }
   return out;

@@ -162,6 +162,7 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
   detection_ahead_seconds_ += ahead.seconds;
   if (ahead.error) std::rethrow_exception(ahead.error);
   if (!(pass_.min_jacobian > 0)) {
+    gather_state();  // every rank fails here alike: the message reads the tet's nodes wherever they are integrated
     std::ostringstream o;
     o << "inverted element at step " << step_ << ", t = " << time_ << " s: " << model_.describe_element(pass_.min_jacobian_element)
       << " has J = " << pass_.min_jacobian << " (the time step may be too large, or the loading too severe for this mesh)"
@@ -181,6 +182,7 @@ void ExplicitSolver::scale_mass() {
   masses_.scale(passes_->mass_factor(), passes_->element_dt2_everywhere(), pass_, rigid_, damping_.beta);
   const std::ptrdiff_t over = masses_.body_over(run_.added_mass_limit);
   if (over < 0) return;
+  gather_state();  // (as for an inverted tet)
   const auto b = static_cast<std::size_t>(over);
   const double added = masses_.added_to_body[b], mass = masses_.body_mass[b];
   std::ostringstream o;
@@ -376,6 +378,7 @@ void ExplicitSolver::advance_position() {
   stress_pass(true);
   relaxation_.after_pass(f_, v_half_.data(), dt, relaxed_dofs());
   if (pass_.critical_step < 1e-3 * initial_critical_) {
+    gather_state();  // (as for an inverted tet)
     std::ostringstream o;
     o << "the stable time step collapsed to " << pass_.critical_step << " s at step " << step_ << ", t = " << time_
       << " s, below 1e-3 of the initial " << initial_critical_ << " s (" << describe_step_limit()

@@ -213,8 +213,9 @@ inline constexpr const char* mass_scaling = "mass_scaling";
 // the forces), peak_resident_bytes (the
 // rank's process, Linux VmHWM), anp_exchange_doubles_per_pass and anp_exchange_messages_per_pass (the ANP J pass's
 // exchanges of volumes and ghost nodes' values; 0 without ANP blocks), integrated_nodes (the nodes it integrates: its
-// own and those every rank integrates; with whole-state stepping 0, meaning every node) and ghost_doubles_per_exchange
-// (what it sends after each update of u or v to the ranks that read its nodes; 0 with whole-state stepping)}
+// own and those every rank integrates; 0 on one rank, meaning every node), ghost_doubles_per_exchange
+// (what it sends after each update of u or v to the ranks that read its nodes; 0 on one rank), resident_bytes_at_end
+// (VmRSS when the report is made, against the peak: what the run holds, not what reading the meshes took)}
 inline constexpr const char* ranks = "ranks";
 inline constexpr std::array<const char*, 20> all{
     status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,
