@@ -19,6 +19,7 @@
 
 #include "gmsh_kit.hpp"
 #include "material_kit.hpp"
+#include "rank_lockstep.hpp"
 #include "tactus/core/gmsh_session.hpp"
 #include "tactus/solver/contact.hpp"
 #include "tactus/solver/decomposition.hpp"
@@ -28,6 +29,7 @@
 
 using namespace tactus;
 using namespace tactus::solver;
+using namespace tactus::testkit;
 
 namespace {
 
@@ -49,68 +51,45 @@ Model u_strip() {
   return model;
 }
 
-bool same(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
-bool same(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
-
 }  // namespace
 
-int main(int argc, char** argv) {
-  int provided = 0, rank = 0, ranks = 1;
-  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-  int failures = 0;
-  try {
-    const Model model = u_strip();
-    RunSpec run;
-    run.end_time = 3e-3;
-    run.threads = 1;
-    DampingSpec damping;
-    damping.beta = 2e-6;
-    const Decomposition d = decompose(model, ranks);
-    RankStressPass shared(model, d, MPI_COMM_WORLD, damping.beta, 1);
-    ExplicitSolver one(model, run, damping), on_ranks(model, run, damping, &shared);
-    std::size_t steps = 0, contact_steps = 0, first_differing = 0;
-    double peak_force = 0;
-    int differ = 0;
-    while (true) {
-      one.advance_velocity(), on_ranks.advance_velocity();
-      on_ranks.gather_state();
-      const ContactStepReport &a = one.contact_report(), &b = on_ranks.contact_report();
-      const bool step_same = same(one.displacement(), on_ranks.displacement()) && same(one.half_step_velocity(), on_ranks.half_step_velocity()) &&
-                             same(one.energies().kinetic, on_ranks.energies().kinetic) &&
-                             same(one.energies().internal, on_ranks.energies().internal) &&
-                             same(one.energies().balance_error(), on_ranks.energies().balance_error()) && same(a.normal_force, b.normal_force);
-      if (!step_same && !differ) differ = 1, first_differing = one.step_index();
-      contact_steps += a.normal_force > 0;
-      peak_force = std::max(peak_force, a.normal_force);
-      if (one.finished()) break;
-      one.advance_position(), on_ranks.advance_position();
-      ++steps;
-    }
-    int all_differ = 0;
-    MPI_Allreduce(&differ, &all_differ, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
-    if (rank == 0) {
-      std::printf(
-          "U strip self-contact, %zu tets, %d rank(s), %zu atoms, faces cut %zu: %zu steps, %zu in contact, peak normal force %.4f N; "
-          "%d rank(s) differ from the one-process run in any bit of u, v, the energies or the contact force",
-          model.num_elements, ranks, d.atom_rank.size(), d.edge_cut_faces, steps, contact_steps, peak_force, all_differ);
-      if (differ) std::printf(" (rank 0 first at step %zu)", first_differing);
-      std::printf("\n");
-    }
-    if (rank == 0)
-      std::printf("owned-node stepping %s: rank 0 integrates %zu of %zu nodes and sends %zu doubles after each update\n",
-                  on_ranks.owned_node_stepping() ? "on" : "off", shared.integrated_nodes(), model.num_nodes, shared.ghost_doubles());
-    const bool stepping_right = on_ranks.owned_node_stepping() == (ranks > 1);
-    if (rank == 0 && !stepping_right) std::printf("FAIL: owned-node stepping should be on over 2 ranks or more, off on one\n");
-    failures = all_differ + (contact_steps < 50 ? 1 : 0) + (stepping_right ? 0 : 1);
-    if (rank == 0 && contact_steps < 50) std::printf("FAIL: the arms should press on each other for 50 steps or more\n");
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "tactus_test_rank_solve: %s\n", e.what());
-    MPI_Abort(MPI_COMM_WORLD, 2);
+int lockstep(int rank, int ranks) {
+  const Model model = u_strip();
+  RunSpec run;
+  run.end_time = 3e-3;
+  run.threads = 1;
+  DampingSpec damping;
+  damping.beta = 2e-6;
+  const Decomposition d = decompose(model, ranks);
+  RankStressPass shared(model, d, MPI_COMM_WORLD, damping.beta, 1);
+  ExplicitSolver one(model, run, damping), on_ranks(model, run, damping, &shared);
+  std::size_t contact_steps = 0;
+  double peak_force = 0;
+  const Lockstep r = run_in_lockstep(
+      one, on_ranks,
+      [&] {
+        return same(one.displacement(), on_ranks.displacement()) && same(one.half_step_velocity(), on_ranks.half_step_velocity()) &&
+               same(one.energies().kinetic, on_ranks.energies().kinetic) && same(one.energies().internal, on_ranks.energies().internal) &&
+               same(one.energies().balance_error(), on_ranks.energies().balance_error()) &&
+               same(one.contact_report().normal_force, on_ranks.contact_report().normal_force);
+      },
+      [&] {
+        contact_steps += one.contact_report().normal_force > 0;
+        peak_force = std::max(peak_force, one.contact_report().normal_force);
+      });
+  const bool stepping_right = on_ranks.owned_node_stepping() == (ranks > 1);
+  if (rank == 0) {
+    std::printf(
+        "U strip self-contact, %zu tets, %d rank(s), %zu atoms, faces cut %zu: %zu steps, %zu in contact, peak normal force %.4f N; "
+        "%d rank(s) differ from the one-process run in any bit of u, v, the energies or the contact force",
+        model.num_elements, ranks, d.atom_rank.size(), d.edge_cut_faces, r.steps, contact_steps, peak_force, r.ranks_differing);
+    if (r.differ) std::printf(" (rank 0 first at step %zu)", r.first_differing);
+    std::printf("\nowned-node stepping %s: rank 0 integrates %zu of %zu nodes and sends %zu doubles after each update\n",
+                on_ranks.owned_node_stepping() ? "on" : "off", shared.integrated_nodes(), model.num_nodes, shared.ghost_doubles());
+    if (!stepping_right) std::printf("FAIL: owned-node stepping should be on over 2 ranks or more, off on one\n");
+    if (contact_steps < 50) std::printf("FAIL: the arms should press on each other for 50 steps or more\n");
   }
-  MPI_Finalize();
-  return failures == 0 ? 0 : 1;
+  return r.ranks_differing + (contact_steps < 50 ? 1 : 0) + (stepping_right ? 0 : 1);
 }
+
+int main(int argc, char** argv) { return rank_test_main(argc, argv, "tactus_test_rank_solve", lockstep); }

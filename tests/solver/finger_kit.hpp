@@ -119,4 +119,27 @@ inline void add_finger(solver::Scenario& sc, const TempDir& dir, bool one_cell_j
   sc.skeleton = solver::SkeletonSpec{"finger", dir.path() / "finger_skeleton.json"};
 }
 
+// The finger over the handle: a rigid cylinder of radius 10 mm along y under the proximal
+// segment, 2 mm below the palm side, held; the skin against it by mortar with friction 0.3.
+inline solver::Scenario grasp_scenario(const TempDir& dir, double target, double end_time) {
+  solver::Scenario sc;
+  sc.file = dir.path() / "grasp.toml";
+  add_finger(sc, dir);
+  solver::BodySpec handle = body_from_mesh(dir, "handle", cylinder_mesh(0.010, 0.030, 0.040, -0.012, 24, 4), "bone");
+  handle.rigid_velocity = Vec3{0, 0, 0}, handle.rigid_angular_velocity = Vec3{0, 0, 0};
+  sc.bodies.push_back(handle);
+  solver::ContactSpec c;
+  c.slave_body = "finger", c.slave_surface = "surface", c.master_body = "handle", c.master_surface = "surface", c.friction = 0.3;
+  sc.contacts.push_back(c);
+  sc.grasp.handle = "handle";
+  sc.grasp.target_force = target;
+  sc.grasp.ramp_time = 0.05;
+  sc.grasp.max_torque = 5;
+  sc.grasp.gain_p = 0.01;
+  sc.grasp.gain_i = 3;
+  sc.run.end_time = end_time;
+  sc.damping.alpha = 200;
+  return sc;
+}
+
 }  // namespace tactus::testkit
