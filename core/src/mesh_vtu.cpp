@@ -36,8 +36,9 @@ vtkSmartPointer<vtkDoubleArray> to_vtk(const MeshField& f, std::size_t expected_
   auto a = vtkSmartPointer<vtkDoubleArray>::New();
   a->SetName(f.name.c_str());
   a->SetNumberOfComponents(f.components);
-  a->SetNumberOfTuples(static_cast<vtkIdType>(expected_tuples));
-  std::copy(f.values.begin(), f.values.end(), a->GetPointer(0));
+  // The array reads the field's own values (save = 1: VTK never frees or writes them), not a copy:
+  // the field outlives the writer, and a state of a 1M-tet model saves about 100 MB of copies.
+  a->SetArray(const_cast<double*>(f.values.data()), static_cast<vtkIdType>(f.values.size()), 1);
   if (f.component_names.size() == static_cast<std::size_t>(f.components))
     for (int c = 0; c < f.components; ++c) a->SetComponentName(c, f.component_names[static_cast<std::size_t>(c)].c_str());
   return a;
