@@ -335,8 +335,9 @@ void ExplicitSolver::advance_velocity() {
   if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
   relaxation_.measure(h, v_old_of, v_new_of, f_.data(), relaxed_dofs(), time_, drive_.get());
   velocity_advanced_ = true;
-  // A scheduled output time (t^n landed on one): the state file needs every node.
-  if (owned_stepping_ && next_target_ > 0 && time_ == schedule_[next_target_ - 1]) gather_state();
+  // A scheduled output time (t^n landed on one), or the relaxed state that ends the run: the state
+  // file needs every node.
+  if (owned_stepping_ && ((next_target_ > 0 && time_ == schedule_[next_target_ - 1]) || relaxation_.relaxed())) gather_state();
   step_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - contact_seconds;
 }
 

@@ -87,8 +87,8 @@ class ExplicitSolver {
   // the nodes it owns and those every process integrates (contact, rigid, supported, loaded), so
   // its arrays hold other nodes only where it reads them. gather_state (collective; a no-op
   // otherwise) brings every node's u and half-step velocities to every process: advance_velocity
-  // calls it at each scheduled output time, and a run that fails calls it before writing the last
-  // good state.
+  // calls it at each scheduled output time and when the run has relaxed, and a run that fails
+  // calls it before writing the last good state.
   bool owned_node_stepping() const { return owned_stepping_; }
   void gather_state();
   // Checks energy blow-up / NaN at t^n; throws NumericalError naming step and time.
