@@ -68,21 +68,23 @@ same_as() {  # same_as ORACLE DIR WHAT
   echo "$3: $n files the same bits as the one-process run"
 }
 figure() { python3 -c "import json,sys; j=json.load(open('$1/run.json')); print($2)"; }
+same_on_ranks() {  # same_on_ranks TOML ORACLE NAME WHAT NP...: NAME_npN on NP ranks, each the oracle's bits
+  local toml=$1 oracle=$2 name=$3 what=$4 np
+  shift 4
+  for np in "$@"; do
+    $M -np "$np" "$S" "$toml" -o "${name}_np$np" -q || { bad "$what on $np ranks failed"; continue; }
+    same_as "$oracle" "${name}_np$np" "$what on $np ranks"
+  done
+}
 
 "$S" pad.toml -o pad1 -q || bad "the one-process pad run failed"
 echo "pad: $(figure pad1 "j['steps']") steps, $(figure pad1 "j['contact']['steps_in_contact']") in contact, $(figure pad1 "round(100 * j['mass_scaling']['bodies']['pad']['fraction'], 2)") % mass added to the pad"
-for np in 1 2 3 4; do
-  $M -np "$np" "$S" pad.toml -o "pad_np$np" -q || { bad "the pad on $np ranks failed"; continue; }
-  same_as pad1 "pad_np$np" "pad on $np ranks"
-done
+same_on_ranks pad.toml pad1 pad "pad" 1 2 3 4
 echo "per rank (4 ranks): $(figure pad_np4 "[(r['tets'], r['halo_doubles_per_pass'], round(r['stress_passes_s'], 3)) for r in j['ranks']]")"
 
 "$S" drop.toml -o drop1 -q || bad "the one-process drop failed"
 echo "rigid cube drop: $(figure drop1 "j['steps']") steps, $(figure drop1 "j['contact']['steps_in_contact']") in contact"
-for np in 2 3; do
-  $M -np "$np" "$S" drop.toml -o "drop_np$np" -q || { bad "the drop on $np ranks failed"; continue; }
-  same_as drop1 "drop_np$np" "rigid cube drop on $np ranks"
-done
+same_on_ranks drop.toml drop1 drop "rigid cube drop" 2 3
 
 # Owned-node stepping (every run over ranks): each rank integrates only its own nodes and the
 # contact, supported and rigid ones, the nodes it reads arriving from their owners after each
@@ -91,10 +93,7 @@ done
 sed 's/^minimum_time_step = .*/minimum_time_step = 0.0/' pad.toml > padn.toml
 "$S" padn.toml -o padn1 -q || bad "the one-process pad without mass scaling failed"
 echo "pad without mass scaling: $(figure padn1 "j['steps']") steps, $(figure padn1 "j['contact']['steps_in_contact']") in contact"
-for np in 2 3 4; do
-  $M -np "$np" "$S" padn.toml -o "padn_np$np" -q || { bad "the pad without mass scaling on $np ranks failed"; continue; }
-  same_as padn1 "padn_np$np" "pad without mass scaling, owned-node stepping on $np ranks"
-done
+same_on_ranks padn.toml padn1 padn "pad without mass scaling, owned-node stepping," 2 3 4
 integrated() { figure "$1" "sum(r['integrated_nodes'] for r in j['ranks'])"; }
 echo "nodes integrated per rank, 3 ranks: $(figure padn_np3 "[(r['integrated_nodes'], r['ghost_doubles_per_exchange']) for r in j['ranks']]") of $(figure padn1 "j['nodes']")"
 [ "$(integrated padn_np3)" -gt 0 ] || bad "the pad without mass scaling should step owned nodes"
@@ -133,10 +132,7 @@ type = "fixed"
 TOML
 "$S" sag.toml -o sag1 -q || bad "the one-process sagging gel failed"
 echo "sagging gel: relaxed at t = $(figure sag1 "j['end_time']") s after $(figure sag1 "j['steps']") steps"
-for np in 2 3; do
-  $M -np "$np" "$S" sag.toml -o "sag_np$np" -q || { bad "the sagging gel on $np ranks failed"; continue; }
-  same_as sag1 "sag_np$np" "sagging gel, relaxed, on $np ranks"
-done
+same_on_ranks sag.toml sag1 sag "sagging gel, relaxed," 2 3
 
 # A cut placed on purpose: the pad's atoms dealt round-robin between 2 ranks.
 "$S" decompose pad.toml --ranks 2 -o metis.json > /dev/null

@@ -52,8 +52,7 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
     receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size() + h.receive_tiles.size());
   }
   requests_.resize(2 * forces_.halo().size());
-  for (const NodeGhosts& g : forces_.anp_ghosts()) ghost_send_.emplace_back(g.send.size()), ghost_receive_.emplace_back(g.receive.size());
-  ghost_requests_.resize(2 * forces_.anp_ghosts().size());
+  anp_ghost_buffers_.sized_for(forces_.anp_ghosts(), 1);
   // Tets and nodes travel as MPI ints in the MINLOC.
   if (model.num_elements > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
       model.num_nodes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
@@ -149,8 +148,7 @@ std::size_t RankStressPass::memory_bytes() const {
     b += (g->counts.capacity() + g->offsets.capacity()) * sizeof(int) + g->forces_at.capacity() * sizeof(std::size_t);
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
-  for (const auto& s : ghost_send_) b += s.capacity() * sizeof(double);
-  for (const auto& s : ghost_receive_) b += s.capacity() * sizeof(double);
+  b += anp_ghost_buffers_.memory_bytes() + state_buffers_.memory_bytes();
   b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_rank_.capacity() * sizeof(std::int32_t);
   return b + atoms_.capacity() * sizeof(StressAccumulator);
 }
@@ -229,22 +227,40 @@ void RankStressPass::exchange_volumes(void* self) {
 void RankStressPass::exchange_nodes(void* self, double* values) {
   auto& me = *static_cast<RankStressPass*>(self);
   const auto& ghosts = me.forces_.anp_ghosts();
+  me.anp_doubles_sent_ += static_cast<double>(me.exchange_ghosts(ghosts, me.anp_ghost_buffers_, values, 1, 2));
+  me.anp_messages_sent_ += static_cast<double>(ghosts.size());
+}
+
+void RankStressPass::GhostBuffers::sized_for(const std::vector<NodeGhosts>& ghosts, std::size_t width) {
+  send.clear(), receive.clear();
+  for (const NodeGhosts& g : ghosts) send.emplace_back(width * g.send.size()), receive.emplace_back(width * g.receive.size());
+  requests.resize(2 * ghosts.size());
+}
+
+std::size_t RankStressPass::GhostBuffers::memory_bytes() const {
+  std::size_t b = requests.capacity() * sizeof(MPI_Request);
+  for (const auto& x : send) b += x.capacity() * sizeof(double);
+  for (const auto& x : receive) b += x.capacity() * sizeof(double);
+  return b;
+}
+
+std::size_t RankStressPass::exchange_ghosts(const std::vector<NodeGhosts>& ghosts, GhostBuffers& buffers, double* values, std::size_t width,
+                                            int tag) {
+  std::size_t sent = 0;
   for (std::size_t i = 0; i < ghosts.size(); ++i) {
-    double* out = me.ghost_send_[i].data();
-    for (std::uint32_t n : ghosts[i].send) *out++ = values[n];
-    me.anp_doubles_sent_ += static_cast<double>(ghosts[i].send.size()), ++me.anp_messages_sent_;
-    check(MPI_Irecv(me.ghost_receive_[i].data(), static_cast<int>(ghosts[i].receive.size()), MPI_DOUBLE, ghosts[i].rank, 2, me.comm_,
-                    &me.ghost_requests_[2 * i]),
-          "MPI_Irecv");
-    check(MPI_Isend(me.ghost_send_[i].data(), static_cast<int>(ghosts[i].send.size()), MPI_DOUBLE, ghosts[i].rank, 2, me.comm_,
-                    &me.ghost_requests_[2 * i + 1]),
-          "MPI_Isend");
+    std::vector<double>& out = buffers.send[i];
+    std::vector<double>& in = buffers.receive[i];
+    for (std::size_t k = 0; k < ghosts[i].send.size(); ++k)
+      std::memcpy(&out[width * k], values + width * static_cast<std::size_t>(ghosts[i].send[k]), width * sizeof(double));
+    sent += out.size();
+    check(MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, ghosts[i].rank, tag, comm_, &buffers.requests[2 * i]), "MPI_Irecv");
+    check(MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, ghosts[i].rank, tag, comm_, &buffers.requests[2 * i + 1]), "MPI_Isend");
   }
-  check(MPI_Waitall(static_cast<int>(me.ghost_requests_.size()), me.ghost_requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
-  for (std::size_t i = 0; i < ghosts.size(); ++i) {
-    const double* in = me.ghost_receive_[i].data();
-    for (std::uint32_t n : ghosts[i].receive) values[n] = *in++;
-  }
+  check(MPI_Waitall(static_cast<int>(buffers.requests.size()), buffers.requests.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+  for (std::size_t i = 0; i < ghosts.size(); ++i)
+    for (std::size_t k = 0; k < ghosts[i].receive.size(); ++k)
+      std::memcpy(values + width * static_cast<std::size_t>(ghosts[i].receive[k]), &buffers.receive[i][width * k], width * sizeof(double));
+  return sent;
 }
 
 StressPassResult RankStressPass::compute(const double* u, const double* v, double* f_out, StressSideTask side) {
@@ -329,12 +345,12 @@ StressPassResult RankStressPass::pass_and_gather(const double* u, const double* 
 
 // Who integrates what: a node's owner (the rank of its first atom, whose forces there are whole
 // after the halo) integrates it, every rank integrates the `everywhere` nodes (their forces gathered
-// to all) and the nodes no stress-pass tet holds (force 0 on every rank). The audit's chunk goes to
-// the rank that integrates most of its nodes alone (ties to the lower rank). A rank then reads, and
-// receives after each update, every node of its tets and of its audit chunks that it does not
-// integrate. Every rank derives every rank's lists from the model, so both sides of an exchange
+// to all) and the nodes no stress-pass tet holds (force 0 on every rank). A chunk of the sums over
+// dofs (the energy audit's, the relaxation's) goes to the rank that integrates most of its nodes
+// alone (ties to the lower rank). A rank then reads, and receives after each update, every node of
+// its tets and of its chunks that it does not integrate. Every rank derives every rank's lists from the model, so both sides of an exchange
 // agree without a message.
-void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::size_t audit_chunk_dofs) {
+void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::size_t sum_chunk_dofs) {
   const std::vector<std::int32_t>& node_owner = forces_.node_ranks();
   const std::size_t nodes = model_.num_nodes, ndof = 3 * nodes;
   // Per node the one rank that integrates it, or -1 (every rank does).
@@ -346,13 +362,13 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
   for (std::size_t n = 0; n < nodes; ++n)
     if (alone[n] < 0 || alone[n] == rank_)
       for (std::uint32_t d = 0; d < 3; ++d) integrated_dofs_.push_back(static_cast<std::uint32_t>(3 * n + d));
-  // The audit's chunks: the rank that integrates most of a chunk's nodes alone sums it.
-  const std::size_t chunks = (ndof + audit_chunk_dofs - 1) / audit_chunk_dofs;
+  // The chunks: the rank that integrates most of a chunk's nodes alone sums it.
+  const std::size_t chunks = (ndof + sum_chunk_dofs - 1) / sum_chunk_dofs;
   std::vector<std::int32_t>& chunk_rank = chunk_rank_;
   chunk_rank.assign(chunks, 0);
   std::vector<std::size_t> count(static_cast<std::size_t>(ranks_));
   auto chunk_nodes = [&](std::size_t c) {
-    return std::pair<std::size_t, std::size_t>(c * audit_chunk_dofs / 3, (std::min(ndof, (c + 1) * audit_chunk_dofs) + 2) / 3);
+    return std::pair<std::size_t, std::size_t>(c * sum_chunk_dofs / 3, (std::min(ndof, (c + 1) * sum_chunk_dofs) + 2) / 3);
   };
   for (std::size_t c = 0; c < chunks; ++c) {
     std::fill(count.begin(), count.end(), 0);
@@ -392,9 +408,7 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
       if (alone[n] == r) g.receive.push_back(n);
     if (!g.send.empty() || !g.receive.empty()) state_ghosts_.push_back(std::move(g));
   }
-  state_send_.clear(), state_receive_.clear();
-  for (const NodeGhosts& g : state_ghosts_) state_send_.emplace_back(3 * g.send.size()), state_receive_.emplace_back(3 * g.receive.size());
-  state_requests_.resize(2 * state_ghosts_.size());
+  state_buffers_.sized_for(state_ghosts_, 3);
   nodes_order_.build(alone, ranks_, rank_, 3);
   // The pass's gather now carries the everywhere nodes' forces alone.
   std::vector<std::int32_t> gathered_owner(nodes, -1);
@@ -405,22 +419,8 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
 }
 
 void RankStressPass::share_ghosts(double* values) {
-  for (std::size_t i = 0; i < state_ghosts_.size(); ++i) {
-    const NodeGhosts& g = state_ghosts_[i];
-    double* out = state_send_[i].data();
-    for (std::uint32_t n : g.send) std::memcpy(out, values + 3 * static_cast<std::size_t>(n), 3 * sizeof(double)), out += 3;
-    ghost_doubles_sent_ += static_cast<double>(state_send_[i].size());
-    check(MPI_Irecv(state_receive_[i].data(), static_cast<int>(state_receive_[i].size()), MPI_DOUBLE, g.rank, 3, comm_, &state_requests_[2 * i]),
-          "MPI_Irecv");
-    check(MPI_Isend(state_send_[i].data(), static_cast<int>(state_send_[i].size()), MPI_DOUBLE, g.rank, 3, comm_, &state_requests_[2 * i + 1]),
-          "MPI_Isend");
-  }
+  ghost_doubles_sent_ += static_cast<double>(exchange_ghosts(state_ghosts_, state_buffers_, values, 3, 3));
   ++ghost_shares_;
-  check(MPI_Waitall(static_cast<int>(state_requests_.size()), state_requests_.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
-  for (std::size_t i = 0; i < state_ghosts_.size(); ++i) {
-    const double* in = state_receive_[i].data();
-    for (std::uint32_t n : state_ghosts_[i].receive) std::memcpy(values + 3 * static_cast<std::size_t>(n), in, 3 * sizeof(double)), in += 3;
-  }
 }
 
 void RankStressPass::gather_sum_chunks(double* chunks, std::size_t width) {
@@ -464,7 +464,7 @@ void RankStressPass::gather_nodes(std::initializer_list<double*> arrays) {
 
 std::size_t RankStressPass::ghost_doubles() const {
   std::size_t n = 0;
-  for (const auto& s : state_send_) n += s.size();
+  for (const auto& s : state_buffers_.send) n += s.size();
   return n;
 }
 

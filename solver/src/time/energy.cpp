@@ -33,40 +33,35 @@ void EnergyAudit::close_step(const HalfStep& h, const ExternalForces& external, 
                              const double* f_int, MassScaling& masses, const std::uint8_t* constrained, const RigidBodies& rigid,
                              const ContactStepReport& c, const StressPassResult& pass, int threads) {
   const std::size_t ndof = 3 * masses.mass.size();
-  double kinetic = rigid.kinetic_energy(h.first), ext_back = 0, ext_fwd = 0, damp_back = 0, damp_fwd = 0;
   const double* __restrict mass_of = masses.mass.data();
   const double* inverse_mass = masses.inverse_mass.data();
   const std::int32_t* rigid_of = rigid.piece_of_node();
   if (masses.on()) masses.book_added(v_old_of, v_new_of, h.first, energy.added_mass_kinetic);
-  const std::size_t chunks = (ndof + kChunk - 1) / kChunk;
-  chunks_.resize(chunks);
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::size_t k = 0; k < chunks; ++k) {
-    if (!share_.sums(k)) continue;  // another rank's: gathered below
-    std::array<double, 5> sum{};    // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
-    for (std::size_t i = k * kChunk; i < std::min(ndof, (k + 1) * kChunk); ++i) {
-      // A rigid body's nodes: their kinetic energy and damping are the body's (below).
-      const double m = rigid_of && rigid_of[i / 3] != -1 ? 0.0 : mass_of[i / 3];
-      const double fext = external.at(i);
-      const double v_old = v_old_of[i], v_new = v_new_of[i];
-      double reaction = 0;
-      if (constrained[i]) {  // the support force that holds the prescribed velocity: what the update added, dtbar c_plus R / m
-        reaction = m * (v_new - h.free_velocity(v_old, fext, f_int[i], inverse_mass[i])) / (h.dtbar * h.c_plus);
-      }
-      const double v_n = h.first ? v_old : 0.5 * (v_old + v_new);
-      sum[0] += 0.5 * m * v_n * v_n;
-      // Work of F^n over du^{n-1/2} (closes step n-1) and du^{n+1/2} (carried to step n+1).
-      const double F = fext + reaction;
-      const double fdamp = h.alpha * m * v_n;
-      sum[1] += F * h.dt_prev * v_old;
-      sum[2] += F * h.dt * v_new;
-      sum[3] += fdamp * h.dt_prev * v_old;
-      sum[4] += fdamp * h.dt * v_new;
-    }
-    chunks_[k] = sum;
-  }
-  if (share_.gather) share_.gather(share_.context, chunks_.data()->data(), 5);
-  for (const auto& sum : chunks_) kinetic += sum[0], ext_back += sum[1], ext_fwd += sum[2], damp_back += sum[3], damp_fwd += sum[4];
+  // kinetic (from the rigid bodies'), ext_back, ext_fwd, damp_back, damp_fwd
+  auto [kinetic, ext_back, ext_fwd, damp_back, damp_fwd] =
+      sum_in_chunks<5>(ndof, share_, chunks_, threads, {rigid.kinetic_energy(h.first), 0, 0, 0, 0}, [&](std::size_t begin, std::size_t end) {
+        std::array<double, 5> sum{};
+        for (std::size_t i = begin; i < end; ++i) {
+          // A rigid body's nodes: their kinetic energy and damping are the body's (below).
+          const double m = rigid_of && rigid_of[i / 3] != -1 ? 0.0 : mass_of[i / 3];
+          const double fext = external.at(i);
+          const double v_old = v_old_of[i], v_new = v_new_of[i];
+          double reaction = 0;
+          if (constrained[i]) {  // the support force that holds the prescribed velocity: what the update added, dtbar c_plus R / m
+            reaction = m * (v_new - h.free_velocity(v_old, fext, f_int[i], inverse_mass[i])) / (h.dtbar * h.c_plus);
+          }
+          const double v_n = h.first ? v_old : 0.5 * (v_old + v_new);
+          sum[0] += 0.5 * m * v_n * v_n;
+          // Work of F^n over du^{n-1/2} (closes step n-1) and du^{n+1/2} (carried to step n+1).
+          const double F = fext + reaction;
+          const double fdamp = h.alpha * m * v_n;
+          sum[1] += F * h.dt_prev * v_old;
+          sum[2] += F * h.dt * v_new;
+          sum[3] += fdamp * h.dt_prev * v_old;
+          sum[4] += fdamp * h.dt * v_new;
+        }
+        return sum;
+      });
   rigid.add_work(h.alpha, h.dt_prev, h.dt, h.first, damp_back, damp_fwd, ext_back, ext_fwd);
   ext_back += c.support_work_back;
   ext_fwd += c.support_work_forward;

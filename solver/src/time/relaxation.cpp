@@ -22,18 +22,11 @@ void Relaxation::before_pass(const std::vector<double>& force) {
 // bit) and, each chunk summed by one rank, for any rank count.
 template <class Term>
 std::array<double, 2> Relaxation::chunked_sums(Term&& term) {
-  const std::size_t chunks = (ndof_ + kSumChunkDofs - 1) / kSumChunkDofs;
-  chunks_.resize(chunks);
-  for (std::size_t k = 0; k < chunks; ++k) {
-    if (!share_.sums(k)) continue;  // another rank's: gathered below
+  return sum_in_chunks<2>(ndof_, share_, chunks_, 1, {0, 0}, [&](std::size_t begin, std::size_t end) {
     double a = 0, b = 0;
-    for (std::size_t i = k * kSumChunkDofs; i < std::min(ndof_, (k + 1) * kSumChunkDofs); ++i) term(i, a, b);
-    chunks_[k] = {a, b};
-  }
-  if (share_.gather) share_.gather(share_.context, chunks_.data()->data(), 2);
-  std::array<double, 2> sum{};
-  for (const auto& c : chunks_) sum[0] += c[0], sum[1] += c[1];
-  return sum;
+    for (std::size_t i = begin; i < end; ++i) term(i, a, b);
+    return std::array<double, 2>{a, b};
+  });
 }
 
 void Relaxation::after_pass(const std::vector<double>& force, const double* v, double dt, const RelaxedDofs& dofs) {

@@ -5,6 +5,7 @@
 // their balance is zero for an exact integrator and an unstable step shows as a growing error.
 // The sums run over fixed chunks of dofs, added in chunk order: the same bits for any number of
 // threads (an OpenMP reduction adds in an order that depends on it).
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -71,6 +72,23 @@ struct ChunkShare {
   bool sums(std::size_t chunk) const { return !summed_here || summed_here[chunk]; }
 };
 
+// The chunked sums of `ndof` dofs: chunk_sum(begin, end) gives a chunk's W partial sums, for the
+// chunks this process sums (`threads` at once; `chunks` keeps them, one per chunk), the others'
+// gathered through `share`; returns `start` plus every chunk's sums, added in chunk order.
+template <std::size_t W, class ChunkSum>
+std::array<double, W> sum_in_chunks(std::size_t ndof, const ChunkShare& share, std::vector<std::array<double, W>>& chunks, int threads,
+                                    std::array<double, W> start, ChunkSum&& chunk_sum) {
+  const std::size_t n = (ndof + kSumChunkDofs - 1) / kSumChunkDofs;
+  chunks.resize(n);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::size_t k = 0; k < n; ++k)
+    if (share.sums(k)) chunks[k] = chunk_sum(k * kSumChunkDofs, std::min(ndof, (k + 1) * kSumChunkDofs));
+  if (share.gather) share.gather(share.context, chunks.data()->data(), W);
+  for (const auto& c : chunks)
+    for (std::size_t j = 0; j < W; ++j) start[j] += c[j];
+  return start;
+}
+
 class EnergyAudit {
  public:
   // The energies at t = 0: the physical kinetic energy (mass added at t = 0 is booked as added,
@@ -93,7 +111,6 @@ class EnergyAudit {
   double pending_external = 0, pending_damping = 0, pending_contact_normal = 0, pending_contact_friction = 0;
 
  private:
-  static constexpr std::size_t kChunk = kSumChunkDofs;
   std::vector<std::array<double, 5>> chunks_;  // kinetic, ext_back, ext_fwd, damp_back, damp_fwd
   ChunkShare share_;
 };

@@ -43,15 +43,15 @@ class RankStressPass : public StressPassEngine {
   std::vector<std::uint32_t> checkpoint_nodes() const override;
   const std::vector<char>& touched() const { return touched_; }
   StressPassResult compute_alone(const double* u, const double* v, double* f_out) override;
-  void step_owned_nodes(const std::vector<char>& everywhere, std::size_t audit_chunk_dofs) override;
+  void step_owned_nodes(const std::vector<char>& everywhere, std::size_t sum_chunk_dofs) override;
   const std::vector<std::uint32_t>& integrated_dofs() const override { return integrated_dofs_; }
   void share_ghosts(double* values) override;
   const char* sum_chunks_summed_here() const override { return chunk_mine_.empty() ? nullptr : chunk_mine_.data(); }
   void gather_sum_chunks(double* chunks, std::size_t width) override;
   void gather_some_nodes(const std::vector<std::uint32_t>& nodes, std::initializer_list<double*> arrays) override;
   void gather_nodes(std::initializer_list<double*> arrays) override;
-  // Owned-node stepping: the nodes this process integrates, and the doubles and messages it sends
-  // in one share_ghosts.
+  // Owned-node stepping: the nodes this process integrates, and the doubles it sends in one
+  // share_ghosts.
   std::size_t integrated_nodes() const { return integrated_dofs_.size() / 3; }
   std::size_t ghost_doubles() const;
   int rank() const { return rank_; }
@@ -77,8 +77,18 @@ class RankStressPass : public StressPassEngine {
   std::vector<char> touched_;
   std::vector<std::vector<double>> send_, receive_;
   std::vector<MPI_Request> requests_;
-  std::vector<std::vector<double>> ghost_send_, ghost_receive_;  // per InternalForces::anp_ghosts() pair
-  std::vector<MPI_Request> ghost_requests_;
+  // One exchange of node values with the ranks of a ghost list (NodeGhosts): per pair the values
+  // sent and received, and the requests. sized_for: `width` doubles per listed node.
+  struct GhostBuffers {
+    std::vector<std::vector<double>> send, receive;
+    std::vector<MPI_Request> requests;
+    void sized_for(const std::vector<NodeGhosts>& ghosts, std::size_t width);
+    std::size_t memory_bytes() const;
+  };
+  // Sends the listed nodes' values (width doubles each, from `values`) to each pair's rank and puts
+  // what it receives into `values` (blocking; tag apart per kind of exchange). Returns the doubles sent.
+  std::size_t exchange_ghosts(const std::vector<NodeGhosts>& ghosts, GhostBuffers& buffers, double* values, std::size_t width, int tag);
+  GhostBuffers anp_ghost_buffers_;  // per InternalForces::anp_ghosts() pair, 1 double per node
   // The ANP J pass's exchanges (volumes and ghost nodes): doubles and messages sent, over passes.
   double anp_doubles_sent_ = 0, anp_messages_sent_ = 0, passes_ = 0;
   // The pass's one gather (pass_and_gather): per rank its doubles and where they land (fixed), and
@@ -128,8 +138,7 @@ class RankStressPass : public StressPassEngine {
   // gather_nodes; the doubles sent by share_ghosts over its calls.
   std::vector<std::uint32_t> integrated_dofs_;
   std::vector<NodeGhosts> state_ghosts_;
-  std::vector<std::vector<double>> state_send_, state_receive_;
-  std::vector<MPI_Request> state_requests_;
+  GhostBuffers state_buffers_;
   std::vector<std::int32_t> alone_;       // per node the one rank that integrates it, or -1: every rank
   std::vector<std::int32_t> chunk_rank_;  // per chunk of the sums over dofs the rank that sums it
   std::vector<char> chunk_mine_;
