@@ -74,8 +74,8 @@ for layout in ("1x2", "2x1"):
 for layout, (wall, stress, contact, steps, ranks, memory) in rows.items():
     print(f"{name} {layout}: {steps} steps, run {wall:.2f} s, stress passes {stress:.2f} s, contact {contact:.2f} s, "
           f"{1e3 * wall / steps:.3f} ms per step; peak memory per process {', '.join(f'{m:.0f}' for m in memory)} MiB"
-          + (f"; per rank (tets, halo doubles, ANP exchange doubles and messages, owned nodes whose forces it sends, nodes it integrates, ghost doubles per update, gather s, force packing s): "
-             f"{[(x['tets'], x['halo_doubles_per_pass'], x['anp_exchange_doubles_per_pass'], x['anp_exchange_messages_per_pass'], x['owned_nodes'], x['integrated_nodes'], x['ghost_doubles_per_exchange'], round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
+          + (f"; per rank (tets, halo doubles, ANP exchange doubles and messages, owned nodes whose forces it sends, nodes it integrates, ghost doubles per update, doubles it sends in the pass's gather, gather s, force packing s): "
+             f"{[(x['tets'], x['halo_doubles_per_pass'], x['anp_exchange_doubles_per_pass'], x['anp_exchange_messages_per_pass'], x['owned_nodes'], x['integrated_nodes'], x['ghost_doubles_per_exchange'], round(x.get('gather_doubles_per_pass', -1)), round(x['sums_s'], 3), round(x['force_gather_s'], 3)) for x in ranks]}"
              if ranks else ""))
 print(f"{name}: 2 ranks x 1 thread / 1 rank x 2 threads, whole run: {rows['2x1'][0] / rows['1x2'][0]:.3f}; "
       f"speed-up over 1 x 1: threads {rows['1x1'][0] / rows['1x2'][0]:.2f}, ranks {rows['1x1'][0] / rows['2x1'][0]:.2f}")

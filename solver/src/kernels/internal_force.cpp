@@ -477,18 +477,25 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       if (nodal_mass_) nodal_bound_of_chunk(c);
     }
   }
-  StressPassResult r = combine_atoms(partition_acc_);
+  // The sums over atoms and chunks, exact (ExactSum): the same bits whichever process or thread
+  // adds which atom.
+  sums_.energy.clear(), sums_.viscous_power.clear();
+  for (std::size_t p = 0; p < partition_acc_.size(); ++p)
+    if (own_rank_ < 0 || partition_rank_[p] == own_rank_)
+      sums_.energy.add(partition_acc_[p].energy), sums_.viscous_power.add(partition_acc_[p].viscous_power);
+  for (std::size_t c = 0; c < chunk_anp_energy_.size(); ++c)
+    if (own_rank_ < 0 || chunk_rank_[c] == own_rank_) sums_.energy.add(chunk_anp_energy_[c]);
+  StressPassResult r = pass_result(sums_);
   if (nodal_mass_) nodal_critical_step(r);
   return r;
 }
 
-// The atoms' sums in atom order; ties of the smallest step or Jacobian go to the first.
-StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulator>& atoms) const {
+// The minima over this process's atoms in atom order (ties of the smallest step or Jacobian go to
+// the first); the sums as given.
+StressPassResult InternalForces::pass_result(const PassSums& sums) const {
   const bool viscous = beta_ > 0;
   StressAccumulator total;
-  for (const StressAccumulator& acc : atoms) {
-    total.energy += acc.energy;
-    total.viscous_power += acc.viscous_power;
+  for (const StressAccumulator& acc : partition_acc_) {
     if (acc.min_J < total.min_J) total.min_J = acc.min_J, total.min_J_element = acc.min_J_element;
     const double dt = viscous ? acc.dt : std::sqrt(acc.dt2);
     const double best = viscous ? total.dt : std::sqrt(total.dt2);
@@ -497,10 +504,9 @@ StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulat
       total.dt_element = acc.dt_element;
     }
   }
-  for (double e : chunk_anp_energy_) total.energy += e;
   StressPassResult r;
-  r.strain_energy = total.energy;
-  r.viscous_power = total.viscous_power;
+  r.strain_energy = sums.energy.value();
+  r.viscous_power = sums.viscous_power.value();
   r.element_critical_step = r.critical_step = viscous ? total.dt : std::sqrt(total.dt2);
   r.limiting_element = total.dt_element;
   r.nodal_critical_step = 0;  // no bound (off, or no moving node under a tet): the element estimate alone
@@ -516,6 +522,7 @@ StressPassResult InternalForces::combine_atoms(const std::vector<StressAccumulat
 void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
+  own_rank_ = rank;
   partition_rank_.assign(partitions_.size(), 0);
   partition_acc_.assign(partitions_.size(), StressAccumulator{});  // the other ranks' atoms never run here: they stay empty
   std::vector<std::uint32_t> slot_partition(partition_volumes_.size()), tile_partition(anp_tiles_.size());

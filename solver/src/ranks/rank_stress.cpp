@@ -1,5 +1,6 @@
 // The stress pass over MPI ranks (ranks.hpp).
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -13,8 +14,9 @@ namespace tactus::solver {
 
 namespace {
 
-// What a rank contributes to the sums per atom it runs: its energy and viscous power.
-constexpr std::size_t kAtomRecord = 2;
+// What a rank contributes to the sums: its atoms' and chunks' energy and its atoms' viscous power,
+// each as an exact accumulator's words (ExactSum: added over the ranks in any order, the same bits).
+constexpr std::size_t kSumRecord = 2 * ExactSum::kWords;
 
 // This process's resident memory (Linux: `VmHWM:` its peak, `VmRSS:` now), bytes; 0 where it
 // cannot be read.
@@ -57,28 +59,22 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   if (model.num_elements > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
       model.num_nodes > static_cast<std::size_t>(std::numeric_limits<int>::max()))
     throw InputError("model", "size", "fewer than 2^31 tets and nodes on ranks", std::to_string(model.num_elements) + " tets");
-  // What each rank sends in the pass's gather is fixed: its atoms' records, with ANP blocks the
-  // volumetric energy of the node chunks it reports (InternalForces::chunk_ranks: its J pass runs
-  // over its own and ghost nodes only), its minima, and for the integrator its owned nodes' forces
-  // (who owns which node is fixed too).
-  const auto& owner = forces_.atom_ranks();
-  records_per_rank_.assign(static_cast<std::size_t>(ranks_), 0);
-  for (int r : owner) records_per_rank_[static_cast<std::size_t>(r)] += static_cast<int>(kAtomRecord);
-  anp_ = std::any_of(model.blocks.begin(), model.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
-  if (anp_)
-    for (std::int32_t r : forces_.chunk_ranks()) ++records_per_rank_[static_cast<std::size_t>(r)];
+  // What each rank sends in the pass's gather is fixed: its sums (the exact accumulators of its
+  // atoms' and, with ANP blocks, of the node chunks it reports: InternalForces::chunk_ranks, its J
+  // pass runs over its own and ghost nodes only), its minima, and for the integrator its owned
+  // nodes' forces (who owns which node is fixed too).
   forces_order_.build(forces_.node_ranks(), ranks_, rank_, 3);
   layout_gathers();
-  atoms_.resize(owner.size()), next_.resize(records_per_rank_.size());
 }
 
 void RankStressPass::layout_gathers() {
-  const std::vector<int>& records = records_per_rank_;
+  const auto ranks = static_cast<std::size_t>(ranks_);
+  constexpr int head = static_cast<int>(kSumRecord) + 2 * kMinima;  // before the forces
   for (Gather* g : {&sums_only_, &with_forces_}) {
-    g->counts.resize(records.size()), g->offsets.resize(records.size()), g->forces_at.resize(records.size());
-    for (std::size_t r = 0; r < records.size(); ++r) g->counts[r] = records[r] + 2 * kMinima + (g == &with_forces_ ? forces_order_.counts[r] : 0);
+    g->counts.resize(ranks), g->offsets.resize(ranks), g->forces_at.resize(ranks);
+    for (std::size_t r = 0; r < ranks; ++r) g->counts[r] = head + (g == &with_forces_ ? forces_order_.counts[r] : 0);
     std::exclusive_scan(g->counts.begin(), g->counts.end(), g->offsets.begin(), 0);
-    for (std::size_t r = 0; r < records.size(); ++r) g->forces_at[r] = static_cast<std::size_t>(g->offsets[r] + records[r] + 2 * kMinima);
+    for (std::size_t r = 0; r < ranks; ++r) g->forces_at[r] = static_cast<std::size_t>(g->offsets[r] + head);
   }
   gathered_.assign(static_cast<std::size_t>(with_forces_.offsets.back() + with_forces_.counts.back()), 0.0);
   records_.reserve(static_cast<std::size_t>(with_forces_.counts[static_cast<std::size_t>(rank_)]));
@@ -150,7 +146,7 @@ std::size_t RankStressPass::memory_bytes() const {
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
   b += anp_ghost_buffers_.memory_bytes() + state_buffers_.memory_bytes();
   b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_rank_.capacity() * sizeof(std::int32_t);
-  return b + atoms_.capacity() * sizeof(StressAccumulator);
+  return b;
 }
 
 std::vector<std::uint32_t> RankStressPass::checkpoint_nodes() const {
@@ -280,17 +276,15 @@ StressPassResult RankStressPass::pass_and_gather(const double* u, const double* 
       forces_.compute(u, v, f_out, side, StressExchange{&start_exchange, &finish_exchange, &exchange_volumes, &exchange_nodes, this});
   const double start = MPI_Wtime();
   ++passes_;
-  // The sums: every atom's energy and viscous power (each rank's atoms in atom order, so a record
-  // needs no index), and the ANP chunks' energies, added in atom and chunk order below.
-  const auto& owner = forces_.atom_ranks();
-  const auto& mine = forces_.atom_results();
+  // The sums: this rank's exact accumulators, as words (bit for bit in the doubles' slots).
   records_.clear();
-  for (std::size_t p = 0; p < owner.size(); ++p)
-    if (owner[p] == rank_) records_.insert(records_.end(), {mine[p].energy, mine[p].viscous_power});
-  std::vector<double>& chunk_energy = forces_.chunk_anp_energy();
-  const std::vector<std::int32_t>& chunk_rank = forces_.chunk_ranks();
-  for (std::size_t c = 0; anp_ && c < chunk_energy.size(); ++c)
-    if (chunk_rank[c] == rank_) records_.push_back(chunk_energy[c]);
+  const PassSums& sums = forces_.pass_sums();
+  for (const ExactSum* sum : {&sums.energy, &sums.viscous_power}) {
+    const std::array<std::int64_t, ExactSum::kWords> words = sum->words();
+    const std::size_t at = records_.size();
+    records_.resize(at + words.size());  // within the reserved size: no allocation
+    std::memcpy(records_.data() + at, words.data(), sizeof words);
+  }
   // The minima, as value-index pairs: the element step and the smallest J, each with its tet, and
   // the nodal bound's largest rows (plain, and per eta of the ANP form), negated; `local` holds
   // this rank's (its atoms alone have results).
@@ -305,22 +299,23 @@ StressPassResult RankStressPass::pass_and_gather(const double* u, const double* 
   check(MPI_Allgatherv(records_.data(), static_cast<int>(records_.size()), MPI_DOUBLE, gathered_.data(), g.counts.data(), g.offsets.data(),
                        MPI_DOUBLE, comm_),
         "MPI_Allgatherv");
-  for (std::size_t r = 0; r < next_.size(); ++r) next_[r] = static_cast<std::size_t>(g.offsets[r]);
-  for (std::size_t p = 0; p < owner.size(); ++p) {
-    std::size_t& at = next_[static_cast<std::size_t>(owner[p])];
-    atoms_[p].energy = gathered_[at], atoms_[p].viscous_power = gathered_[at + 1];
-    at += kAtomRecord;
+  gather_doubles_sent_ += static_cast<double>(records_.size());
+  // The whole model's sums: every rank's words added (integers: exact in any order).
+  PassSums whole;
+  std::array<std::int64_t, 2 * ExactSum::kWords> words;
+  for (std::size_t from = 0; from < g.offsets.size(); ++from) {
+    std::memcpy(words.data(), gathered_.data() + g.offsets[from], sizeof words);
+    whole.energy.add_words(words.data()), whole.viscous_power.add_words(words.data() + ExactSum::kWords);
   }
-  for (std::size_t c = 0; anp_ && c < chunk_energy.size(); ++c) chunk_energy[c] = gathered_[next_[static_cast<std::size_t>(chunk_rank[c])]++];
-  StressPassResult r = forces_.combine_atoms(atoms_);
+  StressPassResult r = forces_.pass_result(whole);
   // Each minimum over the ranks as MPI_MINLOC takes it: the smallest value, ties to the smallest
   // index (for the tets: the first atom's, as the one-process pass takes them; for the rows, the
   // first chunk's). The nodal step then comes from the largest rows as in one process: a MIN of
   // each rank's step would not do, for the ANP form takes, per eta, the largest row over every node
   // first.
   double best[kMinima][2];
-  for (std::size_t from = 0; from < next_.size(); ++from) {
-    const double* x = gathered_.data() + next_[from];  // after the rank's records
+  for (std::size_t from = 0; from < g.offsets.size(); ++from) {
+    const double* x = gathered_.data() + g.offsets[from] + kSumRecord;  // after the rank's sums
     for (int k = 0; k < kMinima; ++k)
       if (from == 0 || x[2 * k] < best[k][0] || (x[2 * k] == best[k][0] && x[2 * k + 1] < best[k][1]))
         best[k][0] = x[2 * k], best[k][1] = x[2 * k + 1];
@@ -448,8 +443,8 @@ void RankStressPass::gather_some_nodes(const std::vector<std::uint32_t>& nodes, 
   check(MPI_Allgatherv(some_mine_.data(), static_cast<int>(some_mine_.size()), MPI_DOUBLE, some_all_.data(), some_counts_.data(),
                        some_offsets_.data(), MPI_DOUBLE, comm_),
         "MPI_Allgatherv");
-  std::vector<std::size_t>& at = next_;  // per rank where its next node's values are (the pass's scratch, free here)
-  for (std::size_t r = 0; r < at.size(); ++r) at[r] = static_cast<std::size_t>(some_offsets_[r]);
+  std::vector<std::size_t>& at = some_next_;  // per rank where its next node's values are
+  at.assign(some_offsets_.begin(), some_offsets_.end());
   for (std::uint32_t n : nodes) {
     if (alone_[n] < 0) continue;
     std::size_t& k = at[static_cast<std::size_t>(alone_[n])];
@@ -480,7 +475,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
   mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(resident_bytes("VmHWM:"));
   mine.push_back(passes_ > 0 ? anp_doubles_sent_ / passes_ : 0), mine.push_back(passes_ > 0 ? anp_messages_sent_ / passes_ : 0);
   mine.push_back(static_cast<double>(integrated_nodes())), mine.push_back(ghost_shares_ > 0 ? ghost_doubles_sent_ / ghost_shares_ : 0);
-  mine.push_back(resident_bytes("VmRSS:"));
+  mine.push_back(resident_bytes("VmRSS:")), mine.push_back(passes_ > 0 ? gather_doubles_sent_ / passes_ : 0);
   std::vector<double> all(mine.size() * static_cast<std::size_t>(ranks_));
   check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), static_cast<int>(mine.size()), MPI_DOUBLE, 0, comm_),
         "MPI_Gather");
@@ -500,6 +495,7 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
     j["integrated_nodes"] = static_cast<std::size_t>(x[9 + seconds.size()]);
     j["ghost_doubles_per_exchange"] = x[10 + seconds.size()];
     j["resident_bytes_at_end"] = x[11 + seconds.size()];
+    j["gather_doubles_per_pass"] = x[12 + seconds.size()];
     out.push_back(j);
   }
   return out;

@@ -215,7 +215,9 @@ inline constexpr const char* mass_scaling = "mass_scaling";
 // exchanges of volumes and ghost nodes' values; 0 without ANP blocks), integrated_nodes (the nodes it integrates: its
 // own and those every rank integrates; 0 on one rank, meaning every node), ghost_doubles_per_exchange
 // (what it sends after each update of u or v to the ranks that read its nodes; 0 on one rank), resident_bytes_at_end
-// (VmRSS when the report is made, against the peak: what the run holds, not what reading the meshes took)}
+// (VmRSS when the report is made, against the peak: what the run holds, not what reading the meshes took),
+// gather_doubles_per_pass (what it sends in the pass's one gather: its exact sums' 142 words, its minima, and the
+// forces of its owned nodes that every rank integrates)}
 inline constexpr const char* ranks = "ranks";
 inline constexpr std::array<const char*, 20> all{
     status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,

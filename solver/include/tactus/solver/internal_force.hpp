@@ -11,6 +11,7 @@
 #include <limits>
 #include <vector>
 
+#include "tactus/solver/exact_sum.hpp"
 #include "tactus/solver/model.hpp"
 
 namespace tactus::solver {
@@ -110,6 +111,12 @@ struct StressAccumulator {
   std::size_t min_J_element = 0;
 };
 
+// The pass's sums over atoms (strain energy, ANP volumetric energy included, and viscous power),
+// exact so that they do not depend on which process or thread adds which atom.
+struct PassSums {
+  ExactSum energy, viscous_power;
+};
+
 struct StressSideTask {
   void (*run)(void* context) = nullptr;
   void* context = nullptr;
@@ -171,8 +178,8 @@ class InternalForces {
   // Ranks: from now on only the atoms of `rank` run (tet_atom and atom_rank: a Decomposition of
   // this model with kAtomTets atoms); f_out is then right at the nodes they touch once the halo()
   // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
-  // one: combine_atoms over every rank's atom_results() in atom order; the other ranks' atoms
-  // keep empty results here, so the result's minima are this rank's). The ANP blocks' J pass runs
+  // one: pass_result of every rank's pass_sums() added; the other ranks' atoms keep empty results
+  // here, so the result's minima are this rank's). The ANP blocks' J pass runs
   // over the rank's own nodes, with its ghost nodes' values exchanged after each node pass
   // (anp_ghosts()).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
@@ -186,20 +193,21 @@ class InternalForces {
   bool nodal_bound_on() const { return nodal_mass_ != nullptr; }
   NodalBoundRows nodal_bound_rows() const;
   void nodal_step(const NodalBoundRows& rows, StressPassResult& r) const;
-  // Per atom of the stress pass (atom order): its rank (after own_atoms) and its last results.
+  // Per atom of the stress pass (atom order): its rank (after own_atoms).
   const std::vector<int>& atom_ranks() const { return partition_rank_; }
-  const std::vector<StressAccumulator>& atom_results() const { return partition_acc_; }
   // Per node (after own_atoms): the rank of the first atom whose stress-pass tets hold it, the one
   // rank certain to have its every slot after the exchange; -1 for a node no such tet holds (its
   // force is 0 on every rank).
   const std::vector<std::int32_t>& node_ranks() const { return node_rank_; }
   // ANP blocks on ranks: per node chunk the rank whose pass has its volumetric energy right (each
-  // rank runs the J pass over its own and ghost nodes only), and every chunk's energy of the last pass (the
-  // rank pass replaces the others' with theirs before combine_atoms).
+  // rank runs the J pass over its own and ghost nodes only).
   const std::vector<std::int32_t>& chunk_ranks() const { return chunk_rank_; }
-  std::vector<double>& chunk_anp_energy() { return chunk_anp_energy_; }
-  // The pass's result from every atom's accumulator, in atom order (the nodal bound not included).
-  StressPassResult combine_atoms(const std::vector<StressAccumulator>& atoms) const;
+  // The last pass's sums over this process's atoms and ANP node chunks (every one in one process;
+  // on ranks those it owns and reports), exact: the whole model's are every rank's added.
+  const PassSums& pass_sums() const { return sums_; }
+  // The pass's result from the sums over every atom and chunk and from this process's atoms'
+  // minima (ties of the smallest step or Jacobian to the first atom); the nodal bound not included.
+  StressPassResult pass_result(const PassSums& sums) const;
   int threads() const { return threads_; }
   // The threads of the next passes (the sums do not depend on them: ThreadTuner changes them as a run goes).
   void set_threads(int threads) { threads_ = threads; }
@@ -298,6 +306,8 @@ class InternalForces {
   std::vector<NodeRun> anp_runs_, anp_convert_runs_;
   std::vector<double> convert_energy_;  // per convert run, its energy of the last pass
   std::vector<std::int32_t> chunk_rank_;
+  int own_rank_ = -1;  // on ranks, this process's (own_atoms); -1: one process, every atom its own
+  PassSums sums_;
   std::vector<NodeGhosts> anp_ghosts_;
   void set_anp_runs(const std::vector<char>& computed, const std::vector<char>& read, int rank);
   void anp_ghosts_of_rank(int rank, const std::vector<char>& touched, const std::vector<std::uint32_t>& slot_partition);

@@ -91,6 +91,7 @@ class RankStressPass : public StressPassEngine {
   GhostBuffers anp_ghost_buffers_;  // per InternalForces::anp_ghosts() pair, 1 double per node
   // The ANP J pass's exchanges (volumes and ghost nodes): doubles and messages sent, over passes.
   double anp_doubles_sent_ = 0, anp_messages_sent_ = 0, passes_ = 0;
+  double gather_doubles_sent_ = 0;  // in the pass's one gather (its sums, minima and forces), over passes
   // The pass's one gather (pass_and_gather): per rank its doubles and where they land (fixed), and
   // where its owned nodes' forces begin; without the forces (compute) and with them
   // (compute_everywhere). This rank's records, everyone's.
@@ -102,10 +103,7 @@ class RankStressPass : public StressPassEngine {
   Gather sums_only_, with_forces_;
   std::vector<double> records_, gathered_;
   StressPassResult pass_and_gather(const double* u, const double* v, double* f_out, StressSideTask side, bool everywhere);
-  std::vector<StressAccumulator> atoms_;  // every atom's sums
-  std::vector<std::size_t> next_;
   std::size_t tets_ = 0;
-  bool anp_ = false;  // the model has ANP blocks: their chunks' energies are gathered too
   // Values of items (nodes, tets) that each rank has right for its own items, sent to every rank:
   // the items in rank then item order, each rank's doubles and where they land, this rank's
   // values packed and everyone's (`width` doubles per item). Fixed once built.
@@ -146,9 +144,9 @@ class RankStressPass : public StressPassEngine {
   RankOrder nodes_order_;
   std::vector<int> some_counts_, some_offsets_;  // gather_some_nodes's layout and values (reused)
   std::vector<double> some_mine_, some_all_;
+  std::vector<std::size_t> some_next_;
   double ghost_doubles_sent_ = 0, ghost_shares_ = 0;
-  std::vector<int> records_per_rank_;  // each rank's records in the pass's gather, before its minima
-  void layout_gathers();               // sums_only_ and with_forces_ from records_per_rank_ and forces_order_
+  void layout_gathers();  // sums_only_ and with_forces_ from the sums, the minima and forces_order_
   // Wall time from the end of the pass to the result (the gather, its waiting and the sums), and of
   // it the forces' packing and unpacking (compute_everywhere).
   double sums_seconds_ = 0, force_gather_seconds_ = 0;
