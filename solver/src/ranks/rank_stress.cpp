@@ -268,8 +268,8 @@ StressPassResult RankStressPass::compute_everywhere(const double* u, const doubl
 }
 
 // The pass, then one MPI_Allgatherv per pass of what every rank needs from every other, each
-// rank's in a fixed layout (Gather): its atoms' sums, its minima and, for the integrator, its
-// owned nodes' forces. One collective rather than three: each costs a synchronisation of the
+// rank's in a fixed layout (Gather): its exact sums, its minima and, for the integrator, the
+// forces of its owned nodes that every rank integrates. One collective rather than three: each costs a synchronisation of the
 // ranks, and on the hand-block the three cost more than their bytes.
 StressPassResult RankStressPass::pass_and_gather(const double* u, const double* v, double* f_out, StressSideTask side, bool everywhere) {
   const StressPassResult local =

@@ -5,7 +5,7 @@
 // a model's atoms gives the same bits whether one thread, several threads or several MPI ranks
 // add them, each rank adding its own and the ranks' accumulators then added limb by limb.
 // The stress pass sums its atoms' strain energy and viscous power with it (docs/design.md,
-// "tactus-solve under mpirun": the ranks exchange each rank's accumulator, a fixed 1,136 bytes,
+// "The stress pass over MPI ranks": each rank sends its two accumulators, a fixed 1,136 bytes,
 // rather than every atom's record).
 #include <array>
 #include <cstddef>

@@ -3,11 +3,12 @@
 // -DTACTUS_MPI=ON): each rank runs the atoms a Decomposition gives it, sends the slots of the nodes
 // it shares to the ranks that share them (non-blocking, while its interior atoms run), and sums
 // every node it touches over all the node's slots in atom order, so its forces are the bits of one
-// process at any rank count. The per-atom energies and viscous powers are gathered and added in
-// atom order on every rank; the element step, the smallest J and the nodal step bound are one
-// global MINLOC. For the integrator (StressPassEngine) the forces of the nodes each rank owns (those
-// whose first atom is its) are then gathered, so every rank holds the whole force vector and steps
-// the whole model as one process would. Every rank holds the whole model for now (scattering it is
+// process at any rank count. Each rank's exact sums of its atoms' energies and viscous powers
+// (ExactSum) are gathered and added on every rank; the element step, the smallest J and the nodal
+// step bound are one global MINLOC. For the integrator (StressPassEngine) the forces of the shared
+// nodes, which every rank integrates, are gathered from the ranks that own them (those whose first
+// atom is theirs); each rank integrates those and its own (owned-node stepping), and receives the
+// other nodes it reads after each update. Every rank holds the whole model for now (scattering it is
 // a later step); the ANP blocks' J pass runs over each rank's own nodes, with the volumes at shared
 // nodes and the ghost nodes' values exchanged (InternalForces::anp_ghosts).
 #include <mpi.h>
