@@ -320,10 +320,15 @@ std::size_t InternalForces::memory_bytes() const {
 
 template <std::size_t kStride, std::size_t kWidth>
 void InternalForces::sum_nodes(std::size_t lo, std::size_t hi, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi,
-                               double* out, double* extra) const {
+                               double* out, double* extra, const char* only) const {
   static_assert(kWidth <= kStride);
   for (std::size_t n = lo; n < hi; ++n) {
     double sum[kWidth] = {}, more = 0;
+    if (only && !only[n]) {  // no slot of this process holds a value here: the sum is 0
+      for (std::size_t i = 0; i < kWidth; ++i) out[kWidth * n + i] = 0;
+      if (extra) extra[n] = 0;
+      continue;
+    }
     for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) {
       const std::size_t s = node_slots_[k];
       if (s < slot_lo || s >= slot_hi) continue;
@@ -473,7 +478,7 @@ StressPassResult InternalForces::compute(const double* u, const double* v, doubl
       const std::size_t c = sum_chunks_[i];
       // Each node's force and row sum: its atoms' in atom order, whatever the threads.
       sum_nodes<kForceStride, 3>(c * kNodeChunk, std::min(model_.num_nodes, (c + 1) * kNodeChunk), partition_forces_, 0, node_slots_.size(), f_out,
-                                 nodal_mass_ ? nodal_bound_.data() : nullptr);
+                                 nodal_mass_ ? nodal_bound_.data() : nullptr, touched_.empty() ? nullptr : touched_.data());
       if (nodal_mass_) nodal_bound_of_chunk(c);
     }
   }
@@ -534,7 +539,8 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
       for (std::size_t t = 0; t < tiles_of(q.end - q.begin); ++t) tile_partition[q.tile_offset + t] = static_cast<std::uint32_t>(p);
   }
   sum_chunks_.clear();
-  std::vector<char> touched(model_.num_nodes, 0);  // by this rank's atoms
+  std::vector<char>& touched = touched_;  // by this rank's atoms
+  touched.assign(model_.num_nodes, 0);
   for (std::size_t n = 0; n < model_.num_nodes; ++n) {
     for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k) touched[n] |= partition_rank_[slot_partition[node_slots_[k]]] == rank;
     if (touched[n] && (sum_chunks_.empty() || sum_chunks_.back() != n / kNodeChunk)) sum_chunks_.push_back(n / kNodeChunk);

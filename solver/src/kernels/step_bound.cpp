@@ -164,8 +164,12 @@ void InternalForces::nodal_bound_of_chunk(std::size_t c) {
   const std::size_t lo = c * kNodeChunk, hi = std::min(model_.num_nodes, lo + kNodeChunk);
   double best = 0;
   std::size_t at = 0;
+  // On ranks only the nodes this process's atoms touch: at the others its rows are 0 (the plain
+  // form never takes them; the eta form's row there is below the true one the owner reports, and
+  // at the same node, so the MINLOC over the ranks is the same without them).
+  const char* only = touched_.empty() ? nullptr : touched_.data();
   for (std::size_t n = lo; n < hi; ++n)
-    if (node_moves_[n] && nodal_bound_[n] > best * nodal_mass_[n]) best = nodal_bound_[n] / nodal_mass_[n], at = n;
+    if (node_moves_[n] && (!only || only[n]) && nodal_bound_[n] > best * nodal_mass_[n]) best = nodal_bound_[n] / nodal_mass_[n], at = n;
   chunk_bound_[c] = best, chunk_bound_node_[c] = at;
   if (chunk_eta_bound_.empty()) return;
   // The second form (design.md, "Stable step"): the ANP volumetric rows replaced by
@@ -181,7 +185,7 @@ void InternalForces::nodal_bound_of_chunk(std::size_t c) {
   double plain_best = 0;  // nodes without an ANP tet: the old row, divided as above (the same bits)
   std::size_t plain_at = lo;
   for (std::size_t n = lo; n < hi; ++n) {
-    if (!node_moves_[n]) continue;
+    if (!node_moves_[n] || (only && !only[n])) continue;
     if (anp_rest_rows_[n] == 0) {
       if (nodal_bound_[n] > plain_best * nodal_mass_[n]) plain_best = nodal_bound_[n] / nodal_mass_[n], plain_at = n;
       continue;

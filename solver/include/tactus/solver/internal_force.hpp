@@ -306,7 +306,8 @@ class InternalForces {
   std::vector<NodeRun> anp_runs_, anp_convert_runs_;
   std::vector<double> convert_energy_;  // per convert run, its energy of the last pass
   std::vector<std::int32_t> chunk_rank_;
-  int own_rank_ = -1;  // on ranks, this process's (own_atoms); -1: one process, every atom its own
+  int own_rank_ = -1;          // on ranks, this process's (own_atoms); -1: one process, every atom its own
+  std::vector<char> touched_;  // on ranks, per node: a tet of this process's atoms holds it (empty: one process)
   PassSums sums_;
   std::vector<NodeGhosts> anp_ghosts_;
   void set_anp_runs(const std::vector<char>& computed, const std::vector<char>& read, int rank);
@@ -330,8 +331,9 @@ class InternalForces {
   // `arrays` (kStride values per slot: the first kWidth to `out`, and value kWidth to `extra` when
   // given), summed in atom order.
   template <std::size_t kStride, std::size_t kWidth>
+  // only: on ranks, the nodes this process's atoms touch (the others' sums are 0 here: written, not summed).
   void sum_nodes(std::size_t lo, std::size_t hi, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
-                 double* extra = nullptr) const;
+                 double* extra = nullptr, const char* only = nullptr) const;
 };
 
 }  // namespace tactus::solver
