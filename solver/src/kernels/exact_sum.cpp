@@ -39,8 +39,6 @@ void ExactSum::add(double x) {
   if (++pending_ >= kAdditionsBeforeCarry) normalise();
 }
 
-void ExactSum::add(const ExactSum& other) { add_words(other.words().data()); }
-
 void ExactSum::add_words(const std::int64_t* words) {
   for (std::size_t i = 0; i < kLimbs; ++i) limb_[i] += words[i];
   nan_ += words[kLimbs], pos_inf_ += words[kLimbs + 1], neg_inf_ += words[kLimbs + 2];

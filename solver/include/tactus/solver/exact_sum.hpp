@@ -16,8 +16,9 @@ namespace tactus::solver {
 class ExactSum {
  public:
   // Every finite double is m 2^e with m an integer of at most 53 bits and -1074 <= e <= 971; it is
-  // kept at bit e + kBias of a fixed-point number (kBias > 1074: the lowest bit is at index >= 0),
-  // which needs 2,098 bits, 66 digits of 32 bits, and two more for the carries of 2^31 additions.
+  // kept at bit e + kBias of a fixed-point number (kBias > 1074: the lowest bit is at index 32 or
+  // more), whose highest bit is then 2,129: 67 digits of 32 bits, and one more limb for the
+  // carries of 2^31 additions of the largest doubles (the top limb keeps its 64 bits).
   static constexpr int kDigitBits = 32;
   static constexpr int kBias = 1074 + kDigitBits;
   static constexpr std::size_t kLimbs = 68;
@@ -25,13 +26,12 @@ class ExactSum {
   static constexpr std::size_t kWords = kLimbs + 3;
 
   void add(double x);
-  // Another accumulator's value (limb by limb: exact, in any order).
-  void add(const ExactSum& other);
   // The sum rounded to the nearest double (ties to even; NaN if a NaN or both infinities were
   // added, an infinity if one was, or if the exact sum is beyond the doubles' range).
   double value() const;
   void clear();
-  // The words (normalised: the same value gives the same words) for a message, and back.
+  // The words (normalised: the same value gives the same words) for a message, and another
+  // accumulator's words added (limb by limb: exact, in any order).
   std::array<std::int64_t, kWords> words() const;
   void add_words(const std::int64_t* words);
 

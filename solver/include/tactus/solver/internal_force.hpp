@@ -329,9 +329,9 @@ class InternalForces {
   void nodal_critical_step(StressPassResult& r) const;
   // Nodes [lo, hi) of `out` (kWidth values per node) = each node's slots in [slot_lo, slot_hi) of
   // `arrays` (kStride values per slot: the first kWidth to `out`, and value kWidth to `extra` when
-  // given), summed in atom order.
+  // given), summed in atom order. only: on ranks, the nodes this process's atoms touch (the
+  // others' sums are 0 here: written, not summed).
   template <std::size_t kStride, std::size_t kWidth>
-  // only: on ranks, the nodes this process's atoms touch (the others' sums are 0 here: written, not summed).
   void sum_nodes(std::size_t lo, std::size_t hi, const std::vector<double>& arrays, std::size_t slot_lo, std::size_t slot_hi, double* out,
                  double* extra = nullptr, const char* only = nullptr) const;
 };
