@@ -13,6 +13,7 @@
 #include <gmsh.h>
 
 #include "../../solver/src/contact/bipotential.hpp"
+#include "../../solver/src/contact/detection.hpp"
 #include "gmsh_kit.hpp"
 #include "material_kit.hpp"
 #include "scenario_kit.hpp"
@@ -101,6 +102,65 @@ void check_signorini(const ExplicitSolver& s, SignoriniCheck& worst, double elem
 // Oracle: the closed form of the projection on K_mu. Inside the cone it is the identity, in the
 // polar cone zero, otherwise on the cone's surface; in every case r is in K_mu and tau - r is
 // normal to K_mu at r (the variational inequality (tau - r).(q - r) <= 0 for every q in K_mu).
+// The Verlet lists' check (BuildSnapshot::holds) with its bound on the moves since the build
+// against a scan of every node at every check (the farthest distance from the build's positions,
+// computed here apart): the same answer at every check, for nodes that wander back and forth (the
+// bound far above the distance) and for one that creeps straight out to the reach in steps of a
+// thousandth of it (the bound equal to the distance up to rounding, the answer turning at the
+// step the scan turns).
+TEST(Contact, ListCheckByBoundGivesTheScansAnswer) {
+  constexpr std::size_t kNodes = 200;
+  ContactPair pair;
+  for (std::size_t i = 0; i < kNodes; ++i) pair.slave_nodes.push_back(static_cast<std::int32_t>(i));
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coordinate(-0.05, 0.05);
+  std::vector<double> x(3 * kNodes);
+  for (double& c : x) c = 0.3 + coordinate(rng);
+  const double reach = 1e-4, band = 2e-4;
+  auto scanned_answer = [&](const std::vector<double>& x0) {
+    double worst = 0;
+    for (std::size_t i = 0; i < 3 * kNodes; i += 3) {
+      const double dx = x[i] - x0[i], dy = x[i + 1] - x0[i + 1], dz = x[i + 2] - x0[i + 2];
+      worst = std::max(worst, dx * dx + dy * dy + dz * dz);
+    }
+    return worst <= reach * reach;
+  };
+  for (const bool creep : {false, true}) {
+    BuildSnapshot snapshot;
+    snapshot.record(pair, {}, x.data(), band);
+    std::vector<double> built = x, last = x;
+    std::size_t checks = 0, rebuilds = 0, agreed = 0;
+    std::normal_distribution<double> jiggle(0, 0.03 * reach);
+    for (int step = 0; step < 4000; ++step) {
+      if (creep)
+        x[0] += 1e-3 * reach;  // straight out along x: out of reach at the 1000th step
+      else
+        for (double& c : x) c += jiggle(rng);
+      double farthest2 = 0;
+      for (std::size_t i = 0; i < 3 * kNodes; i += 3) {
+        const double dx = x[i] - last[i], dy = x[i + 1] - last[i + 1], dz = x[i + 2] - last[i + 2];
+        farthest2 = std::max(farthest2, dx * dx + dy * dy + dz * dz);
+      }
+      last = x;
+      const bool expected = scanned_answer(built);
+      const bool got = snapshot.holds(x.data(), band, reach, std::sqrt(farthest2), 1);
+      ++checks, agreed += got == expected;
+      if (!got) snapshot.record(pair, {}, x.data(), band), built = x, ++rebuilds;
+    }
+    std::printf("%s: %zu checks, %zu agree with a scan of every node, %zu rebuilds, %zu scans\n", creep ? "creeping node" : "wandering nodes", checks,
+                agreed, rebuilds, snapshot.scans);
+    EXPECT_EQ(agreed, checks);
+    EXPECT_GT(rebuilds, creep ? 2u : 10u);
+    EXPECT_LT(snapshot.scans, checks / 2);  // the bound answers most checks
+  }
+  // Not known (a fresh search after a restart): a scan.
+  BuildSnapshot snapshot;
+  snapshot.record(pair, {}, x.data(), band);
+  snapshot.moved_bound = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(snapshot.holds(x.data(), band, reach, std::numeric_limits<double>::infinity(), 1));
+  EXPECT_EQ(snapshot.scans, 1u);
+}
+
 TEST(Contact, CoulombConeProjectionCases) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> U(-1, 1), M(0.05, 1.5);

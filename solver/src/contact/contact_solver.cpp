@@ -43,16 +43,28 @@ ContactSolver::~ContactSolver() = default;
 
 void ContactSolver::detect(const double* u, double search_factor, ContactRows& rows) {
   rows.clear();
-  // Current positions of the nodes the masters read (slave nodes, master triangles' vertices) only.
+  // Current positions of the nodes the masters read (slave nodes, master triangles' vertices) only,
+  // and the farthest any of them moved since the last search: the pairs' searches add it to their
+  // bounds on the moves since their builds (BuildSnapshot) and scan their nodes only when those
+  // come near the reach.
   const std::size_t n = contact_nodes_.size();
-#pragma omp parallel for num_threads(threads_) schedule(static) if (n > 30000)
-  for (std::size_t i = 0; i < n; ++i)
+  double farthest2 = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : farthest2) if (n > 30000)
+  for (std::size_t i = 0; i < n; ++i) {
+    double d2 = 0;
     for (std::size_t d = 0; d < 3; ++d) {
       const std::size_t dof = 3 * static_cast<std::size_t>(contact_nodes_[i]) + d;
-      x_[dof] = model_.X[dof] + u[dof];
+      const double x = model_.X[dof] + u[dof], dx = x - x_[dof];
+      d2 += dx * dx;
+      x_[dof] = x;
     }
+    farthest2 = std::max(farthest2, d2);
+  }
+  const double moved = x_known_ ? std::sqrt(farthest2) : std::numeric_limits<double>::infinity();
+  x_known_ = true;
   for (std::size_t pi = 0; pi < pairs_.size(); ++pi) {
     const ContactPair& p = pairs_[pi];
+    scratch_[pi].moved = moved;
     p.master->detect(p, static_cast<std::int32_t>(pi), x_.data(), search_factor * p.search_scale, scratch_[pi], rows, threads_);
   }
 }

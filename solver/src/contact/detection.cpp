@@ -201,10 +201,14 @@ void BuildSnapshot::record(const ContactPair& p, const std::vector<std::int32_t>
   for (std::size_t i = 0; i < nodes.size(); ++i)
     for (int c = 0; c < 3; ++c) x[3 * i + c] = x_now[3 * nodes[i] + c];
   band = band_now;
+  moved_bound = 0, unscanned = 0;
 }
 
-bool BuildSnapshot::holds(const double* x_now, double band_now, double reach, int threads) const {
+bool BuildSnapshot::holds(const double* x_now, double band_now, double reach, double moved, int threads) {
   if (band != band_now || x.empty()) return false;
+  moved_bound += moved;  // the triangle inequality over the checks since the last scan
+  if (moved_bound <= kBoundSlack * reach && ++unscanned < kMaxUnscanned) return true;
+  ++scans, unscanned = 0;
   const std::size_t n = nodes.size();
   const std::int32_t* ids = nodes.data();
   const double* x0 = x.data();
@@ -215,6 +219,7 @@ bool BuildSnapshot::holds(const double* x_now, double band_now, double reach, in
     const double dx = xi[0] - x0[3 * i], dy = xi[1] - x0[3 * i + 1], dz = xi[2] - x0[3 * i + 2];
     worst = std::max(worst, dx * dx + dy * dy + dz * dz);
   }
+  moved_bound = std::sqrt(worst);
   return worst <= reach * reach;
 }
 
@@ -270,7 +275,7 @@ namespace {
 // moved more than skin / 2 since: a triangle point moves at most as far as its farthest vertex, so
 // a slave node and any master point have closed in by at most the skin.
 bool DeformableSurface::lists_valid(const double* x, double band, DetectionScratch& s, int threads) const {
-  return s.skin > 0 && s.built.holds(x, band, 0.5 * s.skin, threads);
+  return s.skin > 0 && s.built.holds(x, band, 0.5 * s.skin, s.moved, threads);
 }
 
 // Candidates of each slave node: the triangles in its grid cell whose bounding box grown by

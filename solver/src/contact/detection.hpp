@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace tactus::solver {
@@ -15,14 +16,31 @@ struct ContactPair;
 // Where a pair's nodes were when its search was last built, to tell when it must be built again:
 // the node-to-surface Verlet lists and the mortar segments' integration both hold while no node of
 // the pair has moved more than a reach since, and the band is the one they were built for.
+//
+// Most steps move every node far less than the reach, so a check first adds the farthest any
+// contact node moved since the last check (ContactSolver measures it while it copies the
+// positions) to a bound on how far any node has moved since the build: while the bound is within
+// the reach the lists hold without a scan over the pair's nodes. When it is not, the check scans,
+// gives the scan's answer and resets the bound to the distance the scan found. Since the bound is
+// never below the distance a scan would find (the triangle inequality; its relative rounding, a
+// few ulps per term, is covered by kBoundSlack and a scan at least every kMaxUnscanned checks),
+// the answer is always the scan's, and the lists are rebuilt at the same steps as with a scan at
+// every check.
 struct BuildSnapshot {
   double band = -1;
   std::vector<std::int32_t> nodes;  // the pair's slave nodes and master vertices, sorted, unique
   std::vector<double> x;            // their positions at the build, 3 each
+  // At least the farthest any node has moved since the build; infinite when not known (before the
+  // first check after a restart). Checks since the last scan, and scans over all checks.
+  double moved_bound = std::numeric_limits<double>::infinity();
+  std::size_t unscanned = 0, scans = 0;
+  static constexpr double kBoundSlack = 1 - 1e-8;
+  static constexpr std::size_t kMaxUnscanned = std::size_t{1} << 20;
   // Records the positions x of the pair's nodes (its slave nodes and master_triangles' vertices).
   void record(const ContactPair& p, const std::vector<std::int32_t>& master_triangles, const double* x, double band);
   // True when a build was recorded for this band and no node has moved more than `reach` since.
-  bool holds(const double* x, double band, double reach, int threads) const;
+  // moved: at least the farthest any node moved since the last check (infinite: not known).
+  bool holds(const double* x, double band, double reach, double moved, int threads);
 };
 
 // A mortar row as integrated (contact/mortar.cpp), kept until the next integration.
@@ -52,11 +70,12 @@ struct DetectionScratch {
   // Verlet lists (Verlet 1967, as in molecular dynamics): the triangles within band + skin of each
   // slave node when they were built stay the only candidates while no node of the pair has moved
   // more than skin / 2 since (then no triangle can have come within band unseen).
-  double skin = 0;                                        // extra search distance, m (set by the contact solver; 0: search every step)
-  BuildSnapshot built;                                    // the last build of the lists
-  std::vector<std::int32_t> candidate_start, candidates;  // per slave node, CSR
-  std::vector<std::int32_t> active_triangles;             // the triangles whose normals the lists need, sorted
-  std::size_t builds = 0, searches = 0;                   // list builds (mortar: integrations), and steps searched
+  double skin = 0;                                         // extra search distance, m (set by the contact solver; 0: search every step)
+  double moved = std::numeric_limits<double>::infinity();  // since the last search, at least (set by the contact solver)
+  BuildSnapshot built;                                     // the last build of the lists
+  std::vector<std::int32_t> candidate_start, candidates;   // per slave node, CSR
+  std::vector<std::int32_t> active_triangles;              // the triangles whose normals the lists need, sorted
+  std::size_t builds = 0, searches = 0;                    // list builds (mortar: integrations), and steps searched
 
   // A mortar pair's rows as last integrated, and where its nodes were then: the rows hold (their
   // gaps following the nodes' motion) until a node has moved a reach since.

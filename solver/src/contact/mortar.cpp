@@ -459,7 +459,7 @@ void MortarSurface::detect(const ContactPair& p, std::int32_t pi, const double* 
                            int threads) const {
   ++scratch.searches;
   DetectionScratch::Mortar& state = scratch.mortar;
-  if (state.integrated.holds(x, band, kMortarRefresh * p.search_scale, threads)) {
+  if (state.integrated.holds(x, band, kMortarRefresh * p.search_scale, scratch.moved, threads)) {
     emit_rows(state, pi, x, rows);
     return;
   }

@@ -309,6 +309,7 @@ class ContactSolver {
   ContactRows ahead_rows_;  // detect_ahead's rows, for the next step (valid while ahead_)
   bool ahead_ = false;
   std::vector<double> x_;                    // current positions, filled per step at contact_nodes_ only
+  bool x_known_ = false;                     // x_ holds the last search's positions (not yet: a fresh solver)
   std::vector<std::int32_t> contact_nodes_;  // every pair's slave nodes and master vertices, once
   WarmStart last_reaction_;
   std::vector<PairStepReport> pair_reports_;
