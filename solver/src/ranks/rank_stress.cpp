@@ -45,10 +45,6 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   forces_.own_atoms(d.tet_atom, d.atom_rank, rank_);
   tet_rank_.resize(model.num_elements);
   for (std::size_t e = 0; e < model.num_elements; ++e) tet_rank_[e] = d.atom_rank[d.tet_atom[e]], tets_ += tet_rank_[e] == rank_;
-  touched_.assign(model.num_nodes, 0);
-  for (std::size_t e = 0; e < model.num_elements; ++e)
-    if (tet_rank_[e] == rank_)
-      for (int k = 0; k < 4; ++k) touched_[static_cast<std::size_t>(model.conn[4 * e + static_cast<std::size_t>(k)])] = 1;
   for (const HaloSlots& h : forces_.halo()) {
     send_.emplace_back(InternalForces::kSlotDoubles * h.send.size() + h.send_tiles.size());
     receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size() + h.receive_tiles.size());
@@ -137,8 +133,8 @@ const std::vector<double>& RankStressPass::element_dt2_everywhere() {
 }
 
 std::size_t RankStressPass::memory_bytes() const {
-  std::size_t b = forces_.memory_bytes() + touched_.capacity() + forces_order_.memory_bytes() + tets_order_.memory_bytes() +
-                  nodes_order_.memory_bytes() + integrated_dofs_.capacity() * sizeof(std::uint32_t);
+  std::size_t b = forces_.memory_bytes() + forces_order_.memory_bytes() + tets_order_.memory_bytes() + nodes_order_.memory_bytes() +
+                  integrated_dofs_.capacity() * sizeof(std::uint32_t);
   for (const RankOrder& o : chunk_orders_) b += o.memory_bytes();
   for (const Gather* g : {&sums_only_, &with_forces_})
     b += (g->counts.capacity() + g->offsets.capacity()) * sizeof(int) + g->forces_at.capacity() * sizeof(std::size_t);

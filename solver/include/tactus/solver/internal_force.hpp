@@ -199,6 +199,9 @@ class InternalForces {
   // rank certain to have its every slot after the exchange; -1 for a node no such tet holds (its
   // force is 0 on every rank).
   const std::vector<std::int32_t>& node_ranks() const { return node_rank_; }
+  // Per node (after own_atoms): 1 where a stress-pass tet of this rank's atoms holds it, the nodes
+  // whose forces the exchange makes whole here.
+  const std::vector<char>& touched() const { return touched_; }
   // ANP blocks on ranks: per node chunk the rank whose pass has its volumetric energy right (each
   // rank runs the J pass over its own and ghost nodes only).
   const std::vector<std::int32_t>& chunk_ranks() const { return chunk_rank_; }

@@ -25,8 +25,9 @@ class RankStressPass : public StressPassEngine {
  public:
   // Collective over comm; d: the same decomposition (atoms of kAtomTets tets) on every rank.
   RankStressPass(const Model& model, const Decomposition& d, MPI_Comm comm, double beta, int threads);
-  // f_out (3 per node of the model): right at the nodes touched() by this rank's atoms. The result
-  // is the whole model's, the same bits on every rank and at any rank count. Collective.
+  // f_out (3 per node of the model): right at the nodes touched() by this rank's atoms (those a
+  // stress-pass tet of them holds). The result is the whole model's, the same bits on every rank
+  // and at any rank count. Collective.
   StressPassResult compute(const double* u, const double* v, double* f_out) { return compute(u, v, f_out, StressSideTask{}); }
   StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side);
   // compute, with every rank's owned nodes' forces to every rank in the same Allgatherv (3 doubles
@@ -42,7 +43,7 @@ class RankStressPass : public StressPassEngine {
   nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) override;
   std::size_t memory_bytes() const override;
   std::vector<std::uint32_t> checkpoint_nodes() const override;
-  const std::vector<char>& touched() const { return touched_; }
+  const std::vector<char>& touched() const { return forces_.touched(); }
   StressPassResult compute_alone(const double* u, const double* v, double* f_out) override;
   void step_owned_nodes(const std::vector<char>& everywhere, std::size_t sum_chunk_dofs) override;
   const std::vector<std::uint32_t>& integrated_dofs() const override { return integrated_dofs_; }
@@ -75,7 +76,6 @@ class RankStressPass : public StressPassEngine {
   MPI_Comm comm_;
   int rank_ = 0, ranks_ = 1;
   InternalForces forces_;
-  std::vector<char> touched_;
   std::vector<std::vector<double>> send_, receive_;
   std::vector<MPI_Request> requests_;
   // One exchange of node values with the ranks of a ghost list (NodeGhosts): per pair the values
