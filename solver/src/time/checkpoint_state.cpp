@@ -161,6 +161,7 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"added_mass_body", &masses_.added_to_body},
                          {"body_mass", &masses_.body_mass}})
     a.io(std::string("integrator.") + name, *v, v->size());
+  if (a.loading() && masses_.on()) masses_.recount_raised();
   if (mass_scaling()) a.io("integrator.mass_factor", passes_->mass_factor(), model_.num_elements);
   a.io_record("integrator.added_momentum", masses_.added_momentum);
   a.io_record("integrator.stress_pass", pass_);

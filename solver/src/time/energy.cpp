@@ -21,7 +21,7 @@ void EnergyAudit::start(const double* v, MassScaling& masses, const double* mode
     added += 0.5 * (masses.mass[i / 3] - model_mass[i / 3]) * v[i] * v[i];
     masses.added_momentum[i % 3] += (masses.mass[i / 3] - model_mass[i / 3]) * v[i];
   }
-  if (masses.on()) std::fill(masses.pending_added.begin(), masses.pending_added.end(), 0.0);
+  if (masses.on()) masses.forget_added();
   energy.kinetic = kinetic;
   energy.internal = strain_energy;
   energy.added_mass_kinetic = added;

@@ -325,12 +325,9 @@ void ExplicitSolver::advance_velocity() {
         masses_.mass[i / 3] * (v_new_of[i] - h.free_velocity(v_old_of[i], external.at(i), f_[i], inverse_mass[i])) / (h.dtbar * h.c_plus);
   }
   accumulate_reactions();
-  if (owned_stepping_ && masses_.on()) {  // the nodes whose mass was raised: their added kinetic energy is booked in node order
-    raised_nodes_.clear();
-    for (std::size_t n = 0; n < model_.num_nodes; ++n)
-      if (masses_.pending_added[n] != 0) raised_nodes_.push_back(static_cast<std::uint32_t>(n));
-    if (!raised_nodes_.empty()) passes_->gather_some_nodes(raised_nodes_, {v_prev_half_.data(), v_half_.data()});
-  }
+  // The nodes whose mass was raised: their added kinetic energy is booked in node order.
+  if (owned_stepping_ && masses_.on() && !masses_.raised_nodes().empty())
+    passes_->gather_some_nodes(masses_.raised_nodes(), {v_prev_half_.data(), v_half_.data()});
   audit_.close_step(h, external, v_old_of, v_new_of, f_.data(), masses_, model_.constrained.data(), rigid_, contact_report_, pass_, pass_threads());
   if (drive_) drive_->observe(time_, audit_.energy.kinetic, audit_.energy.internal);
   relaxation_.measure(h, v_old_of, v_new_of, f_.data(), relaxed_dofs(), time_, drive_.get());

@@ -1,5 +1,6 @@
 #include "tactus/solver/mass_scaling.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -47,6 +48,7 @@ void MassScaling::scale(std::vector<double>& factor, const std::vector<double>& 
           continue;
         }
         mass[n] += 0.25 * added;
+        if (pending_added[n] == 0) raised_.push_back(static_cast<std::uint32_t>(n));
         pending_added[n] += 0.25 * added;
         for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
           inverse_mass[d] = 1.0 / mass[n];
@@ -56,6 +58,7 @@ void MassScaling::scale(std::vector<double>& factor, const std::vector<double>& 
       added_to_body[static_cast<std::size_t>(element_body_[e])] += added;
     }
   }
+  std::sort(raised_.begin(), raised_.end());
   // The step with the new masses (every scaled tet now sits at the floor), as the kernel computes it.
   double best = std::numeric_limits<double>::infinity();
   for (const MaterialBlock& b : model_.blocks)
@@ -80,8 +83,7 @@ std::ptrdiff_t MassScaling::body_over(double limit) const {
 }
 
 void MassScaling::book_added(const double* v_old, const double* v_new, bool first, double& kinetic) {
-  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
-    if (pending_added[n] == 0) continue;
+  for (const std::uint32_t n : raised_) {
     for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
       const double v_n = first ? v_old[d] : 0.5 * (v_old[d] + v_new[d]);
       kinetic += 0.5 * pending_added[n] * v_n * v_n;
@@ -89,6 +91,18 @@ void MassScaling::book_added(const double* v_old, const double* v_new, bool firs
     }
     pending_added[n] = 0;
   }
+  raised_.clear();
+}
+
+void MassScaling::forget_added() {
+  for (const std::uint32_t n : raised_) pending_added[n] = 0;
+  raised_.clear();
+}
+
+void MassScaling::recount_raised() {
+  raised_.clear();
+  for (std::size_t n = 0; n < pending_added.size(); ++n)
+    if (pending_added[n] != 0) raised_.push_back(static_cast<std::uint32_t>(n));
 }
 
 }  // namespace tactus::solver

@@ -201,11 +201,10 @@ class ExplicitSolver {
   std::size_t step_ = 0;
   bool velocity_advanced_ = false;
   bool owned_stepping_ = false;
-  std::vector<std::uint32_t> raised_nodes_;  // owned-node stepping with mass scaling: the nodes raised this step
-  EnergyAudit audit_;                        // energies at t^n and the work halves carried to the next step (energy.hpp)
-  RigidBodies rigid_;                        // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
-  std::unique_ptr<JointDrive> drive_;        // the bones' motion by their joints (joint_drive.hpp), or none
-  Relaxation relaxation_;                    // adaptive damping and the stop on the residual (relaxation.hpp)
+  EnergyAudit audit_;                  // energies at t^n and the work halves carried to the next step (energy.hpp)
+  RigidBodies rigid_;                  // the rigid pieces' state and their kick, drift and placement (rigid.hpp)
+  std::unique_ptr<JointDrive> drive_;  // the bones' motion by their joints (joint_drive.hpp), or none
+  Relaxation relaxation_;              // adaptive damping and the stop on the residual (relaxation.hpp)
   std::unique_ptr<GripRegions> regions_;
 };
 

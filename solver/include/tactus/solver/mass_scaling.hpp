@@ -38,6 +38,12 @@ class MassScaling {
   // added_momentum (the update from v^{n-1/2} conserves the momentum of the new masses, so that
   // is what the added mass brought).
   void book_added(const double* v_old, const double* v_new, bool first, double& kinetic);
+  // The nodes whose pending_added is not 0, ascending (the order book_added sums them in), kept by
+  // scale and book_added so that neither they nor the ranks' gather of those nodes' velocities scan
+  // every node each step.
+  const std::vector<std::uint32_t>& raised_nodes() const { return raised_; }
+  void forget_added();    // pending_added to 0 (the energy audit's start counts the masses whole)
+  void recount_raised();  // raised_nodes() from pending_added (after a checkpoint is read)
 
   std::vector<double> mass;                      // per node: the model's plus the added, kg
   std::vector<double> inverse_mass;              // per dof
@@ -50,6 +56,7 @@ class MassScaling {
   const Model& model_;
   double floor_;
   std::vector<std::int32_t> element_body_;  // per tet (model numbering), its body
+  std::vector<std::uint32_t> raised_;
 };
 
 }  // namespace tactus::solver
