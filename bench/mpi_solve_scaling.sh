@@ -10,7 +10,8 @@
 # Per layout: the median over rounds of run.json's wall time (the whole run, outputs included), of
 # the stress passes' and of contact's (the slowest rank's, on ranks), the steps, and the peak
 # resident memory of each process (of the first round). The results are compared bit for bit
-# against the 1 x 1 run (history.csv and the last state).
+# against the 1 x 1 run (history.csv and the last state). Last, the data structures' bytes of one
+# process and of each rank (run.json memory_bytes) against the issue's per-rank memory bound.
 #   bench/mpi_solve_scaling.sh [ROUNDS]      (default 5; TACTUS_BUILD_DIR: default build/)
 # Never time it while something else runs.
 set -euo pipefail
@@ -79,5 +80,13 @@ for layout, (wall, stress, contact, steps, ranks, memory) in rows.items():
              if ranks else ""))
 print(f"{name}: 2 ranks x 1 thread / 1 rank x 2 threads, whole run: {rows['2x1'][0] / rows['1x2'][0]:.3f}; "
       f"speed-up over 1 x 1: threads {rows['1x1'][0] / rows['1x2'][0]:.2f}, ranks {rows['1x1'][0] / rows['2x1'][0]:.2f}")
+# The data structures' bytes (run.json memory_bytes: the model, the integrator with its stress pass)
+# against the issue's bound: 1.1 x the one process's bytes per tet x the rank's tets (before its halo).
+one = json.load(open(f"{work}/{name}.1x1.1/run.json"))
+per_tet = (one["memory_bytes"]["model"] + one["memory_bytes"]["solver"]) / one["tets"]
+print(f"{name}: one process holds {one['memory_bytes']['model'] / 2**20:.1f} MiB of model and {one['memory_bytes']['solver'] / 2**20:.1f} MiB "
+      f"of solver ({per_tet:.1f} bytes per tet); per rank (model, solver, the bound before the halo, MiB): "
+      + ", ".join(f"({x['model_bytes'] / 2**20:.1f}, {x['solver_bytes'] / 2**20:.1f}, {1.1 * per_tet * x['tets'] / 2**20:.1f})"
+                  for x in json.load(open(f"{work}/{name}.2x1.1/run.json"))["ranks"]))
 PY
 done

@@ -485,11 +485,13 @@ std::unique_ptr<StressPassEngine> rank_stress_pass(const Model& model, const Sce
 }
 
 // What every rank measured, for run.json's "ranks" (collective).
-nlohmann::json rank_report(StressPassEngine* shared, const ExplicitSolver& solver, std::chrono::steady_clock::time_point start) {
+nlohmann::json rank_report(StressPassEngine* shared, const Model& model, const ExplicitSolver& solver, std::chrono::steady_clock::time_point start) {
   if (!shared) return nullptr;
   return shared->report({{"stress_passes_s", solver.stress_seconds()},
                          {"contact_s", solver.contact_seconds()},
-                         {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}});
+                         {"wall_time_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()},
+                         {"model_bytes", static_cast<double>(model.memory_bytes())},
+                         {"solver_bytes", static_cast<double>(solver.memory_bytes())}});
 }
 
 }  // namespace
@@ -528,7 +530,7 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
     failure = std::current_exception();
     solver.gather_state();  // as rank 0 does before it writes the last good state
   }
-  rank_report(shared.get(), solver, wall_start);
+  rank_report(shared.get(), model, solver, wall_start);
   if (failure) std::rethrow_exception(failure);
 }
 
@@ -553,7 +555,7 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   loop.finishing([&] { failure = loop.finish(failure); });
   RunSummary& summary = loop.summary();
   summary.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  const nlohmann::json per_rank = rank_report(shared.get(), solver, wall_start);
+  const nlohmann::json per_rank = rank_report(shared.get(), model, solver, wall_start);
   summary.run_json = run_json(sc, model, solver, summary, loop.peaks(), failure);
   if (shared) summary.run_json[contracts::run_json::ranks] = per_rank;
   loop.finishing([&] { write_file(staged.path() / "run.json", summary.run_json.dump(2) + '\n'); });

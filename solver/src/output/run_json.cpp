@@ -228,6 +228,7 @@ nlohmann::json run_json(const Scenario& sc, const Model& model, const ExplicitSo
                   {"balance_error_relative", std::abs(en.balance_error()) / en.scale()},
                   {"max_balance_error_relative", summary.max_relative_balance_error}};
   j[k::outputs] = summary.outputs;
+  j[k::memory] = {{"model", model.memory_bytes()}, {"solver", solver.memory_bytes()}};
   nlohmann::json vm = nlohmann::json::object();
   for (std::size_t b = 0; b < model.blocks.size(); ++b) vm[model.blocks[b].name] = summary.von_mises_peak[b];
   j[k::peak_von_mises] = vm;

@@ -464,10 +464,10 @@ StressPassResult RankStressPass::compute_alone(const double* u, const double* v,
   return one.compute(u, v, f_out);
 }
 
-nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, double>>& seconds) {
+nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, double>>& measured) {
   std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
                            static_cast<double>(forces_order_.own_items(rank_))};
-  for (const auto& [name, s] : seconds) mine.push_back(s);
+  for (const auto& [name, value] : measured) mine.push_back(value);
   mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(resident_bytes("VmHWM:"));
   mine.push_back(passes_ > 0 ? anp_doubles_sent_ / passes_ : 0), mine.push_back(passes_ > 0 ? anp_messages_sent_ / passes_ : 0);
   mine.push_back(static_cast<double>(integrated_nodes())), mine.push_back(ghost_shares_ > 0 ? ghost_doubles_sent_ / ghost_shares_ : 0);
@@ -484,14 +484,14 @@ nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, d
                         {"halo_doubles_per_pass", static_cast<std::size_t>(x[1])},
                         {"halo_messages_per_pass", static_cast<std::size_t>(x[2])},
                         {"owned_nodes", static_cast<std::size_t>(x[3])}};
-    for (std::size_t k = 0; k < seconds.size(); ++k) j[seconds[k].first] = x[4 + k];
-    j["sums_s"] = x[4 + seconds.size()], j["force_gather_s"] = x[5 + seconds.size()];
-    j["peak_resident_bytes"] = x[6 + seconds.size()];
-    j["anp_exchange_doubles_per_pass"] = x[7 + seconds.size()], j["anp_exchange_messages_per_pass"] = x[8 + seconds.size()];
-    j["integrated_nodes"] = static_cast<std::size_t>(x[9 + seconds.size()]);
-    j["ghost_doubles_per_exchange"] = x[10 + seconds.size()];
-    j["resident_bytes_at_end"] = x[11 + seconds.size()];
-    j["gather_doubles_per_pass"] = x[12 + seconds.size()];
+    for (std::size_t k = 0; k < measured.size(); ++k) j[measured[k].first] = x[4 + k];
+    j["sums_s"] = x[4 + measured.size()], j["force_gather_s"] = x[5 + measured.size()];
+    j["peak_resident_bytes"] = x[6 + measured.size()];
+    j["anp_exchange_doubles_per_pass"] = x[7 + measured.size()], j["anp_exchange_messages_per_pass"] = x[8 + measured.size()];
+    j["integrated_nodes"] = static_cast<std::size_t>(x[9 + measured.size()]);
+    j["ghost_doubles_per_exchange"] = x[10 + measured.size()];
+    j["resident_bytes_at_end"] = x[11 + measured.size()];
+    j["gather_doubles_per_pass"] = x[12 + measured.size()];
     out.push_back(j);
   }
   return out;

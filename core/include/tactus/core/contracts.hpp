@@ -208,7 +208,7 @@ inline constexpr const char* reactions = "reactions";  // [{name, moment_about, 
 inline constexpr const char* mass_scaling = "mass_scaling";
 // Only under mpirun: per rank {rank, tets, halo_doubles_per_pass, halo_messages_per_pass, owned_nodes (those its
 // atoms own; with owned-node stepping it sends every rank the forces of those that every rank integrates, else of all),
-// stress_passes_s, contact_s, wall_time_s, sums_s (of stress_passes_s: the pass's one
+// stress_passes_s, contact_s, wall_time_s, model_bytes and solver_bytes (as memory_bytes), sums_s (of stress_passes_s: the pass's one
 // gather of sums, minima and forces, with its wait for the slowest rank), force_gather_s (of sums_s: packing and unpacking
 // the forces), peak_resident_bytes (the
 // rank's process, Linux VmHWM), anp_exchange_doubles_per_pass and anp_exchange_messages_per_pass (the ANP J pass's
@@ -219,6 +219,10 @@ inline constexpr const char* mass_scaling = "mass_scaling";
 // gather_doubles_per_pass (what it sends in the pass's one gather: its exact sums' 142 words, its minima, and the
 // forces of its owned nodes that every rank integrates)}
 inline constexpr const char* ranks = "ranks";
+// {model, solver}: bytes of this process's data structures: the model (Model::memory_bytes: every body's nodes and
+// tets, the input mesh's copy) and the integrator with its stress pass (ExplicitSolver::memory_bytes), the figures
+// the per-rank memory bound is checked on (the same in each "ranks" entry as model_bytes and solver_bytes)
+inline constexpr const char* memory = "memory_bytes";
 inline constexpr std::array<const char*, 20> all{
     status,   message,      materials, formulations, pressure_smoothing, volume_floor, bodies, steps,          nodes,   tets,
     end_time, output_times, outputs,   wall_time,    time_step,          timing,       energy, peak_von_mises, contact, reactions};

@@ -40,7 +40,7 @@ class RankStressPass : public StressPassEngine {
   const std::vector<double>& element_dt2_everywhere() override;
   void set_threads(int threads) override { forces_.set_threads(threads); }
   int threads() const override { return forces_.threads(); }
-  nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) override;
+  nlohmann::json report(const std::vector<std::pair<std::string, double>>& measured) override;
   std::size_t memory_bytes() const override;
   std::vector<std::uint32_t> checkpoint_nodes() const override;
   const std::vector<char>& touched() const { return forces_.touched(); }

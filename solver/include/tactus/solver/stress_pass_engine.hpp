@@ -39,11 +39,11 @@ class StressPassEngine {
   virtual int threads() const = 0;
   virtual int ranks() const = 0;
   // What each process did (on ranks collective; the array on rank 0, empty elsewhere; null for one
-  // process): per rank its tets, halo doubles and messages per pass, its owned nodes, `seconds` (its
-  // measured wall times by name) and the pass's own (RankStressPass: sums_s, its one gather of sums,
+  // process): per rank its tets, halo doubles and messages per pass, its owned nodes, `measured` (its
+  // wall times and data structures' bytes, by name) and the pass's own (RankStressPass: sums_s, its one gather of sums,
   // minima and forces; force_gather_s, of that the forces' packing; peak_resident_bytes, the
   // process's peak memory).
-  virtual nlohmann::json report(const std::vector<std::pair<std::string, double>>& seconds) = 0;
+  virtual nlohmann::json report(const std::vector<std::pair<std::string, double>>& measured) = 0;
   virtual std::size_t memory_bytes() const = 0;
   // The nodes whose per-node state this process writes in its checkpoint part (checkpoint.hpp):
   // one process, every node; on ranks those it owns (rank 0 also those no stress-pass tet holds).
