@@ -72,7 +72,10 @@ void RankStressPass::layout_gathers() {
     std::exclusive_scan(g->counts.begin(), g->counts.end(), g->offsets.begin(), 0);
     for (std::size_t r = 0; r < ranks; ++r) g->forces_at[r] = static_cast<std::size_t>(g->offsets[r] + head);
   }
-  gathered_.assign(static_cast<std::size_t>(with_forces_.offsets.back() + with_forces_.counts.back()), 0.0);
+  // Fresh arrays, not resized ones: laid out again for owned-node stepping the gather shrinks from
+  // every owned node's forces to the everywhere nodes' (a resize would keep the first capacity).
+  gathered_ = std::vector<double>(static_cast<std::size_t>(with_forces_.offsets.back() + with_forces_.counts.back()), 0.0);
+  records_ = std::vector<double>();
   records_.reserve(static_cast<std::size_t>(with_forces_.counts[static_cast<std::size_t>(rank_)]));
 }
 
@@ -82,17 +85,17 @@ void RankStressPass::RankOrder::build(const std::vector<std::int32_t>& item_rank
   for (std::int32_t r : item_rank)
     if (r >= 0) counts[static_cast<std::size_t>(r)] += static_cast<int>(width);
   std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
-  items.resize(static_cast<std::size_t>(offsets.back() + counts.back()) / width);
+  items = std::vector<std::uint32_t>(static_cast<std::size_t>(offsets.back() + counts.back()) / width);
   std::vector<std::size_t> next(static_cast<std::size_t>(ranks));
   for (std::size_t r = 0; r < next.size(); ++r) next[r] = static_cast<std::size_t>(offsets[r]) / width;
   for (std::size_t i = 0; i < item_rank.size(); ++i)
     if (item_rank[i] >= 0) items[next[static_cast<std::size_t>(item_rank[i])]++] = static_cast<std::uint32_t>(i);
-  mine.resize(static_cast<std::size_t>(counts[static_cast<std::size_t>(rank)]));
-  all.resize(width * items.size());
+  mine = std::vector<double>(), all = std::vector<double>();  // gather's, sized there: pack and unpack need neither
 }
 
 void RankStressPass::RankOrder::gather(const double* from, double* to, int rank, MPI_Comm comm) {
   const std::size_t first = static_cast<std::size_t>(offsets[static_cast<std::size_t>(rank)]) / width;
+  mine.resize(width * own_items(rank)), all.resize(width * items.size());  // once: the sizes are fixed
   for (std::size_t k = 0; k < own_items(rank); ++k) std::memcpy(&mine[width * k], from + width * items[first + k], width * sizeof(double));
   check(MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, comm),
         "MPI_Allgatherv");

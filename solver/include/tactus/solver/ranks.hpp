@@ -106,8 +106,9 @@ class RankStressPass : public StressPassEngine {
   StressPassResult pass_and_gather(const double* u, const double* v, double* f_out, StressSideTask side, bool everywhere);
   std::size_t tets_ = 0;
   // Values of items (nodes, tets) that each rank has right for its own items, sent to every rank:
-  // the items in rank then item order, each rank's doubles and where they land, this rank's
-  // values packed and everyone's (`width` doubles per item). Fixed once built.
+  // the items in rank then item order, each rank's doubles and where they land, and for gather
+  // (not pack and unpack, whose gather carries more) this rank's values packed and everyone's
+  // (`width` doubles per item, sized at its first call). Fixed once built.
   struct RankOrder {
     std::size_t width = 1;
     std::vector<std::uint32_t> items;
