@@ -59,7 +59,7 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
   // atoms' and, with ANP blocks, of the node chunks it reports: InternalForces::chunk_ranks, its J
   // pass runs over its own and ghost nodes only), its minima, and for the integrator its owned
   // nodes' forces (who owns which node is fixed too).
-  forces_order_.build(forces_.node_ranks(), ranks_, rank_, 3);
+  forces_order_.build(forces_.node_ranks(), ranks_, 3);
   layout_gathers();
 }
 
@@ -79,7 +79,7 @@ void RankStressPass::layout_gathers() {
   records_.reserve(static_cast<std::size_t>(with_forces_.counts[static_cast<std::size_t>(rank_)]));
 }
 
-void RankStressPass::RankOrder::build(const std::vector<std::int32_t>& item_rank, int ranks, int rank, std::size_t per_item) {
+void RankStressPass::RankOrder::build(const std::vector<std::int32_t>& item_rank, int ranks, std::size_t per_item) {
   width = per_item;
   counts.assign(static_cast<std::size_t>(ranks), 0), offsets.assign(static_cast<std::size_t>(ranks), 0);
   for (std::int32_t r : item_rank)
@@ -126,7 +126,7 @@ std::size_t RankStressPass::RankOrder::memory_bytes() const {
 
 void RankStressPass::enable_mass_scaling() {
   forces_.enable_mass_scaling();
-  tets_order_.build(tet_rank_, ranks_, rank_, 1);
+  tets_order_.build(tet_rank_, ranks_, 1);
   all_dt2_.resize(tet_rank_.size());
 }
 
@@ -403,12 +403,12 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
     if (!g.send.empty() || !g.receive.empty()) state_ghosts_.push_back(std::move(g));
   }
   state_buffers_.sized_for(state_ghosts_, 3);
-  nodes_order_.build(alone, ranks_, rank_, 3);
+  nodes_order_.build(alone, ranks_, 3);
   // The pass's gather now carries the everywhere nodes' forces alone.
   std::vector<std::int32_t> gathered_owner(nodes, -1);
   for (std::size_t n = 0; n < nodes; ++n)
     if (everywhere[n]) gathered_owner[n] = node_owner[n];
-  forces_order_.build(gathered_owner, ranks_, rank_, 3);
+  forces_order_.build(gathered_owner, ranks_, 3);
   layout_gathers();
 }
 
@@ -420,7 +420,7 @@ void RankStressPass::share_ghosts(double* values) {
 void RankStressPass::gather_sum_chunks(double* chunks, std::size_t width) {
   if (chunk_orders_.size() <= width) chunk_orders_.resize(width + 1);
   RankOrder& order = chunk_orders_[width];
-  if (order.counts.empty()) order.build(chunk_rank_, ranks_, rank_, width);  // once per width
+  if (order.counts.empty()) order.build(chunk_rank_, ranks_, width);  // once per width
   order.gather(chunks, chunks, rank_, comm_);
 }
 

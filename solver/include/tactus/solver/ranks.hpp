@@ -115,7 +115,7 @@ class RankStressPass : public StressPassEngine {
     std::vector<int> counts, offsets;
     std::vector<double> mine, all;
     // item_rank: per item its rank, or -1 (an item no rank sends).
-    void build(const std::vector<std::int32_t>& item_rank, int ranks, int rank, std::size_t width);
+    void build(const std::vector<std::int32_t>& item_rank, int ranks, std::size_t width);
     // One MPI_Allgatherv: this rank's items' values from `from` (width per item, by item index) to
     // every rank, each into `to` at its item (collective).
     void gather(const double* from, double* to, int rank, MPI_Comm comm);
