@@ -301,7 +301,8 @@ std::size_t InternalForces::memory_bytes() const {
                   sizeof(double);
   b += (anp_tiles_.capacity() + anp_reference_rows_.capacity() + anp_rest_rows_.capacity() + chunk_eta_bound_.capacity()) * sizeof(double);
   b += anp_node_tile_first_.capacity() * sizeof(std::size_t) + anp_node_tiles_.capacity() * sizeof(std::uint32_t);
-  b += node_moves_.capacity() + rigid_node_.capacity() + (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
+  b += node_moves_.capacity() + rigid_node_.capacity() + touched_.capacity() +
+       (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
