@@ -52,7 +52,9 @@ struct StressKernelArgs {
   std::size_t begin, end;      // the elements of this call
   const double* u;
   const double* v;  // for the viscous part (beta > 0)
-  double* f;        // the force buffer of this call's atom: corner k of tet e adds to f[kForceStride f_slot[4 e + k]]
+  // The force buffer of this call's atom: corner k of tet e adds to f[kForceStride f_slot[4 (e - begin) + k]]
+  // (f_slot: the slots of the atom's corners, from its first tet's).
+  double* f;
   const std::uint16_t* f_slot = nullptr;
   double beta;
   const double* nodal_pressure = nullptr;  // ANP: U'(J_a) per node (model numbering); nullptr: standard tets
@@ -329,7 +331,7 @@ TACTUS_KERNEL_INLINE void record_element_step(const StressKernelArgs& a, double 
 // bound's rows (step_bound.hpp) after each node's force, in the same cache line.
 template <class T>
 TACTUS_KERNEL_INLINE void scatter_forces(const StressKernelArgs& a, std::size_t e, const M3<T>& P, const T* g, const T& V0, const T bound[4]) {
-  const std::uint16_t* s = a.f_slot + 4 * e;
+  const std::uint16_t* s = a.f_slot + 4 * (e - a.begin);
   T h[4][3];
   for (int i = 0; i < 3; ++i) h[0][i] = lanes::splat<T>(0.0);
   for (int k = 0; k < 3; ++k)
@@ -399,7 +401,7 @@ void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
           const std::size_t corner = 4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k);
           const auto node = static_cast<std::size_t>(a.conn[corner]);
           __builtin_prefetch(a.u + 3 * node);
-          __builtin_prefetch(a.f + kForceStride * std::size_t{a.f_slot[corner]}, 1);
+          __builtin_prefetch(a.f + kForceStride * std::size_t{a.f_slot[corner - 4 * a.begin]}, 1);
           if constexpr (kAnp) __builtin_prefetch(a.nodal_pressure + node);
         }
       element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);

@@ -17,6 +17,7 @@
 #include <iterator>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 #include <utility>
 
 namespace tactus::solver {
@@ -103,7 +104,7 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
         const auto node = static_cast<std::size_t>(c[4 * kPrefetchAhead + k]);
         __builtin_prefetch(X + 3 * node);
         __builtin_prefetch(u + 3 * node);
-        __builtin_prefetch(node_volume + (slot ? std::size_t{slot[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]} : node), 1);
+        __builtin_prefetch(node_volume + (slot ? std::size_t{slot[4 * (e + kPrefetchAhead - begin) + static_cast<std::size_t>(k)]} : node), 1);
       }
     const std::size_t n0 = 3 * static_cast<std::size_t>(c[0]);
     double edge[3][3];  // edge[k]: from node 0 to node k + 1
@@ -115,7 +116,7 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
                                            edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
                                            edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
     for (int k = 0; k < 4; ++k)
-      node_volume[slot ? std::size_t{slot[4 * e + static_cast<std::size_t>(k)]} : static_cast<std::size_t>(c[k])] += quarter;
+      node_volume[slot ? std::size_t{slot[4 * (e - begin) + static_cast<std::size_t>(k)]} : static_cast<std::size_t>(c[k])] += quarter;
   }
 }
 
@@ -259,7 +260,7 @@ std::size_t InternalForces::build_atoms() {
     block_slot_begin_[k] = slots;
     if (b.has_stress_pass())  // else moved as rigid bodies (time/rigid.cpp) or placed by them: no stress, no step limit
       for (std::size_t start = b.begin; start < std::max(b.end, b.begin + 1); start += kAtomTets) {
-        Partition q{k, start, std::min(b.end, start + kAtomTets), slots, slots, tiles};
+        Partition q{k, start, std::min(b.end, start + kAtomTets), slots, slots, tiles, 4 * start};
         nodes.assign(model.conn.begin() + static_cast<std::ptrdiff_t>(4 * q.begin), model.conn.begin() + static_cast<std::ptrdiff_t>(4 * q.end));
         std::sort(nodes.begin(), nodes.end());
         nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
@@ -388,7 +389,7 @@ void InternalForces::anp_pass(const double* u, const StressExchange& exchange) {
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.slot_begin;
       std::fill(mine, mine + (q.slot_end - q.slot_begin), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, tet_slot_.data());
+      add_current_node_volumes(model_, q.begin, q.end, u, mine, tet_slot_.data() + q.corner_begin);
     }
     if (exchange.volumes) {
 #pragma omp master
@@ -424,9 +425,20 @@ void InternalForces::stress_partition(std::size_t p, const double* u, const doub
   double* f = partition_forces_.data() + kForceStride * q.slot_begin;
   std::fill(f, f + kForceStride * (q.slot_end - q.slot_begin), 0.0);
   StressAccumulator acc;
-  StressKernelArgs args{
-      model_.conn.data(), model_.grad.data(),   model_.volume.data(), b.material.law(), b.data(), b.data_stride(), b.begin, q.begin, q.end, u, v, f,
-      tet_slot_.data(),   viscous ? beta_ : 0.0};
+  StressKernelArgs args{model_.conn.data(),
+                        model_.grad.data(),
+                        model_.volume.data(),
+                        b.material.law(),
+                        b.data(),
+                        b.data_stride(),
+                        b.begin,
+                        q.begin,
+                        q.end,
+                        u,
+                        v,
+                        f,
+                        tet_slot_.data() + q.corner_begin,
+                        viscous ? beta_ : 0.0};
   args.nodal_pressure = block_pressure_[q.block];
   if (args.nodal_pressure) {
     args.anp_volume_floor = b.material.volume_floor(), args.anp_floor_stiffness = b.material.small_strain_bulk();
@@ -528,6 +540,7 @@ StressPassResult InternalForces::pass_result(const PassSums& sums) const {
 void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank) {
   if (tet_atom.size() != model_.num_elements)
     throw InputError("decomposition", "tet_atom", std::to_string(model_.num_elements) + " tets", std::to_string(tet_atom.size()));
+  if (own_rank_ >= 0) throw std::logic_error("InternalForces::own_atoms: called twice (the other ranks' slots are gone after the first)");
   own_rank_ = rank;
   partition_rank_.assign(partitions_.size(), 0);
   partition_acc_.assign(partitions_.size(), StressAccumulator{});  // the other ranks' atoms never run here: they stay empty
@@ -588,6 +601,55 @@ void InternalForces::own_atoms(const std::vector<std::uint32_t>& tet_atom, const
   boundary_atoms_.clear(), interior_atoms_.clear();
   for (std::size_t p = 0; p < partitions_.size(); ++p)
     if (partition_rank_[p] == rank) (sends[p] ? boundary_atoms_ : interior_atoms_).push_back(p);
+  keep_rank_slots(rank, slot_partition);
+}
+
+// Ranks: the slots this rank's atoms fill and those it receives, renumbered in their global order
+// (each own atom's slots stay one run, each node's stay in atom order and each block's a range), and
+// the corners of this rank's atoms' tets; the others' slots and corners are dropped (fresh arrays,
+// so their capacity goes too). A node this rank touches keeps all its slots (the halo brings every
+// one it does not fill); one it does not touch keeps none (sum_nodes writes 0 there).
+void InternalForces::keep_rank_slots(int rank, const std::vector<std::uint32_t>& slot_partition) {
+  const std::size_t slots = slot_partition.size();
+  std::vector<char> kept(slots, 0);
+  for (std::size_t s = 0; s < slots; ++s) kept[s] = partition_rank_[slot_partition[s]] == rank;
+  for (const HaloSlots& h : halo_)
+    for (std::uint32_t s : h.receive) kept[s] = 1;
+  std::vector<std::uint32_t> local(slots + 1, 0);  // per global slot: how many kept slots come before it
+  for (std::size_t s = 0; s < slots; ++s) local[s + 1] = local[s] + static_cast<std::uint32_t>(kept[s]);
+  for (HaloSlots& h : halo_)
+    for (auto* list : {&h.send, &h.receive})
+      for (std::uint32_t& s : *list) s = local[s];
+  for (std::size_t k = 0; k < block_slot_begin_.size(); ++k)
+    block_slot_begin_[k] = local[block_slot_begin_[k]], block_slot_end_[k] = local[block_slot_end_[k]];
+  std::vector<std::size_t> first(model_.num_nodes + 1, 0);
+  std::vector<std::uint32_t> node_slots;
+  node_slots.reserve(local[slots]);
+  for (std::size_t n = 0; n < model_.num_nodes; ++n) {
+    for (std::size_t k = node_slot_first_[n]; k < node_slot_first_[n + 1]; ++k)
+      if (kept[node_slots_[k]]) node_slots.push_back(local[node_slots_[k]]);
+    first[n + 1] = node_slots.size();
+  }
+  node_slot_first_ = std::move(first), node_slots_ = std::move(node_slots);
+  std::size_t corners = 0;
+  for (std::size_t p = 0; p < partitions_.size(); ++p)
+    if (partition_rank_[p] == rank) corners += 4 * (partitions_[p].end - partitions_[p].begin);
+  std::vector<std::uint16_t> tet_slot;
+  tet_slot.reserve(corners);
+  for (std::size_t p = 0; p < partitions_.size(); ++p) {
+    Partition& q = partitions_[p];
+    q.slot_begin = local[q.slot_begin], q.slot_end = local[q.slot_end];
+    if (partition_rank_[p] != rank) {  // never runs here
+      q.slot_end = q.slot_begin, q.corner_begin = 0;
+      continue;
+    }
+    const auto from = tet_slot_.begin() + static_cast<std::ptrdiff_t>(q.corner_begin);
+    q.corner_begin = tet_slot.size();
+    tet_slot.insert(tet_slot.end(), from, from + static_cast<std::ptrdiff_t>(4 * (q.end - q.begin)));
+  }
+  tet_slot_ = std::move(tet_slot);
+  partition_forces_ = std::vector<double>(kForceStride * local[slots], 0.0);
+  partition_volumes_ = std::vector<double>(local[slots], 0.0);
 }
 
 // The node runs of the ANP J pass (anp_pass): where `computed` holds, in runs of consecutive nodes

@@ -43,8 +43,14 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
     throw InputError("decomposition", "atom_tets", std::to_string(kAtomTets) + " (the stress pass's atom)", std::to_string(d.atom_tets));
   if (d.ranks != ranks_) throw InputError("decomposition", "ranks", std::to_string(ranks_) + " (the MPI ranks)", std::to_string(d.ranks));
   forces_.own_atoms(d.tet_atom, d.atom_rank, rank_);
-  tet_rank_.resize(model.num_elements);
-  for (std::size_t e = 0; e < model.num_elements; ++e) tet_rank_[e] = d.atom_rank[d.tet_atom[e]], tets_ += tet_rank_[e] == rank_;
+  for (std::size_t e = 0; e < model.num_elements; ++e) {
+    const std::int32_t r = d.atom_rank[d.tet_atom[e]];
+    if (tet_runs_.empty() || tet_runs_.back().rank != r)
+      tet_runs_.push_back({e, e + 1, r});
+    else
+      tet_runs_.back().end = e + 1;
+    tets_ += r == rank_;
+  }
   for (const HaloSlots& h : forces_.halo()) {
     send_.emplace_back(InternalForces::kSlotDoubles * h.send.size() + h.send_tiles.size());
     receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size() + h.receive_tiles.size());
@@ -126,8 +132,11 @@ std::size_t RankStressPass::RankOrder::memory_bytes() const {
 
 void RankStressPass::enable_mass_scaling() {
   forces_.enable_mass_scaling();
-  tets_order_.build(tet_rank_, ranks_, 1);
-  all_dt2_.resize(tet_rank_.size());
+  std::vector<std::int32_t> tet_rank(model_.num_elements);
+  for (const TetRun& run : tet_runs_)
+    std::fill(tet_rank.begin() + static_cast<std::ptrdiff_t>(run.begin), tet_rank.begin() + static_cast<std::ptrdiff_t>(run.end), run.rank);
+  tets_order_.build(tet_rank, ranks_, 1);
+  all_dt2_.resize(model_.num_elements);
 }
 
 const std::vector<double>& RankStressPass::element_dt2_everywhere() {
@@ -144,7 +153,7 @@ std::size_t RankStressPass::memory_bytes() const {
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
   b += anp_ghost_buffers_.memory_bytes() + state_buffers_.memory_bytes();
-  b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_rank_.capacity() * sizeof(std::int32_t);
+  b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_runs_.capacity() * sizeof(TetRun);
   return b;
 }
 
@@ -381,11 +390,10 @@ void RankStressPass::step_owned_nodes(const std::vector<char>& everywhere, std::
     if (alone[n] < 0 || alone[n] == static_cast<std::int32_t>(r) || marked[n] == static_cast<std::int32_t>(r)) return;
     marked[n] = static_cast<std::int32_t>(r), needs[r].push_back(static_cast<std::uint32_t>(n));
   };
-  std::vector<std::vector<std::uint32_t>> tets_of(static_cast<std::size_t>(ranks_));
-  for (std::size_t e = 0; e < model_.num_elements; ++e) tets_of[static_cast<std::size_t>(tet_rank_[e])].push_back(static_cast<std::uint32_t>(e));
   for (std::size_t r = 0; r < needs.size(); ++r) {
-    for (std::uint32_t e : tets_of[r])
-      for (std::size_t k = 0; k < 4; ++k) need(r, static_cast<std::size_t>(model_.conn[4 * static_cast<std::size_t>(e) + k]));
+    for (const TetRun& run : tet_runs_)
+      if (run.rank == static_cast<std::int32_t>(r))
+        for (std::size_t corner = 4 * run.begin; corner < 4 * run.end; ++corner) need(r, static_cast<std::size_t>(model_.conn[corner]));
     for (std::size_t c = 0; c < chunks; ++c)
       if (chunk_rank[c] == static_cast<std::int32_t>(r))
         for (auto [n, end] = chunk_nodes(c); n < end; ++n) need(r, n);

@@ -53,8 +53,8 @@ struct StressPassResult {
 // [begin, end) at u to the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial:
 // for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
-// node_volume[n] receives node n's share, or node_volume[slot[4 e + k]] for corner k of tet e
-// when a slot map is given (an atom's compact array; InternalForces).
+// node_volume[n] receives node n's share, or node_volume[slot[4 (e - begin) + k]] for corner k of
+// tet e when the slots of [begin, end)'s corners are given (an atom's compact array; InternalForces).
 void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
                               const std::uint16_t* slot = nullptr);
 // Per tet of the block (from its first): the constant factor of its ANP volumetric rows in the
@@ -143,7 +143,8 @@ struct NodeGhosts {
 };
 
 // The slots of the nodes one rank shares with another: those this rank's atoms fill and sends, and
-// those the other's fill and it receives (InternalForces::kSlotDoubles each, in the listed order).
+// those the other's fill and it receives (InternalForces::kSlotDoubles each, in the listed order;
+// each in its own rank's slot numbering, node by node and each node's in atom order on both sides).
 // With the nodal step bound and ANP blocks, also the ANP tiles (their c^2, kernels/element_loop.hpp)
 // that hold a node the two share: this rank's atoms' (sent) and the other's (received), ascending.
 struct HaloSlots {
@@ -175,8 +176,10 @@ class InternalForces {
   // step's contact detection, which reads the same u); that thread then joins them.
   StressPassResult compute(const double* u, const double* v, double* f_out, StressSideTask side = StressSideTask{},
                            StressExchange exchange = StressExchange{});
-  // Ranks: from now on only the atoms of `rank` run (tet_atom and atom_rank: a Decomposition of
-  // this model with kAtomTets atoms); f_out is then right at the nodes they touch once the halo()
+  // Ranks (once): from now on only the atoms of `rank` run (tet_atom and atom_rank: a Decomposition
+  // of this model with kAtomTets atoms), and only their slots and those of the halo they receive
+  // are kept (halo() lists them in this rank's numbering: a pair's lists match by position);
+  // f_out is then right at the nodes they touch once the halo()
   // slots are exchanged (slot_forces()), and the result holds only this rank's atoms (the whole
   // one: pass_result of every rank's pass_sums() added; the other ranks' atoms keep empty results
   // here, so the result's minima are this rank's). The ANP blocks' J pass runs
@@ -247,12 +250,14 @@ class InternalForces {
   // memory and 3.6x the time of the pass).
   struct Partition {
     std::size_t block, begin, end, slot_begin, slot_end;
-    std::size_t tile_offset = 0;  // ANP blocks: its tiles' first in anp_tiles_
+    std::size_t tile_offset = 0;   // ANP blocks: its tiles' first in anp_tiles_
+    std::size_t corner_begin = 0;  // its first tet's corner in tet_slot_
   };
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
-  // Per tet corner (4 per tet, model numbering; stress-pass blocks only): its node's slot within
-  // its atom. Per node: its slots, ascending (= atom order), from node_slot_first_[n].
+  // Per corner of the atoms' tets (4 per tet, from each atom's corner_begin): its node's slot within
+  // its atom. Per node: its slots, ascending (= atom order), from node_slot_first_[n]. On ranks
+  // (keep_rank_slots) only this rank's atoms' corners, and the slots its atoms fill or receive.
   std::vector<std::uint16_t> tet_slot_;
   std::vector<std::size_t> node_slot_first_;
   std::vector<std::uint32_t> node_slots_;
@@ -314,6 +319,7 @@ class InternalForces {
   PassSums sums_;
   std::vector<NodeGhosts> anp_ghosts_;
   void set_anp_runs(const std::vector<char>& computed, const std::vector<char>& read, int rank);
+  void keep_rank_slots(int rank, const std::vector<std::uint32_t>& slot_partition);
   void anp_ghosts_of_rank(int rank, const std::vector<char>& touched, const std::vector<std::uint32_t>& slot_partition);
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
   void anp_pass(const double* u, const StressExchange& exchange);

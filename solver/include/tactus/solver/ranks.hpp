@@ -127,9 +127,14 @@ class RankStressPass : public StressPassEngine {
     std::size_t memory_bytes() const;
   };
   RankOrder forces_order_;  // the nodes each rank owns (InternalForces::node_ranks), 3 doubles each
-  // Mass scaling: per tet its rank; the tets' order (1 double each, built when scaling is on), and
-  // every tet's step.
-  std::vector<std::int32_t> tet_rank_;
+  // The tets' ranks as runs of consecutive tets of one rank (the decomposition's atoms, a rank's
+  // adjacent ones merged: a few per atom, not one per tet). Mass scaling: the tets' order (1 double
+  // each, built when scaling is on), and every tet's step.
+  struct TetRun {
+    std::size_t begin, end;
+    std::int32_t rank;
+  };
+  std::vector<TetRun> tet_runs_;
   RankOrder tets_order_;
   std::vector<double> all_dt2_;
   // Owned-node stepping (step_owned_nodes): the dofs this process integrates; per other process the
