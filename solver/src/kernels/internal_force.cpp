@@ -14,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <numeric>
@@ -168,23 +169,32 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
   return in == x.data() ? x : y;
 }
 
-std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
-  std::vector<Mat3> sigma(m.num_elements, Mat3::Zero());  // joint gaps stay 0
+void for_each_cauchy_stress(const Model& m, const double* u, const std::function<void(std::size_t, std::size_t, const Mat3&, const Mat3&)>& out) {
   // An ANP tet placed by rigid pieces has no volume floor (as in the stress pass).
   const bool any_anp = std::any_of(m.blocks.begin(), m.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
   const std::vector<char> rigid = any_anp ? rigid_nodes(m) : std::vector<char>();
-  for (const MaterialBlock& b : m.blocks) {
-    if (b.joint_gap) continue;  // placed by the bones, no stress (model.hpp): sigma stays 0
-    const std::vector<double> p = b.material.anp() ? anp_nodal_pressure(m, b, u) : std::vector<double>();
+  for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
+    const MaterialBlock& b = m.blocks[bi];
+    const bool stressed = !b.joint_gap;  // a joint gap is placed by the bones, no stress (model.hpp)
+    const std::vector<double> p = stressed && b.material.anp() ? anp_nodal_pressure(m, b, u) : std::vector<double>();
     for (std::size_t e = b.begin; e < b.end; ++e) {
       const std::int32_t* c = &m.conn[4 * e];
       const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, &m.grad[9 * e]);
+      if (!stressed) {
+        out(bi, e, F, Mat3::Zero());
+        continue;
+      }
       const bool placed = b.material.anp() && rigid[c[0]] && rigid[c[1]] && rigid[c[2]] && rigid[c[3]];
       const Mat3 P = b.material.anp() ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), b.data_of(e), !placed).P
                                       : b.material.evaluate(F, b.data_of(e)).P;
-      sigma[e] = cauchy_stress(F, P);
+      out(bi, e, F, cauchy_stress(F, P));
     }
   }
+}
+
+std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
+  std::vector<Mat3> sigma(m.num_elements, Mat3::Zero());
+  for_each_cauchy_stress(m, u, [&](std::size_t, std::size_t e, const Mat3&, const Mat3& s) { sigma[e] = s; });
   return sigma;
 }
 

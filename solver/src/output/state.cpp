@@ -65,37 +65,34 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
     for (const auto& f : b.material.type().result_fields)
       if (std::none_of(law_fields.begin(), law_fields.end(), [&](const MeshField& x) { return x.name == f.name; }))
         law_fields.push_back({f.name, f.components, std::vector<double>(static_cast<std::size_t>(f.components) * E)});
-  std::vector<Mat3> sigma = element_cauchy_stress(m, u.data());
+  // Per block the law's result fields it fills and its values' scratch.
+  std::vector<std::vector<MeshField*>> targets(m.blocks.size());
+  std::vector<std::vector<double>> values(m.blocks.size());
   for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
-    const MaterialBlock& b = m.blocks[bi];
-    const MaterialType& type = b.material.type();
-    std::vector<MeshField*> targets;
-    for (const auto& f : type.result_fields)
+    for (const auto& f : m.blocks[bi].material.type().result_fields) {
       for (auto& x : law_fields)
-        if (x.name == f.name) targets.push_back(&x);
-    std::size_t count = 0;
-    for (const auto& f : type.result_fields) count += static_cast<std::size_t>(f.components);
-    std::vector<double> values(count);
-    for (std::size_t e = b.begin; e < b.end; ++e) {
-      const Mat3 F = Mat3::Identity() + nodal_gradient(u.data(), &m.conn[4 * e], &m.grad[9 * e]);
-      const Mat3& s = sigma[e];
-      const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
-      const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
-      for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
-      vm.values[out] = von_mises(s);
-      block_peak[bi] = std::max(block_peak[bi], vm.values[out]);
-      material.values[out] = static_cast<double>(bi);
-      jac.values[out] = F.row(0).dot(cofactor(F).row(0));
-      if (targets.empty()) continue;
-      type.result_values(b.material.law(), F, b.data_of(e), values.data());
-      std::size_t at = 0;
-      for (MeshField* f : targets) {
-        const auto n = static_cast<std::size_t>(f->components);
-        for (std::size_t c = 0; c < n; ++c) f->values[n * out + c] = values[at++];
-      }
+        if (x.name == f.name) targets[bi].push_back(&x);
+      values[bi].resize(values[bi].size() + static_cast<std::size_t>(f.components));
     }
   }
-  std::vector<Mat3>().swap(sigma);  // (72 bytes per tet) not held while the file is written
+  // Each tet's stress straight into the fields (no array of every tet's tensor at the writer's peak).
+  for_each_cauchy_stress(m, u.data(), [&](std::size_t bi, std::size_t e, const Mat3& F, const Mat3& s) {
+    const MaterialBlock& b = m.blocks[bi];
+    const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
+    const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
+    for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
+    vm.values[out] = von_mises(s);
+    block_peak[bi] = std::max(block_peak[bi], vm.values[out]);
+    material.values[out] = static_cast<double>(bi);
+    jac.values[out] = F.row(0).dot(cofactor(F).row(0));
+    if (targets[bi].empty()) return;
+    b.material.type().result_values(b.material.law(), F, b.data_of(e), values[bi].data());
+    std::size_t at = 0;
+    for (MeshField* f : targets[bi]) {
+      const auto n = static_cast<std::size_t>(f->components);
+      for (std::size_t c = 0; c < n; ++c) f->values[n * out + c] = values[bi][at++];
+    }
+  });
   std::vector<MeshField> cell_fields;
   for (MeshField* f : {&stress, &vm, &material, &body, &jac}) cell_fields.push_back(std::move(*f));
   for (auto& f : law_fields) cell_fields.push_back(std::move(f));

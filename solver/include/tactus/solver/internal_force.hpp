@@ -8,6 +8,7 @@
 // threads, and a rank that owns whole atoms can add the same terms in the same order.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -100,6 +101,10 @@ std::vector<double> anp_rest_rows(const Model& model, const MaterialBlock& block
 // The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
 // volumetric part is the average of its nodes' pressures.
 std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
+// The same tet by tet, block by block in model order, without the array (72 bytes per tet): out(block,
+// tet, F, sigma) with the tet's deformation gradient (the outputs' writer).
+void for_each_cauchy_stress(const Model& model, const double* u,
+                            const std::function<void(std::size_t block, std::size_t tet, const Mat3& F, const Mat3& sigma)>& out);
 
 // What a run of the element loop (kernels/element_loop.hpp) accumulates besides the forces.
 struct StressAccumulator {
