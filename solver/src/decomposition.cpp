@@ -3,7 +3,6 @@
 #include <metis.h>
 
 #include <algorithm>
-#include <array>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -26,7 +25,7 @@ int tet_cost(const MaterialBlock& b) {
 struct NodeTets {
   std::vector<std::size_t> first;  // num_nodes + 1
   std::vector<std::uint32_t> tets;
-  NodeTets(const Model& m) : first(m.num_nodes + 1, 0), tets(m.conn.size()) {
+  explicit NodeTets(const Model& m) : first(m.num_nodes + 1, 0), tets(m.conn.size()) {
     for (const std::int32_t n : m.conn) ++first[static_cast<std::size_t>(n) + 1];
     for (std::size_t n = 0; n < m.num_nodes; ++n) first[n + 1] += first[n];
     std::vector<std::size_t> next(first.begin(), first.end() - 1);
@@ -91,11 +90,16 @@ bool connected(const AtomGraph& g) {
   return reached == n;
 }
 
-void measure(const Model& m, const NodeTets& at, Decomposition& d) {
+// The quality of d's ranks; g: its atoms' graph (a face inside an atom never crosses ranks, so the
+// faces cut are the weights of the graph's edges between ranks, each edge listed from both ends).
+void measure(const Model& m, const NodeTets& at, const AtomGraph& g, Decomposition& d) {
   const std::size_t tets = m.conn.size() / 4;
   const auto rank_of = [&](std::size_t e) { return d.atom_rank[d.tet_atom[e]]; };
-  d.edge_cut_faces = 0;
-  for_each_shared_face(m, at, [&](std::size_t a, std::size_t b) { d.edge_cut_faces += rank_of(a) != rank_of(b); });
+  std::size_t cut_twice = 0;
+  for (std::size_t a = 0; a + 1 < g.xadj.size(); ++a)
+    for (auto k = static_cast<std::size_t>(g.xadj[a]); k < static_cast<std::size_t>(g.xadj[a + 1]); ++k)
+      if (d.atom_rank[a] != d.atom_rank[static_cast<std::size_t>(g.adjncy[k])]) cut_twice += static_cast<std::size_t>(g.adjwgt[k]);
+  d.edge_cut_faces = cut_twice / 2;
   const auto ranks = static_cast<std::size_t>(d.ranks);
   d.rank_cost.assign(ranks, 0);
   d.rank_tets.assign(ranks, 0);
@@ -144,8 +148,8 @@ Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, co
                      std::to_string(ranks));
   d.atom_rank.assign(atoms, 0);
   const NodeTets at(model);
+  AtomGraph g = atom_graph(model, at, d);  // (METIS takes its arrays as non-const)
   if (ranks > 1) {
-    AtomGraph g = atom_graph(model, at, d);
     std::vector<idx_t> weight(d.atom_cost.begin(), d.atom_cost.end()), part(atoms, 0);
     idx_t n = static_cast<idx_t>(atoms), constraints = 1, parts = ranks, cut = 0;
     idx_t options[METIS_NOPTIONS];
@@ -159,7 +163,7 @@ Decomposition decompose(const Model& model, int ranks, std::size_t atom_tets, co
     if (status != METIS_OK) throw NumericalError("decomposition: METIS failed (status " + std::to_string(status) + ")");
     for (std::size_t a = 0; a < atoms; ++a) d.atom_rank[a] = static_cast<std::int32_t>(part[a]);
   }
-  measure(model, at, d);
+  measure(model, at, g, d);
   return d;
 }
 
@@ -194,7 +198,8 @@ Decomposition read_partition(const Model& model, const std::filesystem::path& fi
     if (count[r] == 0)
       throw InputError(name, "atom_rank", "every rank from 0 to " + std::to_string(d.ranks - 1) + " given an atom",
                        "none for rank " + std::to_string(r));
-  measure(model, NodeTets(model), d);
+  const NodeTets at(model);
+  measure(model, at, atom_graph(model, at, d), d);
   return d;
 }
 

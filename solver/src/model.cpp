@@ -45,16 +45,16 @@ struct MortonFrame {
   }
 };
 
-// For k in [begin, end): item k of v (width values each, item i at v[width (i - base)]) becomes
-// the item that was at order[k], which lies in [begin, end) too (order permutes the range); the
-// items move along the permutation's cycles with one held aside, so no second array is needed.
-// placed: scratch.
+// For k in [begin, end): item k of v (width values each, v holding the range's items from item
+// `begin`) becomes the item that was at order[k], which lies in [begin, end) too (order permutes
+// the range); the items move along the permutation's cycles with one held aside, so no second
+// array is needed. placed: scratch.
 template <class T>
 void gather_in_place(std::vector<T>& v, std::size_t width, const std::vector<std::size_t>& order, std::size_t begin, std::size_t end,
-                     std::size_t base, std::vector<bool>& placed) {
+                     std::vector<bool>& placed) {
   placed.assign(end - begin, false);
   std::vector<T> held(width);
-  const auto at = [&](std::size_t item) { return v.begin() + static_cast<std::ptrdiff_t>(width * (item - base)); };
+  const auto at = [&](std::size_t item) { return v.begin() + static_cast<std::ptrdiff_t>(width * (item - begin)); };
   for (std::size_t start = begin; start < end; ++start) {
     if (placed[start - begin]) continue;
     std::copy(at(start), at(start) + static_cast<std::ptrdiff_t>(width), held.begin());
@@ -148,12 +148,12 @@ void reorder_for_locality(Model& m) {
   // peak: on a 1M-tet model a copy of the reference gradients alone is 72 MB).
   std::vector<bool> placed;
   for (auto& b : m.blocks)  // the blocks' per-element data follows its elements
-    if (b.per_element_data()) gather_in_place(b.element_data, b.material.type().element_data_size, eorder, b.begin, b.end, b.begin, placed);
-  gather_in_place(m.conn, 4, eorder, 0, m.num_elements, 0, placed);
-  gather_in_place(m.input_element, 1, eorder, 0, m.num_elements, 0, placed);
+    if (b.per_element_data()) gather_in_place(b.element_data, b.material.type().element_data_size, eorder, b.begin, b.end, placed);
+  gather_in_place(m.conn, 4, eorder, 0, m.num_elements, placed);
+  gather_in_place(m.input_element, 1, eorder, 0, m.num_elements, placed);
   if (!m.grad.empty()) {
-    gather_in_place(m.grad, 9, eorder, 0, m.num_elements, 0, placed);
-    gather_in_place(m.volume, 1, eorder, 0, m.num_elements, 0, placed);
+    gather_in_place(m.grad, 9, eorder, 0, m.num_elements, placed);
+    gather_in_place(m.volume, 1, eorder, 0, m.num_elements, placed);
   }
   for (std::size_t k = 0; k < m.num_elements; ++k) m.element_of_input[static_cast<std::size_t>(m.input_element[k])] = static_cast<std::int32_t>(k);
 }
