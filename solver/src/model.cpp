@@ -173,6 +173,13 @@ std::size_t Model::memory_bytes() const {
          bytes(input_mesh.tets) + bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) + bytes(input_mesh.triangle_group) + bytes(tet_body);
 }
 
+void Model::release_tet_geometry() {
+  grad = std::vector<double>(), volume = std::vector<double>();
+  for (MaterialBlock& b : blocks)
+    if (b.per_element_data()) b.element_data = std::vector<double>(), b.element_data_released = true;
+  tet_geometry_released = true;
+}
+
 const MaterialBlock& Model::block_of(std::size_t e) const {
   for (const auto& b : blocks)
     if (e >= b.begin && e < b.end) return b;

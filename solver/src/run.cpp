@@ -498,13 +498,16 @@ nlohmann::json rank_report(StressPassEngine* shared, const Model& model, const E
 
 void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankRun& ranks) {
   const auto wall_start = std::chrono::steady_clock::now();
-  const Model model = build_model(sc);
+  Model model = build_model(sc);
   const std::unique_ptr<StressPassEngine> shared = rank_stress_pass(model, sc, &ranks);
   ExplicitSolver solver(model, sc.run, sc.damping, shared.get());
   if (from) {
     StateArchive a(from->state, from->file.string());
-    solver.checkpoint(a);
+    solver.checkpoint(a);  // (its check runs this rank's pass over the whole model, once)
   }
+  // This rank writes no results: its pass keeps its own atoms' geometry, and the model's goes
+  // (every tet's gradients, volumes and law data; the model's scatter will not build it here).
+  if (shared->hold_own_geometry()) model.release_tet_geometry();
   // RunLoop::run's steps, less its writes (no collective happens in those) but for this rank's
   // part of each checkpoint.
   const bool rank_parts = sc.run.checkpoints();

@@ -12,9 +12,11 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <random>
 #include <set>
 
 #include "expect_error.hpp"
+#include "material_kit.hpp"
 #include "tactus/core/error.hpp"
 #include "tactus/data_samples/box_mesh.hpp"
 #include "tactus/solver/decomposition.hpp"
@@ -169,4 +171,83 @@ TEST(Decomposition, TwoRanksInOneProcessAddTheSameBitsAsOne) {
   std::printf("stress-pass bytes: one process %zu, rank 0 %zu, rank 1 %zu\n", one.memory_bytes(), rank0.memory_bytes(), rank1.memory_bytes());
   EXPECT_LT(rank0.memory_bytes(), one.memory_bytes());
   EXPECT_LT(rank1.memory_bytes(), one.memory_bytes());
+}
+
+// A rank that writes no results keeps its own atoms' geometry and releases the model's
+// (InternalForces::hold_own_geometry, Model::release_tet_geometry). Its pass must read the same
+// reference gradients, volumes and per-tet law data as before: hgo with random fibres per tet (the
+// law's data travels too), both ranks' forces at their nodes and the sum of their energies against
+// one process's bits, computed before the release.
+TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleasesIt) {
+  Model model = build_model(samples::make_box_mesh(8, 8, 4, 0.08, 0.08, 0.04), testkit::paper_hgo(1e8, "standard"));
+  MaterialBlock& block = model.blocks[0];
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> noise(-1.0, 1.0);
+  block.element_data.resize(6 * model.num_elements);
+  for (std::size_t k = 0; k < block.element_data.size(); k += 3) {
+    double* a = &block.element_data[k];
+    for (int j = 0; j < 3; ++j) a[j] = noise(rng);
+    const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (int j = 0; j < 3; ++j) a[j] /= n;
+  }
+  const Decomposition d = decompose(model, 2);
+  std::vector<double> u(3 * model.num_nodes);
+  for (std::size_t n = 0; n < model.num_nodes; ++n)
+    for (int i = 0; i < 3; ++i) u[3 * n + i] = 0.0005 * std::sin(40.0 * model.X[3 * n + (i + 1) % 3] + i);
+  std::vector<double> f_one(3 * model.num_nodes);
+  double energy_one = 0;
+  {
+    InternalForces one(model, 0.0, 1);
+    energy_one = one.compute(u.data(), nullptr, f_one.data()).strain_energy;
+  }
+  InternalForces rank0(model, 0.0, 1), rank1(model, 0.0, 1);
+  rank0.own_atoms(d.tet_atom, d.atom_rank, 0);
+  rank1.own_atoms(d.tet_atom, d.atom_rank, 1);
+  rank0.hold_own_geometry(), rank1.hold_own_geometry();
+  const std::size_t whole = model.memory_bytes();
+  model.release_tet_geometry();
+  const std::size_t released = whole - model.memory_bytes();
+  std::printf("released %zu bytes of the model's %zu (%zu tets: gradients, volume and 6 fibre components, %zu bytes each)\n", released, whole,
+              model.num_elements, (9 + 1 + 6) * sizeof(double));
+  EXPECT_EQ(released, (9 + 1 + 6) * sizeof(double) * model.num_elements);
+  EXPECT_THROW(InternalForces(model, 0.0, 1), std::logic_error);
+  EXPECT_THROW(static_cast<void>(model.blocks[0].data()), std::logic_error);
+  // Each rank's pass with the other's halo slots copied in by position (as MPI would send them).
+  struct Copy {
+    InternalForces *to, *from;
+  };
+  const auto exchange_from = [](Copy& copy) {
+    StressExchange exchange;
+    exchange.context = &copy;
+    exchange.finish = [](void* c) {
+      auto* k = static_cast<Copy*>(c);
+      const HaloSlots &to = k->to->halo()[0], &from = k->from->halo()[0];
+      for (std::size_t j = 0; j < to.receive.size(); ++j)
+        for (std::size_t i = 0; i < InternalForces::kSlotDoubles; ++i)
+          k->to->slot_forces()[InternalForces::kSlotDoubles * to.receive[j] + i] =
+              k->from->slot_forces()[InternalForces::kSlotDoubles * from.send[j] + i];
+    };
+    return exchange;
+  };
+  std::vector<double> f0(3 * model.num_nodes), f1(3 * model.num_nodes);
+  rank1.compute(u.data(), nullptr, f1.data());
+  Copy to0{&rank0, &rank1}, to1{&rank1, &rank0};
+  rank0.compute(u.data(), nullptr, f0.data(), StressSideTask{}, exchange_from(to0));
+  rank1.compute(u.data(), nullptr, f1.data(), StressSideTask{}, exchange_from(to1));
+  std::size_t compared = 0, differ = 0;
+  for (std::size_t e = 0; e < model.num_elements; ++e) {
+    const std::vector<double>& f = d.atom_rank[d.tet_atom[e]] == 0 ? f0 : f1;
+    for (int k = 0; k < 4; ++k) {
+      const auto n = static_cast<std::size_t>(model.conn[4 * e + static_cast<std::size_t>(k)]);
+      for (int i = 0; i < 3; ++i) ++compared, differ += std::memcmp(&f[3 * n + i], &f_one[3 * n + i], sizeof(double)) != 0;
+    }
+  }
+  PassSums both = rank0.pass_sums();
+  const auto words = rank1.pass_sums().energy.words();
+  both.energy.add_words(words.data());
+  const double energy_ranks = both.energy.value();
+  std::printf("held geometry, 2 ranks: %zu of %zu force components (with repeats) differ in any bit; strain energy %.17g J, one process %.17g J\n",
+              differ, compared, energy_ranks, energy_one);
+  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(std::memcmp(&energy_ranks, &energy_one, sizeof(double)), 0);
 }

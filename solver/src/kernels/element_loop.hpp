@@ -42,13 +42,16 @@ static_assert(kAnpTile % lanes::kLanes == 0);
 
 // One partition of one material block (internal_force.hpp).
 struct StressKernelArgs {
+  // The call's tets' arrays, each from the call's first tet (tet e's at e - begin): a rank reads
+  // its atoms' geometry from its own compact copy (InternalForces::hold_own_geometry), one
+  // process from the model's.
   const std::int32_t* conn;  // 4 per tet (model numbering)
   const double* grad;        // 9 per tet
   const double* volume;
   const void* law;
-  const double* element_data;  // the block's data of its first element
+  const double* element_data;  // the law's data of the first tet
   std::size_t data_stride;     // doubles per element; 0: every element shares the law's constants
-  std::size_t block_begin;     // element index of element_data
+  std::size_t block_begin;     // element index of the block's first tet (anp_bound_factor)
   std::size_t begin, end;      // the elements of this call
   const double* u;
   const double* v;  // for the viscous part (beta > 0)
@@ -221,14 +224,14 @@ TACTUS_KERNEL_INLINE LawStress<T> lane_law_stress(const StressKernelArgs& a, con
   constexpr std::size_t kData = element_data_size<Law>();
   T data[kData];
   if constexpr (requires { Law::kElementData; }) {
-    const double* first = a.element_data + a.data_stride * (e - a.block_begin);
+    const double* first = a.element_data + a.data_stride * (e - a.begin);
     for (std::size_t k = 0; k < kData; ++k) data[k] = load_strided<T>(first + k, a.data_stride);
   } else {
     data[0] = lanes::splat<T>(0.0);
   }
   if constexpr (kAnp) {
     LawStress<T> sp = mat.evaluate_isochoric(d.F, d.cof, d.J, data);
-    const std::int32_t* c = a.conn + 4 * e;
+    const std::int32_t* c = a.conn + 4 * (e - a.begin);
     const double* np = a.nodal_pressure;  // the mean of the tet's nodal pressures: its energy is the nodes' (J pass)
     T p = lanes::make_lanes<T>([&](int l) {
       const std::int32_t* cl = c + 4 * l;
@@ -282,7 +285,7 @@ TACTUS_KERNEL_INLINE void add_viscous_stress(const StressKernelArgs& a, const La
                                              M3<T>& P, LaneResults<T>& out) {
   const double visc_mu = mat.small_strain_shear(), visc_lambda = mat.small_strain_bulk() - 2.0 * visc_mu / 3.0;
   const M3<T>& cof = d.cof;
-  const M3<T> Fdot = nodal_gradient_lanes(a.v, a.conn + 4 * e, d.g);
+  const M3<T> Fdot = nodal_gradient_lanes(a.v, a.conn + 4 * (e - a.begin), d.g);
   M3<T> D;
   const T inv_J = 1.0 / d.J;
   for (int i = 0; i < 3; ++i)
@@ -351,7 +354,7 @@ TACTUS_KERNEL_INLINE void scatter_forces(const StressKernelArgs& a, std::size_t 
 template <class Law, bool kViscous, bool kAnp, class T>
 TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& mat, std::size_t e, LaneResults<T>& out, LaneResults<double>& scalar) {
   constexpr int L = lanes::lanes_of<T>;
-  const LaneDeformation<T> d = deformation_lanes<T>(a.grad, a.conn, a.u, e);
+  const LaneDeformation<T> d = deformation_lanes<T>(a.grad, a.conn, a.u, e - a.begin);
   if constexpr (L > 1) {
     if (!all_positive(d.J)) {  // an inverted tet: lane by lane, so it is recorded and skipped as alone
       for (int l = 0; l < L; ++l) element_lanes<Law, kViscous, kAnp, double>(a, mat, e + static_cast<std::size_t>(l), scalar, scalar);
@@ -366,7 +369,7 @@ TACTUS_KERNEL_INLINE void element_lanes(const StressKernelArgs& a, const Law& ma
     if (!(d.J > 0)) return;  // reported by the caller; the step is abandoned
 
   LawStress<T> sp = lane_law_stress<Law, kAnp, T>(a, mat, e, d);
-  const T V0 = load_strided<T>(a.volume + e, 1);
+  const T V0 = load_strided<T>(a.volume + (e - a.begin), 1);
   out.energy += V0 * sp.W;
   T cg[4][3];
   const T sJ2 = current_gradients(d.cof, d.g, cg);
@@ -398,10 +401,10 @@ void stress_range(const StressKernelArgs& a, StressAccumulator& acc) {
     for (; e + lanes::kLanes <= a.end; e += lanes::kLanes) {
       if (e + kPrefetchAhead + lanes::kLanes <= a.end)
         for (int k = 0; k < 4 * lanes::kLanes; ++k) {
-          const std::size_t corner = 4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k);
+          const std::size_t corner = 4 * (e + kPrefetchAhead - a.begin) + static_cast<std::size_t>(k);
           const auto node = static_cast<std::size_t>(a.conn[corner]);
           __builtin_prefetch(a.u + 3 * node);
-          __builtin_prefetch(a.f + kForceStride * std::size_t{a.f_slot[corner - 4 * a.begin]}, 1);
+          __builtin_prefetch(a.f + kForceStride * std::size_t{a.f_slot[corner]}, 1);
           if constexpr (kAnp) __builtin_prefetch(a.nodal_pressure + node);
         }
       element_lanes<Law, kViscous, kAnp, Pack>(a, mat, e, packed, scalar);

@@ -200,6 +200,7 @@ std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
 
 InternalForces::InternalForces(const Model& model, double beta, int threads)
     : model_(model), beta_(beta), threads_(threads > 0 ? threads : default_threads(model.num_elements)) {
+  if (model.tet_geometry_released) throw std::logic_error("InternalForces: the model's tet geometry was released (Model::release_tet_geometry)");
   block_pressure_.assign(model.blocks.size(), nullptr);
   for (std::size_t k = 0; k < model.blocks.size(); ++k)
     if (model.blocks[k].material.anp() && model.blocks[k].has_stress_pass()) {
@@ -315,6 +316,7 @@ std::size_t InternalForces::memory_bytes() const {
   b += node_moves_.capacity() + rigid_node_.capacity() + touched_.capacity() +
        (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
+  b += (held_grad_.capacity() + held_volume_.capacity() + held_data_.capacity()) * sizeof(double);
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
@@ -435,11 +437,14 @@ void InternalForces::stress_partition(std::size_t p, const double* u, const doub
   double* f = partition_forces_.data() + kForceStride * q.slot_begin;
   std::fill(f, f + kForceStride * (q.slot_end - q.slot_begin), 0.0);
   StressAccumulator acc;
-  StressKernelArgs args{model_.conn.data(),
-                        model_.grad.data(),
-                        model_.volume.data(),
+  const double* grad = holds_geometry_ ? held_grad_.data() + 9 * q.held_tet : model_.grad.data() + 9 * q.begin;
+  const double* volume = holds_geometry_ ? held_volume_.data() + q.held_tet : model_.volume.data() + q.begin;
+  const double* data = !b.per_element_data() ? b.data() : holds_geometry_ ? held_data_.data() + q.held_data : b.data_of(q.begin);
+  StressKernelArgs args{model_.conn.data() + 4 * q.begin,
+                        grad,
+                        volume,
                         b.material.law(),
-                        b.data(),
+                        data,
                         b.data_stride(),
                         b.begin,
                         q.begin,
@@ -660,6 +665,31 @@ void InternalForces::keep_rank_slots(int rank, const std::vector<std::uint32_t>&
   tet_slot_ = std::move(tet_slot);
   partition_forces_ = std::vector<double>(kForceStride * local[slots], 0.0);
   partition_volumes_ = std::vector<double>(local[slots], 0.0);
+}
+
+void InternalForces::hold_own_geometry() {
+  if (own_rank_ < 0) throw std::logic_error("InternalForces::hold_own_geometry: before own_atoms (one process reads the model's)");
+  if (holds_geometry_) return;
+  std::size_t tets = 0, data = 0;
+  for (std::size_t p = 0; p < partitions_.size(); ++p) {
+    if (partition_rank_[p] != own_rank_) continue;
+    const Partition& q = partitions_[p];
+    tets += q.end - q.begin;
+    if (const MaterialBlock& b = model_.blocks[q.block]; b.per_element_data()) data += b.data_stride() * (q.end - q.begin);
+  }
+  held_grad_.reserve(9 * tets), held_volume_.reserve(tets), held_data_.reserve(data);
+  for (std::size_t p = 0; p < partitions_.size(); ++p) {
+    if (partition_rank_[p] != own_rank_) continue;
+    Partition& q = partitions_[p];
+    const MaterialBlock& b = model_.blocks[q.block];
+    q.held_tet = held_volume_.size(), q.held_data = held_data_.size();
+    held_grad_.insert(held_grad_.end(), model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * q.begin),
+                      model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * q.end));
+    held_volume_.insert(held_volume_.end(), model_.volume.begin() + static_cast<std::ptrdiff_t>(q.begin),
+                        model_.volume.begin() + static_cast<std::ptrdiff_t>(q.end));
+    if (b.per_element_data()) held_data_.insert(held_data_.end(), b.data_of(q.begin), b.data_of(q.end));
+  }
+  holds_geometry_ = true;
 }
 
 // The node runs of the ANP J pass (anp_pass): where `computed` holds, in runs of consecutive nodes

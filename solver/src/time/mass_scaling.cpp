@@ -24,9 +24,11 @@ MassScaling::MassScaling(const Model& model, double floor) : model_(model), floo
   added_to_body.assign(model.bodies.size(), 0.0);
   body_mass.assign(model.bodies.size(), 0.0);
   element_body_.resize(model.num_elements);
+  element_mass_.resize(model.num_elements);
   for (std::size_t e = 0; e < model.num_elements; ++e) {
     element_body_[e] = model.tet_body[static_cast<std::size_t>(model.input_element[e])];
-    body_mass[static_cast<std::size_t>(element_body_[e])] += model.block_of(e).material.density() * model.volume[e];
+    element_mass_[e] = model.block_of(e).material.density() * model.volume[e];
+    body_mass[static_cast<std::size_t>(element_body_[e])] += element_mass_[e];
   }
 }
 
@@ -34,12 +36,11 @@ void MassScaling::scale(std::vector<double>& factor, const std::vector<double>& 
   const double floor2 = floor_ * floor_;
   for (const MaterialBlock& b : model_.blocks) {
     if (!b.has_stress_pass()) continue;  // no step of their own
-    const double rho = b.material.density();
     for (std::size_t e = b.begin; e < b.end; ++e) {
       if (!(dt2[e] * factor[e] < floor2)) continue;
       // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
       const double target = floor2 / dt2[e];
-      const double added = rho * model_.volume[e] * (target - factor[e]);
+      const double added = element_mass_[e] * (target - factor[e]);  // rho V (target - factor), as rho V is one product
       factor[e] = target;
       for (int k = 0; k < 4; ++k) {
         const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);

@@ -191,6 +191,12 @@ class InternalForces {
   // over the rank's own nodes, with its ghost nodes' values exchanged after each node pass
   // (anp_ghosts()).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
+  // Ranks, after own_atoms: copies this rank's atoms' reference gradients, volumes and per-tet
+  // law data (fibres) into arrays of its own, in atom order, and reads them from there, so the
+  // model's copies may be released (Model::release_tet_geometry; 80 bytes per tet and the law's
+  // data, of which this rank keeps its share). A process that keeps the model's (the writer)
+  // does not call it.
+  void hold_own_geometry();
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }
   double* slot_volumes() { return partition_volumes_.data(); }  // the ANP atoms' nodal volumes, 1 per slot
@@ -257,7 +263,13 @@ class InternalForces {
     std::size_t block, begin, end, slot_begin, slot_end;
     std::size_t tile_offset = 0;   // ANP blocks: its tiles' first in anp_tiles_
     std::size_t corner_begin = 0;  // its first tet's corner in tet_slot_
+    // After hold_own_geometry: its first tet in held_grad_ / held_volume_, and its first tet's
+    // law data in held_data_ (blocks with per-tet data).
+    std::size_t held_tet = 0, held_data = 0;
   };
+  // The geometry this rank's atoms read (hold_own_geometry; empty: the model's).
+  bool holds_geometry_ = false;
+  std::vector<double> held_grad_, held_volume_, held_data_;
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;
   // Per corner of the atoms' tets (4 per tet, from each atom's corner_begin): its node's slot within

@@ -56,6 +56,9 @@ class MassScaling {
   const Model& model_;
   double floor_;
   std::vector<std::int32_t> element_body_;  // per tet (model numbering), its body
+  // Per tet: rho V, its own copy (a rank that writes no results releases the model's volumes,
+  // Model::release_tet_geometry, and every rank scales every tet alike).
+  std::vector<double> element_mass_;
   std::vector<std::uint32_t> raised_;
 };
 

@@ -4,6 +4,7 @@
 // integrator only reads it.
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -39,9 +40,16 @@ struct MaterialBlock {
   // slide and fold), so it carries no stress and sets no step. Named "<material>_joint_gap".
   bool joint_gap = false;
 
+  // Released (Model::release_tet_geometry): the per-element data lives with the stress pass of
+  // the rank that runs each tet; reading it here is a programming error.
+  bool element_data_released = false;
+
   bool has_stress_pass() const { return !joint_gap && !material.rigid(); }
-  bool per_element_data() const { return !element_data.empty(); }
-  const double* data() const { return per_element_data() ? element_data.data() : material.constant_element_data().data(); }
+  bool per_element_data() const { return !element_data.empty() || element_data_released; }
+  const double* data() const {
+    if (element_data_released) throw std::logic_error("material block '" + name + "': its per-tet data was released (Model::release_tet_geometry)");
+    return per_element_data() ? element_data.data() : material.constant_element_data().data();
+  }
   std::size_t data_stride() const { return per_element_data() ? material.type().element_data_size : 0; }
   const double* data_of(std::size_t e) const { return data() + data_stride() * (e - begin); }
 };
@@ -107,6 +115,14 @@ struct Model {
 
   // The bones' motion by their joints (joint_settings.hpp); off without a [skeleton].
   JointDriveSetup joint_drive;
+
+  // On a rank that does not write results, once its stress pass holds its own atoms' geometry
+  // (InternalForces::hold_own_geometry) and nothing else reads it: frees every tet's reference
+  // gradients, volumes and per-tet law data (80 bytes per tet and the law's), which every rank
+  // builds with the model. A later reader fails loudly (tet_geometry_released) rather than
+  // reading nothing. The step towards the model's scatter (docs/design.md).
+  void release_tet_geometry();
+  bool tet_geometry_released = false;
 
   std::size_t memory_bytes() const;                          // everything held, including the input mesh copy
   std::string describe_element(std::size_t internal) const;  // "tet 123 (body hand, group bone, material bone)"

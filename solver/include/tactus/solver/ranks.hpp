@@ -8,9 +8,9 @@
 // step bound are one global MINLOC. For the integrator (StressPassEngine) the forces of the shared
 // nodes, which every rank integrates, are gathered from the ranks that own them (those whose first
 // atom is theirs); each rank integrates those and its own (owned-node stepping), and receives the
-// other nodes it reads after each update. Every rank holds the whole model for now (scattering it is
-// a later step); the ANP blocks' J pass runs over each rank's own nodes, with the volumes at shared
-// nodes and the ghost nodes' values exchanged (InternalForces::anp_ghosts).
+// other nodes it reads after each update. Every rank builds the whole model for now (scattering it is
+// a later step; a rank that writes no results keeps only its atoms' geometry, hold_own_geometry); the ANP blocks' J pass runs over each rank's own
+// nodes, with the volumes at shared nodes and the ghost nodes' values exchanged (InternalForces::anp_ghosts).
 #include <mpi.h>
 
 #include <vector>
@@ -52,6 +52,10 @@ class RankStressPass : public StressPassEngine {
   void gather_sum_chunks(double* chunks, std::size_t width) override;
   void gather_some_nodes(const std::vector<std::uint32_t>& nodes, std::initializer_list<double*> arrays) override;
   void gather_nodes(std::initializer_list<double*> arrays) override;
+  bool hold_own_geometry() override {
+    forces_.hold_own_geometry();
+    return true;
+  }
   // Owned-node stepping: the nodes this process integrates, and the doubles it sends in one
   // share_ghosts.
   std::size_t integrated_nodes() const { return integrated_dofs_.size() / 3; }

@@ -75,6 +75,10 @@ class StressPassEngine {
   // Collective: every node's 3 values of each array from the process that integrates it, so that
   // every process holds the whole state (before a state file or the last good state is written).
   virtual void gather_nodes(std::initializer_list<double*> /*arrays*/) {}
+  // On ranks: the pass reads its own atoms' geometry from its own copy from now on
+  // (InternalForces::hold_own_geometry), so that a process that writes no results may release
+  // the model's. Returns false where there is nothing to hold (one process reads the model's).
+  virtual bool hold_own_geometry() { return false; }
 
  private:
   std::vector<std::uint32_t> no_dofs_;
