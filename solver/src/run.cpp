@@ -183,6 +183,9 @@ class RunLoop {
         solver_.advance_velocity();
         observe_step();
         solver_.check_energy();
+        // On ranks every rank takes part in a state's cell records when its solver says one is due.
+        if (ranks_ && scheduled() != solver_.at_output_time())
+          throw std::logic_error("run loop: the state schedule and the solver's output times disagree at t = " + std::to_string(solver_.time()));
         if (scheduled()) write_scheduled_state();
         if (solver_.finished()) break;
         if (solver_.relaxed()) {  // dynamic relaxation converged: this state ends the run (relaxation.hpp)
@@ -442,7 +445,8 @@ class RunLoop {
   // A state file; `output` adds its contact row to run.json's contact.at_outputs (the scheduled
   // outputs and the last good state; the initial state has had no contact step yet).
   void write(const std::string& name, const std::vector<double>& u, const std::vector<double>& v, double t, bool output = true) {
-    const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, &solver_.contact(), t, solver_.grip_regions());
+    const CellRecords records = [&](const CellSink& sink) { solver_.cell_records(u, v, sink); };
+    const std::vector<double> vm = write_state(model_, folder_ / "results" / name, u, v, records, &solver_.contact(), t, solver_.grip_regions());
     for (std::size_t b = 0; b < vm.size(); ++b) summary_.von_mises_peak[b] = std::max(summary_.von_mises_peak[b], vm[b]);
     if (output && !solver_.contact().empty()) {
       const ContactStepReport& cr = solver_.contact_report();
@@ -501,13 +505,14 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
   Model model = build_model(sc);
   const std::unique_ptr<StressPassEngine> shared = rank_stress_pass(model, sc, &ranks);
   ExplicitSolver solver(model, sc.run, sc.damping, shared.get());
+  // Rank 0's writes, in which every rank computes its own tets' cell records.
+  const auto state_records = [&](const std::vector<double>& u, const std::vector<double>& v) { solver.cell_records(u, v, [](auto...) {}); };
   if (from) {
     StateArchive a(from->state, from->file.string());
-    solver.checkpoint(a);  // (its check runs this rank's pass over the whole model, once)
+    solver.checkpoint(a);  // (its check runs this process's pass over the whole model, once)
   }
-  // This rank writes no results: its pass keeps its own atoms' geometry, and the model's goes
-  // (every tet's gradients, volumes and law data; the model's scatter will not build it here).
-  if (shared->hold_own_geometry()) model.release_tet_geometry();
+  model.release_tet_geometry();                                                // the pass holds this rank's (after the restart check, as on rank 0)
+  if (!from) state_records(solver.displacement(), solver.velocity_at_step());  // the initial state
   // RunLoop::run's steps, less its writes (no collective happens in those) but for this rank's
   // part of each checkpoint.
   const bool rank_parts = sc.run.checkpoints();
@@ -526,12 +531,18 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
       }
       solver.advance_velocity();
       solver.check_energy();
-      if (solver.finished() || solver.relaxed()) break;
+      if (solver.at_output_time()) state_records(solver.displacement(), solver.velocity_at_step());
+      if (solver.finished()) break;
+      if (solver.relaxed()) {
+        state_records(solver.displacement(), solver.velocity_at_step());
+        break;
+      }
       solver.advance_position();
     }
   } catch (const NumericalError&) {
     failure = std::current_exception();
     solver.gather_state();  // as rank 0 does before it writes the last good state
+    state_records(solver.previous_displacement(), solver.half_step_velocity());
   }
   rank_report(shared.get(), model, solver, wall_start);
   if (failure) std::rethrow_exception(failure);
@@ -539,7 +550,7 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
 
 RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIdentity& identity, const RestartPoint* from, const RankRun* ranks) {
   const auto wall_start = std::chrono::steady_clock::now();
-  const Model model = build_model(sc);
+  Model model = build_model(sc);
   log::info() << "model: " << model.num_nodes << " nodes, " << model.num_elements << " tets, " << model.blocks.size() << " materials, "
               << sc.bodies.size() << " bodies";
   for (const MaterialBlock& b : model.blocks)
@@ -553,7 +564,13 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
   const double est_steps = check_runaway(sc, model, solver, staged);
 
   fs::create_directories(staged.path() / "results");
+  // On ranks the pass holds this rank's tets' geometry: the model's goes (every tet's gradients,
+  // volumes and law data; the model's scatter will not build them here at all), before the initial
+  // state is written, or once the restart check (in the loop's restore) has run.
+  const bool release = shared && shared->holds_own_geometry();
+  if (release && !from) model.release_tet_geometry();
   RunLoop loop(sc, model, solver, staged, est_steps, identity, from, ranks, shared ? shared->checkpoint_nodes() : std::vector<std::uint32_t>{});
+  if (release && from) model.release_tet_geometry();
   nlohmann::json failure = loop.run();
   loop.finishing([&] { failure = loop.finish(failure); });
   RunSummary& summary = loop.summary();

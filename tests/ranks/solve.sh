@@ -7,7 +7,8 @@
 # dropped under gravity onto the block (the rigid body's 6-dof reduction; Rayleigh beta) on 2 and 3
 # ranks; the pad without mass scaling (owned-node stepping: each rank integrates its own nodes) on 2
 # to 4 ranks and through a checkpoint; a gel block relaxing under gravity (adaptive damping, the
-# run stopping at equilibrium) on 2 and 3 ranks; the pad with its atoms dealt round-robin over 2 ranks by
+# run stopping at equilibrium) on 2 and 3 ranks; the pad failing numerically (its last good state) on
+# 2 and 3 ranks; the pad with its atoms dealt round-robin over 2 ranks by
 # --partition (a cut through the
 # contact patch); the pad killed at 3 ranks and continued at 2, and killed at 2 and continued in
 # one process, from checkpoints of one part per rank. (Self-contact:
@@ -85,6 +86,20 @@ echo "per rank (4 ranks): $(figure pad_np4 "[(r['tets'], r['halo_doubles_per_pas
 "$S" drop.toml -o drop1 -q || bad "the one-process drop failed"
 echo "rigid cube drop: $(figure drop1 "j['steps']") steps, $(figure drop1 "j['contact']['steps_in_contact']") in contact"
 same_on_ranks drop.toml drop1 drop "rigid cube drop" 2 3
+
+# A run that fails (the pad at 5e-6 s, about four times its stable step: an energy blow-up at step
+# 14) writes its last good state: every rank computes its own tets' cell records of that state and
+# rank 0 writes them; the same bits and the same exit code (3) on 2 and 3 ranks.
+blowup="--set run.force_time_step=true --set run.time_step=5e-6"
+"$S" pad.toml -o blow1 -q $blowup 2>/dev/null
+[ $? -eq 3 ] || bad "the one-process pad at 5e-6 s should fail numerically (exit 3)"
+[ -e blow1/results/last_good_state.vtu ] || bad "the failed one-process run wrote no last good state"
+for np in 2 3; do
+  $M -np $np "$S" pad.toml -o blow_np$np -q $blowup >/dev/null 2>&1
+  code=$?
+  [ $code -eq 3 ] || bad "the pad at 5e-6 s on $np ranks: exit $code, not 3"
+  same_as blow1 blow_np$np "the failed pad (last good state) on $np ranks"
+done
 
 # Owned-node stepping (every run over ranks): each rank integrates only its own nodes and the
 # contact, supported and rigid ones, the nodes it reads arriving from their owners after each

@@ -35,6 +35,25 @@ Material box_material() {
   return Material::make("linear_elastic", v);
 }
 
+// Two ranks' passes in one process: the exchange that copies into `to`'s received halo slots the
+// slots `from` sends, by position (as MPI would deliver them), once `from` has computed.
+struct HaloCopy {
+  InternalForces *to, *from;
+  StressExchange exchange() {
+    StressExchange e;
+    e.context = this;
+    e.finish = [](void* c) {
+      auto* k = static_cast<HaloCopy*>(c);
+      const HaloSlots &to = k->to->halo()[0], &from = k->from->halo()[0];
+      for (std::size_t j = 0; j < to.receive.size(); ++j)
+        for (std::size_t i = 0; i < InternalForces::kSlotDoubles; ++i)
+          k->to->slot_forces()[InternalForces::kSlotDoubles * to.receive[j] + i] =
+              k->from->slot_forces()[InternalForces::kSlotDoubles * from.send[j] + i];
+    };
+    return e;
+  }
+};
+
 Model box_model() { return build_model(samples::make_box_mesh(16, 16, 8, 0.16, 0.16, 0.08), box_material()); }
 
 }  // namespace
@@ -142,20 +161,8 @@ TEST(Decomposition, TwoRanksInOneProcessAddTheSameBitsAsOne) {
   EXPECT_EQ(rank0.halo()[0].receive.size(), rank1.halo()[0].send.size());
   EXPECT_EQ(rank1.halo()[0].receive.size(), rank0.halo()[0].send.size());
   rank1.compute(u.data(), nullptr, f1.data());
-  struct Copy {
-    InternalForces *to, *from;
-  } copy{&rank0, &rank1};
-  StressExchange exchange;
-  exchange.context = &copy;
-  exchange.finish = [](void* c) {
-    auto* k = static_cast<Copy*>(c);
-    const HaloSlots &to = k->to->halo()[0], &from = k->from->halo()[0];
-    for (std::size_t j = 0; j < to.receive.size(); ++j)
-      for (std::size_t i = 0; i < InternalForces::kSlotDoubles; ++i)
-        k->to->slot_forces()[InternalForces::kSlotDoubles * to.receive[j] + i] =
-            k->from->slot_forces()[InternalForces::kSlotDoubles * from.send[j] + i];
-  };
-  rank0.compute(u.data(), nullptr, f0.data(), StressSideTask{}, exchange);
+  HaloCopy copy{&rank0, &rank1};
+  rank0.compute(u.data(), nullptr, f0.data(), StressSideTask{}, copy.exchange());
   std::size_t compared = 0, differ = 0;
   for (std::size_t e = 0; e < model.num_elements; ++e)
     if (d.atom_rank[d.tet_atom[e]] == 0)
@@ -196,14 +203,23 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
     for (int i = 0; i < 3; ++i) u[3 * n + i] = 0.0005 * std::sin(40.0 * model.X[3 * n + (i + 1) % 3] + i);
   std::vector<double> f_one(3 * model.num_nodes);
   double energy_one = 0;
+  const std::size_t width = cell_record_width(model);
+  std::vector<double> records_one(width * model.num_elements), records_ranks(records_one.size(), -1.0);
   {
     InternalForces one(model, 0.0, 1);
     energy_one = one.compute(u.data(), nullptr, f_one.data()).strain_energy;
+    one.cell_records(u.data(), [&](std::size_t, std::size_t e, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
   }
   InternalForces rank0(model, 0.0, 1), rank1(model, 0.0, 1);
   rank0.own_atoms(d.tet_atom, d.atom_rank, 0);
   rank1.own_atoms(d.tet_atom, d.atom_rank, 1);
-  rank0.hold_own_geometry(), rank1.hold_own_geometry();
+  std::vector<TetRange> tets0, tets1;
+  for (std::size_t e = 0; e < model.num_elements; ++e) {
+    std::vector<TetRange>& mine = d.atom_rank[d.tet_atom[e]] == 0 ? tets0 : tets1;
+    if (mine.empty() || mine.back().end != e) mine.push_back({e, e});
+    ++mine.back().end;
+  }
+  rank0.hold_own_geometry(tets0), rank1.hold_own_geometry(tets1);
   const std::size_t whole = model.memory_bytes();
   model.release_tet_geometry();
   const std::size_t released = whole - model.memory_bytes();
@@ -212,28 +228,12 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   EXPECT_EQ(released, (9 + 1 + 6) * sizeof(double) * model.num_elements);
   EXPECT_THROW(InternalForces(model, 0.0, 1), std::logic_error);
   EXPECT_THROW(static_cast<void>(model.blocks[0].data()), std::logic_error);
-  // Each rank's pass with the other's halo slots copied in by position (as MPI would send them).
-  struct Copy {
-    InternalForces *to, *from;
-  };
-  const auto exchange_from = [](Copy& copy) {
-    StressExchange exchange;
-    exchange.context = &copy;
-    exchange.finish = [](void* c) {
-      auto* k = static_cast<Copy*>(c);
-      const HaloSlots &to = k->to->halo()[0], &from = k->from->halo()[0];
-      for (std::size_t j = 0; j < to.receive.size(); ++j)
-        for (std::size_t i = 0; i < InternalForces::kSlotDoubles; ++i)
-          k->to->slot_forces()[InternalForces::kSlotDoubles * to.receive[j] + i] =
-              k->from->slot_forces()[InternalForces::kSlotDoubles * from.send[j] + i];
-    };
-    return exchange;
-  };
+  // Each rank's pass with the other's halo slots copied in.
   std::vector<double> f0(3 * model.num_nodes), f1(3 * model.num_nodes);
   rank1.compute(u.data(), nullptr, f1.data());
-  Copy to0{&rank0, &rank1}, to1{&rank1, &rank0};
-  rank0.compute(u.data(), nullptr, f0.data(), StressSideTask{}, exchange_from(to0));
-  rank1.compute(u.data(), nullptr, f1.data(), StressSideTask{}, exchange_from(to1));
+  HaloCopy to0{&rank0, &rank1}, to1{&rank1, &rank0};
+  rank0.compute(u.data(), nullptr, f0.data(), StressSideTask{}, to0.exchange());
+  rank1.compute(u.data(), nullptr, f1.data(), StressSideTask{}, to1.exchange());
   std::size_t compared = 0, differ = 0;
   for (std::size_t e = 0; e < model.num_elements; ++e) {
     const std::vector<double>& f = d.atom_rank[d.tet_atom[e]] == 0 ? f0 : f1;
@@ -250,4 +250,17 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
               differ, compared, energy_ranks, energy_one);
   EXPECT_EQ(differ, 0u);
   EXPECT_EQ(std::memcmp(&energy_ranks, &energy_one, sizeof(double)), 0);
+  // The states' cell records (stress, von Mises, J, hgo's fibre stretches), each tet's from the
+  // rank that holds it, against one process's before the release.
+  std::size_t given = 0;
+  for (const InternalForces* rank : {&rank0, &rank1})
+    rank->cell_records(u.data(), [&](std::size_t, std::size_t e, const double* r) {
+      ++given;
+      std::copy(r, r + width, &records_ranks[width * e]);
+    });
+  const bool same = std::memcmp(records_ranks.data(), records_one.data(), records_one.size() * sizeof(double)) == 0;
+  std::printf("cell records: %zu of %zu tets given by the two ranks (%zu doubles each), the same bits as one process's: %s\n", given,
+              model.num_elements, width, same ? "yes" : "no");
+  EXPECT_EQ(given, model.num_elements);
+  EXPECT_TRUE(same);
 }

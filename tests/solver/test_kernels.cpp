@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <string>
 
 #include "../../solver/src/kernels/lanes.hpp"
 #include "material_kit.hpp"
@@ -233,4 +234,38 @@ TEST(Kernels, LocalityReorderCarriesEveryTetsDataWithIt) {
   std::printf("locality reorder: %zu of %zu tets moved, %zu mismatches against the model not reordered\n", moved, reordered.num_elements, differ);
   EXPECT_GT(moved, reordered.num_elements / 2);
   EXPECT_EQ(differ, 0u);
+}
+
+// The states' cell records come from the stress pass (InternalForces::cell_records) after a pass
+// at u. Oracle: element_cauchy_stress, one process apart from the pass (an ANP tet's nodal
+// pressures summed tet by tet rather than atom by atom): the same bits for standard tets, and for
+// ANP tets within rounding (1e-12 of the largest stress component).
+TEST(Kernels, CellRecordsReportThePassesStress) {
+  for (const char* formulation : {"standard", "anp"}) {
+    Case c = random_case(testkit::paper_hgo(1e8, formulation), true, 11, 0.33);
+    InternalForces forces(c.model, 0.0, 1);
+    std::vector<double> f(3 * c.model.num_nodes);
+    forces.compute(c.u.data(), nullptr, f.data());
+    const std::vector<Mat3> sigma = element_cauchy_stress(c.model, c.u.data());
+    double largest = 0, worst = 0;
+    std::size_t given = 0, differ = 0;
+    forces.cell_records(c.u.data(), [&](std::size_t, std::size_t e, const double* r) {
+      const Mat3& s = sigma[e];
+      const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
+      ++given;
+      for (int k = 0; k < 6; ++k) {
+        largest = std::max(largest, std::abs(voigt[k]));
+        worst = std::max(worst, std::abs(r[k] - voigt[k]));
+        differ += r[k] != voigt[k];
+      }
+      if (r[6] != von_mises(s) && std::string(formulation) == "standard") ++differ;
+    });
+    std::printf("hgo %s: %zu tets' records, %zu stress components differ from element_cauchy_stress, the largest by %.3g of %.3g Pa\n", formulation,
+                given, differ, worst, largest);
+    EXPECT_EQ(given, c.model.num_elements);
+    if (std::string(formulation) == "standard")
+      EXPECT_EQ(differ, 0u);
+    else
+      EXPECT_LE(worst, 1e-12 * largest);
+  }
 }

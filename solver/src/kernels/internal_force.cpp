@@ -667,29 +667,99 @@ void InternalForces::keep_rank_slots(int rank, const std::vector<std::uint32_t>&
   partition_volumes_ = std::vector<double>(local[slots], 0.0);
 }
 
-void InternalForces::hold_own_geometry() {
+void InternalForces::hold_own_geometry(const std::vector<TetRange>& tets) {
   if (own_rank_ < 0) throw std::logic_error("InternalForces::hold_own_geometry: before own_atoms (one process reads the model's)");
   if (holds_geometry_) return;
-  std::size_t tets = 0, data = 0;
-  for (std::size_t p = 0; p < partitions_.size(); ++p) {
-    if (partition_rank_[p] != own_rank_) continue;
-    const Partition& q = partitions_[p];
-    tets += q.end - q.begin;
-    if (const MaterialBlock& b = model_.blocks[q.block]; b.per_element_data()) data += b.data_stride() * (q.end - q.begin);
+  // The runs split at the blocks' ends (a block's law data has its own stride).
+  for (const TetRange& r : tets)
+    for (std::size_t k = 0; k < model_.blocks.size(); ++k) {
+      const MaterialBlock& b = model_.blocks[k];
+      const std::size_t lo = std::max(r.begin, b.begin), hi = std::min(r.end, b.end);
+      if (lo < hi) held_runs_.push_back({k, lo, hi, 0, 0});
+    }
+  std::sort(held_runs_.begin(), held_runs_.end(), [](const HeldRun& a, const HeldRun& b) { return a.begin < b.begin; });
+  std::size_t count = 0, data = 0;
+  for (HeldRun& r : held_runs_) {
+    const MaterialBlock& b = model_.blocks[r.block];
+    r.tet = count, r.data = data;
+    count += r.end - r.begin;
+    if (b.per_element_data()) data += b.data_stride() * (r.end - r.begin);
   }
-  held_grad_.reserve(9 * tets), held_volume_.reserve(tets), held_data_.reserve(data);
+  held_grad_.reserve(9 * count), held_volume_.reserve(count), held_data_.reserve(data);
+  for (const HeldRun& r : held_runs_) {
+    const MaterialBlock& b = model_.blocks[r.block];
+    held_grad_.insert(held_grad_.end(), model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * r.begin),
+                      model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * r.end));
+    held_volume_.insert(held_volume_.end(), model_.volume.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                        model_.volume.begin() + static_cast<std::ptrdiff_t>(r.end));
+    if (b.per_element_data()) held_data_.insert(held_data_.end(), b.data_of(r.begin), b.data_of(r.end));
+  }
+  // Each own atom lies within one held run.
   for (std::size_t p = 0; p < partitions_.size(); ++p) {
     if (partition_rank_[p] != own_rank_) continue;
     Partition& q = partitions_[p];
-    const MaterialBlock& b = model_.blocks[q.block];
-    q.held_tet = held_volume_.size(), q.held_data = held_data_.size();
-    held_grad_.insert(held_grad_.end(), model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * q.begin),
-                      model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * q.end));
-    held_volume_.insert(held_volume_.end(), model_.volume.begin() + static_cast<std::ptrdiff_t>(q.begin),
-                        model_.volume.begin() + static_cast<std::ptrdiff_t>(q.end));
-    if (b.per_element_data()) held_data_.insert(held_data_.end(), b.data_of(q.begin), b.data_of(q.end));
+    const auto in = std::upper_bound(held_runs_.begin(), held_runs_.end(), q.begin, [](std::size_t e, const HeldRun& r) { return e < r.begin; });
+    if (in == held_runs_.begin() || std::prev(in)->end < q.end)
+      throw std::logic_error("InternalForces::hold_own_geometry: tets " + std::to_string(q.begin) + "-" + std::to_string(q.end) +
+                             " of this rank's atoms are not among the tets given");
+    const HeldRun& r = *std::prev(in);
+    q.held_tet = r.tet + (q.begin - r.begin);
+    q.held_data = r.data + model_.blocks[q.block].data_stride() * (q.begin - r.begin);
   }
   holds_geometry_ = true;
+}
+
+void InternalForces::cell_records(const double* u, const CellSink& sink) const {
+  std::vector<double> record(cell_record_width(model_), 0.0);
+  const auto run = [&](std::size_t bi, std::size_t begin, std::size_t end, const double* grad, const double* data) {
+    const MaterialBlock& b = model_.blocks[bi];
+    const double* p = b.has_stress_pass() ? block_pressure_[bi] : nullptr;  // ANP: the pass's nodal pressures
+    const std::size_t stride = b.data_stride();
+    for (std::size_t e = begin; e < end; ++e) {
+      const std::int32_t* c = &model_.conn[4 * e];
+      const double* g = grad + 9 * (e - begin);
+      const double* d = data + stride * (e - begin);
+      const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, g);
+      Mat3 sigma = Mat3::Zero();  // a joint gap is placed by the bones, no stress (model.hpp)
+      if (!b.joint_gap) {
+        const bool placed = p && rigid_node_[c[0]] && rigid_node_[c[1]] && rigid_node_[c[2]] && rigid_node_[c[3]];
+        const Mat3 P =
+            p ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), d, !placed).P : b.material.evaluate(F, d).P;
+        sigma = cauchy_stress(F, P);
+      }
+      fill_cell_record(b, F, sigma, d, record.data());
+      sink(bi, e, record.data());
+    }
+  };
+  if (!holds_geometry_) {
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+      const MaterialBlock& b = model_.blocks[bi];
+      run(bi, b.begin, b.end, model_.grad.data() + 9 * b.begin, b.data());
+    }
+    return;
+  }
+  for (const HeldRun& r : held_runs_) {
+    const MaterialBlock& b = model_.blocks[r.block];
+    run(r.block, r.begin, r.end, held_grad_.data() + 9 * r.tet, b.per_element_data() ? held_data_.data() + r.data : b.data());
+  }
+}
+
+std::size_t cell_record_width(const Model& model) {
+  std::size_t law = 0;
+  for (const MaterialBlock& b : model.blocks) {
+    std::size_t n = 0;
+    for (const auto& f : b.material.type().result_fields) n += static_cast<std::size_t>(f.components);
+    law = std::max(law, n);
+  }
+  return kCellRecordFixed + law;
+}
+
+void fill_cell_record(const MaterialBlock& b, const Mat3& F, const Mat3& s, const double* law_data, double* record) {
+  const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
+  std::copy(voigt, voigt + 6, record);
+  record[6] = von_mises(s);
+  record[7] = F.row(0).dot(cofactor(F).row(0));
+  if (!b.material.type().result_fields.empty()) b.material.type().result_values(b.material.law(), F, law_data, record + kCellRecordFixed);
 }
 
 // The node runs of the ANP J pass (anp_pass): where `computed` holds, in runs of consecutive nodes

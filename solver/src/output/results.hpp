@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -23,9 +24,13 @@
 namespace tactus::solver {
 
 // The state at one time as a .vtu (input numbering). Returns each block's largest von Mises.
+// cell_records: hands every tet's cell record at u to its sink (ExplicitSolver::cell_records:
+// the stress pass's own evaluation, on ranks gathered to this process).
+using CellRecords = std::function<void(const CellSink& sink)>;
 std::vector<double> write_state(const Model& m, const std::filesystem::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                                const ContactSolver* contact, double time,  // time (s): field data TimeValue
-                                const GripRegions* regions = nullptr);      // a grasp: each node's region (grip_region)
+                                const CellRecords& cell_records, const ContactSolver* contact,
+                                double time,                            // time (s): field data TimeValue
+                                const GripRegions* regions = nullptr);  // a grasp: each node's region (grip_region)
 void write_pvd(const std::filesystem::path& file, const std::vector<std::pair<double, std::string>>& entries);
 
 // One history row's inputs.

@@ -19,7 +19,7 @@ namespace cc = contracts::cell;
 // Cell and point fields of one state, in the input numbering.
 // Returns the largest von Mises stress of each material block in this state.
 std::vector<double> write_state(const Model& m, const fs::path& file, const std::vector<double>& u, const std::vector<double>& v,
-                                const ContactSolver* contact, double time, const GripRegions* regions) {
+                                const CellRecords& cell_records, const ContactSolver* contact, double time, const GripRegions* regions) {
   std::vector<double> block_peak(m.blocks.size(), 0.0);
   const std::size_t N = m.num_nodes, E = m.num_elements;
   MeshField disp{cp::displacement.name, 3, std::vector<double>(3 * N)}, vel{cp::velocity.name, 3, std::vector<double>(3 * N)};
@@ -65,32 +65,24 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
     for (const auto& f : b.material.type().result_fields)
       if (std::none_of(law_fields.begin(), law_fields.end(), [&](const MeshField& x) { return x.name == f.name; }))
         law_fields.push_back({f.name, f.components, std::vector<double>(static_cast<std::size_t>(f.components) * E)});
-  // Per block the law's result fields it fills and its values' scratch.
+  // Per block the law's result fields it fills, in its law's order (that of its records' values).
   std::vector<std::vector<MeshField*>> targets(m.blocks.size());
-  std::vector<std::vector<double>> values(m.blocks.size());
-  for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
-    for (const auto& f : m.blocks[bi].material.type().result_fields) {
+  for (std::size_t bi = 0; bi < m.blocks.size(); ++bi)
+    for (const auto& f : m.blocks[bi].material.type().result_fields)
       for (auto& x : law_fields)
         if (x.name == f.name) targets[bi].push_back(&x);
-      values[bi].resize(values[bi].size() + static_cast<std::size_t>(f.components));
-    }
-  }
-  // Each tet's stress straight into the fields (no array of every tet's tensor at the writer's peak).
-  for_each_cauchy_stress(m, u.data(), [&](std::size_t bi, std::size_t e, const Mat3& F, const Mat3& s) {
-    const MaterialBlock& b = m.blocks[bi];
+  // Each tet's record straight into the fields (no array of every tet's at the writer's peak).
+  cell_records([&](std::size_t bi, std::size_t e, const double* record) {
     const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
-    const double voigt[6] = {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(1, 2), s(0, 2)};
-    for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = voigt[k];
-    vm.values[out] = von_mises(s);
+    for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = record[k];
+    vm.values[out] = record[6];
     block_peak[bi] = std::max(block_peak[bi], vm.values[out]);
     material.values[out] = static_cast<double>(bi);
-    jac.values[out] = F.row(0).dot(cofactor(F).row(0));
-    if (targets[bi].empty()) return;
-    b.material.type().result_values(b.material.law(), F, b.data_of(e), values[bi].data());
-    std::size_t at = 0;
+    jac.values[out] = record[7];
+    std::size_t at = kCellRecordFixed;
     for (MeshField* f : targets[bi]) {
       const auto n = static_cast<std::size_t>(f->components);
-      for (std::size_t c = 0; c < n; ++c) f->values[n * out + c] = values[bi][at++];
+      for (std::size_t c = 0; c < n; ++c) f->values[n * out + c] = record[at++];
     }
   });
   std::vector<MeshField> cell_fields;

@@ -51,6 +51,10 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
       tet_runs_.back().end = e + 1;
     tets_ += r == rank_;
   }
+  std::vector<TetRange> own;
+  for (const TetRun& run : tet_runs_)
+    if (run.rank == rank_) own.push_back({run.begin, run.end});
+  forces_.hold_own_geometry(own);
   for (const HaloSlots& h : forces_.halo()) {
     send_.emplace_back(InternalForces::kSlotDoubles * h.send.size() + h.send_tiles.size());
     receive_.emplace_back(InternalForces::kSlotDoubles * h.receive.size() + h.receive_tiles.size());
@@ -468,6 +472,49 @@ std::size_t RankStressPass::ghost_doubles() const {
   std::size_t n = 0;
   for (const auto& s : state_buffers_.send) n += s.size();
   return n;
+}
+
+void RankStressPass::cell_records(const double* u, const double* v, const CellSink& sink) {
+  constexpr int kCellRecordsTag = 4;           // (0-3: the halo and ghost exchanges)
+  constexpr std::size_t kMessageTets = 16384;  // records per message: ~1 MB, whatever a rank's share
+  std::vector<double> f(3 * model_.num_nodes);
+  compute(u, v, f.data());  // the ANP nodal pressures at u
+  const std::size_t width = cell_record_width(model_);
+  std::vector<double> buffer;
+  buffer.reserve(width * std::min(kMessageTets, tets_));
+  if (rank_ != 0) {
+    const auto send = [&] {
+      check(MPI_Send(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, 0, kCellRecordsTag, comm_), "MPI_Send");
+      buffer.clear();
+    };
+    forces_.cell_records(u, [&](std::size_t, std::size_t, const double* record) {
+      buffer.insert(buffer.end(), record, record + width);
+      if (buffer.size() == width * kMessageTets) send();
+    });
+    if (!buffer.empty()) send();
+    return;
+  }
+  forces_.cell_records(u, sink);
+  // Every other rank's records, one rank and one message at a time, in the order of its tets' runs.
+  for (int r = 1; r < ranks_; ++r) {
+    std::size_t left = 0, in_buffer = 0;
+    for (const TetRun& run : tet_runs_) left += run.rank == r ? run.end - run.begin : 0;
+    const double* record = nullptr;
+    for (const TetRun& run : tet_runs_) {
+      if (run.rank != r) continue;
+      std::size_t block = 0;
+      for (std::size_t e = run.begin; e < run.end; ++e, record += width, --in_buffer, --left) {
+        if (in_buffer == 0) {
+          in_buffer = std::min(kMessageTets, left);
+          buffer.resize(width * in_buffer);
+          check(MPI_Recv(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, r, kCellRecordsTag, comm_, MPI_STATUS_IGNORE), "MPI_Recv");
+          record = buffer.data();
+        }
+        while (e >= model_.blocks[block].end) ++block;
+        sink(block, e, record);
+      }
+    }
+  }
 }
 
 StressPassResult RankStressPass::compute_alone(const double* u, const double* v, double* f_out) {

@@ -334,7 +334,7 @@ void ExplicitSolver::advance_velocity() {
   velocity_advanced_ = true;
   // A scheduled output time (t^n landed on one), or the relaxed state that ends the run: the state
   // file needs every node.
-  if (owned_stepping_ && ((next_target_ > 0 && time_ == schedule_[next_target_ - 1]) || relaxation_.relaxed())) gather_state();
+  if (owned_stepping_ && (at_output_time() || relaxation_.relaxed())) gather_state();
   step_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - contact_seconds;
 }
 

@@ -53,6 +53,14 @@ class ExplicitSolver {
   const std::vector<double>& schedule() const { return schedule_; }
   // True when t^n is exactly the end time.
   bool finished() const { return time_ == run_.end_time; }
+  // t^n landed on a scheduled output time (after advance_velocity): a state is due. The same on
+  // every rank, which all take part in its cell records.
+  bool at_output_time() const { return next_target_ > 0 && time_ == schedule_[next_target_ - 1]; }
+  // The state files' cell records at u (StressPassEngine::cell_records; on ranks collective,
+  // handed to sink on rank 0 only).
+  void cell_records(const std::vector<double>& u, const std::vector<double>& v, const CellSink& sink) {
+    passes_->cell_records(u.data(), v.data(), sink);
+  }
   // Smallest ratio of a step taken to the nominal step at that time (>= 0.5 by construction).
   double min_step_ratio() const { return min_step_ratio_; }
   double initial_critical_step() const { return initial_critical_; }

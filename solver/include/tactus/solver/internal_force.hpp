@@ -98,13 +98,30 @@ struct NodeAveraging {
 std::vector<double> anp_rest_rows(const Model& model, const MaterialBlock& block, const std::vector<double>& node_reference_volume,
                                   const NodeAveraging* averaging);
 
-// The Cauchy stress of every tet (model numbering) at u, as the results report it: an ANP tet's
-// volumetric part is the average of its nodes' pressures.
+// The Cauchy stress of every tet (model numbering) at u, one process over the whole model, apart
+// from the stress pass (the tests' reference for the reported stress, InternalForces::cell_records):
+// an ANP tet's volumetric part is the average of its nodes' pressures, summed tet by tet.
 std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
 // The same tet by tet, block by block in model order, without the array (72 bytes per tet): out(block,
-// tet, F, sigma) with the tet's deformation gradient (the outputs' writer).
+// tet, F, sigma) with the tet's deformation gradient.
 void for_each_cauchy_stress(const Model& model, const double* u,
                             const std::function<void(std::size_t block, std::size_t tet, const Mat3& F, const Mat3& sigma)>& out);
+
+// One tet's record of the state files' cell fields: its Cauchy stress in Voigt order (xx yy zz xy
+// yz xz), von Mises, J = det F, then its block's law result values (hgo: fibre_stretch) in the
+// order of its law's result_fields; cell_record_width: the longest over the model's blocks. The
+// stress pass fills them (InternalForces::cell_records) from the geometry it reads, and the
+// writer takes them from it (on ranks gathered to rank 0), so the file reports the stress the
+// forces came from.
+inline constexpr std::size_t kCellRecordFixed = 8;
+std::size_t cell_record_width(const Model& model);
+void fill_cell_record(const MaterialBlock& block, const Mat3& F, const Mat3& sigma, const double* law_data, double* record);
+using CellSink = std::function<void(std::size_t block, std::size_t tet, const double* record)>;
+
+// A run of consecutive tets [begin, end) (model numbering).
+struct TetRange {
+  std::size_t begin = 0, end = 0;
+};
 
 // What a run of the element loop (kernels/element_loop.hpp) accumulates besides the forces.
 struct StressAccumulator {
@@ -191,12 +208,17 @@ class InternalForces {
   // over the rank's own nodes, with its ghost nodes' values exchanged after each node pass
   // (anp_ghosts()).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
-  // Ranks, after own_atoms: copies this rank's atoms' reference gradients, volumes and per-tet
-  // law data (fibres) into arrays of its own, in atom order, and reads them from there, so the
-  // model's copies may be released (Model::release_tet_geometry; 80 bytes per tet and the law's
-  // data, of which this rank keeps its share). A process that keeps the model's (the writer)
-  // does not call it.
-  void hold_own_geometry();
+  // Ranks, after own_atoms: copies the reference gradients, volumes and per-tet law data (fibres)
+  // of `tets` (this rank's share of the decomposition, ascending: its atoms' tets and those
+  // without a stress pass, rigid or joint gaps, whose results it reports) into arrays of its own
+  // and reads them from there, so the model's may be released (Model::release_tet_geometry; 80
+  // bytes per tet and the law's data, of which this rank keeps its share).
+  void hold_own_geometry(const std::vector<TetRange>& tets);
+  // After a pass at u: the cell record (cell_record_width(model) doubles) of every tet this
+  // process holds (one process: every tet; after hold_own_geometry: those it holds), in model
+  // order, each handed to sink. An ANP tet's volumetric part is the mean of its nodes' pressures
+  // of that pass (the pressures its forces came from).
+  void cell_records(const double* u, const CellSink& sink) const;
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }
   double* slot_volumes() { return partition_volumes_.data(); }  // the ANP atoms' nodal volumes, 1 per slot
@@ -267,8 +289,13 @@ class InternalForces {
     // law data in held_data_ (blocks with per-tet data).
     std::size_t held_tet = 0, held_data = 0;
   };
-  // The geometry this rank's atoms read (hold_own_geometry; empty: the model's).
+  // The geometry this rank's atoms read (hold_own_geometry; empty: the model's): per held run of
+  // one block's tets, where its first tet's are.
+  struct HeldRun {
+    std::size_t block, begin, end, tet, data;
+  };
   bool holds_geometry_ = false;
+  std::vector<HeldRun> held_runs_;
   std::vector<double> held_grad_, held_volume_, held_data_;
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;

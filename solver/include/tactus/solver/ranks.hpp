@@ -9,7 +9,8 @@
 // nodes, which every rank integrates, are gathered from the ranks that own them (those whose first
 // atom is theirs); each rank integrates those and its own (owned-node stepping), and receives the
 // other nodes it reads after each update. Every rank builds the whole model for now (scattering it is
-// a later step; a rank that writes no results keeps only its atoms' geometry, hold_own_geometry); the ANP blocks' J pass runs over each rank's own
+// a later step; its pass holds its own tets' geometry, and the model's is released after the
+// restart check); the ANP blocks' J pass runs over each rank's own
 // nodes, with the volumes at shared nodes and the ghost nodes' values exchanged (InternalForces::anp_ghosts).
 #include <mpi.h>
 
@@ -52,10 +53,8 @@ class RankStressPass : public StressPassEngine {
   void gather_sum_chunks(double* chunks, std::size_t width) override;
   void gather_some_nodes(const std::vector<std::uint32_t>& nodes, std::initializer_list<double*> arrays) override;
   void gather_nodes(std::initializer_list<double*> arrays) override;
-  bool hold_own_geometry() override {
-    forces_.hold_own_geometry();
-    return true;
-  }
+  bool holds_own_geometry() const override { return true; }
+  void cell_records(const double* u, const double* v, const CellSink& sink) override;
   // Owned-node stepping: the nodes this process integrates, and the doubles it sends in one
   // share_ghosts.
   std::size_t integrated_nodes() const { return integrated_dofs_.size() / 3; }

@@ -75,10 +75,15 @@ class StressPassEngine {
   // Collective: every node's 3 values of each array from the process that integrates it, so that
   // every process holds the whole state (before a state file or the last good state is written).
   virtual void gather_nodes(std::initializer_list<double*> /*arrays*/) {}
-  // On ranks: the pass reads its own atoms' geometry from its own copy from now on
-  // (InternalForces::hold_own_geometry), so that a process that writes no results may release
-  // the model's. Returns false where there is nothing to hold (one process reads the model's).
-  virtual bool hold_own_geometry() { return false; }
+  // On ranks the pass reads its own tets' geometry from its own copy (InternalForces::
+  // hold_own_geometry), so the model's may be released once the restart check has run; one
+  // process reads the model's.
+  virtual bool holds_own_geometry() const { return false; }
+  // The state files' cell records at u (cell_record_width doubles per tet: internal_force.hpp),
+  // after a pass at u (v: its viscous part, not reported), each handed to sink with its block and
+  // tet. On ranks collective: every rank computes its own tets' and rank 0 receives them, rank by
+  // rank; sink is called on rank 0 only.
+  virtual void cell_records(const double* u, const double* v, const CellSink& sink) = 0;
 
  private:
   std::vector<std::uint32_t> no_dofs_;
@@ -101,6 +106,11 @@ class OneProcessStressPass final : public StressPassEngine {
   int ranks() const override { return 1; }
   nlohmann::json report(const std::vector<std::pair<std::string, double>>&) override { return nullptr; }
   std::size_t memory_bytes() const override { return forces_.memory_bytes(); }
+  void cell_records(const double* u, const double* v, const CellSink& sink) override {
+    std::vector<double> f(3 * nodes_);
+    forces_.compute(u, v, f.data());
+    forces_.cell_records(u, sink);
+  }
   std::vector<std::uint32_t> checkpoint_nodes() const override {
     std::vector<std::uint32_t> all(nodes_);
     std::iota(all.begin(), all.end(), std::uint32_t{0});
