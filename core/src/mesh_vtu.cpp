@@ -58,7 +58,16 @@ MeshField from_vtk(vtkDataArray* a) {
 
 void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
                const std::vector<Vec3>* current_nodes, std::optional<double> time, const std::vector<MeshStrings>& strings) {
+  write_vtu(
+      file, mesh, mesh.tets.size(), [&](std::size_t e) { return mesh.tets[e]; }, point_fields, cell_fields, current_nodes, time, strings);
+}
+
+void write_vtu(const fs::path& file, const TetMesh& mesh, std::size_t tets, const TetNodes& tet_nodes, const std::vector<MeshField>& point_fields,
+               const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes, std::optional<double> time,
+               const std::vector<MeshStrings>& strings) {
   const std::string fname = file.string();
+  if (mesh.tet_group.size() != tets)
+    throw InputError(fname, "tet groups", std::to_string(tets) + " (one per tet)", std::to_string(mesh.tet_group.size()));
   const auto& xyz = current_nodes ? *current_nodes : mesh.nodes;
   if (xyz.size() != mesh.nodes.size()) throw InputError(fname, "current nodes", std::to_string(mesh.nodes.size()) + " positions");
   vtkNew<vtkPoints> points;
@@ -67,15 +76,16 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   for (std::size_t i = 0; i < xyz.size(); ++i) points->SetPoint(static_cast<vtkIdType>(i), xyz[i].data());
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(points);
-  grid->Allocate(static_cast<vtkIdType>(mesh.tets.size()));
-  for (const auto& t : mesh.tets) {
+  grid->Allocate(static_cast<vtkIdType>(tets));
+  for (std::size_t e = 0; e < tets; ++e) {
+    const std::array<int, 4> t = tet_nodes(e);
     const vtkIdType ids[4] = {t[0], t[1], t[2], t[3]};
     grid->InsertNextCell(VTK_TETRA, 4, ids);
   }
   vtkNew<vtkIntArray> group;
   group->SetName("group");
-  group->SetNumberOfTuples(static_cast<vtkIdType>(mesh.tets.size()));
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e) group->SetValue(static_cast<vtkIdType>(e), mesh.tet_group[e]);
+  group->SetNumberOfTuples(static_cast<vtkIdType>(tets));
+  for (std::size_t e = 0; e < tets; ++e) group->SetValue(static_cast<vtkIdType>(e), mesh.tet_group[e]);
   grid->GetCellData()->AddArray(group);
   // 1-based ids, as every message, summary and quality.json counts (ParaView's own ids start at 0).
   vtkNew<vtkIdTypeArray> node_id, tet_id;
@@ -83,12 +93,12 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<Mesh
   node_id->SetNumberOfTuples(static_cast<vtkIdType>(mesh.nodes.size()));
   for (vtkIdType i = 0; i < node_id->GetNumberOfTuples(); ++i) node_id->SetValue(i, i + 1);
   tet_id->SetName(contracts::cell::tet_id.name);
-  tet_id->SetNumberOfTuples(static_cast<vtkIdType>(mesh.tets.size()));
+  tet_id->SetNumberOfTuples(static_cast<vtkIdType>(tets));
   for (vtkIdType e = 0; e < tet_id->GetNumberOfTuples(); ++e) tet_id->SetValue(e, e + 1);
   grid->GetPointData()->AddArray(node_id);
   grid->GetCellData()->AddArray(tet_id);
   for (const auto& f : point_fields) grid->GetPointData()->AddArray(to_vtk(f, mesh.nodes.size(), fname));
-  for (const auto& f : cell_fields) grid->GetCellData()->AddArray(to_vtk(f, mesh.tets.size(), fname));
+  for (const auto& f : cell_fields) grid->GetCellData()->AddArray(to_vtk(f, tets, fname));
   vtkNew<vtkStringArray> units;  // every tactus file says its units
   units->SetName("units");
   units->InsertNextValue("SI (m, kg, s, Pa, J)");

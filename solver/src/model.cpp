@@ -255,6 +255,7 @@ Model build_model(const TetMesh& mesh, const Material& material, const std::stri
   m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
   compute_element_geometry(m);
   lump_mass(m);
+  m.input_mesh.tets = std::vector<std::array<int, 4>>();  // held once, as conn (Model::input_mesh)
   if (reorder) reorder_for_locality(m);
   return m;
 }

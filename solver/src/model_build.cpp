@@ -700,6 +700,7 @@ Model build_model(const Scenario& sc) {
   add_contacts(m, sc.contacts);
   add_pressure_loads(sc, m);
   m.contact_settings = sc.contact_solver;
+  m.input_mesh.tets = std::vector<std::array<int, 4>>();  // held once, as conn (Model::input_mesh)
   return m;
 }
 

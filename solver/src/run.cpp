@@ -511,10 +511,12 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
     StateArchive a(from->state, from->file.string());
     solver.checkpoint(a);  // (its check runs this process's pass over the whole model, once)
   }
-  model.release_tet_geometry();                                                // the pass holds this rank's (after the restart check, as on rank 0)
-  if (!from) state_records(solver.displacement(), solver.velocity_at_step());  // the initial state
-  // RunLoop::run's steps, less its writes (no collective happens in those) but for this rank's
-  // part of each checkpoint.
+  // The pass holds this rank's tets' geometry: the model's goes once the restart check has run
+  // (as on rank 0), before the initial state.
+  model.release_tet_geometry();
+  if (!from) state_records(solver.displacement(), solver.velocity_at_step());
+  // RunLoop::run's steps, less its writes but for this rank's part of each checkpoint and its
+  // tets' part of each state (the collectives in those).
   const bool rank_parts = sc.run.checkpoints();
   const std::string folder = rank_parts ? ranks.rank0_text("") : "";
   const std::vector<std::uint32_t> part_nodes = shared->checkpoint_nodes();

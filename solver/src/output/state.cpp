@@ -94,7 +94,16 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   for (const auto& b : m.blocks) material_names.values.push_back(b.name);
   std::vector<MeshStrings> names{body_names, material_names};
   if (regions) names.push_back({contracts::kGripRegionNames, regions->names()});
-  write_vtu(file, m.input_mesh, point_fields, cell_fields, &current, time, names);
+  // The cells from the model's connectivity, in the input numbering (the input mesh keeps no tets
+  // of its own: Model::input_mesh).
+  std::vector<int> input_of(N);
+  for (std::size_t i = 0; i < N; ++i) input_of[static_cast<std::size_t>(m.node_of_input[i])] = static_cast<int>(i);
+  const auto cell = [&](std::size_t in) {
+    const std::int32_t* c = &m.conn[4 * static_cast<std::size_t>(m.element_of_input[in])];
+    return std::array<int, 4>{input_of[static_cast<std::size_t>(c[0])], input_of[static_cast<std::size_t>(c[1])],
+                              input_of[static_cast<std::size_t>(c[2])], input_of[static_cast<std::size_t>(c[3])]};
+  };
+  write_vtu(file, m.input_mesh, E, cell, point_fields, cell_fields, &current, time, names);
   return block_peak;
 }
 

@@ -5,6 +5,7 @@
 // written 1-based in .msh as gmsh expects.
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -68,6 +69,13 @@ struct MeshStrings {
 void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields = {},
                const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr,
                std::optional<double> time = std::nullopt, const std::vector<MeshStrings>& strings = {});
+// The same with `tets` tets whose nodes (mesh.nodes' numbering) come from tet_nodes rather than
+// mesh.tets, for a writer that keeps them once elsewhere (the solver: its model's connectivity);
+// mesh.tet_group still holds one tag per tet.
+using TetNodes = std::function<std::array<int, 4>(std::size_t tet)>;
+void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, std::size_t tets, const TetNodes& tet_nodes,
+               const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes,
+               std::optional<double> time, const std::vector<MeshStrings>& strings);
 
 struct VtuContents {
   TetMesh mesh;  // nodes, tets, tet_group (no triangles: a .vtu holds the volume cells)
