@@ -119,11 +119,11 @@ struct Model {
   // The bones' motion by their joints (joint_settings.hpp); off without a [skeleton].
   JointDriveSetup joint_drive;
 
-  // On a rank that does not write results, once its stress pass holds its own atoms' geometry
-  // (InternalForces::hold_own_geometry) and nothing else reads it: frees every tet's reference
-  // gradients, volumes and per-tet law data (80 bytes per tet and the law's), which every rank
-  // builds with the model. A later reader fails loudly (tet_geometry_released) rather than
-  // reading nothing. The step towards the model's scatter (docs/design.md).
+  // On ranks, once the rank's stress pass holds its own tets' geometry (InternalForces::
+  // hold_own_geometry) and the restart check has run: frees every tet's reference gradients,
+  // volumes and per-tet law data (80 bytes per tet and the law's), which every rank builds with
+  // the model. A later reader fails loudly (tet_geometry_released) rather than reading nothing.
+  // A step towards the model's scatter (docs/design.md).
   void release_tet_geometry();
   bool tet_geometry_released = false;
 
