@@ -44,11 +44,11 @@ struct HaloCopy {
     e.context = this;
     e.finish = [](void* c) {
       auto* k = static_cast<HaloCopy*>(c);
-      const HaloSlots &to = k->to->halo()[0], &from = k->from->halo()[0];
-      for (std::size_t j = 0; j < to.receive.size(); ++j)
+      const HaloSlots &into = k->to->halo()[0], &out_of = k->from->halo()[0];
+      for (std::size_t j = 0; j < into.receive.size(); ++j)
         for (std::size_t i = 0; i < InternalForces::kSlotDoubles; ++i)
-          k->to->slot_forces()[InternalForces::kSlotDoubles * to.receive[j] + i] =
-              k->from->slot_forces()[InternalForces::kSlotDoubles * from.send[j] + i];
+          k->to->slot_forces()[InternalForces::kSlotDoubles * into.receive[j] + i] =
+              k->from->slot_forces()[InternalForces::kSlotDoubles * out_of.send[j] + i];
     };
     return e;
   }
