@@ -169,32 +169,33 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
   return in == x.data() ? x : y;
 }
 
-void for_each_cauchy_stress(const Model& m, const double* u, const std::function<void(std::size_t, std::size_t, const Mat3&, const Mat3&)>& out) {
-  // An ANP tet placed by rigid pieces has no volume floor (as in the stress pass).
-  const bool any_anp = std::any_of(m.blocks.begin(), m.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
-  const std::vector<char> rigid = any_anp ? rigid_nodes(m) : std::vector<char>();
-  for (std::size_t bi = 0; bi < m.blocks.size(); ++bi) {
-    const MaterialBlock& b = m.blocks[bi];
-    const bool stressed = !b.joint_gap;  // a joint gap is placed by the bones, no stress (model.hpp)
-    const std::vector<double> p = stressed && b.material.anp() ? anp_nodal_pressure(m, b, u) : std::vector<double>();
-    for (std::size_t e = b.begin; e < b.end; ++e) {
-      const std::int32_t* c = &m.conn[4 * e];
-      const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, &m.grad[9 * e]);
-      if (!stressed) {
-        out(bi, e, F, Mat3::Zero());
-        continue;
-      }
-      const bool placed = b.material.anp() && rigid[c[0]] && rigid[c[1]] && rigid[c[2]] && rigid[c[3]];
-      const Mat3 P = b.material.anp() ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), b.data_of(e), !placed).P
-                                      : b.material.evaluate(F, b.data_of(e)).P;
-      out(bi, e, F, cauchy_stress(F, P));
-    }
-  }
+namespace {
+
+// The reported Cauchy stress of one tet of block b (nodes c, deformation gradient F, law data d):
+// 0 in a joint gap (placed by the bones, no stress: model.hpp); with nodal pressures p (an ANP
+// block) its volumetric part is the mean of its nodes', with no volume floor where rigid pieces
+// place all four nodes (as in the stress pass); p null: the law's own stress.
+Mat3 reported_cauchy_stress(const MaterialBlock& b, const Mat3& F, const std::int32_t* c, const double* p, const char* rigid, const double* d) {
+  if (b.joint_gap) return Mat3::Zero();
+  if (!p) return cauchy_stress(F, b.material.evaluate(F, d).P);
+  const bool placed = rigid[c[0]] && rigid[c[1]] && rigid[c[2]] && rigid[c[3]];
+  return cauchy_stress(F, b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), d, !placed).P);
 }
+
+}  // namespace
 
 std::vector<Mat3> element_cauchy_stress(const Model& m, const double* u) {
   std::vector<Mat3> sigma(m.num_elements, Mat3::Zero());
-  for_each_cauchy_stress(m, u, [&](std::size_t, std::size_t e, const Mat3&, const Mat3& s) { sigma[e] = s; });
+  const bool any_anp = std::any_of(m.blocks.begin(), m.blocks.end(), [](const MaterialBlock& b) { return b.material.anp(); });
+  const std::vector<char> rigid = any_anp ? rigid_nodes(m) : std::vector<char>();
+  for (const MaterialBlock& b : m.blocks) {
+    const std::vector<double> p = !b.joint_gap && b.material.anp() ? anp_nodal_pressure(m, b, u) : std::vector<double>();
+    for (std::size_t e = b.begin; e < b.end; ++e) {
+      const std::int32_t* c = &m.conn[4 * e];
+      const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, &m.grad[9 * e]);
+      sigma[e] = reported_cauchy_stress(b, F, c, p.empty() ? nullptr : p.data(), rigid.data(), b.data_of(e));
+    }
+  }
   return sigma;
 }
 
@@ -720,14 +721,7 @@ void InternalForces::cell_records(const double* u, const CellSink& sink) const {
       const double* g = grad + 9 * (e - begin);
       const double* d = data + stride * (e - begin);
       const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, g);
-      Mat3 sigma = Mat3::Zero();  // a joint gap is placed by the bones, no stress (model.hpp)
-      if (!b.joint_gap) {
-        const bool placed = p && rigid_node_[c[0]] && rigid_node_[c[1]] && rigid_node_[c[2]] && rigid_node_[c[3]];
-        const Mat3 P =
-            p ? b.material.evaluate_with_pressure(F, 0.25 * (p[c[0]] + p[c[1]] + p[c[2]] + p[c[3]]), d, !placed).P : b.material.evaluate(F, d).P;
-        sigma = cauchy_stress(F, P);
-      }
-      fill_cell_record(b, F, sigma, d, record.data());
+      fill_cell_record(b, F, reported_cauchy_stress(b, F, c, p, rigid_node_.data(), d), d, record.data());
       sink(bi, e, record.data());
     }
   };

@@ -102,10 +102,6 @@ std::vector<double> anp_rest_rows(const Model& model, const MaterialBlock& block
 // from the stress pass (the tests' reference for the reported stress, InternalForces::cell_records):
 // an ANP tet's volumetric part is the average of its nodes' pressures, summed tet by tet.
 std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
-// The same tet by tet, block by block in model order, without the array (72 bytes per tet): out(block,
-// tet, F, sigma) with the tet's deformation gradient.
-void for_each_cauchy_stress(const Model& model, const double* u,
-                            const std::function<void(std::size_t block, std::size_t tet, const Mat3& F, const Mat3& sigma)>& out);
 
 // One tet's record of the state files' cell fields: its Cauchy stress in Voigt order (xx yy zz xy
 // yz xz), von Mises, J = det F, then its block's law result values (hgo: fibre_stretch) in the
