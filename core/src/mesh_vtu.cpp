@@ -13,6 +13,7 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
+#include <functional>
 
 #include <cmath>
 
@@ -54,17 +55,12 @@ MeshField from_vtk(vtkDataArray* a) {
   return f;
 }
 
-}  // namespace
-
-void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
-               const std::vector<Vec3>* current_nodes, std::optional<double> time, const std::vector<MeshStrings>& strings) {
-  write_vtu(
-      file, mesh, mesh.tets.size(), [&](std::size_t e) { return mesh.tets[e]; }, point_fields, cell_fields, current_nodes, time, strings);
-}
-
-void write_vtu(const fs::path& file, const TetMesh& mesh, std::size_t tets, const TetNodes& tet_nodes, const std::vector<MeshField>& point_fields,
-               const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes, std::optional<double> time,
-               const std::vector<MeshStrings>& strings) {
+// The grid's writer: tet e's nodes from tet_nodes(e); cells_inserted runs once VTK holds its own
+// copy of the cells.
+using TetNodes = std::function<std::array<int, 4>(std::size_t tet)>;
+void write_grid(const fs::path& file, const TetMesh& mesh, std::size_t tets, const TetNodes& tet_nodes, const std::function<void()>& cells_inserted,
+                const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes,
+                std::optional<double> time, const std::vector<MeshStrings>& strings) {
   const std::string fname = file.string();
   if (mesh.tet_group.size() != tets)
     throw InputError(fname, "tet groups", std::to_string(tets) + " (one per tet)", std::to_string(mesh.tet_group.size()));
@@ -82,6 +78,7 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, std::size_t tets, cons
     const vtkIdType ids[4] = {t[0], t[1], t[2], t[3]};
     grid->InsertNextCell(VTK_TETRA, 4, ids);
   }
+  if (cells_inserted) cells_inserted();
   vtkNew<vtkIntArray> group;
   group->SetName("group");
   group->SetNumberOfTuples(static_cast<vtkIdType>(tets));
@@ -129,6 +126,23 @@ void write_vtu(const fs::path& file, const TetMesh& mesh, std::size_t tets, cons
   writer->SetCompressorTypeToZLib();
   if (writer->Write() != 1 || writer->GetErrorCode() != 0) throw_library_write_failure(file, "VTK failed writing the grid");
   out.commit("</VTKFile>\n", "VTK grid");
+}
+
+}  // namespace
+
+void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
+               const std::vector<Vec3>* current_nodes, std::optional<double> time, const std::vector<MeshStrings>& strings) {
+  write_grid(
+      file, mesh, mesh.tets.size(), [&](std::size_t e) { return mesh.tets[e]; }, {}, point_fields, cell_fields, current_nodes, time, strings);
+}
+
+void write_vtu(const fs::path& file, const TetMesh& mesh, std::vector<std::array<int, 4>>&& cells, const std::vector<MeshField>& point_fields,
+               const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes, std::optional<double> time,
+               const std::vector<MeshStrings>& strings) {
+  std::vector<std::array<int, 4>> held = std::move(cells);
+  write_grid(
+      file, mesh, held.size(), [&](std::size_t e) { return held[e]; }, [&] { held = std::vector<std::array<int, 4>>(); }, point_fields, cell_fields,
+      current_nodes, time, strings);
 }
 
 const MeshField* VtuContents::point_field(std::string_view name) const {

@@ -155,7 +155,6 @@ void reorder_for_locality(Model& m) {
     gather_in_place(m.grad, 9, eorder, 0, m.num_elements, placed);
     gather_in_place(m.volume, 1, eorder, 0, m.num_elements, placed);
   }
-  for (std::size_t k = 0; k < m.num_elements; ++k) m.element_of_input[static_cast<std::size_t>(m.input_element[k])] = static_cast<std::int32_t>(k);
 }
 
 namespace {
@@ -169,12 +168,13 @@ std::size_t Model::memory_bytes() const {
   std::size_t block_data = 0;
   for (const auto& b : blocks) block_data += bytes(b.element_data);
   return bytes(X) + bytes(mass) + bytes(initial_velocity) + bytes(conn) + bytes(grad) + bytes(volume) + bytes(constrained) + block_data +
-         bytes(constraint_velocity) + bytes(node_of_input) + bytes(element_of_input) + bytes(input_element) + bytes(input_mesh.nodes) +
-         bytes(input_mesh.tets) + bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) + bytes(input_mesh.triangle_group) + bytes(tet_body);
+         bytes(constraint_velocity) + bytes(node_of_input) + bytes(input_element) + bytes(input_mesh.nodes) + bytes(input_mesh.tets) +
+         bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) + bytes(input_mesh.triangle_group);
 }
 
-void Model::release_tet_geometry() {
+void Model::release_tet_geometry(bool keep_connectivity) {
   grad = std::vector<double>(), volume = std::vector<double>();
+  if (!keep_connectivity) conn = std::vector<std::int32_t>();
   for (MaterialBlock& b : blocks)
     if (b.per_element_data()) b.element_data = std::vector<double>(), b.element_data_released = true;
   tet_geometry_released = true;
@@ -228,11 +228,16 @@ std::size_t Model::body_of_node(std::size_t input_node) const {
   return 0;
 }
 
+std::size_t Model::body_of_tet(std::size_t input_tet) const {
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    if (input_tet >= bodies[b].tet_begin && input_tet < bodies[b].tet_end) return b;
+  return 0;
+}
+
 Model build_model(const TetMesh& mesh, const Material& material, const std::string& material_name, const Vec3& initial_velocity, bool reorder) {
   Model m;
   m.input_mesh = mesh;
   m.bodies.push_back({"body", 0, mesh.nodes.size(), 0, mesh.tets.size(), 0, mesh.triangles.size(), 0, mesh.groups.size()});
-  m.tet_body.assign(mesh.tets.size(), 0);
   m.num_nodes = mesh.nodes.size();
   m.num_elements = mesh.tets.size();
   m.X.resize(3 * m.num_nodes);
@@ -241,10 +246,9 @@ Model build_model(const TetMesh& mesh, const Material& material, const std::stri
     for (int c = 0; c < 3; ++c) m.X[3 * i + c] = mesh.nodes[i][c], m.initial_velocity[3 * i + c] = initial_velocity[c];
   m.conn.resize(4 * m.num_elements);
   m.input_element.resize(m.num_elements);
-  m.element_of_input.resize(m.num_elements);
   for (std::size_t e = 0; e < m.num_elements; ++e) {
     for (int a = 0; a < 4; ++a) m.conn[4 * e + a] = mesh.tets[e][a];
-    m.input_element[e] = m.element_of_input[e] = static_cast<std::int32_t>(e);
+    m.input_element[e] = static_cast<std::int32_t>(e);
   }
   m.node_of_input.resize(m.num_nodes);
   std::iota(m.node_of_input.begin(), m.node_of_input.end(), 0);

@@ -165,7 +165,6 @@ void append_body(const Scenario& sc, std::size_t bi, Model& m, TetAssignment& te
     for (int& v : t) v += static_cast<int>(node0);
     all.tets.push_back(t);
     all.tet_group.push_back(mesh.tet_group[e]);
-    m.tet_body.push_back(static_cast<std::int32_t>(bi));
     const std::string& gname = mesh.find_group(3, mesh.tet_group[e])->name;
     auto it = body.materials.find(gname);
     if (it == body.materials.end()) it = body.materials.find("*");
@@ -266,7 +265,7 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
       const std::size_t n = type.element_data_size;
       bool from_files = false;
       for (std::size_t k = b.begin; k < b.end && n > 0; ++k) {
-        if (tets.data[order[k]] || sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].rotated)
+        if (tets.data[order[k]] || sc.bodies[m.body_of_tet(order[k])].rotated)
           from_files = true;
         else if (b.material.needs_element_data()) {
           std::string keys;
@@ -274,7 +273,7 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
             if (s.type == ValueType::vec3_list) keys += (keys.empty() ? "" : ", ") + s.key;
           throw InputError(sc.file.string(), "materials." + name + "." + keys,
                            "element data for " + type.name + ": " + keys + " here, or a per-element `fibres` file on body '" +
-                               sc.bodies[static_cast<std::size_t>(m.tet_body[order[k]])].name + "'",
+                               sc.bodies[m.body_of_tet(order[k])].name + "'",
                            "none");
         }
       }
@@ -282,7 +281,7 @@ std::vector<std::size_t> make_blocks(const Scenario& sc, Model& m, const TetAssi
         b.element_data.resize(n * (b.end - b.begin));
         for (std::size_t k = b.begin; k < b.end; ++k) {
           double* out = &b.element_data[n * (k - b.begin)];
-          const std::size_t body = static_cast<std::size_t>(m.tet_body[order[k]]);
+          const std::size_t body = m.body_of_tet(order[k]);
           if (const auto& d = tets.data[order[k]])
             type.element_data_from_fields(d->data(), out,
                                           sc.bodies[body].fibres.string() + ": tet " + std::to_string(order[k] - m.bodies[body].tet_begin + 1));
@@ -680,11 +679,9 @@ Model build_model(const Scenario& sc) {
   const std::vector<std::size_t> order = make_blocks(sc, m, tets);
   m.conn.resize(4 * m.num_elements);
   m.input_element.resize(m.num_elements);
-  m.element_of_input.resize(m.num_elements);
   for (std::size_t k = 0; k < m.num_elements; ++k) {
     for (int a = 0; a < 4; ++a) m.conn[4 * k + a] = m.input_mesh.tets[order[k]][a];
     m.input_element[k] = static_cast<std::int32_t>(order[k]);
-    m.element_of_input[order[k]] = static_cast<std::int32_t>(k);
   }
   m.node_of_input.resize(m.num_nodes);
   std::iota(m.node_of_input.begin(), m.node_of_input.end(), 0);

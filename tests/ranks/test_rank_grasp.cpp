@@ -8,14 +8,17 @@
 // the stress pass spread over the ranks of this mpiexec, in lockstep. Oracle: the one-process run.
 // After every step the state is gathered and every displacement and half-step velocity component,
 // the energies, the relaxation's damping and residual and the grip force must be the same bits on
-// every rank. Run by CTest on 1 to 4 ranks.
+// every rank. Then the crushed-tissue message on ranks (crushed, below). Run by CTest on 1 to 4
+// ranks.
 #include <mpi.h>
 
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "finger_kit.hpp"
 #include "rank_lockstep.hpp"
+#include "tactus/core/error.hpp"
 #include "tactus/solver/decomposition.hpp"
 #include "tactus/solver/explicit.hpp"
 #include "tactus/solver/model_build.hpp"
@@ -75,4 +78,45 @@ int lockstep(int rank, int ranks) {
   return r.ranks_differing + (contact_steps < 20 ? 1 : 0) + (stepping_right ? 0 : 1);
 }
 
-int main(int argc, char** argv) { return rank_test_main(argc, argv, "tactus_test_rank_grasp", lockstep); }
+// The handle driven into the finger (bones held) crushes tissue between two rigid bodies: the
+// error names the rigid bodies nearest the tet (ExplicitSolver::describe_rigid_neighbours), whose
+// nodes only the rank that holds it has once the model has released its connectivity
+// (Model::release_tet_geometry). Every rank must throw one process's message, word for word.
+std::string crushed_message(const Scenario& sc, StressPassEngine* shared, Model& model) {
+  ExplicitSolver s(model, sc.run, sc.damping, shared);
+  if (shared) model.release_tet_geometry(false);
+  try {
+    while (true) {
+      s.advance_velocity();
+      if (s.finished()) break;
+      s.advance_position();
+    }
+  } catch (const NumericalError& e) {
+    return e.what();
+  }
+  return "(ran to the end)";
+}
+
+int crushed(int rank, int ranks) {
+  TempDir dir;
+  Scenario sc = grasp_scenario(dir, 50, 0.03);
+  sc.run.threads = 1;
+  sc.grasp = GraspSpec{};  // the bones held
+  sc.bodies[1].rigid_velocity = Vec3{0, 0, 1.0};
+  Model alone = build_model(sc), spread = build_model(sc);
+  const std::string one = crushed_message(sc, nullptr, alone);
+  RankStressPass shared(spread, decompose(spread, ranks), MPI_COMM_WORLD, sc.damping.beta, 1);
+  const std::string on_ranks = crushed_message(sc, &shared, spread);
+  const bool names_both = on_ranks.find("crushed between two rigid bodies") != std::string::npos;
+  const int wrong = on_ranks == one && names_both ? 0 : 1;
+  int ranks_wrong = 0;
+  MPI_Allreduce(&wrong, &ranks_wrong, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+  if (rank == 0)
+    std::printf("crushed tissue on %d rank(s), the model's connectivity released: %s\n%d rank(s) throw another message than one process's: %s\n",
+                ranks, on_ranks.c_str(), ranks_wrong, one.c_str());
+  return ranks_wrong;
+}
+
+int main(int argc, char** argv) {
+  return rank_test_main(argc, argv, "tactus_test_rank_grasp", [](int rank, int ranks) { return lockstep(rank, ranks) + crushed(rank, ranks); });
+}

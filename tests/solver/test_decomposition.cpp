@@ -180,11 +180,11 @@ TEST(Decomposition, TwoRanksInOneProcessAddTheSameBitsAsOne) {
   EXPECT_LT(rank1.memory_bytes(), one.memory_bytes());
 }
 
-// A rank that writes no results keeps its own atoms' geometry and releases the model's
+// Each rank keeps its own atoms' geometry and connectivity and the model releases its own
 // (InternalForces::hold_own_geometry, Model::release_tet_geometry). Its pass must read the same
-// reference gradients, volumes and per-tet law data as before: hgo with random fibres per tet (the
-// law's data travels too), both ranks' forces at their nodes and the sum of their energies against
-// one process's bits, computed before the release.
+// nodes, reference gradients, volumes and per-tet law data as before: hgo with random fibres per
+// tet (the law's data travels too), both ranks' forces at their nodes, the sum of their energies
+// and each tet's cell record and nodes against one process's bits, computed before the release.
 TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleasesIt) {
   Model model = build_model(samples::make_box_mesh(8, 8, 4, 0.08, 0.08, 0.04), testkit::paper_hgo(1e8, "standard"));
   MaterialBlock& block = model.blocks[0];
@@ -208,7 +208,8 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   {
     InternalForces one(model, 0.0, 1);
     energy_one = one.compute(u.data(), nullptr, f_one.data()).strain_energy;
-    one.cell_records(u.data(), [&](std::size_t, std::size_t e, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
+    one.cell_records(u.data(),
+                     [&](std::size_t, std::size_t e, const std::int32_t*, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
   }
   InternalForces rank0(model, 0.0, 1), rank1(model, 0.0, 1);
   rank0.own_atoms(d.tet_atom, d.atom_rank, 0);
@@ -220,12 +221,13 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
     ++mine.back().end;
   }
   rank0.hold_own_geometry(tets0), rank1.hold_own_geometry(tets1);
+  const std::vector<std::int32_t> conn = model.conn;
   const std::size_t whole = model.memory_bytes();
-  model.release_tet_geometry();
-  const std::size_t released = whole - model.memory_bytes();
-  std::printf("released %zu bytes of the model's %zu (%zu tets: gradients, volume and 6 fibre components, %zu bytes each)\n", released, whole,
-              model.num_elements, (9 + 1 + 6) * sizeof(double));
-  EXPECT_EQ(released, (9 + 1 + 6) * sizeof(double) * model.num_elements);
+  model.release_tet_geometry(false);
+  const std::size_t released = whole - model.memory_bytes(), per_tet = 4 * sizeof(std::int32_t) + (9 + 1 + 6) * sizeof(double);
+  std::printf("released %zu bytes of the model's %zu (%zu tets: nodes, gradients, volume and 6 fibre components, %zu bytes each)\n", released, whole,
+              model.num_elements, per_tet);
+  EXPECT_EQ(released, per_tet * model.num_elements);
   EXPECT_THROW(InternalForces(model, 0.0, 1), std::logic_error);
   EXPECT_THROW(static_cast<void>(model.blocks[0].data()), std::logic_error);
   // Each rank's pass with the other's halo slots copied in.
@@ -238,7 +240,7 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   for (std::size_t e = 0; e < model.num_elements; ++e) {
     const std::vector<double>& f = d.atom_rank[d.tet_atom[e]] == 0 ? f0 : f1;
     for (int k = 0; k < 4; ++k) {
-      const auto n = static_cast<std::size_t>(model.conn[4 * e + static_cast<std::size_t>(k)]);
+      const auto n = static_cast<std::size_t>(conn[4 * e + static_cast<std::size_t>(k)]);
       for (int i = 0; i < 3; ++i) ++compared, differ += std::memcmp(&f[3 * n + i], &f_one[3 * n + i], sizeof(double)) != 0;
     }
   }
@@ -252,15 +254,30 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   EXPECT_EQ(std::memcmp(&energy_ranks, &energy_one, sizeof(double)), 0);
   // The states' cell records (stress, von Mises, J, hgo's fibre stretches), each tet's from the
   // rank that holds it, against one process's before the release.
-  std::size_t given = 0;
+  std::size_t given = 0, wrong_nodes = 0;
   for (const InternalForces* rank : {&rank0, &rank1})
-    rank->cell_records(u.data(), [&](std::size_t, std::size_t e, const double* r) {
+    rank->cell_records(u.data(), [&](std::size_t, std::size_t e, const std::int32_t* nodes, const double* r) {
       ++given;
+      wrong_nodes += !std::equal(nodes, nodes + 4, &conn[4 * e]);
       std::copy(r, r + width, &records_ranks[width * e]);
     });
   const bool same = std::memcmp(records_ranks.data(), records_one.data(), records_one.size() * sizeof(double)) == 0;
-  std::printf("cell records: %zu of %zu tets given by the two ranks (%zu doubles each), the same bits as one process's: %s\n", given,
-              model.num_elements, width, same ? "yes" : "no");
+  std::printf(
+      "cell records: %zu of %zu tets given by the two ranks (%zu doubles each), the same bits as one process's: %s; %zu with "
+      "other nodes than the model's\n",
+      given, model.num_elements, width, same ? "yes" : "no", wrong_nodes);
   EXPECT_EQ(given, model.num_elements);
   EXPECT_TRUE(same);
+  EXPECT_EQ(wrong_nodes, 0u);
+  // A message's tet: each rank gives the nodes of its own tets and none of the other's.
+  std::size_t found = 0;
+  for (std::size_t e = 0; e < model.num_elements; ++e) {
+    const InternalForces& owner = d.atom_rank[d.tet_atom[e]] == 0 ? rank0 : rank1;
+    const InternalForces& other = &owner == &rank0 ? rank1 : rank0;
+    found +=
+        owner.nodes_of_tet(e) &&
+        std::equal(conn.begin() + static_cast<std::ptrdiff_t>(4 * e), conn.begin() + static_cast<std::ptrdiff_t>(4 * e + 4), owner.nodes_of_tet(e)) &&
+        !other.nodes_of_tet(e);
+  }
+  EXPECT_EQ(found, model.num_elements);
 }

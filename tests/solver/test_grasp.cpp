@@ -120,7 +120,7 @@ TEST(Grasp, JointGapsArePlacedByTheBonesAndCarryNoStress) {
   mesh.tets.resize(model.num_elements);
   for (std::size_t e = 0; e < model.num_elements; ++e)
     for (std::size_t k = 0; k < 4; ++k)
-      mesh.tets[e][k] = input_of[static_cast<std::size_t>(model.conn[4 * static_cast<std::size_t>(model.element_of_input[e]) + k])];
+      mesh.tets[static_cast<std::size_t>(model.input_element[e])][k] = input_of[static_cast<std::size_t>(model.conn[4 * e + k])];
   std::vector<std::set<int>> bones_of(mesh.nodes.size());  // the bone groups a node lies on
   std::vector<char> bone_tet(mesh.tets.size(), 0);
   for (std::size_t e = 0; e < mesh.tets.size(); ++e) {

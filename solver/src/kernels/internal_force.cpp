@@ -96,16 +96,17 @@ std::vector<double> anp_reference_node_volumes(const Model& m, const MaterialBlo
 // Not through F = I + grad u and not in SIMD lanes: the pass is gathers and scatters around a few
 // flops, and the nine reference gradients are 72 bytes per tet more to stream (bench: one thread,
 // 10k tets, J pass ~6.2 ns per tet in lanes through F, ~4.5 ns like this).
-void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end, const double* u, double* node_volume, const std::uint16_t* slot) {
+void add_current_node_volumes(const Model& m, const std::int32_t* conn, std::size_t count, const double* u, double* node_volume,
+                              const std::uint16_t* slot) {
   const double* X = m.X.data();
-  for (std::size_t e = begin; e < end; ++e) {
-    const std::int32_t* c = &m.conn[4 * e];
-    if (e + kPrefetchAhead < end)  // the gathers' misses dominate on large meshes, as in the stress pass
+  for (std::size_t e = 0; e < count; ++e) {
+    const std::int32_t* c = conn + 4 * e;
+    if (e + kPrefetchAhead < count)  // the gathers' misses dominate on large meshes, as in the stress pass
       for (int k = 0; k < 4; ++k) {
         const auto node = static_cast<std::size_t>(c[4 * kPrefetchAhead + k]);
         __builtin_prefetch(X + 3 * node);
         __builtin_prefetch(u + 3 * node);
-        __builtin_prefetch(node_volume + (slot ? std::size_t{slot[4 * (e + kPrefetchAhead - begin) + static_cast<std::size_t>(k)]} : node), 1);
+        __builtin_prefetch(node_volume + (slot ? std::size_t{slot[4 * (e + kPrefetchAhead) + static_cast<std::size_t>(k)]} : node), 1);
       }
     const std::size_t n0 = 3 * static_cast<std::size_t>(c[0]);
     double edge[3][3];  // edge[k]: from node 0 to node k + 1
@@ -117,7 +118,7 @@ void add_current_node_volumes(const Model& m, std::size_t begin, std::size_t end
                                            edge[0][1] * (edge[1][2] * edge[2][0] - edge[1][0] * edge[2][2]) +
                                            edge[0][2] * (edge[1][0] * edge[2][1] - edge[1][1] * edge[2][0]));
     for (int k = 0; k < 4; ++k)
-      node_volume[slot ? std::size_t{slot[4 * (e - begin) + static_cast<std::size_t>(k)]} : static_cast<std::size_t>(c[k])] += quarter;
+      node_volume[slot ? std::size_t{slot[4 * e + static_cast<std::size_t>(k)]} : static_cast<std::size_t>(c[k])] += quarter;
   }
 }
 
@@ -152,7 +153,7 @@ std::vector<double> anp_nodal_pressure(const Model& m, const MaterialBlock& b, c
   const std::vector<double> V = anp_reference_node_volumes(m, b);
   const std::size_t n = m.num_nodes;
   std::vector<double> x(n, 0.0);
-  add_current_node_volumes(m, b.begin, b.end, u, x.data());
+  add_current_node_volumes(m, &m.conn[4 * b.begin], b.end - b.begin, u, x.data());
   if (b.material.pressure_smoothing() == 0) {
     b.material.type().anp_nodal_pressure(b.material.law(), V.data(), x.data(), 0, n);
     return x;
@@ -317,7 +318,7 @@ std::size_t InternalForces::memory_bytes() const {
   b += node_moves_.capacity() + rigid_node_.capacity() + touched_.capacity() +
        (chunk_bound_node_.capacity() + chunk_eta_node_.capacity()) * sizeof(std::size_t);
   b += partitions_.capacity() * sizeof(Partition) + partition_acc_.capacity() * sizeof(StressAccumulator);
-  b += (held_grad_.capacity() + held_volume_.capacity() + held_data_.capacity()) * sizeof(double);
+  b += held_conn_.capacity() * sizeof(std::int32_t) + (held_grad_.capacity() + held_volume_.capacity() + held_data_.capacity()) * sizeof(double);
   b += tet_slot_.capacity() * sizeof(std::uint16_t) + node_slot_first_.capacity() * sizeof(std::size_t) +
        node_slots_.capacity() * sizeof(std::uint32_t);
   b += (block_slot_begin_.capacity() + block_slot_end_.capacity() + boundary_atoms_.capacity() + interior_atoms_.capacity()) * sizeof(std::size_t);
@@ -402,7 +403,7 @@ void InternalForces::anp_pass(const double* u, const StressExchange& exchange) {
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.slot_begin;
       std::fill(mine, mine + (q.slot_end - q.slot_begin), 0.0);
-      add_current_node_volumes(model_, q.begin, q.end, u, mine, tet_slot_.data() + q.corner_begin);
+      add_current_node_volumes(model_, tet_nodes(q), q.end - q.begin, u, mine, tet_slot_.data() + q.corner_begin);
     }
     if (exchange.volumes) {
 #pragma omp master
@@ -441,7 +442,7 @@ void InternalForces::stress_partition(std::size_t p, const double* u, const doub
   const double* grad = holds_geometry_ ? held_grad_.data() + 9 * q.held_tet : model_.grad.data() + 9 * q.begin;
   const double* volume = holds_geometry_ ? held_volume_.data() + q.held_tet : model_.volume.data() + q.begin;
   const double* data = !b.per_element_data() ? b.data() : holds_geometry_ ? held_data_.data() + q.held_data : b.data_of(q.begin);
-  StressKernelArgs args{model_.conn.data() + 4 * q.begin,
+  StressKernelArgs args{tet_nodes(q),
                         grad,
                         volume,
                         b.material.law(),
@@ -686,9 +687,11 @@ void InternalForces::hold_own_geometry(const std::vector<TetRange>& tets) {
     count += r.end - r.begin;
     if (b.per_element_data()) data += b.data_stride() * (r.end - r.begin);
   }
-  held_grad_.reserve(9 * count), held_volume_.reserve(count), held_data_.reserve(data);
+  held_conn_.reserve(4 * count), held_grad_.reserve(9 * count), held_volume_.reserve(count), held_data_.reserve(data);
   for (const HeldRun& r : held_runs_) {
     const MaterialBlock& b = model_.blocks[r.block];
+    held_conn_.insert(held_conn_.end(), model_.conn.begin() + static_cast<std::ptrdiff_t>(4 * r.begin),
+                      model_.conn.begin() + static_cast<std::ptrdiff_t>(4 * r.end));
     held_grad_.insert(held_grad_.end(), model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * r.begin),
                       model_.grad.begin() + static_cast<std::ptrdiff_t>(9 * r.end));
     held_volume_.insert(held_volume_.end(), model_.volume.begin() + static_cast<std::ptrdiff_t>(r.begin),
@@ -712,30 +715,38 @@ void InternalForces::hold_own_geometry(const std::vector<TetRange>& tets) {
 
 void InternalForces::cell_records(const double* u, const CellSink& sink) const {
   std::vector<double> record(cell_record_width(model_), 0.0);
-  const auto run = [&](std::size_t bi, std::size_t begin, std::size_t end, const double* grad, const double* data) {
+  const auto run = [&](std::size_t bi, std::size_t begin, std::size_t end, const std::int32_t* conn, const double* grad, const double* data) {
     const MaterialBlock& b = model_.blocks[bi];
     const double* p = b.has_stress_pass() ? block_pressure_[bi] : nullptr;  // ANP: the pass's nodal pressures
     const std::size_t stride = b.data_stride();
     for (std::size_t e = begin; e < end; ++e) {
-      const std::int32_t* c = &model_.conn[4 * e];
+      const std::int32_t* c = conn + 4 * (e - begin);
       const double* g = grad + 9 * (e - begin);
       const double* d = data + stride * (e - begin);
       const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, g);
       fill_cell_record(b, F, reported_cauchy_stress(b, F, c, p, rigid_node_.data(), d), d, record.data());
-      sink(bi, e, record.data());
+      sink(bi, e, c, record.data());
     }
   };
   if (!holds_geometry_) {
     for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
       const MaterialBlock& b = model_.blocks[bi];
-      run(bi, b.begin, b.end, model_.grad.data() + 9 * b.begin, b.data());
+      run(bi, b.begin, b.end, model_.conn.data() + 4 * b.begin, model_.grad.data() + 9 * b.begin, b.data());
     }
     return;
   }
   for (const HeldRun& r : held_runs_) {
     const MaterialBlock& b = model_.blocks[r.block];
-    run(r.block, r.begin, r.end, held_grad_.data() + 9 * r.tet, b.per_element_data() ? held_data_.data() + r.data : b.data());
+    run(r.block, r.begin, r.end, held_conn_.data() + 4 * r.tet, held_grad_.data() + 9 * r.tet,
+        b.per_element_data() ? held_data_.data() + r.data : b.data());
   }
+}
+
+const std::int32_t* InternalForces::nodes_of_tet(std::size_t e) const {
+  if (!holds_geometry_) return e < model_.num_elements && !model_.conn.empty() ? &model_.conn[4 * e] : nullptr;
+  const auto in = std::upper_bound(held_runs_.begin(), held_runs_.end(), e, [](std::size_t t, const HeldRun& r) { return t < r.begin; });
+  if (in == held_runs_.begin() || std::prev(in)->end <= e) return nullptr;
+  return &held_conn_[4 * (std::prev(in)->tet + (e - std::prev(in)->begin))];
 }
 
 std::size_t cell_record_width(const Model& model) {

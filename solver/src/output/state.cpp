@@ -58,7 +58,9 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   MeshField stress{cc::cauchy_stress.name, 6, std::vector<double>(6 * E), {"xx", "yy", "zz", "xy", "yz", "xz"}},
       vm{cc::von_mises.name, 1, std::vector<double>(E)}, material{cc::material.name, 1, std::vector<double>(E)},
       jac{cc::jacobian.name, 1, std::vector<double>(E)}, body{cc::body.name, 1, std::vector<double>(E)};
-  for (std::size_t e = 0; e < E; ++e) body.values[e] = static_cast<double>(m.tet_body[e]);
+  for (std::size_t b = 0; b < m.bodies.size(); ++b)
+    std::fill(body.values.begin() + static_cast<std::ptrdiff_t>(m.bodies[b].tet_begin),
+              body.values.begin() + static_cast<std::ptrdiff_t>(m.bodies[b].tet_end), static_cast<double>(b));
   // The result fields the laws of this model add (hgo: fibre_stretch), 0 on the other laws' tets.
   std::vector<MeshField> law_fields;
   for (const auto& b : m.blocks)
@@ -71,9 +73,15 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
     for (const auto& f : m.blocks[bi].material.type().result_fields)
       for (auto& x : law_fields)
         if (x.name == f.name) targets[bi].push_back(&x);
+  // The cells come with the records (the process that computed them holds their nodes; no process
+  // need hold the whole connectivity), in the input numbering.
+  std::vector<int> input_of(N);
+  for (std::size_t i = 0; i < N; ++i) input_of[static_cast<std::size_t>(m.node_of_input[i])] = static_cast<int>(i);
+  std::vector<std::array<int, 4>> cells(E);
   // Each tet's record straight into the fields (no array of every tet's at the writer's peak).
-  cell_records([&](std::size_t bi, std::size_t e, const double* record) {
+  cell_records([&](std::size_t bi, std::size_t e, const std::int32_t* nodes, const double* record) {
     const std::size_t out = static_cast<std::size_t>(m.input_element[e]);
+    for (int k = 0; k < 4; ++k) cells[out][static_cast<std::size_t>(k)] = input_of[static_cast<std::size_t>(nodes[k])];
     for (int k = 0; k < 6; ++k) stress.values[6 * out + k] = record[k];
     vm.values[out] = record[6];
     block_peak[bi] = std::max(block_peak[bi], vm.values[out]);
@@ -94,16 +102,7 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   for (const auto& b : m.blocks) material_names.values.push_back(b.name);
   std::vector<MeshStrings> names{body_names, material_names};
   if (regions) names.push_back({contracts::kGripRegionNames, regions->names()});
-  // The cells from the model's connectivity, in the input numbering (the input mesh keeps no tets
-  // of its own: Model::input_mesh).
-  std::vector<int> input_of(N);
-  for (std::size_t i = 0; i < N; ++i) input_of[static_cast<std::size_t>(m.node_of_input[i])] = static_cast<int>(i);
-  const auto cell = [&](std::size_t in) {
-    const std::int32_t* c = &m.conn[4 * static_cast<std::size_t>(m.element_of_input[in])];
-    return std::array<int, 4>{input_of[static_cast<std::size_t>(c[0])], input_of[static_cast<std::size_t>(c[1])],
-                              input_of[static_cast<std::size_t>(c[2])], input_of[static_cast<std::size_t>(c[3])]};
-  };
-  write_vtu(file, m.input_mesh, E, cell, point_fields, cell_fields, &current, time, names);
+  write_vtu(file, m.input_mesh, std::move(cells), point_fields, cell_fields, &current, time, names);
   return block_peak;
 }
 

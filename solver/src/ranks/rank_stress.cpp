@@ -479,17 +479,20 @@ void RankStressPass::cell_records(const double* u, const double* v, const CellSi
   constexpr std::size_t kMessageTets = 16384;  // records per message: ~1 MB, whatever a rank's share
   std::vector<double> f(3 * model_.num_nodes);
   compute(u, v, f.data());  // the ANP nodal pressures at u
-  const std::size_t width = cell_record_width(model_);
+  // On the wire, each tet's four nodes (exact as doubles) then its record: rank 0 holds only its
+  // own tets' connectivity too, and writes the cells from them.
+  const std::size_t width = cell_record_width(model_), stride = 4 + width;
   std::vector<double> buffer;
-  buffer.reserve(width * std::min(kMessageTets, tets_));
+  buffer.reserve(stride * std::min(kMessageTets, tets_));
   if (rank_ != 0) {
     const auto send = [&] {
       check(MPI_Send(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, 0, kCellRecordsTag, comm_), "MPI_Send");
       buffer.clear();
     };
-    forces_.cell_records(u, [&](std::size_t, std::size_t, const double* record) {
+    forces_.cell_records(u, [&](std::size_t, std::size_t, const std::int32_t* nodes, const double* record) {
+      for (int k = 0; k < 4; ++k) buffer.push_back(static_cast<double>(nodes[k]));
       buffer.insert(buffer.end(), record, record + width);
-      if (buffer.size() == width * kMessageTets) send();
+      if (buffer.size() == stride * kMessageTets) send();
     });
     if (!buffer.empty()) send();
     return;
@@ -499,22 +502,31 @@ void RankStressPass::cell_records(const double* u, const double* v, const CellSi
   for (int r = 1; r < ranks_; ++r) {
     std::size_t left = 0, in_buffer = 0;
     for (const TetRun& run : tet_runs_) left += run.rank == r ? run.end - run.begin : 0;
-    const double* record = nullptr;
+    const double* at = nullptr;
     for (const TetRun& run : tet_runs_) {
       if (run.rank != r) continue;
       std::size_t block = 0;
-      for (std::size_t e = run.begin; e < run.end; ++e, record += width, --in_buffer, --left) {
+      for (std::size_t e = run.begin; e < run.end; ++e, at += stride, --in_buffer, --left) {
         if (in_buffer == 0) {
           in_buffer = std::min(kMessageTets, left);
-          buffer.resize(width * in_buffer);
+          buffer.resize(stride * in_buffer);
           check(MPI_Recv(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, r, kCellRecordsTag, comm_, MPI_STATUS_IGNORE), "MPI_Recv");
-          record = buffer.data();
+          at = buffer.data();
         }
         while (e >= model_.blocks[block].end) ++block;
-        sink(block, e, record);
+        const std::int32_t nodes[4] = {static_cast<std::int32_t>(at[0]), static_cast<std::int32_t>(at[1]), static_cast<std::int32_t>(at[2]),
+                                       static_cast<std::int32_t>(at[3])};
+        sink(block, e, nodes, at + 4);
       }
     }
   }
+}
+
+std::array<std::int32_t, 4> RankStressPass::tet_nodes(std::size_t e) {
+  std::array<std::int32_t, 4> nodes{-1, -1, -1, -1}, all{};
+  if (const std::int32_t* c = forces_.nodes_of_tet(e)) std::copy(c, c + 4, nodes.begin());
+  check(MPI_Allreduce(nodes.data(), all.data(), 4, MPI_INT32_T, MPI_MAX, comm_), "MPI_Allreduce");
+  return all;
 }
 
 StressPassResult RankStressPass::compute_alone(const double* u, const double* v, double* f_out) {

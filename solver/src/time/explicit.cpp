@@ -232,8 +232,8 @@ std::string ExplicitSolver::describe_rigid_neighbours(std::size_t e) const {
   const std::vector<RigidBody>& pieces = rigid_.bodies();
   if (pieces.size() < 2 || e >= model_.num_elements) return "";
   Vec3d c = Vec3d::Zero();
-  for (int k = 0; k < 4; ++k) {
-    const auto a = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
+  for (const std::int32_t node : passes_->tet_nodes(e)) {  // (on ranks collective, as the message is)
+    const auto a = static_cast<std::size_t>(node);
     c += 0.25 * (Vec3d(&model_.X[3 * a]) + Vec3d(&u_[3 * a]));
   }
   std::vector<std::pair<double, std::size_t>> nearest;  // distance, piece

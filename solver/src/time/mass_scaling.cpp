@@ -26,7 +26,7 @@ MassScaling::MassScaling(const Model& model, double floor) : model_(model), floo
   element_body_.resize(model.num_elements);
   element_mass_.resize(model.num_elements);
   for (std::size_t e = 0; e < model.num_elements; ++e) {
-    element_body_[e] = model.tet_body[static_cast<std::size_t>(model.input_element[e])];
+    element_body_[e] = static_cast<std::int32_t>(model.body_of_tet(static_cast<std::size_t>(model.input_element[e])));
     element_mass_[e] = model.block_of(e).material.density() * model.volume[e];
     body_mass[static_cast<std::size_t>(element_body_[e])] += element_mass_[e];
   }

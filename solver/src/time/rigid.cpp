@@ -82,7 +82,7 @@ std::vector<RigidBody> find_rigid_bodies(const Model& m) {
       auto [it, added] = index.emplace(root, out.size());
       if (added) {
         RigidBody r;
-        r.body = static_cast<std::size_t>(m.tet_body[static_cast<std::size_t>(m.input_element[e])]);
+        r.body = m.body_of_tet(static_cast<std::size_t>(m.input_element[e]));
         r.name = m.bodies[r.body].name + "/" + b.name;
         out.push_back(std::move(r));
       }

@@ -69,11 +69,11 @@ struct MeshStrings {
 void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields = {},
                const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr,
                std::optional<double> time = std::nullopt, const std::vector<MeshStrings>& strings = {});
-// The same with `tets` tets whose nodes (mesh.nodes' numbering) come from tet_nodes rather than
-// mesh.tets, for a writer that keeps them once elsewhere (the solver: its model's connectivity);
-// mesh.tet_group still holds one tag per tet.
-using TetNodes = std::function<std::array<int, 4>(std::size_t tet)>;
-void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, std::size_t tets, const TetNodes& tet_nodes,
+// The same with the cells (mesh.nodes' numbering) moved in rather than in mesh.tets, for a writer
+// that keeps no tets of its own (the solver's states: their cells come with the stress records);
+// they are freed once VTK holds its copy, before it copies the fields, so a writer's peak holds
+// them once. mesh.tet_group still holds one tag per tet.
+void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, std::vector<std::array<int, 4>>&& cells,
                const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes,
                std::optional<double> time, const std::vector<MeshStrings>& strings);
 

@@ -50,13 +50,13 @@ struct StressPassResult {
 
 // Average nodal pressure tets (material.hpp, kernels/element_loop.hpp), for the blocks whose
 // material runs as ANP: the nodal reference volumes V_a = sum_e V_e / 4 over the block's tets
-// (0 at the other nodes), one entry per node; adding the current volume v_e / 4 of tets
-// [begin, end) at u to the nodes' current volumes; and the nodal pressures U'(J_a) at u (serial:
-// for the outputs).
+// (0 at the other nodes), one entry per node; adding the current volume v_e / 4 of `count` tets
+// (their nodes from `conn`, 4 per tet) at u to the nodes' current volumes; and the nodal pressures
+// U'(J_a) at u (serial: for the outputs).
 std::vector<double> anp_reference_node_volumes(const Model& model, const MaterialBlock& block);
-// node_volume[n] receives node n's share, or node_volume[slot[4 (e - begin) + k]] for corner k of
-// tet e when the slots of [begin, end)'s corners are given (an atom's compact array; InternalForces).
-void add_current_node_volumes(const Model& model, std::size_t begin, std::size_t end, const double* u, double* node_volume,
+// node_volume[n] receives node n's share, or node_volume[slot[4 e + k]] for corner k of the e-th
+// tet when the slots of their corners are given (an atom's compact array; InternalForces).
+void add_current_node_volumes(const Model& model, const std::int32_t* conn, std::size_t count, const double* u, double* node_volume,
                               const std::uint16_t* slot = nullptr);
 // Per tet of the block (from its first): the constant factor of its ANP volumetric rows in the
 // nodal step bound (InternalForces; design.md, "Stable step").
@@ -112,7 +112,9 @@ std::vector<Mat3> element_cauchy_stress(const Model& model, const double* u);
 inline constexpr std::size_t kCellRecordFixed = 8;
 std::size_t cell_record_width(const Model& model);
 void fill_cell_record(const MaterialBlock& block, const Mat3& F, const Mat3& sigma, const double* law_data, double* record);
-using CellSink = std::function<void(std::size_t block, std::size_t tet, const double* record)>;
+// A tet's record with its block, its model index and its four nodes (model numbering: the writer
+// takes the cells from them, so no process needs the whole connectivity to write a state).
+using CellSink = std::function<void(std::size_t block, std::size_t tet, const std::int32_t* nodes, const double* record)>;
 
 // A run of consecutive tets [begin, end) (model numbering).
 struct TetRange {
@@ -204,17 +206,20 @@ class InternalForces {
   // over the rank's own nodes, with its ghost nodes' values exchanged after each node pass
   // (anp_ghosts()).
   void own_atoms(const std::vector<std::uint32_t>& tet_atom, const std::vector<std::int32_t>& atom_rank, int rank);
-  // Ranks, after own_atoms: copies the reference gradients, volumes and per-tet law data (fibres)
-  // of `tets` (this rank's share of the decomposition, ascending: its atoms' tets and those
-  // without a stress pass, rigid or joint gaps, whose results it reports) into arrays of its own
-  // and reads them from there, so the model's may be released (Model::release_tet_geometry; 80
-  // bytes per tet and the law's data, of which this rank keeps its share).
+  // Ranks, after own_atoms: copies the connectivity, reference gradients, volumes and per-tet law
+  // data (fibres) of `tets` (this rank's share of the decomposition, ascending: its atoms' tets and
+  // those without a stress pass, rigid or joint gaps, whose results it reports) into arrays of its
+  // own and reads them from there, so the model's may be released (Model::release_tet_geometry;
+  // 96 bytes per tet and the law's data, of which this rank keeps its share).
   void hold_own_geometry(const std::vector<TetRange>& tets);
   // After a pass at u: the cell record (cell_record_width(model) doubles) of every tet this
   // process holds (one process: every tet; after hold_own_geometry: those it holds), in model
   // order, each handed to sink. An ANP tet's volumetric part is the mean of its nodes' pressures
   // of that pass (the pressures its forces came from).
   void cell_records(const double* u, const CellSink& sink) const;
+  // Tet e's four nodes where this process reads them (after hold_own_geometry: its own tets',
+  // else the model's), or nullptr.
+  const std::int32_t* nodes_of_tet(std::size_t e) const;
   const std::vector<HaloSlots>& halo() const { return halo_; }
   double* slot_forces() { return partition_forces_.data(); }
   double* slot_volumes() { return partition_volumes_.data(); }  // the ANP atoms' nodal volumes, 1 per slot
@@ -281,8 +286,8 @@ class InternalForces {
     std::size_t block, begin, end, slot_begin, slot_end;
     std::size_t tile_offset = 0;   // ANP blocks: its tiles' first in anp_tiles_
     std::size_t corner_begin = 0;  // its first tet's corner in tet_slot_
-    // After hold_own_geometry: its first tet in held_grad_ / held_volume_, and its first tet's
-    // law data in held_data_ (blocks with per-tet data).
+    // After hold_own_geometry: its first tet in held_conn_ / held_grad_ / held_volume_, and its
+    // first tet's law data in held_data_ (blocks with per-tet data).
     std::size_t held_tet = 0, held_data = 0;
   };
   // The geometry this rank's atoms read (hold_own_geometry; empty: the model's): per held run of
@@ -291,7 +296,12 @@ class InternalForces {
     std::size_t block, begin, end, tet, data;
   };
   bool holds_geometry_ = false;
+  // Atom q's first tet's nodes: in held_conn_ once this rank holds its own, else the model's.
+  const std::int32_t* tet_nodes(const Partition& q) const {
+    return holds_geometry_ ? held_conn_.data() + 4 * q.held_tet : model_.conn.data() + 4 * q.begin;
+  }
   std::vector<HeldRun> held_runs_;
+  std::vector<std::int32_t> held_conn_;
   std::vector<double> held_grad_, held_volume_, held_data_;
   std::vector<Partition> partitions_;
   std::vector<double> partition_forces_, partition_volumes_;

@@ -102,15 +102,13 @@ struct Model {
   std::int32_t gravity_curve = -1;
 
   // Mapping back to the input numbering, for output and messages.
-  std::vector<std::int32_t> node_of_input;     // internal index of input node i
-  std::vector<std::int32_t> element_of_input;  // internal index of input tet e
-  std::vector<std::int32_t> input_element;     // input index of internal tet
+  std::vector<std::int32_t> node_of_input;  // internal index of input node i
+  std::vector<std::int32_t> input_element;  // input index of internal tet
   // All bodies, input numbering, placed coordinates, file tags; its tets are dropped once the model
-  // is built (16 bytes per tet held twice): tet e of the input is conn's element_of_input[e], its
-  // nodes through node_of_input. tet_group keeps one tag per tet.
+  // is built (16 bytes per tet held twice): internal tet e is input tet input_element[e], its nodes
+  // conn's through node_of_input. tet_group keeps one tag per tet.
   TetMesh input_mesh;
-  std::vector<BodyRange> bodies;
-  std::vector<std::int32_t> tet_body;  // body of each input tet
+  std::vector<BodyRange> bodies;  // each body's input tets are one range (body_of_tet)
 
   // Contact (internal numbering): directed slave -> master pairs and the iteration settings.
   std::vector<ContactPair> contact_pairs;
@@ -119,12 +117,14 @@ struct Model {
   // The bones' motion by their joints (joint_settings.hpp); off without a [skeleton].
   JointDriveSetup joint_drive;
 
-  // On ranks, once the rank's stress pass holds its own tets' geometry (InternalForces::
-  // hold_own_geometry) and the restart check has run: frees every tet's reference gradients,
-  // volumes and per-tet law data (80 bytes per tet and the law's), which every rank builds with
-  // the model. A later reader fails loudly (tet_geometry_released) rather than reading nothing.
-  // A step towards the model's scatter (docs/design.md).
-  void release_tet_geometry();
+  // On ranks, once the rank's stress pass holds its own tets' geometry and connectivity
+  // (InternalForces::hold_own_geometry) and the restart check has run: frees every tet's reference
+  // gradients, volumes and per-tet law data (80 bytes per tet and the law's) and, unless
+  // keep_connectivity (mass scaling reads every tet's nodes on every rank), the connectivity (16
+  // bytes per tet), which every rank builds with the model. A later reader fails loudly
+  // (tet_geometry_released, conn empty) rather than reading nothing. A step towards the model's
+  // scatter (docs/design.md).
+  void release_tet_geometry(bool keep_connectivity);
   bool tet_geometry_released = false;
 
   std::size_t memory_bytes() const;                          // everything held, including the input mesh copy
@@ -135,8 +135,9 @@ struct Model {
   // The physical groups of body b, in file order; one of them by dimension and name (or nullptr).
   std::vector<const PhysicalGroup*> body_groups(std::size_t body) const;
   const PhysicalGroup* body_group(std::size_t body, int dim, const std::string& name) const;
-  // The body an input node belongs to.
+  // The body an input node, or an input tet, belongs to (a search over the bodies' ranges).
   std::size_t body_of_node(std::size_t input_node) const;
+  std::size_t body_of_tet(std::size_t input_tet) const;
 };
 
 // A model from an in-memory mesh (tests and benchmarks; a scenario's: build_model in model_build.hpp): one body, one material for every group.

@@ -55,6 +55,7 @@ class RankStressPass : public StressPassEngine {
   void gather_nodes(std::initializer_list<double*> arrays) override;
   bool holds_own_geometry() const override { return true; }
   void cell_records(const double* u, const double* v, const CellSink& sink) override;
+  std::array<std::int32_t, 4> tet_nodes(std::size_t e) override;
   // Owned-node stepping: the nodes this process integrates, and the doubles it sends in one
   // share_ghosts.
   std::size_t integrated_nodes() const { return integrated_dofs_.size() / 3; }

@@ -5,6 +5,7 @@
 // whole model's sums and minima - with the same bits, so that every process of a run over ranks
 // goes on with the same state (docs/design.md, "tactus-solve under mpirun"). The solver library
 // itself needs no MPI: only this interface.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
@@ -84,6 +85,9 @@ class StressPassEngine {
   // tet. On ranks collective: every rank computes its own tets' and rank 0 receives them, rank by
   // rank; sink is called on rank 0 only.
   virtual void cell_records(const double* u, const double* v, const CellSink& sink) = 0;
+  // Tet e's four nodes (a message's: the tet an error names). On ranks collective: from the rank
+  // that holds them, since no rank need hold every tet's.
+  virtual std::array<std::int32_t, 4> tet_nodes(std::size_t e) = 0;
 
  private:
   std::vector<std::uint32_t> no_dofs_;
@@ -110,6 +114,10 @@ class OneProcessStressPass final : public StressPassEngine {
     std::vector<double> f(3 * nodes_);
     forces_.compute(u, v, f.data());
     forces_.cell_records(u, sink);
+  }
+  std::array<std::int32_t, 4> tet_nodes(std::size_t e) override {
+    const std::int32_t* c = forces_.nodes_of_tet(e);
+    return {c[0], c[1], c[2], c[3]};
   }
   std::vector<std::uint32_t> checkpoint_nodes() const override {
     std::vector<std::uint32_t> all(nodes_);
