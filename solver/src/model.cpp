@@ -172,9 +172,8 @@ std::size_t Model::memory_bytes() const {
          bytes(input_mesh.tet_group) + bytes(input_mesh.triangles) + bytes(input_mesh.triangle_group);
 }
 
-void Model::release_tet_geometry(bool keep_connectivity) {
-  grad = std::vector<double>(), volume = std::vector<double>();
-  if (!keep_connectivity) conn = std::vector<std::int32_t>();
+void Model::release_tet_geometry() {
+  conn = std::vector<std::int32_t>(), grad = std::vector<double>(), volume = std::vector<double>();
   for (MaterialBlock& b : blocks)
     if (b.per_element_data()) b.element_data = std::vector<double>(), b.element_data_released = true;
   tet_geometry_released = true;

@@ -482,10 +482,6 @@ class RunLoop {
 
 namespace {
 
-// Once a rank's pass holds its own tets, the model keeps the connectivity only for mass scaling,
-// which scales every tet alike on every rank (MassScaling).
-bool keeps_connectivity(const Scenario& sc) { return sc.run.minimum_time_step > 0; }
-
 // On ranks: this rank's part of the stress pass, at run.threads per rank (1 unless given).
 std::unique_ptr<StressPassEngine> rank_stress_pass(const Model& model, const Scenario& sc, const RankRun* ranks) {
   if (!ranks) return nullptr;
@@ -517,7 +513,7 @@ void follow_simulation(const Scenario& sc, const RestartPoint* from, const RankR
   }
   // The pass holds this rank's tets' geometry and nodes: the model's go once the restart check has
   // run (as on rank 0), before the initial state.
-  model.release_tet_geometry(keeps_connectivity(sc));
+  model.release_tet_geometry();
   if (!from) state_records(solver.displacement(), solver.velocity_at_step());
   // RunLoop::run's steps, less its writes but for this rank's part of each checkpoint and its
   // tets' part of each state (the collectives in those).
@@ -571,13 +567,12 @@ RunSummary run_simulation(const Scenario& sc, OutputFolder& staged, const RunIde
 
   fs::create_directories(staged.path() / "results");
   // On ranks the pass holds this rank's tets' geometry and nodes: the model's go (every tet's
-  // gradients, volumes, law data and, without mass scaling, nodes; the model's scatter will not
-  // build them here at all), before the initial state is written, or once the restart check (in
-  // the loop's restore) has run.
+  // nodes, gradients, volumes and law data; the model's scatter will not build them here at all),
+  // before the initial state is written, or once the restart check (in the loop's restore) has run.
   const bool release = shared && shared->holds_own_geometry();
-  if (release && !from) model.release_tet_geometry(keeps_connectivity(sc));
+  if (release && !from) model.release_tet_geometry();
   RunLoop loop(sc, model, solver, staged, est_steps, identity, from, ranks, shared ? shared->checkpoint_nodes() : std::vector<std::uint32_t>{});
-  if (release && from) model.release_tet_geometry(keeps_connectivity(sc));
+  if (release && from) model.release_tet_geometry();
   nlohmann::json failure = loop.run();
   loop.finishing([&] { failure = loop.finish(failure); });
   RunSummary& summary = loop.summary();

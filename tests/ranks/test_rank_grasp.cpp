@@ -84,7 +84,7 @@ int lockstep(int rank, int ranks) {
 // (Model::release_tet_geometry). Every rank must throw one process's message, word for word.
 std::string crushed_message(const Scenario& sc, StressPassEngine* shared, Model& model) {
   ExplicitSolver s(model, sc.run, sc.damping, shared);
-  if (shared) model.release_tet_geometry(false);
+  if (shared) model.release_tet_geometry();
   try {
     while (true) {
       s.advance_velocity();

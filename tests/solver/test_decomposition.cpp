@@ -205,13 +205,24 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   double energy_one = 0;
   const std::size_t width = cell_record_width(model);
   std::vector<double> records_one(width * model.num_elements), records_ranks(records_one.size(), -1.0);
+  // Mass scaling's scans (tets below a floor, the smallest scaled step): half the tets below.
+  double floor2 = 0;
+  std::vector<FloorTet> below_one;
+  std::pair<double, std::size_t> smallest_one;
   {
     InternalForces one(model, 0.0, 1);
+    one.enable_mass_scaling();
     energy_one = one.compute(u.data(), nullptr, f_one.data()).strain_energy;
+    std::vector<double> dt2 = one.element_dt2();
+    std::nth_element(dt2.begin(), dt2.begin() + static_cast<std::ptrdiff_t>(dt2.size() / 2), dt2.end());
+    floor2 = dt2[dt2.size() / 2];
+    one.tets_below_floor(floor2, below_one);
+    smallest_one = one.smallest_scaled_step(1e-7);
     one.cell_records(u.data(),
                      [&](std::size_t, std::size_t e, const std::int32_t*, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
   }
   InternalForces rank0(model, 0.0, 1), rank1(model, 0.0, 1);
+  rank0.enable_mass_scaling(), rank1.enable_mass_scaling();
   rank0.own_atoms(d.tet_atom, d.atom_rank, 0);
   rank1.own_atoms(d.tet_atom, d.atom_rank, 1);
   std::vector<TetRange> tets0, tets1;
@@ -223,7 +234,7 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   rank0.hold_own_geometry(tets0), rank1.hold_own_geometry(tets1);
   const std::vector<std::int32_t> conn = model.conn;
   const std::size_t whole = model.memory_bytes();
-  model.release_tet_geometry(false);
+  model.release_tet_geometry();
   const std::size_t released = whole - model.memory_bytes(), per_tet = 4 * sizeof(std::int32_t) + (9 + 1 + 6) * sizeof(double);
   std::printf("released %zu bytes of the model's %zu (%zu tets: nodes, gradients, volume and 6 fibre components, %zu bytes each)\n", released, whole,
               model.num_elements, per_tet);
@@ -280,4 +291,23 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
         !other.nodes_of_tet(e);
   }
   EXPECT_EQ(found, model.num_elements);
+  // Mass scaling's scans from the held geometry: the two ranks' tets below the floor, merged in tet
+  // order, and the smaller of their smallest steps, against one process's.
+  std::vector<FloorTet> below;
+  rank0.tets_below_floor(floor2, below), rank1.tets_below_floor(floor2, below);
+  std::sort(below.begin(), below.end(), [](const FloorTet& a, const FloorTet& b) { return a.tet < b.tet; });
+  std::size_t floor_differ = below.size() != below_one.size();
+  for (std::size_t k = 0; k < std::min(below.size(), below_one.size()); ++k)
+    floor_differ += below[k].tet != below_one[k].tet || std::memcmp(&below[k].dt2, &below_one[k].dt2, sizeof(double)) != 0 ||
+                    std::memcmp(&below[k].rho_v, &below_one[k].rho_v, sizeof(double)) != 0 || below[k].nodes != below_one[k].nodes;
+  const auto s0 = rank0.smallest_scaled_step(1e-7), s1 = rank1.smallest_scaled_step(1e-7);
+  const auto smallest = s1.first < s0.first || (s1.first == s0.first && s1.second < s0.second) ? s1 : s0;
+  std::printf(
+      "mass scaling: %zu of %zu tets below the floor from the two ranks, %zu differ from one process's %zu; smallest scaled step "
+      "%.17g s at tet %zu (one process %.17g s at tet %zu)\n",
+      below.size(), model.num_elements, floor_differ, below_one.size(), smallest.first, smallest.second, smallest_one.first, smallest_one.second);
+  EXPECT_GT(below_one.size(), model.num_elements / 4);
+  EXPECT_EQ(floor_differ, 0u);
+  EXPECT_EQ(std::memcmp(&smallest.first, &smallest_one.first, sizeof(double)), 0);
+  EXPECT_EQ(smallest.second, smallest_one.second);
 }

@@ -742,6 +742,45 @@ void InternalForces::cell_records(const double* u, const CellSink& sink) const {
   }
 }
 
+template <class F>
+void InternalForces::each_stress_run(F f) const {
+  if (!holds_geometry_) {
+    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
+      const MaterialBlock& b = model_.blocks[bi];
+      if (b.has_stress_pass()) f(bi, b.begin, b.end, model_.conn.data() + 4 * b.begin, model_.volume.data() + b.begin);
+    }
+    return;
+  }
+  for (const HeldRun& r : held_runs_)
+    if (model_.blocks[r.block].has_stress_pass()) f(r.block, r.begin, r.end, held_conn_.data() + 4 * r.tet, held_volume_.data() + r.tet);
+}
+
+void InternalForces::tets_below_floor(double floor2, std::vector<FloorTet>& out) const {
+  each_stress_run([&](std::size_t bi, std::size_t begin, std::size_t end, const std::int32_t* conn, const double* volume) {
+    const double density = model_.blocks[bi].material.density();
+    for (std::size_t e = begin; e < end; ++e) {
+      if (!(element_dt2_[e] * mass_factor_[e] < floor2)) continue;
+      const std::int32_t* c = conn + 4 * (e - begin);
+      out.push_back({e, element_dt2_[e], density * volume[e - begin], {c[0], c[1], c[2], c[3]}});
+    }
+  });
+}
+
+std::pair<double, std::size_t> InternalForces::smallest_scaled_step(double beta) const {
+  std::pair<double, std::size_t> best{std::numeric_limits<double>::infinity(), std::numeric_limits<std::size_t>::max()};
+  each_stress_run([&](std::size_t, std::size_t begin, std::size_t end, const std::int32_t*, const double*) {
+    for (std::size_t e = begin; e < end; ++e) {
+      double dt = std::sqrt(element_dt2_[e] * mass_factor_[e]);
+      if (beta > 0) {  // Rayleigh stiffness damping shortens the step, as the kernel computes it
+        const double omega = 2.0 / dt, xi = 0.5 * beta * omega;
+        dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
+      }
+      if (dt < best.first) best = {dt, e};
+    }
+  });
+  return best;
+}
+
 const std::int32_t* InternalForces::nodes_of_tet(std::size_t e) const {
   if (!holds_geometry_) return e < model_.num_elements && !model_.conn.empty() ? &model_.conn[4 * e] : nullptr;
   const auto in = std::upper_bound(held_runs_.begin(), held_runs_.end(), e, [](std::size_t t, const HeldRun& r) { return t < r.begin; });

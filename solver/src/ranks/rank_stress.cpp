@@ -134,30 +134,64 @@ std::size_t RankStressPass::RankOrder::memory_bytes() const {
          (mine.capacity() + all.capacity()) * sizeof(double);
 }
 
-void RankStressPass::enable_mass_scaling() {
-  forces_.enable_mass_scaling();
-  std::vector<std::int32_t> tet_rank(model_.num_elements);
-  for (const TetRun& run : tet_runs_)
-    std::fill(tet_rank.begin() + static_cast<std::ptrdiff_t>(run.begin), tet_rank.begin() + static_cast<std::ptrdiff_t>(run.end), run.rank);
-  tets_order_.build(tet_rank, ranks_, 1);
-  all_dt2_.resize(model_.num_elements);
+void RankStressPass::enable_mass_scaling() { forces_.enable_mass_scaling(); }
+
+std::vector<FloorTet> RankStressPass::tets_below_floor(double floor2) {
+  std::vector<FloorTet> mine;
+  forces_.tets_below_floor(floor2, mine);
+  constexpr int kWidth = 7;  // tet, dt2, rho V, 4 nodes (exact as doubles)
+  std::vector<double> send;
+  send.reserve(kWidth * mine.size());
+  for (const FloorTet& t : mine) {
+    send.insert(send.end(), {static_cast<double>(t.tet), t.dt2, t.rho_v});
+    for (const std::int32_t n : t.nodes) send.push_back(static_cast<double>(n));
+  }
+  const int count = static_cast<int>(send.size());
+  std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_) + 1, 0);
+  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "MPI_Allgather");
+  for (std::size_t r = 0; r < counts.size(); ++r) offsets[r + 1] = offsets[r] + counts[r];
+  std::vector<double> all(static_cast<std::size_t>(offsets.back()));
+  check(MPI_Allgatherv(send.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, comm_), "MPI_Allgatherv");
+  std::vector<FloorTet> below(all.size() / kWidth);
+  for (std::size_t k = 0; k < below.size(); ++k) {
+    const double* t = &all[kWidth * k];
+    below[k] = {static_cast<std::size_t>(t[0]),
+                t[1],
+                t[2],
+                {static_cast<std::int32_t>(t[3]), static_cast<std::int32_t>(t[4]), static_cast<std::int32_t>(t[5]), static_cast<std::int32_t>(t[6])}};
+  }
+  // Each rank's ascending; ranks own interleaved runs of tets, so the tet order is a sort.
+  std::sort(below.begin(), below.end(), [](const FloorTet& a, const FloorTet& b) { return a.tet < b.tet; });
+  return below;
 }
 
-const std::vector<double>& RankStressPass::element_dt2_everywhere() {
-  tets_order_.gather(forces_.element_dt2().data(), all_dt2_.data(), rank_, comm_);
-  return all_dt2_;
+std::pair<double, std::size_t> RankStressPass::smallest_scaled_step(double beta) {
+  const std::pair<double, std::size_t> mine = forces_.smallest_scaled_step(beta);
+  // (a rank that runs no tet with a stress pass sends infinity and tet -1)
+  const double sent[2] = {mine.first, mine.first < std::numeric_limits<double>::infinity() ? static_cast<double>(mine.second) : -1.0};
+  std::vector<double> all(2 * static_cast<std::size_t>(ranks_));
+  check(MPI_Allgather(sent, 2, MPI_DOUBLE, all.data(), 2, MPI_DOUBLE, comm_), "MPI_Allgather");
+  // The smallest, and at a tie the first tet: one process's scan in tet order.
+  std::pair<double, std::size_t> best = mine;
+  for (int r = 0; r < ranks_; ++r) {
+    const double dt = all[2 * static_cast<std::size_t>(r)], at = all[2 * static_cast<std::size_t>(r) + 1];
+    if (at < 0) continue;
+    const auto tet = static_cast<std::size_t>(at);
+    if (dt < best.first || (dt == best.first && tet < best.second)) best = {dt, tet};
+  }
+  return best;
 }
 
 std::size_t RankStressPass::memory_bytes() const {
-  std::size_t b = forces_.memory_bytes() + forces_order_.memory_bytes() + tets_order_.memory_bytes() + nodes_order_.memory_bytes() +
-                  integrated_dofs_.capacity() * sizeof(std::uint32_t);
+  std::size_t b =
+      forces_.memory_bytes() + forces_order_.memory_bytes() + nodes_order_.memory_bytes() + integrated_dofs_.capacity() * sizeof(std::uint32_t);
   for (const RankOrder& o : chunk_orders_) b += o.memory_bytes();
   for (const Gather* g : {&sums_only_, &with_forces_})
     b += (g->counts.capacity() + g->offsets.capacity()) * sizeof(int) + g->forces_at.capacity() * sizeof(std::size_t);
   for (const auto& s : send_) b += s.capacity() * sizeof(double);
   for (const auto& s : receive_) b += s.capacity() * sizeof(double);
   b += anp_ghost_buffers_.memory_bytes() + state_buffers_.memory_bytes();
-  b += (records_.capacity() + gathered_.capacity() + all_dt2_.capacity()) * sizeof(double) + tet_runs_.capacity() * sizeof(TetRun);
+  b += (records_.capacity() + gathered_.capacity()) * sizeof(double) + tet_runs_.capacity() * sizeof(TetRun);
   return b;
 }
 

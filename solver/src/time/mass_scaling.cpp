@@ -23,58 +23,48 @@ MassScaling::MassScaling(const Model& model, double floor) : model_(model), floo
   pending_added.assign(model.num_nodes, 0.0);
   added_to_body.assign(model.bodies.size(), 0.0);
   body_mass.assign(model.bodies.size(), 0.0);
-  element_body_.resize(model.num_elements);
-  element_mass_.resize(model.num_elements);
-  for (std::size_t e = 0; e < model.num_elements; ++e) {
-    element_body_[e] = static_cast<std::int32_t>(model.body_of_tet(static_cast<std::size_t>(model.input_element[e])));
-    element_mass_[e] = model.block_of(e).material.density() * model.volume[e];
-    body_mass[static_cast<std::size_t>(element_body_[e])] += element_mass_[e];
-  }
+  // Each body's mass in tet order (before the model releases its volumes on ranks: the tets below
+  // the floor then bring their own rho V, FloorTet).
+  for (const MaterialBlock& b : model.blocks)
+    for (std::size_t e = b.begin; e < b.end; ++e)
+      body_mass[model.body_of_tet(static_cast<std::size_t>(model.input_element[e]))] += b.material.density() * model.volume[e];
 }
 
-void MassScaling::scale(std::vector<double>& factor, const std::vector<double>& dt2, StressPassResult& pass, const RigidBodies& rigid, double beta) {
+void MassScaling::scale(std::vector<double>& factor, const std::vector<FloorTet>& below, const RigidBodies& rigid) {
   const double floor2 = floor_ * floor_;
-  for (const MaterialBlock& b : model_.blocks) {
-    if (!b.has_stress_pass()) continue;  // no step of their own
-    for (std::size_t e = b.begin; e < b.end; ++e) {
-      if (!(dt2[e] * factor[e] < floor2)) continue;
-      // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
-      const double target = floor2 / dt2[e];
-      const double added = element_mass_[e] * (target - factor[e]);  // rho V (target - factor), as rho V is one product
-      factor[e] = target;
-      for (int k = 0; k < 4; ++k) {
-        const auto n = static_cast<std::size_t>(model_.conn[4 * e + static_cast<std::size_t>(k)]);
-        if (rigid.holds(n)) {
-          added_to_body[static_cast<std::size_t>(element_body_[e])] -= 0.25 * added;
-          continue;
-        }
-        mass[n] += 0.25 * added;
-        if (pending_added[n] == 0) raised_.push_back(static_cast<std::uint32_t>(n));
-        pending_added[n] += 0.25 * added;
-        for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
-          inverse_mass[d] = 1.0 / mass[n];
-          contact_inverse_mass[d] = model_.constrained[d] ? 0.0 : inverse_mass[d];
-        }
+  for (const FloorTet& t : below) {
+    const std::size_t e = t.tet;
+    const std::size_t body = model_.body_of_tet(static_cast<std::size_t>(model_.input_element[e]));
+    // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
+    const double target = floor2 / t.dt2;
+    const double added = t.rho_v * (target - factor[e]);  // rho V (target - factor), as rho V is one product
+    factor[e] = target;
+    for (const std::int32_t node : t.nodes) {
+      const auto n = static_cast<std::size_t>(node);
+      if (rigid.holds(n)) {
+        added_to_body[body] -= 0.25 * added;
+        continue;
       }
-      added_to_body[static_cast<std::size_t>(element_body_[e])] += added;
+      mass[n] += 0.25 * added;
+      if (pending_added[n] == 0) raised_.push_back(static_cast<std::uint32_t>(n));
+      pending_added[n] += 0.25 * added;
+      for (std::size_t d = 3 * n; d < 3 * n + 3; ++d) {
+        inverse_mass[d] = 1.0 / mass[n];
+        contact_inverse_mass[d] = model_.constrained[d] ? 0.0 : inverse_mass[d];
+      }
     }
+    added_to_body[body] += added;
   }
   std::sort(raised_.begin(), raised_.end());
-  // The step with the new masses (every scaled tet now sits at the floor), as the kernel computes it.
-  double best = std::numeric_limits<double>::infinity();
-  for (const MaterialBlock& b : model_.blocks)
-    for (std::size_t e = b.begin; e < b.end && b.has_stress_pass(); ++e) {
-      double dt = std::sqrt(dt2[e] * factor[e]);
-      if (beta > 0) {
-        const double omega = 2.0 / dt, xi = 0.5 * beta * omega;
-        dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
-      }
-      if (dt < best) best = dt, pass.limiting_element = e;
-    }
-  // The nodal bound of the pass holds a fortiori with the added mass.
-  pass.element_critical_step = best;
-  pass.limited_by_node = pass.nodal_critical_step > best;
-  pass.critical_step = std::max(best, pass.nodal_critical_step);
+}
+
+void MassScaling::take_scaled_step(StressPassResult& pass, const std::pair<double, std::size_t>& smallest) {
+  // Every scaled tet now sits at the floor; the nodal bound of the pass holds a fortiori with the
+  // added mass.
+  pass.element_critical_step = smallest.first;
+  pass.limiting_element = smallest.second;
+  pass.limited_by_node = pass.nodal_critical_step > smallest.first;
+  pass.critical_step = std::max(smallest.first, pass.nodal_critical_step);
 }
 
 std::ptrdiff_t MassScaling::body_over(double limit) const {

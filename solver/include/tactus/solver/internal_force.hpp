@@ -116,6 +116,14 @@ void fill_cell_record(const MaterialBlock& block, const Mat3& F, const Mat3& sig
 // takes the cells from them, so no process needs the whole connectivity to write a state).
 using CellSink = std::function<void(std::size_t block, std::size_t tet, const std::int32_t* nodes, const double* record)>;
 
+// Mass scaling: a tet whose step with its mass factor is below the floor (its model index,
+// unscaled squared step, rho V and nodes), as the process that runs it found it.
+struct FloorTet {
+  std::size_t tet = 0;
+  double dt2 = 0, rho_v = 0;
+  std::array<std::int32_t, 4> nodes{};
+};
+
 // A run of consecutive tets [begin, end) (model numbering).
 struct TetRange {
   std::size_t begin = 0, end = 0;
@@ -258,6 +266,12 @@ class InternalForces {
   void enable_mass_scaling();
   const std::vector<double>& element_dt2() const { return element_dt2_; }
   std::vector<double>& mass_factor() { return mass_factor_; }
+  // Over the tets with a stress pass this process runs (one process: every one; ranks: its atoms'),
+  // in tet order: those whose step dt2 x factor is below floor2 (appended to `out`), and the
+  // smallest step with the current factors as the kernel computes it (beta: stiffness damping) with
+  // its tet, the first at a tie (infinity and no tet when it runs none).
+  void tets_below_floor(double floor2, std::vector<FloorTet>& out) const;
+  std::pair<double, std::size_t> smallest_scaled_step(double beta) const;
   // The nodal step bound (on by default, with the model's lumped masses): a second upper bound on
   // omega_max from the nodes' whole masses, where the element estimate sees only each tet's share
   // of them (design.md, "The stable step"). nodal_mass: per node, the masses the run integrates
@@ -296,6 +310,10 @@ class InternalForces {
     std::size_t block, begin, end, tet, data;
   };
   bool holds_geometry_ = false;
+  // f(block, begin, end, conn, volume) over the runs of tets with a stress pass this process reads,
+  // ascending, with their first tet's nodes and volume.
+  template <class F>
+  void each_stress_run(F f) const;
   // Atom q's first tet's nodes: in held_conn_ once this rank holds its own, else the model's.
   const std::int32_t* tet_nodes(const Partition& q) const {
     return holds_geometry_ ? held_conn_.data() + 4 * q.held_tet : model_.conn.data() + 4 * q.begin;

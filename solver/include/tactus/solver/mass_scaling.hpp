@@ -7,6 +7,7 @@
 // kinetic energy and momentum it brought, so the energy audit (energy.hpp) still closes.
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "tactus/core/vec3.hpp"
@@ -15,6 +16,7 @@ namespace tactus::solver {
 
 struct Model;
 struct StressPassResult;
+struct FloorTet;
 class InternalForces;
 class RigidBodies;
 
@@ -24,13 +26,14 @@ class MassScaling {
   MassScaling(const Model& model, double floor);
   bool on() const { return floor_ > 0; }
   // After a stress pass whose critical step is below the floor: raises the mass of every tet below
-  // it until its step (before the safety factor) meets it, and sets the pass's element estimate
-  // and critical step to the scaled ones. A rigid body's node gets none (its body's mass is its
-  // own, and far larger). beta: Rayleigh stiffness damping, which shortens the step as the kernel
-  // computes it.
-  // factor: the stress pass's per-tet mass factors (raised here); dt2: every tet's unscaled squared
-  // step of the pass (StressPassEngine::element_dt2_everywhere).
-  void scale(std::vector<double>& factor, const std::vector<double>& dt2, StressPassResult& pass, const RigidBodies& rigid, double beta);
+  // it (`below`, in tet order: StressPassEngine::tets_below_floor) until its step (before the
+  // safety factor) meets it, raising its entry of factor (the stress pass's per-tet mass
+  // factors). A rigid body's node gets none (its body's mass is its own, and far larger).
+  void scale(std::vector<double>& factor, const std::vector<FloorTet>& below, const RigidBodies& rigid);
+  double floor_squared() const { return floor_ * floor_; }
+  // Then the pass's element estimate and critical step become the scaled ones: `smallest`, the
+  // smallest step with the raised factors and its tet (StressPassEngine::smallest_scaled_step).
+  static void take_scaled_step(StressPassResult& pass, const std::pair<double, std::size_t>& smallest);
   // The first body (model.bodies order) whose added mass exceeds `limit` times its own mass, or -1.
   std::ptrdiff_t body_over(double limit) const;
   // The mass added since the last call, at the velocities v^n (v_old alone on the first step):
@@ -55,10 +58,6 @@ class MassScaling {
  private:
   const Model& model_;
   double floor_;
-  std::vector<std::int32_t> element_body_;  // per tet (model numbering), its body
-  // Per tet: rho V, its own copy (a rank that writes no results releases the model's volumes,
-  // Model::release_tet_geometry, and every rank scales every tet alike).
-  std::vector<double> element_mass_;
   std::vector<std::uint32_t> raised_;
 };
 

@@ -118,13 +118,11 @@ struct Model {
   JointDriveSetup joint_drive;
 
   // On ranks, once the rank's stress pass holds its own tets' geometry and connectivity
-  // (InternalForces::hold_own_geometry) and the restart check has run: frees every tet's reference
-  // gradients, volumes and per-tet law data (80 bytes per tet and the law's) and, unless
-  // keep_connectivity (mass scaling reads every tet's nodes on every rank), the connectivity (16
-  // bytes per tet), which every rank builds with the model. A later reader fails loudly
-  // (tet_geometry_released, conn empty) rather than reading nothing. A step towards the model's
-  // scatter (docs/design.md).
-  void release_tet_geometry(bool keep_connectivity);
+  // (InternalForces::hold_own_geometry) and the restart check has run: frees every tet's nodes,
+  // reference gradients, volumes and per-tet law data (96 bytes per tet and the law's), which
+  // every rank builds with the model. A later reader fails loudly (tet_geometry_released, conn
+  // empty) rather than reading nothing. A step towards the model's scatter (docs/design.md).
+  void release_tet_geometry();
   bool tet_geometry_released = false;
 
   std::size_t memory_bytes() const;                          // everything held, including the input mesh copy

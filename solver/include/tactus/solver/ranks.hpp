@@ -37,8 +37,10 @@ class RankStressPass : public StressPassEngine {
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
   void enable_mass_scaling() override;
   std::vector<double>& mass_factor() override { return forces_.mass_factor(); }
-  // One MPI_Allgatherv of each rank's tets' steps (8 bytes per tet, in rank then tet order).
-  const std::vector<double>& element_dt2_everywhere() override;
+  // An MPI_Allgatherv of the tets each rank found below the floor (7 doubles each), merged in tet
+  // order; an MPI_Allgather of each rank's smallest step and its tet.
+  std::vector<FloorTet> tets_below_floor(double floor2) override;
+  std::pair<double, std::size_t> smallest_scaled_step(double beta) override;
   void set_threads(int threads) override { forces_.set_threads(threads); }
   int threads() const override { return forces_.threads(); }
   nlohmann::json report(const std::vector<std::pair<std::string, double>>& measured) override;
@@ -139,8 +141,6 @@ class RankStressPass : public StressPassEngine {
     std::int32_t rank;
   };
   std::vector<TetRun> tet_runs_;
-  RankOrder tets_order_;
-  std::vector<double> all_dt2_;
   // Owned-node stepping (step_owned_nodes): the dofs this process integrates; per other process the
   // nodes it sends after each update and those it receives (3 doubles each); the chunks of the sums
   // over dofs summed here and their order; the non-everywhere nodes by owner, for

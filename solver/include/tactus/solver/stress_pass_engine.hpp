@@ -30,12 +30,15 @@ class StressPassEngine {
   virtual StressPassResult compute_alone(const double* u, const double* v, double* f_out) = 0;
   virtual void set_nodal_step_bound(const double* nodal_mass) = 0;  // as InternalForces::set_nodal_step_bound
   // Mass scaling (as InternalForces's): the per-tet mass factors, the same on every process (each
-  // raises them alike from the same steps), and every tet's unscaled squared step of the last pass,
-  // gathered to every process (on ranks collective: only when the run scales, which every process
-  // knows alike).
+  // raises them alike from the same list of tets below the floor); the tets of the last pass below
+  // the floor (floor2: its square), every process's, in tet order; and the smallest step with the
+  // factors as they are then, and its tet. On ranks both collective (only when the run scales,
+  // which every process knows alike): each rank scans its own tets and sends the others what it
+  // found, a few tets a step rather than every tet's step.
   virtual void enable_mass_scaling() = 0;
   virtual std::vector<double>& mass_factor() = 0;
-  virtual const std::vector<double>& element_dt2_everywhere() = 0;
+  virtual std::vector<FloorTet> tets_below_floor(double floor2) = 0;
+  virtual std::pair<double, std::size_t> smallest_scaled_step(double beta) = 0;
   virtual void set_threads(int threads) = 0;
   virtual int threads() const = 0;
   virtual int ranks() const = 0;
@@ -104,7 +107,12 @@ class OneProcessStressPass final : public StressPassEngine {
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
   void enable_mass_scaling() override { forces_.enable_mass_scaling(); }
   std::vector<double>& mass_factor() override { return forces_.mass_factor(); }
-  const std::vector<double>& element_dt2_everywhere() override { return forces_.element_dt2(); }
+  std::vector<FloorTet> tets_below_floor(double floor2) override {
+    std::vector<FloorTet> below;
+    forces_.tets_below_floor(floor2, below);
+    return below;
+  }
+  std::pair<double, std::size_t> smallest_scaled_step(double beta) override { return forces_.smallest_scaled_step(beta); }
   void set_threads(int threads) override { forces_.set_threads(threads); }
   int threads() const override { return forces_.threads(); }
   int ranks() const override { return 1; }
