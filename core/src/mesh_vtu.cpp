@@ -72,7 +72,7 @@ void write_grid(const fs::path& file, const TetMesh& mesh, std::size_t tets, con
   for (std::size_t i = 0; i < xyz.size(); ++i) points->SetPoint(static_cast<vtkIdType>(i), xyz[i].data());
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(points);
-  grid->Allocate(static_cast<vtkIdType>(tets));
+  grid->AllocateExact(static_cast<vtkIdType>(tets), 4 * static_cast<vtkIdType>(tets));  // no growth by doubling: a copy of every cell at the peak
   for (std::size_t e = 0; e < tets; ++e) {
     const std::array<int, 4> t = tet_nodes(e);
     const vtkIdType ids[4] = {t[0], t[1], t[2], t[3]};
