@@ -209,6 +209,7 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   double floor2 = 0;
   std::vector<FloorTet> below_one;
   std::pair<double, std::size_t> smallest_one;
+  std::vector<double> factors_one;
   {
     InternalForces one(model, 0.0, 1);
     one.enable_mass_scaling();
@@ -216,8 +217,9 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
     std::vector<double> dt2 = one.element_dt2();
     std::nth_element(dt2.begin(), dt2.begin() + static_cast<std::ptrdiff_t>(dt2.size() / 2), dt2.end());
     floor2 = dt2[dt2.size() / 2];
-    one.tets_below_floor(floor2, below_one);
+    one.raise_to_floor(floor2, below_one);
     smallest_one = one.smallest_scaled_step(1e-7);
+    one.mass_factors_into(factors_one);
     one.cell_records(u.data(),
                      [&](std::size_t, std::size_t e, const std::int32_t*, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
   }
@@ -291,15 +293,17 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
         !other.nodes_of_tet(e);
   }
   EXPECT_EQ(found, model.num_elements);
-  // Mass scaling's scans from the held geometry: the two ranks' tets below the floor, merged in tet
-  // order, and the smaller of their smallest steps, against one process's.
+  // Mass scaling's scans from the held geometry: the two ranks' tets below the floor, raised,
+  // merged in tet order, the smaller of their smallest steps and every tet's factor from the rank
+  // that holds it, against one process's.
   std::vector<FloorTet> below;
-  rank0.tets_below_floor(floor2, below), rank1.tets_below_floor(floor2, below);
+  rank0.raise_to_floor(floor2, below), rank1.raise_to_floor(floor2, below);
   std::sort(below.begin(), below.end(), [](const FloorTet& a, const FloorTet& b) { return a.tet < b.tet; });
   std::size_t floor_differ = below.size() != below_one.size();
   for (std::size_t k = 0; k < std::min(below.size(), below_one.size()); ++k)
-    floor_differ += below[k].tet != below_one[k].tet || std::memcmp(&below[k].dt2, &below_one[k].dt2, sizeof(double)) != 0 ||
-                    std::memcmp(&below[k].rho_v, &below_one[k].rho_v, sizeof(double)) != 0 || below[k].nodes != below_one[k].nodes;
+    floor_differ += below[k].tet != below_one[k].tet || std::memcmp(&below[k].rho_v, &below_one[k].rho_v, sizeof(double)) != 0 ||
+                    std::memcmp(&below[k].factor_before, &below_one[k].factor_before, sizeof(double)) != 0 ||
+                    std::memcmp(&below[k].factor_after, &below_one[k].factor_after, sizeof(double)) != 0 || below[k].nodes != below_one[k].nodes;
   const auto s0 = rank0.smallest_scaled_step(1e-7), s1 = rank1.smallest_scaled_step(1e-7);
   const auto smallest = s1.first < s0.first || (s1.first == s0.first && s1.second < s0.second) ? s1 : s0;
   std::printf(
@@ -310,4 +314,13 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   EXPECT_EQ(floor_differ, 0u);
   EXPECT_EQ(std::memcmp(&smallest.first, &smallest_one.first, sizeof(double)), 0);
   EXPECT_EQ(smallest.second, smallest_one.second);
+  std::vector<double> factors0, factors1;
+  rank0.mass_factors_into(factors0), rank1.mass_factors_into(factors1);
+  std::size_t factors_differ = 0;
+  for (std::size_t e = 0; e < model.num_elements; ++e) {
+    const double f = d.atom_rank[d.tet_atom[e]] == 0 ? factors0[e] : factors1[e];
+    factors_differ += std::memcmp(&f, &factors_one[e], sizeof(double)) != 0;
+  }
+  std::printf("mass factors after the raise: %zu of %zu tets differ from one process's\n", factors_differ, model.num_elements);
+  EXPECT_EQ(factors_differ, 0u);
 }

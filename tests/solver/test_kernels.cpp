@@ -93,7 +93,9 @@ Pass stress_pass(const Case& c, double beta, bool vectorised, bool mass_scaling)
   forces.set_vectorised(vectorised);
   if (mass_scaling) {
     forces.enable_mass_scaling();
-    for (std::size_t e = 0; e < c.model.num_elements; ++e) forces.mass_factor()[e] = 1.0 + static_cast<double>(e % 7);
+    std::vector<double> factor(c.model.num_elements);
+    for (std::size_t e = 0; e < c.model.num_elements; ++e) factor[e] = 1.0 + static_cast<double>(e % 7);
+    forces.set_mass_factors(factor);
   }
   Pass p;
   p.f.resize(c.u.size());

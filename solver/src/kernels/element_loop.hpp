@@ -76,8 +76,8 @@ struct StressKernelArgs {
   // design.md "Stable step": a tet's volume-rate vectors have moved from the reference ones by at
   // most c times their reference length; InternalForces).
   double* anp_tiles = nullptr;
-  // Mass scaling (nullptr: off): per element (model numbering), the factor (rho V + added) / (rho V)
-  // its step is computed with, and where its unscaled squared step (no beta) is stored.
+  // Mass scaling (nullptr: off): per element from the call's first, the factor (rho V + added) /
+  // (rho V) its step is computed with, and where its unscaled squared step (no beta) is stored.
   const double* mass_factor = nullptr;
   double* element_dt2 = nullptr;
   bool vectorised = true;  // false: one tet at a time (the reference the vector kernel is tested against)
@@ -312,8 +312,8 @@ TACTUS_KERNEL_INLINE void record_element_step(const StressKernelArgs& a, double 
                                               const LaneIndex<T>& index, LaneResults<T>& out) {
   T dt2 = density * J / (sJ2 * modulus);
   if (a.element_dt2) {  // mass scaling on: the element's added mass lengthens its step as sqrt(m)
-    for (int l = 0; l < lanes::lanes_of<T>; ++l) a.element_dt2[e + static_cast<std::size_t>(l)] = lanes::lane(dt2, l);
-    dt2 *= load_strided<T>(a.mass_factor + e, 1);
+    for (int l = 0; l < lanes::lanes_of<T>; ++l) a.element_dt2[e - a.begin + static_cast<std::size_t>(l)] = lanes::lane(dt2, l);
+    dt2 *= load_strided<T>(a.mass_factor + (e - a.begin), 1);
   }
   if constexpr (kViscous) {
     const T omega = 2.0 / lanes::sqrt_of(dt2);

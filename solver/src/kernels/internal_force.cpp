@@ -305,8 +305,9 @@ std::size_t InternalForces::build_atoms() {
 int InternalForces::lanes() { return lanes::kLanes; }
 
 void InternalForces::enable_mass_scaling() {
-  mass_factor_.assign(model_.num_elements, 1.0);
-  element_dt2_.assign(model_.num_elements, 0.0);
+  const std::size_t tets = holds_geometry_ ? held_volume_.size() : model_.num_elements;
+  mass_factor_.assign(tets, 1.0);
+  element_dt2_.assign(tets, 0.0);
 }
 
 std::size_t InternalForces::memory_bytes() const {
@@ -471,7 +472,10 @@ void InternalForces::stress_partition(std::size_t p, const double* u, const doub
       }
   }
   args.vectorised = vectorised_;
-  if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data(), args.element_dt2 = element_dt2_.data();
+  if (!mass_factor_.empty()) {
+    const std::size_t at = held_index(q.held_tet, q.begin);
+    args.mass_factor = mass_factor_.data() + at, args.element_dt2 = element_dt2_.data() + at;
+  }
   b.material.type().stress_pass(args, acc);
   partition_acc_[p] = acc;
 }
@@ -747,38 +751,64 @@ void InternalForces::each_stress_run(F f) const {
   if (!holds_geometry_) {
     for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
       const MaterialBlock& b = model_.blocks[bi];
-      if (b.has_stress_pass()) f(bi, b.begin, b.end, model_.conn.data() + 4 * b.begin, model_.volume.data() + b.begin);
+      if (b.has_stress_pass()) f(bi, b.begin, b.end, b.begin, model_.conn.data() + 4 * b.begin, model_.volume.data() + b.begin);
     }
     return;
   }
   for (const HeldRun& r : held_runs_)
-    if (model_.blocks[r.block].has_stress_pass()) f(r.block, r.begin, r.end, held_conn_.data() + 4 * r.tet, held_volume_.data() + r.tet);
+    if (model_.blocks[r.block].has_stress_pass()) f(r.block, r.begin, r.end, r.tet, held_conn_.data() + 4 * r.tet, held_volume_.data() + r.tet);
 }
 
-void InternalForces::tets_below_floor(double floor2, std::vector<FloorTet>& out) const {
-  each_stress_run([&](std::size_t bi, std::size_t begin, std::size_t end, const std::int32_t* conn, const double* volume) {
+void InternalForces::raise_to_floor(double floor2, std::vector<FloorTet>& out) {
+  each_stress_run([&](std::size_t bi, std::size_t begin, std::size_t end, std::size_t at, const std::int32_t* conn, const double* volume) {
     const double density = model_.blocks[bi].material.density();
-    for (std::size_t e = begin; e < end; ++e) {
-      if (!(element_dt2_[e] * mass_factor_[e] < floor2)) continue;
-      const std::int32_t* c = conn + 4 * (e - begin);
-      out.push_back({e, element_dt2_[e], density * volume[e - begin], {c[0], c[1], c[2], c[3]}});
+    for (std::size_t k = 0; k < end - begin; ++k) {
+      double& factor = mass_factor_[at + k];
+      const double dt2 = element_dt2_[at + k];
+      if (!(dt2 * factor < floor2)) continue;
+      // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
+      const double target = floor2 / dt2;
+      const std::int32_t* c = conn + 4 * k;
+      out.push_back({begin + k, density * volume[k], factor, target, {c[0], c[1], c[2], c[3]}});
+      factor = target;
     }
   });
 }
 
 std::pair<double, std::size_t> InternalForces::smallest_scaled_step(double beta) const {
   std::pair<double, std::size_t> best{std::numeric_limits<double>::infinity(), std::numeric_limits<std::size_t>::max()};
-  each_stress_run([&](std::size_t, std::size_t begin, std::size_t end, const std::int32_t*, const double*) {
-    for (std::size_t e = begin; e < end; ++e) {
-      double dt = std::sqrt(element_dt2_[e] * mass_factor_[e]);
+  each_stress_run([&](std::size_t, std::size_t begin, std::size_t end, std::size_t at, const std::int32_t*, const double*) {
+    for (std::size_t k = 0; k < end - begin; ++k) {
+      double dt = std::sqrt(element_dt2_[at + k] * mass_factor_[at + k]);
       if (beta > 0) {  // Rayleigh stiffness damping shortens the step, as the kernel computes it
         const double omega = 2.0 / dt, xi = 0.5 * beta * omega;
         dt = 2.0 / omega * (std::sqrt(1.0 + xi * xi) - xi);
       }
-      if (dt < best.first) best = {dt, e};
+      if (dt < best.first) best = {dt, begin + k};
     }
   });
   return best;
+}
+
+void InternalForces::mass_factors_into(std::vector<double>& whole) const {
+  if (!holds_geometry_) {
+    whole = mass_factor_;
+    return;
+  }
+  whole.resize(model_.num_elements);
+  for (const HeldRun& r : held_runs_)
+    std::copy(mass_factor_.begin() + static_cast<std::ptrdiff_t>(r.tet), mass_factor_.begin() + static_cast<std::ptrdiff_t>(r.tet + r.end - r.begin),
+              whole.begin() + static_cast<std::ptrdiff_t>(r.begin));
+}
+
+void InternalForces::set_mass_factors(const std::vector<double>& whole) {
+  if (!holds_geometry_) {
+    mass_factor_ = whole;
+    return;
+  }
+  for (const HeldRun& r : held_runs_)
+    std::copy(whole.begin() + static_cast<std::ptrdiff_t>(r.begin), whole.begin() + static_cast<std::ptrdiff_t>(r.end),
+              mass_factor_.begin() + static_cast<std::ptrdiff_t>(r.tet));
 }
 
 const std::int32_t* InternalForces::nodes_of_tet(std::size_t e) const {

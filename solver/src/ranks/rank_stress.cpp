@@ -136,14 +136,14 @@ std::size_t RankStressPass::RankOrder::memory_bytes() const {
 
 void RankStressPass::enable_mass_scaling() { forces_.enable_mass_scaling(); }
 
-std::vector<FloorTet> RankStressPass::tets_below_floor(double floor2) {
+std::vector<FloorTet> RankStressPass::raise_to_floor(double floor2) {
   std::vector<FloorTet> mine;
-  forces_.tets_below_floor(floor2, mine);
-  constexpr int kWidth = 7;  // tet, dt2, rho V, 4 nodes (exact as doubles)
+  forces_.raise_to_floor(floor2, mine);
+  constexpr int kWidth = 8;  // tet, rho V, factor before and after, 4 nodes (exact as doubles)
   std::vector<double> send;
   send.reserve(kWidth * mine.size());
   for (const FloorTet& t : mine) {
-    send.insert(send.end(), {static_cast<double>(t.tet), t.dt2, t.rho_v});
+    send.insert(send.end(), {static_cast<double>(t.tet), t.rho_v, t.factor_before, t.factor_after});
     for (const std::int32_t n : t.nodes) send.push_back(static_cast<double>(n));
   }
   const int count = static_cast<int>(send.size());
@@ -158,11 +158,35 @@ std::vector<FloorTet> RankStressPass::tets_below_floor(double floor2) {
     below[k] = {static_cast<std::size_t>(t[0]),
                 t[1],
                 t[2],
-                {static_cast<std::int32_t>(t[3]), static_cast<std::int32_t>(t[4]), static_cast<std::int32_t>(t[5]), static_cast<std::int32_t>(t[6])}};
+                t[3],
+                {static_cast<std::int32_t>(t[4]), static_cast<std::int32_t>(t[5]), static_cast<std::int32_t>(t[6]), static_cast<std::int32_t>(t[7])}};
   }
   // Each rank's ascending; ranks own interleaved runs of tets, so the tet order is a sort.
   std::sort(below.begin(), below.end(), [](const FloorTet& a, const FloorTet& b) { return a.tet < b.tet; });
   return below;
+}
+
+std::vector<double> RankStressPass::mass_factors_everywhere() {
+  std::vector<double> mine, whole;
+  forces_.mass_factors_into(mine);  // (model order, this rank's own entries filled)
+  // This rank's tets in its runs' order, then on rank 0 each rank's placed by its runs.
+  std::vector<double> send;
+  for (const TetRun& run : tet_runs_)
+    if (run.rank == rank_)
+      send.insert(send.end(), mine.begin() + static_cast<std::ptrdiff_t>(run.begin), mine.begin() + static_cast<std::ptrdiff_t>(run.end));
+  mine = std::vector<double>();
+  std::vector<int> counts(static_cast<std::size_t>(ranks_), 0), offsets(static_cast<std::size_t>(ranks_) + 1, 0);
+  for (const TetRun& run : tet_runs_) counts[static_cast<std::size_t>(run.rank)] += static_cast<int>(run.end - run.begin);
+  for (std::size_t r = 0; r < counts.size(); ++r) offsets[r + 1] = offsets[r] + counts[r];
+  std::vector<double> all(rank_ == 0 ? model_.num_elements : 0);
+  check(MPI_Gatherv(send.data(), static_cast<int>(send.size()), MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm_),
+        "MPI_Gatherv");
+  if (rank_ != 0) return whole;
+  whole.resize(model_.num_elements);
+  std::vector<std::size_t> at(offsets.begin(), offsets.end() - 1);
+  for (const TetRun& run : tet_runs_)
+    for (std::size_t e = run.begin; e < run.end; ++e) whole[e] = all[at[static_cast<std::size_t>(run.rank)]++];
+  return whole;
 }
 
 std::pair<double, std::size_t> RankStressPass::smallest_scaled_step(double beta) {

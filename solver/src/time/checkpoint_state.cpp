@@ -162,7 +162,11 @@ void ExplicitSolver::checkpoint(StateArchive& a) {
                          {"body_mass", &masses_.body_mass}})
     a.io(std::string("integrator.") + name, *v, v->size());
   if (a.loading() && masses_.on()) masses_.recount_raised();
-  if (mass_scaling()) a.io("integrator.mass_factor", passes_->mass_factor(), model_.num_elements);
+  if (mass_scaling()) {  // per tet, whole: each process holds its own tets' (on ranks gathered to rank 0, whose part holds them)
+    std::vector<double> factors = a.loading() ? std::vector<double>() : passes_->mass_factors_everywhere();
+    if (a.loading() || !factors.empty()) a.io("integrator.mass_factor", factors, model_.num_elements);
+    if (a.loading()) passes_->set_mass_factors(factors);
+  }
   a.io_record("integrator.added_momentum", masses_.added_momentum);
   a.io_record("integrator.stress_pass", pass_);
   a.io_record("integrator.energies", audit_.energy);

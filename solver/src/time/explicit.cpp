@@ -179,7 +179,7 @@ void ExplicitSolver::stress_pass(bool detect_ahead) {
 }
 
 void ExplicitSolver::scale_mass() {
-  masses_.scale(passes_->mass_factor(), passes_->tets_below_floor(masses_.floor_squared()), rigid_);
+  masses_.scale(passes_->raise_to_floor(masses_.floor_squared()), rigid_);
   MassScaling::take_scaled_step(pass_, passes_->smallest_scaled_step(damping_.beta));
   const std::ptrdiff_t over = masses_.body_over(run_.added_mass_limit);
   if (over < 0) return;

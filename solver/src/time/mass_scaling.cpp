@@ -30,15 +30,10 @@ MassScaling::MassScaling(const Model& model, double floor) : model_(model), floo
       body_mass[model.body_of_tet(static_cast<std::size_t>(model.input_element[e]))] += b.material.density() * model.volume[e];
 }
 
-void MassScaling::scale(std::vector<double>& factor, const std::vector<FloorTet>& below, const RigidBodies& rigid) {
-  const double floor2 = floor_ * floor_;
+void MassScaling::scale(const std::vector<FloorTet>& below, const RigidBodies& rigid) {
   for (const FloorTet& t : below) {
-    const std::size_t e = t.tet;
-    const std::size_t body = model_.body_of_tet(static_cast<std::size_t>(model_.input_element[e]));
-    // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
-    const double target = floor2 / t.dt2;
-    const double added = t.rho_v * (target - factor[e]);  // rho V (target - factor), as rho V is one product
-    factor[e] = target;
+    const std::size_t body = model_.body_of_tet(static_cast<std::size_t>(model_.input_element[t.tet]));
+    const double added = t.rho_v * (t.factor_after - t.factor_before);  // as rho V is one product
     for (const std::int32_t node : t.nodes) {
       const auto n = static_cast<std::size_t>(node);
       if (rigid.holds(n)) {

@@ -116,11 +116,12 @@ void fill_cell_record(const MaterialBlock& block, const Mat3& F, const Mat3& sig
 // takes the cells from them, so no process needs the whole connectivity to write a state).
 using CellSink = std::function<void(std::size_t block, std::size_t tet, const std::int32_t* nodes, const double* record)>;
 
-// Mass scaling: a tet whose step with its mass factor is below the floor (its model index,
-// unscaled squared step, rho V and nodes), as the process that runs it found it.
+// Mass scaling: a tet whose step with its mass factor was below the floor, as the process that
+// runs it found and raised it: its model index, rho V, its mass factor before and after (its step
+// then meets the floor) and its nodes.
 struct FloorTet {
   std::size_t tet = 0;
-  double dt2 = 0, rho_v = 0;
+  double rho_v = 0, factor_before = 0, factor_after = 0;
   std::array<std::int32_t, 4> nodes{};
 };
 
@@ -261,17 +262,21 @@ class InternalForces {
   void set_threads(int threads) { threads_ = threads; }
   std::size_t memory_bytes() const;
   // Mass scaling: from now on every pass stores each tet's unscaled squared stable step (no beta)
-  // in element_dt2() and computes the step with mass_factor() (1 + added / (rho V), per tet, which
-  // the caller raises; model numbering).
+  // and computes the step with its mass factor (1 + added / (rho V)), both per tet this process
+  // holds (one process: model order; after hold_own_geometry: its held tets', in their order).
   void enable_mass_scaling();
   const std::vector<double>& element_dt2() const { return element_dt2_; }
-  std::vector<double>& mass_factor() { return mass_factor_; }
   // Over the tets with a stress pass this process runs (one process: every one; ranks: its atoms'),
-  // in tet order: those whose step dt2 x factor is below floor2 (appended to `out`), and the
-  // smallest step with the current factors as the kernel computes it (beta: stiffness damping) with
-  // its tet, the first at a tie (infinity and no tet when it runs none).
-  void tets_below_floor(double floor2, std::vector<FloorTet>& out) const;
+  // in tet order: raises the factor of each whose step is below the floor (floor2: its square) to
+  // floor2 / dt2 and appends it to `out`; and the smallest step with the factors as they are, as
+  // the kernel computes it (beta: stiffness damping), with its tet, the first at a tie (infinity
+  // and no tet when it runs none).
+  void raise_to_floor(double floor2, std::vector<FloorTet>& out);
   std::pair<double, std::size_t> smallest_scaled_step(double beta) const;
+  // Every tet's mass factor, model order: those this process holds read from / written into
+  // `whole` (a checkpoint holds them whole).
+  void mass_factors_into(std::vector<double>& whole) const;
+  void set_mass_factors(const std::vector<double>& whole);
   // The nodal step bound (on by default, with the model's lumped masses): a second upper bound on
   // omega_max from the nodes' whole masses, where the element estimate sees only each tet's share
   // of them (design.md, "The stable step"). nodal_mass: per node, the masses the run integrates
@@ -310,8 +315,9 @@ class InternalForces {
     std::size_t block, begin, end, tet, data;
   };
   bool holds_geometry_ = false;
-  // f(block, begin, end, conn, volume) over the runs of tets with a stress pass this process reads,
-  // ascending, with their first tet's nodes and volume.
+  // f(block, begin, end, at, conn, volume) over the runs of tets with a stress pass this process
+  // reads, ascending, with their first tet's index in the per-tet arrays it holds (at: in
+  // mass_factor_ and element_dt2_), nodes and volume.
   template <class F>
   void each_stress_run(F f) const;
   // Atom q's first tet's nodes: in held_conn_ once this rank holds its own, else the model's.
@@ -389,7 +395,9 @@ class InternalForces {
   void set_anp_runs(const std::vector<char>& computed, const std::vector<char>& read, int rank);
   void keep_rank_slots(int rank, const std::vector<std::uint32_t>& slot_partition);
   void anp_ghosts_of_rank(int rank, const std::vector<char>& touched, const std::vector<std::uint32_t>& slot_partition);
-  std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on
+  std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on; per held tet
+  // A run's (or an atom's) first tet's index in the per-tet arrays this process holds.
+  std::size_t held_index(std::size_t held_tet, std::size_t model_tet) const { return holds_geometry_ ? held_tet : model_tet; }
   void anp_pass(const double* u, const StressExchange& exchange);
   std::size_t build_atoms();  // partitions_, their slots and arrays; returns the ANP tiles
   void stress_partition(std::size_t p, const double* u, const double* v, bool viscous);

@@ -25,11 +25,11 @@ class MassScaling {
   // floor: run.minimum_time_step (0: off); the masses start as the model's.
   MassScaling(const Model& model, double floor);
   bool on() const { return floor_ > 0; }
-  // After a stress pass whose critical step is below the floor: raises the mass of every tet below
-  // it (`below`, in tet order: StressPassEngine::tets_below_floor) until its step (before the
-  // safety factor) meets it, raising its entry of factor (the stress pass's per-tet mass
-  // factors). A rigid body's node gets none (its body's mass is its own, and far larger).
-  void scale(std::vector<double>& factor, const std::vector<FloorTet>& below, const RigidBodies& rigid);
+  // After a stress pass whose critical step is below the floor: adds to the nodes of every tet
+  // the pass raised to meet it (`below`, in tet order: StressPassEngine::raise_to_floor, which
+  // raised its mass factor so its step before the safety factor meets the floor) the mass that
+  // raise stands for. A rigid body's node gets none (its body's mass is its own, and far larger).
+  void scale(const std::vector<FloorTet>& below, const RigidBodies& rigid);
   double floor_squared() const { return floor_ * floor_; }
   // Then the pass's element estimate and critical step become the scaled ones: `smallest`, the
   // smallest step with the raised factors and its tet (StressPassEngine::smallest_scaled_step).

@@ -36,11 +36,12 @@ class RankStressPass : public StressPassEngine {
   StressPassResult compute_everywhere(const double* u, const double* v, double* f_out, StressSideTask side) override;
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
   void enable_mass_scaling() override;
-  std::vector<double>& mass_factor() override { return forces_.mass_factor(); }
-  // An MPI_Allgatherv of the tets each rank found below the floor (7 doubles each), merged in tet
-  // order; an MPI_Allgather of each rank's smallest step and its tet.
-  std::vector<FloorTet> tets_below_floor(double floor2) override;
+  // An MPI_Allgatherv of the tets each rank raised (8 doubles each), merged in tet order; an
+  // MPI_Allgather of each rank's smallest step and its tet; an MPI_Gatherv of the factors to rank 0.
+  std::vector<FloorTet> raise_to_floor(double floor2) override;
   std::pair<double, std::size_t> smallest_scaled_step(double beta) override;
+  std::vector<double> mass_factors_everywhere() override;
+  void set_mass_factors(const std::vector<double>& whole) override { forces_.set_mass_factors(whole); }
   void set_threads(int threads) override { forces_.set_threads(threads); }
   int threads() const override { return forces_.threads(); }
   nlohmann::json report(const std::vector<std::pair<std::string, double>>& measured) override;

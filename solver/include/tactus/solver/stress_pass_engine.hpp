@@ -29,16 +29,18 @@ class StressPassEngine {
   // The same pass by this process alone, not collective (a restored state's check, once).
   virtual StressPassResult compute_alone(const double* u, const double* v, double* f_out) = 0;
   virtual void set_nodal_step_bound(const double* nodal_mass) = 0;  // as InternalForces::set_nodal_step_bound
-  // Mass scaling (as InternalForces's): the per-tet mass factors, the same on every process (each
-  // raises them alike from the same list of tets below the floor); the tets of the last pass below
-  // the floor (floor2: its square), every process's, in tet order; and the smallest step with the
-  // factors as they are then, and its tet. On ranks both collective (only when the run scales,
-  // which every process knows alike): each rank scans its own tets and sends the others what it
-  // found, a few tets a step rather than every tet's step.
+  // Mass scaling (as InternalForces's; each process holds the mass factors of its own tets): the
+  // tets of the last pass below the floor (floor2: its square), raised to meet it, every process's
+  // in tet order; the smallest step with the factors as they are then, and its tet; every tet's
+  // factor (a checkpoint's; set_mass_factors keeps this process's own of them). On ranks
+  // collective (raise_to_floor and smallest_scaled_step only when the run scales, which every
+  // process knows alike): each rank scans its own tets and sends the others what it raised, a few
+  // tets a step rather than every tet's step; the factors are gathered to rank 0 (empty elsewhere).
   virtual void enable_mass_scaling() = 0;
-  virtual std::vector<double>& mass_factor() = 0;
-  virtual std::vector<FloorTet> tets_below_floor(double floor2) = 0;
+  virtual std::vector<FloorTet> raise_to_floor(double floor2) = 0;
   virtual std::pair<double, std::size_t> smallest_scaled_step(double beta) = 0;
+  virtual std::vector<double> mass_factors_everywhere() = 0;
+  virtual void set_mass_factors(const std::vector<double>& whole) = 0;
   virtual void set_threads(int threads) = 0;
   virtual int threads() const = 0;
   virtual int ranks() const = 0;
@@ -106,12 +108,17 @@ class OneProcessStressPass final : public StressPassEngine {
   StressPassResult compute_alone(const double* u, const double* v, double* f_out) override { return forces_.compute(u, v, f_out); }
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
   void enable_mass_scaling() override { forces_.enable_mass_scaling(); }
-  std::vector<double>& mass_factor() override { return forces_.mass_factor(); }
-  std::vector<FloorTet> tets_below_floor(double floor2) override {
+  std::vector<FloorTet> raise_to_floor(double floor2) override {
     std::vector<FloorTet> below;
-    forces_.tets_below_floor(floor2, below);
+    forces_.raise_to_floor(floor2, below);
     return below;
   }
+  std::vector<double> mass_factors_everywhere() override {
+    std::vector<double> whole;
+    forces_.mass_factors_into(whole);
+    return whole;
+  }
+  void set_mass_factors(const std::vector<double>& whole) override { forces_.set_mass_factors(whole); }
   std::pair<double, std::size_t> smallest_scaled_step(double beta) override { return forces_.smallest_scaled_step(beta); }
   void set_threads(int threads) override { forces_.set_threads(threads); }
   int threads() const override { return forces_.threads(); }
