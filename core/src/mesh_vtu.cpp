@@ -55,17 +55,17 @@ MeshField from_vtk(vtkDataArray* a) {
   return f;
 }
 
-// The grid's writer: tet e's nodes from tet_nodes(e); cells_inserted runs once VTK holds its own
-// copy of the cells.
+// The grid's writer: `nodes` points, tet e's nodes from tet_nodes(e); cells_inserted runs once VTK
+// holds its own copy of the cells.
 using TetNodes = std::function<std::array<int, 4>(std::size_t tet)>;
-void write_grid(const fs::path& file, const TetMesh& mesh, std::size_t tets, const TetNodes& tet_nodes, const std::function<void()>& cells_inserted,
-                const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes,
-                std::optional<double> time, const std::vector<MeshStrings>& strings) {
+void write_grid(const fs::path& file, const TetMesh& mesh, std::size_t nodes, std::size_t tets, const TetNodes& tet_nodes,
+                const std::function<void()>& cells_inserted, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
+                const std::vector<Vec3>* current_nodes, std::optional<double> time, const std::vector<MeshStrings>& strings) {
   const std::string fname = file.string();
   if (mesh.tet_group.size() != tets)
     throw InputError(fname, "tet groups", std::to_string(tets) + " (one per tet)", std::to_string(mesh.tet_group.size()));
   const auto& xyz = current_nodes ? *current_nodes : mesh.nodes;
-  if (xyz.size() != mesh.nodes.size()) throw InputError(fname, "current nodes", std::to_string(mesh.nodes.size()) + " positions");
+  if (xyz.size() != nodes) throw InputError(fname, "current nodes", std::to_string(nodes) + " positions");
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   points->SetNumberOfPoints(static_cast<vtkIdType>(xyz.size()));
@@ -87,14 +87,14 @@ void write_grid(const fs::path& file, const TetMesh& mesh, std::size_t tets, con
   // 1-based ids, as every message, summary and quality.json counts (ParaView's own ids start at 0).
   vtkNew<vtkIdTypeArray> node_id, tet_id;
   node_id->SetName(contracts::point::node_id.name);
-  node_id->SetNumberOfTuples(static_cast<vtkIdType>(mesh.nodes.size()));
+  node_id->SetNumberOfTuples(static_cast<vtkIdType>(nodes));
   for (vtkIdType i = 0; i < node_id->GetNumberOfTuples(); ++i) node_id->SetValue(i, i + 1);
   tet_id->SetName(contracts::cell::tet_id.name);
   tet_id->SetNumberOfTuples(static_cast<vtkIdType>(tets));
   for (vtkIdType e = 0; e < tet_id->GetNumberOfTuples(); ++e) tet_id->SetValue(e, e + 1);
   grid->GetPointData()->AddArray(node_id);
   grid->GetCellData()->AddArray(tet_id);
-  for (const auto& f : point_fields) grid->GetPointData()->AddArray(to_vtk(f, mesh.nodes.size(), fname));
+  for (const auto& f : point_fields) grid->GetPointData()->AddArray(to_vtk(f, nodes, fname));
   for (const auto& f : cell_fields) grid->GetCellData()->AddArray(to_vtk(f, tets, fname));
   vtkNew<vtkStringArray> units;  // every tactus file says its units
   units->SetName("units");
@@ -133,16 +133,17 @@ void write_grid(const fs::path& file, const TetMesh& mesh, std::size_t tets, con
 void write_vtu(const fs::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields,
                const std::vector<Vec3>* current_nodes, std::optional<double> time, const std::vector<MeshStrings>& strings) {
   write_grid(
-      file, mesh, mesh.tets.size(), [&](std::size_t e) { return mesh.tets[e]; }, {}, point_fields, cell_fields, current_nodes, time, strings);
+      file, mesh, mesh.nodes.size(), mesh.tets.size(), [&](std::size_t e) { return mesh.tets[e]; }, {}, point_fields, cell_fields, current_nodes,
+      time, strings);
 }
 
 void write_vtu(const fs::path& file, const TetMesh& mesh, std::vector<std::array<int, 4>>&& cells, const std::vector<MeshField>& point_fields,
-               const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes, std::optional<double> time,
+               const std::vector<MeshField>& cell_fields, const std::vector<Vec3>& current_nodes, std::optional<double> time,
                const std::vector<MeshStrings>& strings) {
   std::vector<std::array<int, 4>> held = std::move(cells);
   write_grid(
-      file, mesh, held.size(), [&](std::size_t e) { return held[e]; }, [&] { held = std::vector<std::array<int, 4>>(); }, point_fields, cell_fields,
-      current_nodes, time, strings);
+      file, mesh, current_nodes.size(), held.size(), [&](std::size_t e) { return held[e]; }, [&] { held = std::vector<std::array<int, 4>>(); },
+      point_fields, cell_fields, &current_nodes, time, strings);
 }
 
 const MeshField* VtuContents::point_field(std::string_view name) const {

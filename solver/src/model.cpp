@@ -258,7 +258,8 @@ Model build_model(const TetMesh& mesh, const Material& material, const std::stri
   m.constraint_velocity.assign(3 * m.num_nodes, 0.0);
   compute_element_geometry(m);
   lump_mass(m);
-  m.input_mesh.tets = std::vector<std::array<int, 4>>();  // held once, as conn (Model::input_mesh)
+  // Held once, as conn and X (Model::input_mesh).
+  m.input_mesh.tets = std::vector<std::array<int, 4>>(), m.input_mesh.nodes = std::vector<Vec3>();
   if (reorder) reorder_for_locality(m);
   return m;
 }

@@ -697,7 +697,8 @@ Model build_model(const Scenario& sc) {
   add_contacts(m, sc.contacts);
   add_pressure_loads(sc, m);
   m.contact_settings = sc.contact_solver;
-  m.input_mesh.tets = std::vector<std::array<int, 4>>();  // held once, as conn (Model::input_mesh)
+  // Held once, as conn and X (Model::input_mesh).
+  m.input_mesh.tets = std::vector<std::array<int, 4>>(), m.input_mesh.nodes = std::vector<Vec3>();
   return m;
 }
 

@@ -113,7 +113,7 @@ TEST(Grasp, JointGapsArePlacedByTheBonesAndCarryNoStress) {
   sc.damping.alpha = 100;
   const Model model = build_model(sc);
   // The count in the input numbering (the finger is the only body); the input mesh's tets from the
-  // model's connectivity (Model::input_mesh keeps none).
+  // model's connectivity (Model::input_mesh keeps no tets or nodes).
   TetMesh mesh = model.input_mesh;
   std::vector<int> input_of(model.num_nodes);
   for (std::size_t i = 0; i < model.num_nodes; ++i) input_of[static_cast<std::size_t>(model.node_of_input[i])] = static_cast<int>(i);
@@ -121,7 +121,7 @@ TEST(Grasp, JointGapsArePlacedByTheBonesAndCarryNoStress) {
   for (std::size_t e = 0; e < model.num_elements; ++e)
     for (std::size_t k = 0; k < 4; ++k)
       mesh.tets[static_cast<std::size_t>(model.input_element[e])][k] = input_of[static_cast<std::size_t>(model.conn[4 * e + k])];
-  std::vector<std::set<int>> bones_of(mesh.nodes.size());  // the bone groups a node lies on
+  std::vector<std::set<int>> bones_of(model.num_nodes);  // the bone groups a node lies on
   std::vector<char> bone_tet(mesh.tets.size(), 0);
   for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
     const std::string& group = mesh.find_group(3, mesh.tet_group[e])->name;

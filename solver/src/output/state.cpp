@@ -102,7 +102,7 @@ std::vector<double> write_state(const Model& m, const fs::path& file, const std:
   for (const auto& b : m.blocks) material_names.values.push_back(b.name);
   std::vector<MeshStrings> names{body_names, material_names};
   if (regions) names.push_back({contracts::kGripRegionNames, regions->names()});
-  write_vtu(file, m.input_mesh, std::move(cells), point_fields, cell_fields, &current, time, names);
+  write_vtu(file, m.input_mesh, std::move(cells), point_fields, cell_fields, current, time, names);
   return block_peak;
 }
 

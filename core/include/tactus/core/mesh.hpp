@@ -69,12 +69,13 @@ struct MeshStrings {
 void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, const std::vector<MeshField>& point_fields = {},
                const std::vector<MeshField>& cell_fields = {}, const std::vector<Vec3>* current_nodes = nullptr,
                std::optional<double> time = std::nullopt, const std::vector<MeshStrings>& strings = {});
-// The same with the cells (mesh.nodes' numbering) moved in rather than in mesh.tets, for a writer
-// that keeps no tets of its own (the solver's states: their cells come with the stress records);
-// they are freed once VTK holds its copy, before it copies the fields, so a writer's peak holds
-// them once. mesh.tet_group still holds one tag per tet.
+// The same with the cells moved in rather than in mesh.tets and the points from current_nodes
+// alone, for a writer that keeps no tets or nodes in its mesh (the solver's states: their cells
+// come with the stress records, the points are the deformed positions); the cells are freed once
+// VTK holds its copy, before it copies the fields, so a writer's peak holds them once. mesh.tet_group
+// still holds one tag per tet, and mesh.nodes is not read.
 void write_vtu(const std::filesystem::path& file, const TetMesh& mesh, std::vector<std::array<int, 4>>&& cells,
-               const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields, const std::vector<Vec3>* current_nodes,
+               const std::vector<MeshField>& point_fields, const std::vector<MeshField>& cell_fields, const std::vector<Vec3>& current_nodes,
                std::optional<double> time, const std::vector<MeshStrings>& strings);
 
 struct VtuContents {

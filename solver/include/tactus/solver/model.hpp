@@ -104,9 +104,10 @@ struct Model {
   // Mapping back to the input numbering, for output and messages.
   std::vector<std::int32_t> node_of_input;  // internal index of input node i
   std::vector<std::int32_t> input_element;  // input index of internal tet
-  // All bodies, input numbering, placed coordinates, file tags; its tets are dropped once the model
-  // is built (16 bytes per tet held twice): internal tet e is input tet input_element[e], its nodes
-  // conn's through node_of_input. tet_group keeps one tag per tet.
+  // All bodies, input numbering, file tags; its tets and nodes are dropped once the model is built
+  // (each held twice, 16 bytes per tet and 24 per node): internal tet e is input tet
+  // input_element[e], its nodes conn's through node_of_input, and input node i is at X's
+  // node_of_input[i]. tet_group keeps one tag per tet.
   TetMesh input_mesh;
   std::vector<BodyRange> bodies;  // each body's input tets are one range (body_of_tet)
 
