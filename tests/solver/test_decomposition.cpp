@@ -224,7 +224,6 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
                      [&](std::size_t, std::size_t e, const std::int32_t*, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
   }
   InternalForces rank0(model, 0.0, 1), rank1(model, 0.0, 1);
-  rank0.enable_mass_scaling(), rank1.enable_mass_scaling();
   rank0.own_atoms(d.tet_atom, d.atom_rank, 0);
   rank1.own_atoms(d.tet_atom, d.atom_rank, 1);
   std::vector<TetRange> tets0, tets1;
@@ -234,6 +233,7 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
     ++mine.back().end;
   }
   rank0.hold_own_geometry(tets0), rank1.hold_own_geometry(tets1);
+  rank0.enable_mass_scaling(), rank1.enable_mass_scaling();  // (their factors and steps: the held tets')
   const std::vector<std::int32_t> conn = model.conn;
   const std::size_t whole = model.memory_bytes();
   model.release_tet_geometry();

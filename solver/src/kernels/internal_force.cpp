@@ -676,6 +676,8 @@ void InternalForces::keep_rank_slots(int rank, const std::vector<std::uint32_t>&
 void InternalForces::hold_own_geometry(const std::vector<TetRange>& tets) {
   if (own_rank_ < 0) throw std::logic_error("InternalForces::hold_own_geometry: before own_atoms (one process reads the model's)");
   if (holds_geometry_) return;
+  if (!mass_factor_.empty())  // its per-tet arrays are then the held tets'
+    throw std::logic_error("InternalForces::hold_own_geometry: after enable_mass_scaling (enable it once the tets are held)");
   // The runs split at the blocks' ends (a block's law data has its own stride).
   for (const TetRange& r : tets)
     for (std::size_t k = 0; k < model_.blocks.size(); ++k) {

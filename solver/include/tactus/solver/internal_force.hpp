@@ -263,7 +263,8 @@ class InternalForces {
   std::size_t memory_bytes() const;
   // Mass scaling: from now on every pass stores each tet's unscaled squared stable step (no beta)
   // and computes the step with its mass factor (1 + added / (rho V)), both per tet this process
-  // holds (one process: model order; after hold_own_geometry: its held tets', in their order).
+  // holds (one process: model order; on ranks, enabled after hold_own_geometry: its held tets', in
+  // their order).
   void enable_mass_scaling();
   const std::vector<double>& element_dt2() const { return element_dt2_; }
   // Over the tets with a stress pass this process runs (one process: every one; ranks: its atoms'),
