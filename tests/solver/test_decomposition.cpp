@@ -219,7 +219,7 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
     floor2 = dt2[dt2.size() / 2];
     one.raise_to_floor(floor2, below_one);
     smallest_one = one.smallest_scaled_step(1e-7);
-    one.mass_factors_into(factors_one);
+    factors_one = one.mass_factors();  // (model order)
     one.cell_records(u.data(),
                      [&](std::size_t, std::size_t e, const std::int32_t*, const double* r) { std::copy(r, r + width, &records_one[width * e]); });
   }
@@ -314,13 +314,17 @@ TEST(Decomposition, RanksHoldingTheirOwnGeometryAddTheSameBitsOnceTheModelReleas
   EXPECT_EQ(floor_differ, 0u);
   EXPECT_EQ(std::memcmp(&smallest.first, &smallest_one.first, sizeof(double)), 0);
   EXPECT_EQ(smallest.second, smallest_one.second);
-  std::vector<double> factors0, factors1;
-  rank0.mass_factors_into(factors0), rank1.mass_factors_into(factors1);
-  std::size_t factors_differ = 0;
-  for (std::size_t e = 0; e < model.num_elements; ++e) {
-    const double f = d.atom_rank[d.tet_atom[e]] == 0 ? factors0[e] : factors1[e];
-    factors_differ += std::memcmp(&f, &factors_one[e], sizeof(double)) != 0;
+  // (each rank's factors: its tets', ascending)
+  std::size_t factors_differ = 0, factors_held = 0;
+  for (const auto& [rank, tets] : {std::pair{&rank0, &tets0}, std::pair{&rank1, &tets1}}) {
+    std::size_t k = 0;
+    for (const TetRange& r : *tets)
+      for (std::size_t e = r.begin; e < r.end; ++e, ++k)
+        factors_differ += std::memcmp(&rank->mass_factors()[k], &factors_one[e], sizeof(double)) != 0;
+    factors_held += rank->mass_factors().size();
+    EXPECT_EQ(k, rank->mass_factors().size());
   }
+  EXPECT_EQ(factors_held, model.num_elements);
   std::printf("mass factors after the raise: %zu of %zu tets differ from one process's\n", factors_differ, model.num_elements);
   EXPECT_EQ(factors_differ, 0u);
 }

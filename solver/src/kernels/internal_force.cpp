@@ -404,7 +404,7 @@ void InternalForces::anp_pass(const double* u, const StressExchange& exchange) {
       if (q.block != a.block) continue;
       double* mine = partition_volumes_.data() + q.slot_begin;
       std::fill(mine, mine + (q.slot_end - q.slot_begin), 0.0);
-      add_current_node_volumes(model_, tet_nodes(q), q.end - q.begin, u, mine, tet_slot_.data() + q.corner_begin);
+      add_current_node_volumes(model_, tet_conn() + 4 * held_index(q.held_tet, q.begin), q.end - q.begin, u, mine, tet_slot_.data() + q.corner_begin);
     }
     if (exchange.volumes) {
 #pragma omp master
@@ -440,12 +440,11 @@ void InternalForces::stress_partition(std::size_t p, const double* u, const doub
   double* f = partition_forces_.data() + kForceStride * q.slot_begin;
   std::fill(f, f + kForceStride * (q.slot_end - q.slot_begin), 0.0);
   StressAccumulator acc;
-  const double* grad = holds_geometry_ ? held_grad_.data() + 9 * q.held_tet : model_.grad.data() + 9 * q.begin;
-  const double* volume = holds_geometry_ ? held_volume_.data() + q.held_tet : model_.volume.data() + q.begin;
+  const std::size_t at = held_index(q.held_tet, q.begin);
   const double* data = !b.per_element_data() ? b.data() : holds_geometry_ ? held_data_.data() + q.held_data : b.data_of(q.begin);
-  StressKernelArgs args{tet_nodes(q),
-                        grad,
-                        volume,
+  StressKernelArgs args{tet_conn() + 4 * at,
+                        tet_grad() + 9 * at,
+                        tet_volume() + at,
                         b.material.law(),
                         data,
                         b.data_stride(),
@@ -472,10 +471,7 @@ void InternalForces::stress_partition(std::size_t p, const double* u, const doub
       }
   }
   args.vectorised = vectorised_;
-  if (!mass_factor_.empty()) {
-    const std::size_t at = held_index(q.held_tet, q.begin);
-    args.mass_factor = mass_factor_.data() + at, args.element_dt2 = element_dt2_.data() + at;
-  }
+  if (!mass_factor_.empty()) args.mass_factor = mass_factor_.data() + at, args.element_dt2 = element_dt2_.data() + at;
   b.material.type().stress_pass(args, acc);
   partition_acc_[p] = acc;
 }
@@ -719,50 +715,41 @@ void InternalForces::hold_own_geometry(const std::vector<TetRange>& tets) {
   holds_geometry_ = true;
 }
 
-void InternalForces::cell_records(const double* u, const CellSink& sink) const {
-  std::vector<double> record(cell_record_width(model_), 0.0);
-  const auto run = [&](std::size_t bi, std::size_t begin, std::size_t end, const std::int32_t* conn, const double* grad, const double* data) {
-    const MaterialBlock& b = model_.blocks[bi];
-    const double* p = b.has_stress_pass() ? block_pressure_[bi] : nullptr;  // ANP: the pass's nodal pressures
-    const std::size_t stride = b.data_stride();
-    for (std::size_t e = begin; e < end; ++e) {
-      const std::int32_t* c = conn + 4 * (e - begin);
-      const double* g = grad + 9 * (e - begin);
-      const double* d = data + stride * (e - begin);
-      const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, g);
-      fill_cell_record(b, F, reported_cauchy_stress(b, F, c, p, rigid_node_.data(), d), d, record.data());
-      sink(bi, e, c, record.data());
-    }
-  };
+template <class F>
+void InternalForces::each_run(F f) const {
   if (!holds_geometry_) {
     for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
       const MaterialBlock& b = model_.blocks[bi];
-      run(bi, b.begin, b.end, model_.conn.data() + 4 * b.begin, model_.grad.data() + 9 * b.begin, b.data());
+      f(bi, b.begin, b.end, b.begin, b.data());
     }
     return;
   }
   for (const HeldRun& r : held_runs_) {
     const MaterialBlock& b = model_.blocks[r.block];
-    run(r.block, r.begin, r.end, held_conn_.data() + 4 * r.tet, held_grad_.data() + 9 * r.tet,
-        b.per_element_data() ? held_data_.data() + r.data : b.data());
+    f(r.block, r.begin, r.end, r.tet, b.per_element_data() ? held_data_.data() + r.data : b.data());
   }
 }
 
-template <class F>
-void InternalForces::each_stress_run(F f) const {
-  if (!holds_geometry_) {
-    for (std::size_t bi = 0; bi < model_.blocks.size(); ++bi) {
-      const MaterialBlock& b = model_.blocks[bi];
-      if (b.has_stress_pass()) f(bi, b.begin, b.end, b.begin, model_.conn.data() + 4 * b.begin, model_.volume.data() + b.begin);
+void InternalForces::cell_records(const double* u, const CellSink& sink) const {
+  std::vector<double> record(cell_record_width(model_), 0.0);
+  each_run([&](std::size_t bi, std::size_t begin, std::size_t end, std::size_t at, const double* data) {
+    const MaterialBlock& b = model_.blocks[bi];
+    const double* p = b.has_stress_pass() ? block_pressure_[bi] : nullptr;  // ANP: the pass's nodal pressures
+    const std::size_t stride = b.data_stride();
+    for (std::size_t k = 0; k < end - begin; ++k) {
+      const std::int32_t* c = tet_conn() + 4 * (at + k);
+      const double* g = tet_grad() + 9 * (at + k);
+      const double* d = data + stride * k;
+      const Mat3 F = Mat3::Identity() + nodal_gradient(u, c, g);
+      fill_cell_record(b, F, reported_cauchy_stress(b, F, c, p, rigid_node_.data(), d), d, record.data());
+      sink(bi, begin + k, c, record.data());
     }
-    return;
-  }
-  for (const HeldRun& r : held_runs_)
-    if (model_.blocks[r.block].has_stress_pass()) f(r.block, r.begin, r.end, r.tet, held_conn_.data() + 4 * r.tet, held_volume_.data() + r.tet);
+  });
 }
 
 void InternalForces::raise_to_floor(double floor2, std::vector<FloorTet>& out) {
-  each_stress_run([&](std::size_t bi, std::size_t begin, std::size_t end, std::size_t at, const std::int32_t* conn, const double* volume) {
+  each_run([&](std::size_t bi, std::size_t begin, std::size_t end, std::size_t at, const double*) {
+    if (!model_.blocks[bi].has_stress_pass()) return;  // no step of their own
     const double density = model_.blocks[bi].material.density();
     for (std::size_t k = 0; k < end - begin; ++k) {
       double& factor = mass_factor_[at + k];
@@ -770,8 +757,8 @@ void InternalForces::raise_to_floor(double floor2, std::vector<FloorTet>& out) {
       if (!(dt2 * factor < floor2)) continue;
       // The tet's step grows as sqrt of its mass: (rho V + dM) / (rho V) = floor^2 / dt_e^2.
       const double target = floor2 / dt2;
-      const std::int32_t* c = conn + 4 * k;
-      out.push_back({begin + k, density * volume[k], factor, target, {c[0], c[1], c[2], c[3]}});
+      const std::int32_t* c = tet_conn() + 4 * (at + k);
+      out.push_back({begin + k, density * tet_volume()[at + k], factor, target, {c[0], c[1], c[2], c[3]}});
       factor = target;
     }
   });
@@ -779,7 +766,8 @@ void InternalForces::raise_to_floor(double floor2, std::vector<FloorTet>& out) {
 
 std::pair<double, std::size_t> InternalForces::smallest_scaled_step(double beta) const {
   std::pair<double, std::size_t> best{std::numeric_limits<double>::infinity(), std::numeric_limits<std::size_t>::max()};
-  each_stress_run([&](std::size_t, std::size_t begin, std::size_t end, std::size_t at, const std::int32_t*, const double*) {
+  each_run([&](std::size_t bi, std::size_t begin, std::size_t end, std::size_t at, const double*) {
+    if (!model_.blocks[bi].has_stress_pass()) return;
     for (std::size_t k = 0; k < end - begin; ++k) {
       double dt = std::sqrt(element_dt2_[at + k] * mass_factor_[at + k]);
       if (beta > 0) {  // Rayleigh stiffness damping shortens the step, as the kernel computes it
@@ -790,17 +778,6 @@ std::pair<double, std::size_t> InternalForces::smallest_scaled_step(double beta)
     }
   });
   return best;
-}
-
-void InternalForces::mass_factors_into(std::vector<double>& whole) const {
-  if (!holds_geometry_) {
-    whole = mass_factor_;
-    return;
-  }
-  whole.resize(model_.num_elements);
-  for (const HeldRun& r : held_runs_)
-    std::copy(mass_factor_.begin() + static_cast<std::ptrdiff_t>(r.tet), mass_factor_.begin() + static_cast<std::ptrdiff_t>(r.tet + r.end - r.begin),
-              whole.begin() + static_cast<std::ptrdiff_t>(r.begin));
 }
 
 void InternalForces::set_mass_factors(const std::vector<double>& whole) {

@@ -43,13 +43,14 @@ RankStressPass::RankStressPass(const Model& model, const Decomposition& d, MPI_C
     throw InputError("decomposition", "atom_tets", std::to_string(kAtomTets) + " (the stress pass's atom)", std::to_string(d.atom_tets));
   if (d.ranks != ranks_) throw InputError("decomposition", "ranks", std::to_string(ranks_) + " (the MPI ranks)", std::to_string(d.ranks));
   forces_.own_atoms(d.tet_atom, d.atom_rank, rank_);
+  rank_tets_.assign(static_cast<std::size_t>(ranks_), 0);
   for (std::size_t e = 0; e < model.num_elements; ++e) {
     const std::int32_t r = d.atom_rank[d.tet_atom[e]];
     if (tet_runs_.empty() || tet_runs_.back().rank != r)
       tet_runs_.push_back({e, e + 1, r});
     else
       tet_runs_.back().end = e + 1;
-    tets_ += r == rank_;
+    ++rank_tets_[static_cast<std::size_t>(r)];
   }
   std::vector<TetRange> own;
   for (const TetRun& run : tet_runs_)
@@ -167,19 +168,13 @@ std::vector<FloorTet> RankStressPass::raise_to_floor(double floor2) {
 }
 
 std::vector<double> RankStressPass::mass_factors_everywhere() {
-  std::vector<double> mine, whole;
-  forces_.mass_factors_into(mine);  // (model order, this rank's own entries filled)
-  // This rank's tets in its runs' order, then on rank 0 each rank's placed by its runs.
-  std::vector<double> send;
-  for (const TetRun& run : tet_runs_)
-    if (run.rank == rank_)
-      send.insert(send.end(), mine.begin() + static_cast<std::ptrdiff_t>(run.begin), mine.begin() + static_cast<std::ptrdiff_t>(run.end));
-  mine = std::vector<double>();
-  std::vector<int> counts(static_cast<std::size_t>(ranks_), 0), offsets(static_cast<std::size_t>(ranks_) + 1, 0);
-  for (const TetRun& run : tet_runs_) counts[static_cast<std::size_t>(run.rank)] += static_cast<int>(run.end - run.begin);
+  // This rank's held factors are its runs' tets in ascending order; rank 0 places each rank's by
+  // its runs.
+  const std::vector<double>& mine = forces_.mass_factors();
+  std::vector<int> counts(rank_tets_.begin(), rank_tets_.end()), offsets(static_cast<std::size_t>(ranks_) + 1, 0);
   for (std::size_t r = 0; r < counts.size(); ++r) offsets[r + 1] = offsets[r] + counts[r];
-  std::vector<double> all(rank_ == 0 ? model_.num_elements : 0);
-  check(MPI_Gatherv(send.data(), static_cast<int>(send.size()), MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm_),
+  std::vector<double> all(rank_ == 0 ? model_.num_elements : 0), whole;
+  check(MPI_Gatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm_),
         "MPI_Gatherv");
   if (rank_ != 0) return whole;
   whole.resize(model_.num_elements);
@@ -191,19 +186,15 @@ std::vector<double> RankStressPass::mass_factors_everywhere() {
 
 std::pair<double, std::size_t> RankStressPass::smallest_scaled_step(double beta) {
   const std::pair<double, std::size_t> mine = forces_.smallest_scaled_step(beta);
-  // (a rank that runs no tet with a stress pass sends infinity and tet -1)
-  const double sent[2] = {mine.first, mine.first < std::numeric_limits<double>::infinity() ? static_cast<double>(mine.second) : -1.0};
-  std::vector<double> all(2 * static_cast<std::size_t>(ranks_));
-  check(MPI_Allgather(sent, 2, MPI_DOUBLE, all.data(), 2, MPI_DOUBLE, comm_), "MPI_Allgather");
-  // The smallest, and at a tie the first tet: one process's scan in tet order.
-  std::pair<double, std::size_t> best = mine;
-  for (int r = 0; r < ranks_; ++r) {
-    const double dt = all[2 * static_cast<std::size_t>(r)], at = all[2 * static_cast<std::size_t>(r) + 1];
-    if (at < 0) continue;
-    const auto tet = static_cast<std::size_t>(at);
-    if (dt < best.first || (dt == best.first && tet < best.second)) best = {dt, tet};
-  }
-  return best;
+  // MPI_MINLOC: the smallest step, and at a tie the first tet, as one process's scan in tet order
+  // (a rank that runs no tet with a stress pass offers infinity; tets fit an int, constructor).
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  struct {
+    double step;
+    int tet;
+  } offer{mine.first, mine.first < kNone ? static_cast<int>(mine.second) : std::numeric_limits<int>::max()}, best{};
+  check(MPI_Allreduce(&offer, &best, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "MPI_Allreduce");
+  return {best.step, best.step < kNone ? static_cast<std::size_t>(best.tet) : std::numeric_limits<std::size_t>::max()};
 }
 
 std::size_t RankStressPass::memory_bytes() const {
@@ -541,7 +532,7 @@ void RankStressPass::cell_records(const double* u, const double* v, const CellSi
   // own tets' connectivity too, and writes the cells from them.
   const std::size_t width = cell_record_width(model_), stride = 4 + width;
   std::vector<double> buffer;
-  buffer.reserve(stride * std::min(kMessageTets, tets_));
+  buffer.reserve(stride * std::min(kMessageTets, tets()));
   if (rank_ != 0) {
     const auto send = [&] {
       check(MPI_Send(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, 0, kCellRecordsTag, comm_), "MPI_Send");
@@ -558,8 +549,7 @@ void RankStressPass::cell_records(const double* u, const double* v, const CellSi
   forces_.cell_records(u, sink);
   // Every other rank's records, one rank and one message at a time, in the order of its tets' runs.
   for (int r = 1; r < ranks_; ++r) {
-    std::size_t left = 0, in_buffer = 0;
-    for (const TetRun& run : tet_runs_) left += run.rank == r ? run.end - run.begin : 0;
+    std::size_t left = rank_tets_[static_cast<std::size_t>(r)], in_buffer = 0;
     const double* at = nullptr;
     for (const TetRun& run : tet_runs_) {
       if (run.rank != r) continue;
@@ -593,7 +583,7 @@ StressPassResult RankStressPass::compute_alone(const double* u, const double* v,
 }
 
 nlohmann::json RankStressPass::report(const std::vector<std::pair<std::string, double>>& measured) {
-  std::vector<double> mine{static_cast<double>(tets_), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
+  std::vector<double> mine{static_cast<double>(tets()), static_cast<double>(halo_doubles()), static_cast<double>(halo_ranks()),
                            static_cast<double>(forces_order_.own_items(rank_))};
   for (const auto& [name, value] : measured) mine.push_back(value);
   mine.push_back(sums_seconds_), mine.push_back(force_gather_seconds_), mine.push_back(resident_bytes("VmHWM:"));

@@ -274,9 +274,10 @@ class InternalForces {
   // and no tet when it runs none).
   void raise_to_floor(double floor2, std::vector<FloorTet>& out);
   std::pair<double, std::size_t> smallest_scaled_step(double beta) const;
-  // Every tet's mass factor, model order: those this process holds read from / written into
-  // `whole` (a checkpoint holds them whole).
-  void mass_factors_into(std::vector<double>& whole) const;
+  // The mass factors of the tets this process holds, in their order (one process: model order;
+  // after hold_own_geometry: its held tets', ascending); set_mass_factors takes those of its tets
+  // from every tet's (model order: a checkpoint holds them whole).
+  const std::vector<double>& mass_factors() const { return mass_factor_; }
   void set_mass_factors(const std::vector<double>& whole);
   // The nodal step bound (on by default, with the model's lumped masses): a second upper bound on
   // omega_max from the nodes' whole masses, where the element estimate sees only each tet's share
@@ -316,15 +317,18 @@ class InternalForces {
     std::size_t block, begin, end, tet, data;
   };
   bool holds_geometry_ = false;
-  // f(block, begin, end, at, conn, volume) over the runs of tets with a stress pass this process
-  // reads, ascending, with their first tet's index in the per-tet arrays it holds (at: in
-  // mass_factor_ and element_dt2_), nodes and volume.
+  // The per-tet arrays this process reads: its own once it holds them (hold_own_geometry), else the
+  // model's; a tet's index in them, and in mass_factor_ and element_dt2_, is held_index (an atom's
+  // first: its held_tet there, its model index here).
+  std::size_t held_index(std::size_t held_tet, std::size_t model_tet) const { return holds_geometry_ ? held_tet : model_tet; }
+  const std::int32_t* tet_conn() const { return holds_geometry_ ? held_conn_.data() : model_.conn.data(); }
+  const double* tet_grad() const { return holds_geometry_ ? held_grad_.data() : model_.grad.data(); }
+  const double* tet_volume() const { return holds_geometry_ ? held_volume_.data() : model_.volume.data(); }
+  // f(block, begin, end, at, data) over the runs of one block's tets this process reads, ascending
+  // (one process: the blocks; after hold_own_geometry: its held runs): `at` their first tet's index
+  // in the arrays above, `data` its law data.
   template <class F>
-  void each_stress_run(F f) const;
-  // Atom q's first tet's nodes: in held_conn_ once this rank holds its own, else the model's.
-  const std::int32_t* tet_nodes(const Partition& q) const {
-    return holds_geometry_ ? held_conn_.data() + 4 * q.held_tet : model_.conn.data() + 4 * q.begin;
-  }
+  void each_run(F f) const;
   std::vector<HeldRun> held_runs_;
   std::vector<std::int32_t> held_conn_;
   std::vector<double> held_grad_, held_volume_, held_data_;
@@ -397,8 +401,6 @@ class InternalForces {
   void keep_rank_slots(int rank, const std::vector<std::uint32_t>& slot_partition);
   void anp_ghosts_of_rank(int rank, const std::vector<char>& touched, const std::vector<std::uint32_t>& slot_partition);
   std::vector<double> mass_factor_, element_dt2_;  // empty unless mass scaling is on; per held tet
-  // A run's (or an atom's) first tet's index in the per-tet arrays this process holds.
-  std::size_t held_index(std::size_t held_tet, std::size_t model_tet) const { return holds_geometry_ ? held_tet : model_tet; }
   void anp_pass(const double* u, const StressExchange& exchange);
   std::size_t build_atoms();  // partitions_, their slots and arrays; returns the ANP tiles
   void stress_partition(std::size_t p, const double* u, const double* v, bool viscous);

@@ -37,7 +37,7 @@ class RankStressPass : public StressPassEngine {
   void set_nodal_step_bound(const double* nodal_mass) override { forces_.set_nodal_step_bound(nodal_mass); }
   void enable_mass_scaling() override;
   // An MPI_Allgatherv of the tets each rank raised (8 doubles each), merged in tet order; an
-  // MPI_Allgather of each rank's smallest step and its tet; an MPI_Gatherv of the factors to rank 0.
+  // MPI_MINLOC of each rank's smallest step and its tet; an MPI_Gatherv of the factors to rank 0.
   std::vector<FloorTet> raise_to_floor(double floor2) override;
   std::pair<double, std::size_t> smallest_scaled_step(double beta) override;
   std::vector<double> mass_factors_everywhere() override;
@@ -65,7 +65,7 @@ class RankStressPass : public StressPassEngine {
   std::size_t ghost_doubles() const;
   int rank() const { return rank_; }
   int ranks() const override { return ranks_; }
-  std::size_t tets() const { return tets_; }  // this rank's
+  std::size_t tets() const { return rank_tets_[static_cast<std::size_t>(rank_)]; }  // this rank's
   // Doubles sent to other ranks per pass (the halo's size), and the messages: one per rank that
   // shares a node with this one.
   std::size_t halo_doubles() const;
@@ -111,7 +111,7 @@ class RankStressPass : public StressPassEngine {
   Gather sums_only_, with_forces_;
   std::vector<double> records_, gathered_;
   StressPassResult pass_and_gather(const double* u, const double* v, double* f_out, StressSideTask side, bool everywhere);
-  std::size_t tets_ = 0;
+  std::vector<std::size_t> rank_tets_;  // each rank's tets (the runs of tet_runs_ that are its)
   // Values of items (nodes, tets) that each rank has right for its own items, sent to every rank:
   // the items in rank then item order, each rank's doubles and where they land, and for gather
   // (not pack and unpack, whose gather carries more) this rank's values packed and everyone's

@@ -113,11 +113,7 @@ class OneProcessStressPass final : public StressPassEngine {
     forces_.raise_to_floor(floor2, below);
     return below;
   }
-  std::vector<double> mass_factors_everywhere() override {
-    std::vector<double> whole;
-    forces_.mass_factors_into(whole);
-    return whole;
-  }
+  std::vector<double> mass_factors_everywhere() override { return forces_.mass_factors(); }
   void set_mass_factors(const std::vector<double>& whole) override { forces_.set_mass_factors(whole); }
   std::pair<double, std::size_t> smallest_scaled_step(double beta) override { return forces_.smallest_scaled_step(beta); }
   void set_threads(int threads) override { forces_.set_threads(threads); }
